@@ -1,0 +1,66 @@
+# cumuli — the README's commands and the one-time set-up they need.
+#
+#   make demo    set up (if needed) and render the default scene to out.png / out.exr
+#   make test    set up (if needed) and run the whole test suite (pytest + notebooks)
+#   make bench   run the benchmarks (JSON + plots under benchmarks/out/)
+#   make lint    ruff on python/, tests/, benchmarks/
+#   make inplace build the extension into python/cumuli for PYTHONPATH=python development
+
+VENV ?= .venv
+PY := $(VENV)/bin/python
+SYSTEM_PACKAGES := g++ make libglm-dev libegl1 libegl-mesa0 libgl1-mesa-dri libgles2
+STAMP := $(VENV)/.cumuli-installed
+
+.PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace clean
+
+setup: system install
+
+# Debian packages: GLM headers for the C++ core, EGL + Mesa (llvmpipe) for headless GL.
+system:
+	@missing=""; for p in $(SYSTEM_PACKAGES); do \
+	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
+	done; \
+	if [ -n "$$missing" ]; then \
+	  echo "installing Debian packages:$$missing"; \
+	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
+	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
+	fi
+
+$(PY):
+	python3 -m venv $(VENV)
+	$(PY) -m pip install -q --upgrade pip
+
+venv: $(PY)
+
+# Editable install with a persistent build folder, so a re-run only recompiles what changed.
+install: $(PY)
+	$(PY) -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.13" cmake ninja
+	$(PY) -m pip install -q --no-build-isolation -e ".[test]"
+
+demo: setup
+	$(VENV)/bin/cumuli demo -o out.png
+
+test: setup
+	$(PY) -m pytest -q tests --nbmake notebooks
+
+test-fast: install
+	$(PY) -m pytest -q tests -x
+
+bench: setup
+	$(PY) benchmarks/run_all.py
+
+bench-quick: install
+	$(PY) benchmarks/run_all.py --quick
+
+lint:
+	$(PY) -m ruff check python tests benchmarks
+	$(PY) -m ruff format --check python tests benchmarks
+
+inplace: $(PY)
+	cmake -S . -B build/inplace -DCUMULI_INPLACE=ON -DCMAKE_BUILD_TYPE=Release \
+	  -DPython_EXECUTABLE=$(abspath $(PY)) \
+	  -Dpybind11_DIR=$$($(PY) -c "import pybind11; print(pybind11.get_cmake_dir())") >/dev/null
+	cmake --build build/inplace -j2
+
+clean:
+	rm -rf build python/cumuli/_core*.so

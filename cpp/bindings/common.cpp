@@ -1,0 +1,42 @@
+#include "common.hpp"
+
+namespace cumuli::bind {
+
+CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
+                             const FloatArray& rotations, const std::string& model, float kappa,
+                             float phi) {
+  require_points(centres, "centres");
+  require_points(radii, "radii");
+  const py::ssize_t n = centres.shape(0);
+  if (radii.shape(0) != n) throw py::value_error("radii must have the same length as centres");
+  if (rotations.ndim() != 3 || rotations.shape(0) != n || rotations.shape(1) != 3 ||
+      rotations.shape(2) != 3)
+    throw py::value_error("rotations must have shape (N, 3, 3)");
+  CloudShape cloud;
+  if (model == "spheroid") {
+    cloud.density.model = DensityModel::Spheroid;
+  } else if (model == "metaball") {
+    cloud.density.model = DensityModel::Metaball;
+  } else {
+    throw py::value_error("density model must be 'spheroid' or 'metaball', got '" + model + "'");
+  }
+  cloud.density.kappa = kappa;
+  cloud.density.phi = phi;
+  cloud.primitives.resize(static_cast<std::size_t>(n));
+  const float* c = centres.data();
+  const float* r = radii.data();
+  const float* m = rotations.data();
+  for (py::ssize_t i = 0; i < n; ++i) {
+    Ellipsoid& e = cloud.primitives[static_cast<std::size_t>(i)];
+    e.centre = glm::vec3(c[3 * i], c[3 * i + 1], c[3 * i + 2]);
+    e.radii = glm::vec3(r[3 * i], r[3 * i + 1], r[3 * i + 2]);
+    // numpy row-major R[row][col]; glm is column-major: rotation[col][row].
+    for (int row = 0; row < 3; ++row)
+      for (int col = 0; col < 3; ++col) e.rotation[col][row] = m[9 * i + 3 * row + col];
+  }
+  cloud.validate();
+  cloud.density.mean_r2 = cloud.mean_squared_radius();
+  return cloud;
+}
+
+}  // namespace cumuli::bind

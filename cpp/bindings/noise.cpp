@@ -1,0 +1,67 @@
+// Bindings for cumuli/noise.hpp.
+#include "cumuli/noise.hpp"
+
+#include "common.hpp"
+
+namespace cumuli::bind {
+
+namespace {
+
+FbmParams make_params(int octaves, float gain, float lacunarity, float frequency) {
+  FbmParams p{octaves, gain, lacunarity, frequency};
+  p.validate();
+  return p;
+}
+
+}  // namespace
+
+void bind_noise(py::module_& m) {
+  py::class_<Noise>(m, "Noise")
+      .def(py::init<std::uint64_t, int>(), py::arg("seed"), py::arg("size") = 64)
+      .def_property_readonly("size", &Noise::size)
+      .def_property_readonly("seed", &Noise::seed)
+      .def_property_readonly(
+          "lattice",
+          [](py::object self) {
+            const Noise& n = self.cast<const Noise&>();
+            const py::ssize_t s = n.size();
+            // A read-only view that keeps the Noise alive.
+            py::array_t<float> view({s, s, s}, n.lattice().data(), self);
+            py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+            return view;
+          },
+          "The size³ uniform lattice, [z, y, x], read-only view.")
+      .def(
+          "fbm",
+          [](const Noise& n, const FloatArray& points, int octaves, float gain, float lacunarity,
+             float frequency, int threads) {
+            require_points(points, "points");
+            const FbmParams p = make_params(octaves, gain, lacunarity, frequency);
+            const std::size_t count = static_cast<std::size_t>(points.shape(0));
+            auto out = new_array({static_cast<py::ssize_t>(count)});
+            const float* src = points.data();
+            float* dst = out.mutable_data();
+            {
+              py::gil_scoped_release release;
+              n.fbm_many(src, count, dst, p, threads);
+            }
+            return out;
+          },
+          py::arg("points"), py::arg("octaves") = 5, py::arg("gain") = 0.5f,
+          py::arg("lacunarity") = 2.0f, py::arg("frequency") = 1.0f, py::arg("threads") = 0)
+      .def(
+          "lattice_at",
+          [](const Noise& n, const FloatArray& coords) {
+            require_points(coords, "coords");
+            const py::ssize_t count = coords.shape(0);
+            auto out = new_array({count});
+            const float* c = coords.data();
+            float* o = out.mutable_data();
+            for (py::ssize_t i = 0; i < count; ++i)
+              o[i] = n.lattice_at(glm::vec3(c[3 * i], c[3 * i + 1], c[3 * i + 2]));
+            return out;
+          },
+          py::arg("coords"), "Trilinear lattice value at lattice coordinates (texels).");
+}
+
+}  // namespace cumuli::bind

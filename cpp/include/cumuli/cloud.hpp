@@ -1,0 +1,57 @@
+// A cloud as the core sees it: primitives plus the density model that fills them.
+//
+// DESIGN §4. Pseudo-spheroid model (eq. 2): at a sample p attributed to primitive j, ρ = fbm(p),
+// γ = exp(−|q_j| / ((1 − κ) + 2κρ)); the sample is cloud only if ρ < γ, with density ρ.
+// Metaball model (eqs. 19–21): inside where Σ 1/|q_i|² ≥ 1 (Σ r_i²/|p − c_i|² for spheres);
+// density ρ = fbm(p) · r̄² · φ with r̄² the mean squared radius.
+#pragma once
+
+#include <vector>
+
+#include "cumuli/noise.hpp"
+#include "cumuli/primitives.hpp"
+
+namespace cumuli {
+
+enum class DensityModel { Spheroid, Metaball };
+
+struct DensityParams {
+  DensityModel model = DensityModel::Spheroid;
+  float kappa = 0.5f;    // κ of eq. (2), in [0, 1]
+  float phi = 0.6f;      // φ of eq. (21)
+  float mean_r2 = 1.0f;  // r̄² of eq. (20), computed once from the primitives
+};
+
+struct CloudShape {
+  std::vector<Ellipsoid> primitives;
+  DensityParams density;
+
+  Box bounds() const;          // union of the primitives' bounds
+  glm::vec3 centre() const;    // centre of the bounds
+  float mean_squared_radius() const;  // eq. (20), with an ellipsoid's r² the mean of its radii²
+  void validate() const;       // throws std::invalid_argument (empty, NaN, radii ≤ 0, ...)
+};
+
+// Where density comes from: fBm of a noise lattice, or (for analytic tests) a constant.
+struct DensitySource {
+  const Noise* noise = nullptr;
+  FbmParams fbm;
+  float constant = -1.0f;  // ≥ 0: use this instead of fBm
+
+  float operator()(glm::vec3 p) const { return constant >= 0.0f ? constant : noise->fbm(p, fbm); }
+};
+
+// One density sample. `gamma` is eq. (2)'s γ (1 for metaballs), used by the render pass.
+struct DensitySample {
+  float rho = 0.0f;
+  float gamma = 0.0f;
+};
+
+// Pseudo-spheroid density at p attributed to primitive j (eq. 2); rho = 0 outside the cloud.
+DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p, const DensitySource& src);
+// Metaball density at p (eqs. 19–21); rho = 0 outside the iso-surface.
+DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src);
+// Dispatch on cloud.density.model (j is ignored by the metaball model).
+DensitySample cloud_density(const CloudShape& cloud, int j, glm::vec3 p, const DensitySource& src);
+
+}  // namespace cumuli

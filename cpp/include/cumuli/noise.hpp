@@ -1,0 +1,55 @@
+// Value-noise lattice and fBm (Jiménez de Parga & Gómez Palomo 2018, §3.1, eq. 1).
+//
+// The lattice is a size³ cube of uniform values in [0, 1). Lookups follow the GL texel-centre
+// convention of a LINEAR / REPEAT 3D texture, so that the GLSL in shaders/noise.glsl returns the
+// same numbers: at lattice coordinate u (in texels) we blend texels floor(u - 0.5) and the next
+// with weight fract(u - 0.5), indices wrapped modulo size. World point p maps to u = p · f.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+namespace cumuli {
+
+struct FbmParams {
+  int octaves = 5;          // n
+  float gain = 0.5f;        // w: amplitude of octave i is w^i
+  float lacunarity = 2.0f;  // s: frequency of octave i is s^i · f
+  float frequency = 1.0f;   // f: lattice texels per world unit
+
+  void validate() const;  // throws std::invalid_argument naming the bad parameter
+};
+
+class Noise {
+ public:
+  static constexpr int kMaxSize = 512;  // 512³ floats = 512 MiB; anything larger is refused
+
+  Noise(std::uint64_t seed, int size = 64);
+
+  int size() const { return size_; }
+  std::uint64_t seed() const { return seed_; }
+  const std::vector<float>& lattice() const { return lattice_; }  // [z][y][x]
+
+  // Trilinear lattice value at lattice coordinate u (texels), GL texel-centre convention.
+  float lattice_at(glm::vec3 u) const;
+
+  // eq. (1): Σ_{i=1..n} w^i · lattice(s^i · f · p).
+  float fbm(glm::vec3 p, const FbmParams& params) const;
+
+  // fBm of `count` points (xyz interleaved) into `out`, on `threads` threads (0 = all).
+  void fbm_many(const float* points, std::size_t count, float* out, const FbmParams& params,
+                int threads) const;
+
+ private:
+  float texel(int x, int y, int z) const {
+    return lattice_[(static_cast<std::size_t>(z) * size_ + y) * size_ + x];
+  }
+
+  std::uint64_t seed_;
+  int size_;
+  std::vector<float> lattice_;
+};
+
+}  // namespace cumuli

@@ -1,0 +1,110 @@
+"""Argument checks shared by the public API: clear errors that name the parameter."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+#: Largest number of points / samples a single call accepts (keeps allocations sane).
+MAX_POINTS = 1 << 28
+
+
+def points3(value: Any, name: str = "points", *, allow_empty: bool = True) -> np.ndarray:
+    """Return ``value`` as a C-contiguous float32 ``(N, 3)`` array of finite numbers."""
+    if isinstance(value, np.ndarray):
+        arr = value
+    else:
+        try:
+            arr = np.asarray(value)
+        except Exception as exc:  # ragged lists and the like
+            raise TypeError(f"{name} must be an array of shape (N, 3): {exc}") from None
+    if arr.dtype.kind not in "fiu":
+        raise TypeError(f"{name} must be a real numeric array, got dtype {arr.dtype}")
+    if arr.ndim != 2 or arr.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (N, 3), got {arr.shape}")
+    if arr.shape[0] > MAX_POINTS:
+        raise ValueError(f"{name} has {arr.shape[0]} rows, more than the limit {MAX_POINTS}")
+    if not allow_empty and arr.shape[0] == 0:
+        raise ValueError(f"{name} must not be empty")
+    arr = np.ascontiguousarray(arr, dtype=np.float32)
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return arr
+
+
+def vec3(value: Any, name: str) -> tuple[float, float, float]:
+    """Return ``value`` as a tuple of three finite floats."""
+    try:
+        seq = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a sequence of three numbers, got {value!r}") from None
+    if len(seq) != 3:
+        raise ValueError(f"{name} must have three components, got {len(seq)}")
+    if not all(math.isfinite(v) for v in seq):
+        raise ValueError(f"{name} must be finite, got {tuple(seq)}")
+    return (seq[0], seq[1], seq[2])
+
+
+def direction(value: Any, name: str) -> tuple[float, float, float]:
+    """Return ``value`` normalised; zero-length or non-finite vectors are rejected."""
+    v = vec3(value, name)
+    n = math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2)
+    if n < 1e-12:
+        raise ValueError(f"{name} must not be the zero vector")
+    return (v[0] / n, v[1] / n, v[2] / n)
+
+
+def integer(value: Any, name: str, lo: int | None = None, hi: int | None = None) -> int:
+    """Return ``value`` as an int within ``[lo, hi]`` (bools and floats with fractions refused)."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
+        raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+    v = int(value)
+    if lo is not None and v < lo:
+        raise ValueError(f"{name} must be >= {lo}, got {v}")
+    if hi is not None and v > hi:
+        raise ValueError(f"{name} must be <= {hi}, got {v}")
+    return v
+
+
+def real(
+    value: Any,
+    name: str,
+    lo: float | None = None,
+    hi: float | None = None,
+    *,
+    lo_open: bool = False,
+    hi_open: bool = False,
+) -> float:
+    """Return ``value`` as a finite float within the given (optionally open) bounds."""
+    if isinstance(value, bool):
+        raise TypeError(f"{name} must be a number, got bool")
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise TypeError(f"{name} must be a number, got {value!r}") from None
+    if not math.isfinite(v):
+        raise ValueError(f"{name} must be finite, got {v}")
+    if lo is not None and (v < lo or (lo_open and v == lo)):
+        raise ValueError(f"{name} must be {'>' if lo_open else '>='} {lo}, got {v}")
+    if hi is not None and (v > hi or (hi_open and v == hi)):
+        raise ValueError(f"{name} must be {'<' if hi_open else '<='} {hi}, got {v}")
+    return v
+
+
+def threads(value: Any) -> int:
+    """Thread count: 0 means all cores."""
+    return integer(value, "threads", 0, 1024)
+
+
+def shape3(value: Any, name: str, hi: int) -> tuple[int, int, int]:
+    """A resolution given as one int or three ints, each in [1, hi]; returned as (x, y, z)."""
+    if isinstance(value, (int, np.integer)) and not isinstance(value, bool):
+        n = integer(value, name, 1, hi)
+        return (n, n, n)
+    if isinstance(value, Sequence) and len(value) == 3:
+        a, b, c = (integer(v, name, 1, hi) for v in value)
+        return (a, b, c)
+    raise TypeError(f"{name} must be an int or three ints, got {value!r}")
