@@ -8,6 +8,8 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 from __future__ import annotations
 
 from cumuli._version import __version__
+from cumuli.cloud import Cloud
 from cumuli.noise import Noise
+from cumuli.sun import Sun
 
-__all__ = ["Noise", "__version__"]
+__all__ = ["Cloud", "Noise", "Sun", "__version__"]
