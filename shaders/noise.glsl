@@ -20,8 +20,9 @@ float lattice_exact(vec3 u) {
     vec3 x = u - 0.5;
     vec3 f = floor(x);
     vec3 w = x - f;
-    ivec3 i0 = ivec3(f);
-    i0 = ((i0 % size) + size) % size;
+    // Wrap with floor (GLSL's % is undefined for negative operands); % catches rounding to size.
+    vec3 fs = vec3(size);
+    ivec3 i0 = ivec3(f - fs * floor(f / fs)) % size;
     ivec3 i1 = (i0 + 1) % size;
     float c000 = texelFetch(u_lattice, ivec3(i0.x, i0.y, i0.z), 0).r;
     float c100 = texelFetch(u_lattice, ivec3(i1.x, i0.y, i0.z), 0).r;
