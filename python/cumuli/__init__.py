@@ -10,6 +10,14 @@ from __future__ import annotations
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
 from cumuli.noise import Noise
+from cumuli.shapes import gaussian_cumulus, metaball_cumulus
 from cumuli.sun import Sun
 
-__all__ = ["Cloud", "Noise", "Sun", "__version__"]
+__all__ = [
+    "Cloud",
+    "Noise",
+    "Sun",
+    "__version__",
+    "gaussian_cumulus",
+    "metaball_cumulus",
+]
