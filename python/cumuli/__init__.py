@@ -8,7 +8,7 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 from __future__ import annotations
 
 from cumuli._version import __version__
-from cumuli.cloud import Cloud
+from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.noise import Noise
 from cumuli.shapes import gaussian_cumulus, metaball_cumulus
 from cumuli.sun import Sun
@@ -19,5 +19,7 @@ __all__ = [
     "Sun",
     "__version__",
     "gaussian_cumulus",
+    "load_cloud",
+    "merge",
     "metaball_cumulus",
 ]
