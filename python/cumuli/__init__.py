@@ -10,7 +10,13 @@ from __future__ import annotations
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.noise import Noise
-from cumuli.shapes import gaussian_cumulus, metaball_cumulus
+from cumuli.shapes import (
+    gaussian_cumulus,
+    lsystem_cloud,
+    lsystem_expand,
+    lsystem_length,
+    metaball_cumulus,
+)
 from cumuli.sun import Sun
 
 __all__ = [
@@ -20,6 +26,9 @@ __all__ = [
     "__version__",
     "gaussian_cumulus",
     "load_cloud",
+    "lsystem_cloud",
+    "lsystem_expand",
+    "lsystem_length",
     "merge",
     "metaball_cumulus",
 ]
