@@ -7,14 +7,17 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 
 from __future__ import annotations
 
+from cumuli import meshes
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.noise import Noise
 from cumuli.shapes import (
+    ellipsoids_from_mesh,
     gaussian_cumulus,
     lsystem_cloud,
     lsystem_expand,
     lsystem_length,
+    mesh_cloud,
     metaball_cumulus,
 )
 from cumuli.sun import Sun
@@ -24,11 +27,14 @@ __all__ = [
     "Noise",
     "Sun",
     "__version__",
+    "ellipsoids_from_mesh",
     "gaussian_cumulus",
     "load_cloud",
     "lsystem_cloud",
     "lsystem_expand",
     "lsystem_length",
     "merge",
+    "mesh_cloud",
+    "meshes",
     "metaball_cumulus",
 ]
