@@ -185,3 +185,11 @@ def test_core_validates_on_its_own() -> None:
             True,
             0,
         )
+
+
+def test_epsilon_pair_picks_by_model() -> None:
+    a = cumuli.gaussian_cumulus(seed=1, radius_model="eq15", epsilon=(10.0, 2.0))
+    b = cumuli.gaussian_cumulus(seed=1, radius_model="eq15", epsilon=10.0)
+    assert np.array_equal(a.radii, b.radii) and a.params["args"]["epsilon"] == 10.0
+    c = cumuli.gaussian_cumulus(seed=1, epsilon=(10.0, 2.0))
+    assert c.params["args"]["epsilon"] == 2.0 and (c.radii <= 2.0 * 2.9 + 1e-4).all()

@@ -182,3 +182,11 @@ def test_bad_sources(tmp_path: Path) -> None:
         path.write_bytes(data)
         with pytest.raises(ValueError, match=name.replace(".", r"\.")):
             cumuli.mesh_cloud(path)
+
+
+def test_thread_count_does_not_change_the_result() -> None:
+    v, f = meshes.bunny_like(subdivisions=2)
+    one = cumuli.ellipsoids_from_mesh(v, f, scale=1.3, threads=1)
+    many = cumuli.ellipsoids_from_mesh(v, f, scale=1.3, threads=4)
+    for a, b in zip(one, many, strict=True):
+        assert np.array_equal(a, b)
