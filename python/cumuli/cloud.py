@@ -263,6 +263,10 @@ class Cloud:
                         doc["light"] = light.ravel().tolist()
                     text = json.dumps(doc, default=_json_default, allow_nan=False)
                     fh.write(text.encode("utf-8"))
+            # mkstemp makes the file private (0600); give it the permissions a plain open() would.
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(tmp, 0o666 & ~umask)
             os.replace(tmp, path)
         except BaseException:
             try:
