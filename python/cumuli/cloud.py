@@ -14,6 +14,7 @@ clouds (without a light grid, which no longer fits) and append what they did to
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import tempfile
@@ -285,6 +286,13 @@ class Cloud:
             "phi": self.phi,
             "stats": self.stats,
             "params": self.params,
+            # Other light metadata fields (e.g. the sun a grid was made for) ride along when the
+            # Cloud has them, so a saved grid keeps its provenance.
+            "light_extra": {
+                f.name: getattr(self, f.name)
+                for f in dataclasses.fields(self)
+                if f.name.startswith("light_") and f.name != "light_box"
+            },
             "light_box": None
             if self.light_box is None
             else [list(map(float, self.light_box[0])), list(map(float, self.light_box[1]))],
@@ -385,10 +393,22 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
                 check.vec3(light_box[0], "light_box"),
                 check.vec3(light_box[1], "light_box"),
             )
+        known = {f.name for f in dataclasses.fields(Cloud)}
+        extra = meta.get("light_extra") or {}
+        if not isinstance(extra, dict):
+            raise ValueError("light_extra must be an object")
+        extra = {
+            k: tuple(v) if isinstance(v, list) else v
+            for k, v in extra.items()
+            if k in known and k.startswith("light_")
+        }
+        if light is None:
+            extra = {}
         return Cloud(
             arrays["centres"],
             arrays["radii"],
             arrays["rotations"],
+            **extra,
             model=meta["model"],
             kappa=meta["kappa"],
             phi=meta["phi"],
