@@ -9,7 +9,17 @@ from __future__ import annotations
 
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
+from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.noise import Noise
 from cumuli.sun import Sun
 
-__all__ = ["Cloud", "Noise", "Sun", "__version__"]
+__all__ = [
+    "Cloud",
+    "Noise",
+    "Sun",
+    "__version__",
+    "from_srgb8",
+    "read_image",
+    "to_srgb8",
+    "write_image",
+]
