@@ -93,7 +93,9 @@ class GLContext:
 
     def program(self, vertex: str, fragment: str) -> moderngl.Program:
         """Compile a program from two shader file names under ``shaders/``."""
-        return self.ctx.program(vertex_shader=load_shader(vertex), fragment_shader=load_shader(fragment))
+        return self.ctx.program(
+            vertex_shader=load_shader(vertex), fragment_shader=load_shader(fragment)
+        )
 
     def compute(self, name: str) -> moderngl.ComputeShader:
         """Compile a compute shader from a file name under ``shaders/``."""
@@ -162,7 +164,9 @@ def _resolve_context(context: GLContext | None) -> GLContext:
     if context is None:
         return default_context()
     if not isinstance(context, GLContext):
-        raise TypeError(f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}")
+        raise TypeError(
+            f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
+        )
     if context.closed:
         raise ValueError("context is closed")
     return context
@@ -300,7 +304,7 @@ def fbm(
     exact: bool = False,
     context: GLContext | None = None,
 ) -> np.ndarray:
-    """fBm (eq. 1) of ``noise`` at ``(N, 3)`` points, evaluated by ``shaders/noise.glsl`` on the GPU.
+    """fBm (eq. 1) of ``noise`` at ``(N, 3)`` points, evaluated by ``shaders/noise.glsl`` on a GPU.
 
     This is the GLSL twin of :meth:`cumuli.Noise.fbm`, used to check that the shaders and the C++
     core agree. ``exact=True`` blends the 8 texels by hand with float weights (agrees with the
