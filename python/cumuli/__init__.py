@@ -10,6 +10,7 @@ from __future__ import annotations
 from cumuli import meshes
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
+from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.noise import Noise
 from cumuli.shapes import (
     ellipsoids_from_mesh,
@@ -37,4 +38,8 @@ __all__ = [
     "mesh_cloud",
     "meshes",
     "metaball_cumulus",
+    "from_srgb8",
+    "read_image",
+    "to_srgb8",
+    "write_image",
 ]
