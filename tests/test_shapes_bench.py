@@ -1,0 +1,34 @@
+"""The shapes benchmark runs in --quick mode and writes its JSON and plot (speed not checked)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_bench_shapes_quick(tmp_path: Path) -> None:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
+    env["MPLBACKEND"] = "Agg"
+    res = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "bench_shapes.py"), "--quick", "--out",
+         str(tmp_path)],
+        capture_output=True, text=True, timeout=300, env=env,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr + res.stdout
+    data = json.loads((tmp_path / "shapes.json").read_text())
+    assert (tmp_path / "shapes.png").stat().st_size > 1000
+    assert data["benchmark"] == "shapes" and data["quick"] is True
+    assert data["gaussian"]["paper_n35"]["wall_s"]["n"] == data["repeats"]
+    assert [r["spheres"] for r in data["lsystem"]] == [128, 1024, 8192]
+    assert [r["faces"] for r in data["mesh"]["sizes"]] == [560, 2240, 8960]
+    for r in data["gaussian"]["sizes"]:
+        assert r["containment_cost_ratio"] > 0
+        w = r["with_containment"]["wall_s"]
+        assert w["min"] <= w["median"] <= w["max"]
+    assert "shapes.json" in res.stdout
