@@ -8,6 +8,17 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 from __future__ import annotations
 
 from cumuli import meshes
+from cumuli.animation import (
+    AnimationFrame,
+    EndlessAnimation,
+    VolumeDatabase,
+    VolumeLighting,
+    blend_volumes,
+    crossfade_weights,
+    evolving_cloud_volumes,
+    similarity_matrix,
+    transition_matrix,
+)
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
@@ -22,8 +33,21 @@ from cumuli.shapes import (
     metaball_cumulus,
 )
 from cumuli.sun import Sun
+from cumuli.volume_render import VolumeCamera, VolumeRenderer, render_volume
 
 __all__ = [
+    "AnimationFrame",
+    "EndlessAnimation",
+    "VolumeCamera",
+    "VolumeDatabase",
+    "VolumeLighting",
+    "VolumeRenderer",
+    "blend_volumes",
+    "crossfade_weights",
+    "evolving_cloud_volumes",
+    "render_volume",
+    "similarity_matrix",
+    "transition_matrix",
     "Cloud",
     "Noise",
     "Sun",

@@ -1,0 +1,102 @@
+// Light for density volumes (Iwasaki, Nishino & Dobashi 2011, §3.1): single scattering of sun
+// and sky with precomputed optical depths.
+//
+// Optical depth f(x, ω) = ∫₀^∞ ρ(x + uω) du (density × length; the extinction σ_t multiplies it
+// at render time) is linear in ρ, so the optical depth of a cross-dissolved volume is the blend
+// of the optical depths of its two database volumes (eq. 6): precompute once per database volume,
+// blend per frame. Towards the sun one value per voxel; towards the sky the function of ω is
+// projected onto real spherical harmonics (bands 0..order−1, order² coefficients), and the sky
+// transmittance τ = exp(−σ_t f) is recovered with the SH exponential of Ren et al. 2006 (eq. 7):
+// exp*(g) ≈ exp(g₀/√4π)·(a(‖ĝ‖)·1 + b(‖ĝ‖)·ĝ), with a, b tabulated by least squares over voxels
+// sampled from the database, as the paper does.
+//
+// Volumes are [z][y][x] over a world box; voxel centres sit at lo + (i + ½)·size/res and values
+// between them are trilinear with clamp-to-edge (GL's texel-centre convention, so a GL_LINEAR
+// texture with CLAMP_TO_EDGE agrees). Outside the box the density is 0.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "cumuli/primitives.hpp"
+
+namespace cumuli {
+
+// A [z][y][x] volume's shape and world box.
+struct VolumeGrid {
+  int w = 1, h = 1, d = 1;  // voxels along x, y, z
+  Box box;
+
+  std::size_t voxels() const { return static_cast<std::size_t>(w) * h * d; }
+  glm::vec3 voxel_size() const { return (box.hi - box.lo) / glm::vec3(w, h, d); }
+  glm::vec3 centre(int x, int y, int z) const {
+    return box.lo + (glm::vec3(x, y, z) + 0.5f) * voxel_size();
+  }
+  void validate() const;  // throws std::invalid_argument
+};
+
+// Trilinear value of `channels`-interleaved field `vol` at world point p (clamp to edge), into
+// out[0..channels).
+void sample_trilinear(const float* vol, const VolumeGrid& g, int channels, glm::vec3 p, float* out);
+float sample_trilinear(const float* vol, const VolumeGrid& g, glm::vec3 p);
+
+// ∫ ρ along p + u·dir from u = 0 to the box exit (midpoint rule, equal steps no longer than
+// step_voxels voxel sizes; exact for a constant density).
+float optical_depth_ray(const float* vol, const VolumeGrid& g, glm::vec3 p, glm::vec3 dir,
+                        float step_voxels);
+
+// Optical depth towards the sun (`to_sun` points from the scene to the sun) for every voxel
+// centre of `count` volumes: count × voxels floats.
+std::vector<float> sun_optical_depth(const float* volumes, int count, const VolumeGrid& g,
+                                     glm::vec3 to_sun, float step_voxels, int threads);
+
+// --- spherical harmonics -------------------------------------------------------------------
+constexpr int kMaxShOrder = 4;  // bands 0..3, 16 coefficients (the paper's 4th order)
+
+// Real SH y_m(ω), m = l(l+1) + k over bands l < order, orthonormal on the sphere.
+void sh_eval(int order, glm::vec3 dir, float* out);
+
+// A product quadrature on the sphere: Gauss–Legendre in cos θ (n_theta nodes) × 2·n_theta
+// uniform angles in φ. Exact for spherical polynomials of degree < 2·n_theta, so projecting a
+// constant (or any low band) is exact to rounding whenever order ≤ n_theta.
+struct SphereQuadrature {
+  std::vector<glm::vec3> dirs;
+  std::vector<float> weights;  // sum to 4π
+  explicit SphereQuadrature(int n_theta);
+};
+
+// SH projection of per-voxel optical depth over the quadrature's directions:
+// count × voxels × order² floats (coefficients innermost).
+std::vector<float> sh_optical_depth(const float* volumes, int count, const VolumeGrid& g,
+                                    int order, int n_theta, float step_voxels, int threads);
+
+// SH projection (order² coefficients per channel, 3 channels) of the gradient sky
+// L(ω) = max(0, horizon + (zenith − horizon)·ω_y).
+std::vector<float> sky_sh(glm::vec3 zenith, glm::vec3 horizon, int order, int n_theta);
+
+// The tabulated a, b of the SH exponential over ‖ĝ‖ ∈ [0, max_norm].
+struct ShExpTable {
+  int order = 3;
+  float max_norm = 0.0f;
+  std::vector<float> a, b;  // one entry per bin centre
+
+  // τ = exp*(g): order² coefficients of exp(g·y(ω)) from g (order² coefficients) into out.
+  void apply(const float* g, float* out) const;
+};
+
+// Fit a, b by least squares: for `count` SH vectors f (optical depths), g = −σ_t·f; the target is
+// the quadrature projection of exp(g·y(ω)) (the exponential of the band-limited optical depth)
+// divided by exp(g₀/√4π). Since 1 and ĝ are orthogonal the two unknowns decouple per bin:
+// a = mean(τ̃₀)/√4π, b = Σ τ̃·ĝ / Σ ‖ĝ‖². Empty bins copy their nearest filled neighbour.
+ShExpTable fit_shexp(const float* f, std::size_t count, int order, float sigma_t, int bins,
+                     int n_theta);
+
+// The per-voxel light the renderer reads, 4 floats per voxel: τ_sun = exp(−σ_t·f_sun) and the
+// sky irradiance E_sky (RGB) = ∫ L_sky(ω) τ(x, ω) dω = Σ_m L_m τ_m(x), τ = exp*(−σ_t·f_sh).
+std::vector<float> light_volume(const float* f_sun, const float* f_sh, const VolumeGrid& g,
+                                const ShExpTable& table, const float* sky_coeffs, float sigma_t,
+                                int threads);
+
+}  // namespace cumuli

@@ -1,0 +1,46 @@
+// Emission–absorption ray marching through a density volume lit by a per-voxel light volume
+// (Iwasaki et al. 2011's rendering of the database volumes): the CPU reference that
+// shaders/volume_march.frag.glsl mirrors.
+//
+// Per pixel: the ray o + t·d (pinhole camera, vertical fov, row 0 on top, pixel centres) is
+// clipped to the volume's box and marched in equal steps no longer than `step`. At a sample,
+// ρ and the light (τ_sun, E_sky RGB) are trilinear (clamp to edge); σ = σ_t·ρ;
+// S = albedo·(sun·τ_sun·HG(g, d·sun_dir) + E_sky/4π) (single scattering of sun and sky, eqs. 2–3,
+// isotropic phase for the sky); colour += T·(1 − e^{−σh})·S; T *= e^{−σh}; stop when T < 1e-4.
+// Finally rgb = colour + T·sky(d) with the gradient sky max(0, horizon + (zenith − horizon)·d.y),
+// alpha = 1 − T.
+#pragma once
+
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "cumuli/volume_light.hpp"
+
+namespace cumuli {
+
+struct VolumeCameraRays {
+  glm::vec3 position{0.0f};
+  glm::vec3 forward{0.0f, 0.0f, -1.0f}, right{1.0f, 0.0f, 0.0f}, up{0.0f, 1.0f, 0.0f};
+  float tan_half_fov = 0.5f;  // tan(vertical fov / 2)
+};
+
+struct VolumeRenderParams {
+  int width = 64, height = 48;
+  glm::vec3 sun_dir{0.0f, 1.0f, 0.0f};  // towards the sun, unit
+  glm::vec3 sun_radiance{1.0f};
+  glm::vec3 zenith{0.2f, 0.4f, 0.85f}, horizon{0.62f, 0.75f, 0.95f};
+  float sigma_t = 1.0f;
+  float albedo = 1.0f;
+  float g = 0.2f;     // Henyey–Greenstein asymmetry
+  float step = 0.1f;  // world units
+};
+
+constexpr float kVolumeMinTransmittance = 1e-4f;
+
+// (height, width, 4) float32, row 0 at the top.
+std::vector<float> render_volume_cpu(const float* density, const float* light, const VolumeGrid& g,
+                                     const VolumeCameraRays& cam, const VolumeRenderParams& p,
+                                     int threads);
+
+}  // namespace cumuli

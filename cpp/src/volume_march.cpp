@@ -1,0 +1,69 @@
+#include "cumuli/volume_march.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include <glm/geometric.hpp>
+
+#include "cumuli/parallel.hpp"
+
+namespace cumuli {
+
+namespace {
+constexpr float kInv4Pi = 0.0795774715459477f;
+
+float henyey_greenstein(float g, float cos_theta) {
+  const float d = 1.0f + g * g - 2.0f * g * cos_theta;
+  return kInv4Pi * (1.0f - g * g) / (d * std::sqrt(d));
+}
+}  // namespace
+
+std::vector<float> render_volume_cpu(const float* density, const float* light, const VolumeGrid& g,
+                                     const VolumeCameraRays& cam, const VolumeRenderParams& p,
+                                     int threads) {
+  g.validate();
+  if (p.width < 1 || p.height < 1) throw std::invalid_argument("width and height must be >= 1");
+  if (!(p.step > 0.0f) || !std::isfinite(p.step)) throw std::invalid_argument("step must be > 0");
+  const std::size_t npix = static_cast<std::size_t>(p.width) * p.height;
+  std::vector<float> img(npix * 4);
+  const float aspect = static_cast<float>(p.width) / static_cast<float>(p.height);
+  parallel_for(npix, threads, [&](std::size_t i) {
+    const int row = static_cast<int>(i / p.width), col = static_cast<int>(i % p.width);
+    const float sx = (2.0f * (col + 0.5f) / p.width - 1.0f) * cam.tan_half_fov * aspect;
+    const float sy = (1.0f - 2.0f * (row + 0.5f) / p.height) * cam.tan_half_fov;
+    const glm::vec3 d = glm::normalize(cam.forward + sx * cam.right + sy * cam.up);
+    glm::vec3 colour(0.0f);
+    float T = 1.0f;
+    Interval span;
+    if (intersect(g.box, cam.position, 1.0f / d, span) && span.t_out > std::max(span.t_in, 0.0f)) {
+      const float t0 = std::max(span.t_in, 0.0f);
+      const float len = span.t_out - t0;
+      const int n = std::max(1, static_cast<int>(std::ceil(len / p.step)));
+      const float h = len / static_cast<float>(n);
+      const float phase = henyey_greenstein(p.g, glm::dot(d, p.sun_dir));
+      for (int k = 0; k < n && T >= kVolumeMinTransmittance; ++k) {
+        const glm::vec3 x = cam.position + (t0 + (k + 0.5f) * h) * d;
+        const float rho = sample_trilinear(density, g, x);
+        if (rho <= 0.0f) continue;
+        float L[4];
+        sample_trilinear(light, g, 4, x, L);
+        const glm::vec3 S = p.albedo * (p.sun_radiance * (L[0] * phase) +
+                                        glm::vec3(L[1], L[2], L[3]) * kInv4Pi);
+        const float dtau = std::exp(-p.sigma_t * rho * h);
+        colour += T * (1.0f - dtau) * S;
+        T *= dtau;
+      }
+    }
+    const glm::vec3 sky = glm::max(glm::vec3(0.0f), p.horizon + (p.zenith - p.horizon) * d.y);
+    const glm::vec3 rgb = colour + T * sky;
+    float* px = &img[i * 4];
+    px[0] = rgb.x;
+    px[1] = rgb.y;
+    px[2] = rgb.z;
+    px[3] = 1.0f - T;
+  });
+  return img;
+}
+
+}  // namespace cumuli

@@ -1,0 +1,98 @@
+#version 430
+// Emission–absorption march through a lit density volume (Iwasaki et al. 2011 rendering).
+// GLSL twin of cpp/src/volume_march.cpp: same ray, same equal steps, same trilinear lookups
+// (done by hand with texelFetch so the weights are full float, as in C++), same light:
+//   S = albedo·(sun·τ_sun·HG(g, d·sun) + E_sky/4π), colour += T·(1 − e^{−σ_t ρ h})·S, T *= e^{−σ_t ρ h}.
+// u_density: R32F [z][y][x]; u_light: RGBA32F (τ_sun, E_sky RGB).
+
+uniform sampler3D u_density;
+uniform sampler3D u_light;
+uniform vec3 u_box_min;
+uniform vec3 u_box_max;
+uniform vec3 u_cam_pos;
+uniform vec3 u_cam_forward;
+uniform vec3 u_cam_right;
+uniform vec3 u_cam_up;
+uniform float u_tan_half_fov;
+uniform vec2 u_resolution;
+uniform vec3 u_sun_dir;
+uniform vec3 u_sun_radiance;
+uniform vec3 u_zenith;
+uniform vec3 u_horizon;
+uniform float u_sigma_t;
+uniform float u_albedo;
+uniform float u_g;
+uniform float u_step;
+uniform int u_max_steps;
+
+out vec4 frag_colour;
+
+const float INV_4PI = 0.0795774715459477;
+const float MIN_TRANSMITTANCE = 1e-4;
+
+// Trilinear, GL texel centres, clamp to edge (C++: sample_trilinear).
+vec4 trilinear(sampler3D tex, vec3 p) {
+  ivec3 n = textureSize(tex, 0);
+  vec3 u = (p - u_box_min) / ((u_box_max - u_box_min) / vec3(n)) - 0.5;
+  vec3 fl = floor(u);
+  vec3 f = u - fl;
+  ivec3 i0 = clamp(ivec3(fl), ivec3(0), n - 1);
+  ivec3 i1 = clamp(ivec3(fl) + 1, ivec3(0), n - 1);
+  vec4 c000 = texelFetch(tex, ivec3(i0.x, i0.y, i0.z), 0);
+  vec4 c100 = texelFetch(tex, ivec3(i1.x, i0.y, i0.z), 0);
+  vec4 c010 = texelFetch(tex, ivec3(i0.x, i1.y, i0.z), 0);
+  vec4 c110 = texelFetch(tex, ivec3(i1.x, i1.y, i0.z), 0);
+  vec4 c001 = texelFetch(tex, ivec3(i0.x, i0.y, i1.z), 0);
+  vec4 c101 = texelFetch(tex, ivec3(i1.x, i0.y, i1.z), 0);
+  vec4 c011 = texelFetch(tex, ivec3(i0.x, i1.y, i1.z), 0);
+  vec4 c111 = texelFetch(tex, ivec3(i1.x, i1.y, i1.z), 0);
+  vec4 c00 = c000 + f.x * (c100 - c000);
+  vec4 c10 = c010 + f.x * (c110 - c010);
+  vec4 c01 = c001 + f.x * (c101 - c001);
+  vec4 c11 = c011 + f.x * (c111 - c011);
+  vec4 c0 = c00 + f.y * (c10 - c00);
+  vec4 c1 = c01 + f.y * (c11 - c01);
+  return c0 + f.z * (c1 - c0);
+}
+
+float henyey_greenstein(float g, float cos_theta) {
+  float d = 1.0 + g * g - 2.0 * g * cos_theta;
+  return INV_4PI * (1.0 - g * g) / (d * sqrt(d));
+}
+
+void main() {
+  float aspect = u_resolution.x / u_resolution.y;
+  float sx = (2.0 * gl_FragCoord.x / u_resolution.x - 1.0) * u_tan_half_fov * aspect;
+  float sy = (2.0 * gl_FragCoord.y / u_resolution.y - 1.0) * u_tan_half_fov;
+  vec3 d = normalize(u_cam_forward + sx * u_cam_right + sy * u_cam_up);
+
+  vec3 colour = vec3(0.0);
+  float T = 1.0;
+  // Slab test (C++: intersect(Box, ...)).
+  vec3 inv = 1.0 / d;
+  vec3 ta = (u_box_min - u_cam_pos) * inv;
+  vec3 tb = (u_box_max - u_cam_pos) * inv;
+  vec3 tmin = min(ta, tb);
+  vec3 tmax = max(ta, tb);
+  float t_in = max(max(tmin.x, tmin.y), tmin.z);
+  float t_out = min(min(tmax.x, tmax.y), tmax.z);
+  float t0 = max(t_in, 0.0);
+  if (t_out >= t_in && t_out > t0) {
+    float len = t_out - t0;
+    int n = clamp(int(ceil(len / u_step)), 1, u_max_steps);
+    float h = len / float(n);
+    float phase = henyey_greenstein(u_g, dot(d, u_sun_dir));
+    for (int k = 0; k < n && T >= MIN_TRANSMITTANCE; ++k) {
+      vec3 x = u_cam_pos + (t0 + (float(k) + 0.5) * h) * d;
+      float rho = trilinear(u_density, x).r;
+      if (rho <= 0.0) continue;
+      vec4 L = trilinear(u_light, x);
+      vec3 S = u_albedo * (u_sun_radiance * (L.x * phase) + L.yzw * INV_4PI);
+      float dtau = exp(-u_sigma_t * rho * h);
+      colour += T * (1.0 - dtau) * S;
+      T *= dtau;
+    }
+  }
+  vec3 sky = max(vec3(0.0), u_horizon + (u_zenith - u_horizon) * d.y);
+  frag_colour = vec4(colour + T * sky, 1.0 - T);
+}
