@@ -8,6 +8,7 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 from __future__ import annotations
 
 from cumuli import meshes
+from cumuli._version import __version__
 from cumuli.animation import (
     AnimationFrame,
     EndlessAnimation,
@@ -19,7 +20,6 @@ from cumuli.animation import (
     similarity_matrix,
     transition_matrix,
 )
-from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.noise import Noise

@@ -38,10 +38,12 @@ MAX_EDGE = 2048
 MAX_VOLUMES = 1 << 16
 
 
-def _box(box_min: Any, box_max: Any) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
+def _box(
+    box_min: Any, box_max: Any
+) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
     lo = check.vec3(box_min, "box_min")
     hi = check.vec3(box_max, "box_max")
-    if not all(h > lo_ for lo_, h in zip(lo, hi)):
+    if not all(h > lo_ for lo_, h in zip(lo, hi, strict=True)):
         raise ValueError(f"box_max must be greater than box_min on every axis, got {lo}, {hi}")
     return lo, hi
 
@@ -246,7 +248,9 @@ class EndlessAnimation:
         start: int = 0,
     ) -> None:
         if not isinstance(database, VolumeDatabase):
-            raise TypeError(f"database must be a cumuli.VolumeDatabase, got {type(database).__name__}")
+            raise TypeError(
+                f"database must be a cumuli.VolumeDatabase, got {type(database).__name__}"
+            )
         self.database = database
         d = database.similarity()
         self.sigma = (
@@ -411,13 +415,17 @@ def sky_colours(sky: Any) -> tuple[tuple[float, float, float], tuple[float, floa
         try:
             arr = np.asarray(sky, dtype=np.float64)
         except (TypeError, ValueError):
-            raise TypeError(f"sky must be a colour, (zenith, horizon) or a Sky, got {sky!r}") from None
+            raise TypeError(
+                f"sky must be a colour, (zenith, horizon) or a Sky, got {sky!r}"
+            ) from None
         if arr.shape == (3,):
             z = h = check.vec3(arr, "sky")
         elif arr.shape == (2, 3):
             z, h = check.vec3(arr[0], "sky zenith"), check.vec3(arr[1], "sky horizon")
         else:
-            raise ValueError(f"sky must be a colour (3,) or (zenith, horizon) (2, 3), got {arr.shape}")
+            raise ValueError(
+                f"sky must be a colour (3,) or (zenith, horizon) (2, 3), got {arr.shape}"
+            )
     if min(z) < 0 or min(h) < 0:
         raise ValueError("sky colours must be non-negative")
     return z, h
@@ -456,7 +464,9 @@ class VolumeLighting:
         threads: int = 0,
     ) -> None:
         if not isinstance(database, VolumeDatabase):
-            raise TypeError(f"database must be a cumuli.VolumeDatabase, got {type(database).__name__}")
+            raise TypeError(
+                f"database must be a cumuli.VolumeDatabase, got {type(database).__name__}"
+            )
         if not isinstance(sun, Sun):
             raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
         self.database = database
@@ -480,14 +490,18 @@ class VolumeLighting:
         )
         self.sky_sh = _core.sky_sh(self.zenith, self.horizon, self.sh_order, self.sh_samples)
         flat = self.sky_depth.reshape(-1, nc)
-        pick = np.unique(np.linspace(0, flat.shape[0] - 1, min(fit_samples, flat.shape[0])).astype(np.int64))
+        pick = np.unique(
+            np.linspace(0, flat.shape[0] - 1, min(fit_samples, flat.shape[0])).astype(np.int64)
+        )
         self.shexp_a, self.shexp_b, self.shexp_max_norm = _core.fit_shexp(
             np.ascontiguousarray(flat[pick]), self.sh_order, self.sigma_t, bins, self.sh_samples
         )
         for arr in (self.sun_depth, self.sky_depth, self.sky_sh, self.shexp_a, self.shexp_b):
             arr.setflags(write=False)
 
-    def optical_depth(self, frame: AnimationFrame | int, threads: int = 0) -> tuple[np.ndarray, np.ndarray]:
+    def optical_depth(
+        self, frame: AnimationFrame | int, threads: int = 0
+    ) -> tuple[np.ndarray, np.ndarray]:
         """``(f_sun (D, H, W), f_sky (D, H, W, order²))`` of a frame: the blend of the precomputed
         optical depths with the frame's weight (eq. 6)."""
         source, target, w = self._frame(frame)
@@ -501,11 +515,14 @@ class VolumeLighting:
 
     def light(self, frame: AnimationFrame | int, threads: int = 0) -> np.ndarray:
         """The frame's light ``(D, H, W, 4)`` float32: ``τ_sun = exp(−σ_t f_sun)`` and the sky
-        irradiance ``E_sky`` (RGB) ``= Σ_m L_m τ_m`` with ``τ = exp*(−σ_t f_sky)`` (SH exponential)."""
+        irradiance ``E_sky`` (RGB) ``= Σ_m L_m τ_m`` with ``τ = exp*(−σ_t f_sky)`` (the SH
+        exponential)."""
         f_sun, f_sky = self.optical_depth(frame, threads)
         return self.light_from_depths(f_sun, f_sky, threads)
 
-    def light_from_depths(self, f_sun: np.ndarray, f_sky: np.ndarray, threads: int = 0) -> np.ndarray:
+    def light_from_depths(
+        self, f_sun: np.ndarray, f_sky: np.ndarray, threads: int = 0
+    ) -> np.ndarray:
         """Light ``(D, H, W, 4)`` from given optical depths (e.g. computed on a blended volume)."""
         lo, hi = self.database.box
         return _core.light_volume(
@@ -533,8 +550,12 @@ class VolumeLighting:
 
 
 def sun_optical_depth(
-    volumes: Any, box_min: Sequence[float], box_max: Sequence[float], to_sun: Sequence[float],
-    step: float = 0.5, threads: int = 0,
+    volumes: Any,
+    box_min: Sequence[float],
+    box_max: Sequence[float],
+    to_sun: Sequence[float],
+    step: float = 0.5,
+    threads: int = 0,
 ) -> np.ndarray:
     """Optical depth ``∫ ρ du`` from every voxel centre towards the sun (``(N, D, H, W)`` or
     ``(D, H, W)`` in, same shape out; trilinear, steps of ``step`` voxels; C++)."""
@@ -543,15 +564,24 @@ def sun_optical_depth(
     arr = _float_volumes(arr[None] if single else arr, "volumes", 4)
     lo, hi = _box(box_min, box_max)
     out = _core.sun_optical_depth(
-        arr, lo, hi, check.direction(to_sun, "to_sun"), check.real(step, "step", 1e-3, 64.0),
+        arr,
+        lo,
+        hi,
+        check.direction(to_sun, "to_sun"),
+        check.real(step, "step", 1e-3, 64.0),
         check.threads(threads),
     )
     return out[0] if single else out
 
 
 def sh_optical_depth(
-    volumes: Any, box_min: Sequence[float], box_max: Sequence[float], sh_order: int = 3,
-    sh_samples: int = 6, step: float = 0.5, threads: int = 0,
+    volumes: Any,
+    box_min: Sequence[float],
+    box_max: Sequence[float],
+    sh_order: int = 3,
+    sh_samples: int = 6,
+    step: float = 0.5,
+    threads: int = 0,
 ) -> np.ndarray:
     """SH coefficients (``sh_order²``, innermost) of each voxel's optical depth over directions."""
     arr = np.asarray(volumes)
@@ -568,10 +598,11 @@ def sh_optical_depth(
 
 def sh_basis(order: int, directions: Any) -> np.ndarray:
     """Real orthonormal SH ``y_m(ω)`` of unit ``(N, 3)`` directions: ``(N, order²)`` (C++)."""
-    return _core.sh_eval(check.integer(order, "order", 1, 4), check.points3(directions, "directions"))
+    return _core.sh_eval(
+        check.integer(order, "order", 1, 4), check.points3(directions, "directions")
+    )
 
 
 def sphere_quadrature(n_theta: int) -> tuple[np.ndarray, np.ndarray]:
     """The product quadrature: directions ``(2·n_theta², 3)`` and weights summing to 4π."""
     return _core.sphere_quadrature(check.integer(n_theta, "n_theta", 1, 64))
-

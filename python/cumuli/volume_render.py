@@ -200,7 +200,9 @@ class VolumeRenderer:
         d, h, w = vol.shape
         limit = int(self.context.info.get("GL_MAX_3D_TEXTURE_SIZE", 2048))
         if max(d, h, w) > limit:
-            raise ValueError(f"volume edge {max(d, h, w)} exceeds this GL's 3D texture limit {limit}")
+            raise ValueError(
+                f"volume edge {max(d, h, w)} exceeds this GL's 3D texture limit {limit}"
+            )
         made: list[Any] = []
         try:
             dens = ctx.texture3d((w, h, d), 1, data=vol.tobytes(), dtype="f4")
