@@ -1,0 +1,216 @@
+"""Endless cloud animation (Iwasaki et al. 2011): precompute and per-frame costs.
+
+Measured (median / best / worst wall time of repeats, plus process CPU time):
+
+* ``similarity``: the similarity matrix ``D`` (C++) against the number of volumes N and their
+  resolution, on 1 thread and on all cores (ratio), and against a numpy reference at one size
+  (ratio: C++ speed-up).
+* ``optical_depth``: per database volume, the sun optical depth (one march per voxel) and the SH
+  optical depth (one march per voxel and quadrature direction), against resolution.
+* ``frame``: one displayed frame of a cross-dissolve: blend the densities and the optical depths,
+  evaluate the light (SH exponential), render on the CPU and (where a GL context exists) with
+  the GL marcher — the shares of the frame time.
+
+No pass/fail on time. JSON + PNG under ``benchmarks/out/`` (``--out`` to change).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common as common  # noqa: E402
+import numpy as np  # noqa: E402
+
+import cumuli as cu  # noqa: E402
+from cumuli.animation import sh_optical_depth, sun_optical_depth  # noqa: E402
+
+
+def _timed(fn, repeats: int) -> dict[str, Any]:
+    wall, cpu = common.time_repeats(fn, repeats)
+    return {"wall_s": common.spread(wall), "cpu_s": common.spread(cpu)}
+
+
+def _med(r: dict[str, Any]) -> float:
+    return r["wall_s"]["median"]
+
+
+def bench_similarity(quick: bool, repeats: int, cores: int) -> dict[str, Any]:
+    rng = np.random.default_rng(0)
+    counts = [8, 16, 32] if quick else [16, 32, 64, 128]
+    resolutions = [16, 24] if quick else [16, 32, 48]
+    rows = []
+    for res in resolutions:
+        for n in counts:
+            vols = rng.random((n, res, res, res), dtype=np.float32)
+            row: dict[str, Any] = {"n": n, "resolution": res}
+            row["threads_1"] = _timed(lambda v=vols: cu.similarity_matrix(v, threads=1), repeats)
+            if cores > 1:
+                row["threads_all"] = _timed(lambda v=vols: cu.similarity_matrix(v), repeats)
+                row["all_over_1_speedup"] = _med(row["threads_1"]) / _med(row["threads_all"])
+            rows.append(row)
+    n, res = counts[0], resolutions[0]
+    vols = rng.random((n, res, res, res), dtype=np.float32)
+    flat = vols.reshape(n, -1).astype(np.float64)
+
+    def numpy_ref() -> np.ndarray:
+        return np.array([[((a - b) ** 2).sum() for b in flat] for a in flat])
+
+    ref = _timed(numpy_ref, repeats)
+    cpp = _timed(lambda: cu.similarity_matrix(vols, threads=1), repeats)
+    return {
+        "sizes": rows,
+        "numpy_reference": {
+            "n": n,
+            "resolution": res,
+            "numpy": ref,
+            "cpp_1_thread": cpp,
+            "numpy_over_cpp": _med(ref) / _med(cpp),
+        },
+    }
+
+
+def _cloud_volumes(res: int, n: int) -> cu.VolumeDatabase:
+    cloud = cu.gaussian_cumulus(centre=(0, 0, 0), seed=1)
+    return cu.evolving_cloud_volumes(
+        cloud, cu.Noise(seed=7), n, res, density_scale=2.0, frequency=0.3, seed=3
+    )
+
+
+def bench_optical_depth(quick: bool, repeats: int) -> list[dict[str, Any]]:
+    resolutions = [12, 16, 24] if quick else [16, 32, 48]
+    sh_samples = 3 if quick else 6
+    rows = []
+    for res in resolutions:
+        db = _cloud_volumes(res, 1)
+        vol = db.volumes
+        sun = _timed(lambda v=vol, b=db.box: sun_optical_depth(v, *b, (0.5, 0.7, 0.3)), repeats)
+        sky = _timed(
+            lambda v=vol, b=db.box: sh_optical_depth(v, *b, 3, sh_samples), max(1, repeats // 2)
+        )
+        rows.append(
+            {
+                "resolution": res,
+                "voxels": res**3,
+                "sh_order": 3,
+                "directions": 2 * sh_samples**2,
+                "sun_per_volume": sun,
+                "sky_sh_per_volume": sky,
+                "sky_over_sun": _med(sky) / _med(sun),
+            }
+        )
+    return rows
+
+
+def bench_frame(quick: bool, repeats: int, gl_ok: bool) -> dict[str, Any]:
+    res = 20 if quick else 40
+    width, height = (64, 48) if quick else (320, 240)
+    db = _cloud_volumes(res, 8)
+    sun = cu.Sun(direction=(0.5, 0.7, 0.3), intensity=10.0)
+    lighting = cu.VolumeLighting(db, sun, sh_samples=3 if quick else 6)
+    frame = cu.AnimationFrame(0, 2, 5, 0.5, True)
+    density = cu.blend_volumes(db[2], db[5], 0.5)
+    light = lighting.light(frame)
+    lo, hi = np.array(db.box_min), np.array(db.box_max)
+    c = (lo + hi) / 2
+    cam = cu.VolumeCamera(tuple(c + np.array([0, 0.2, 0.9]) * (hi - lo).max()), tuple(c), fov=45)
+    out: dict[str, Any] = {"resolution": res, "width": width, "height": height}
+    out["blend_density"] = _timed(lambda: cu.blend_volumes(db[2], db[5], 0.5), repeats)
+    out["blend_depths"] = _timed(lambda: lighting.optical_depth(frame), repeats)
+    out["light"] = _timed(lambda: lighting.light(frame), repeats)
+    out["render_cpu"] = _timed(
+        lambda: cu.render_volume(density, light, db.box, cam, width, height, sun), repeats
+    )
+    if gl_ok:
+        with cu.VolumeRenderer() as r:
+            out["render_gl"] = _timed(
+                lambda: r.render(density, light, db.box, cam, width, height, sun), repeats
+            )
+        out["cpu_over_gl"] = _med(out["render_cpu"]) / _med(out["render_gl"])
+    render = _med(out.get("render_gl", out["render_cpu"]))
+    out["frame_total_s"] = _med(out["blend_density"]) + _med(out["light"]) + render
+    return out
+
+
+def plot(result: dict[str, Any], path: Path) -> None:
+    plt = common.pyplot()
+    fig, axes = plt.subplots(1, 3, figsize=(13, 3.8))
+    ax = axes[0]
+    rows = result["similarity"]["sizes"]
+    for res in sorted({r["resolution"] for r in rows}):
+        sel = [r for r in rows if r["resolution"] == res]
+        ax.loglog([r["n"] for r in sel], [_med(r["threads_1"]) for r in sel], "o-", label=f"{res}³")
+    ax.set_xlabel("volumes N")
+    ax.set_ylabel("seconds (median, 1 thread)")
+    ax.set_title("similarity matrix D")
+    ax.legend()
+    ax = axes[1]
+    od = result["optical_depth"]
+    vox = [r["voxels"] for r in od]
+    ax.loglog(vox, [_med(r["sun_per_volume"]) for r in od], "o-", label="sun")
+    ax.loglog(vox, [_med(r["sky_sh_per_volume"]) for r in od], "s--", label="sky SH")
+    ax.set_xlabel("voxels per volume")
+    ax.set_title("optical-depth precompute per volume")
+    ax.legend()
+    ax = axes[2]
+    fr = result["frame"]
+    names = [
+        k for k in ("blend_density", "blend_depths", "light", "render_cpu", "render_gl") if k in fr
+    ]
+    ax.bar(names, [_med(fr[k]) * 1e3 for k in names])
+    ax.set_ylabel("ms per frame (median)")
+    ax.set_title(f"one frame ({fr['resolution']}³, {fr['width']}×{fr['height']})")
+    ax.tick_params(axis="x", rotation=30)
+    m = result["machine"]
+    fig.suptitle(f"{m['cpu_model']} ×{m['cores']} — GL: {m['gl_renderer']}", fontsize=9)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = common.parse_args(__doc__.splitlines()[0], argv)
+    repeats = 3 if args.quick else 7
+    machine = common.machine_info()
+    common.log(f"machine: {machine['cpu_model']} ×{machine['cores']}, GL: {machine['gl_renderer']}")
+    result: dict[str, Any] = {
+        "benchmark": "animation",
+        "description": "Iwasaki 2011: similarity matrix, optical-depth precompute, per-frame cost",
+        "quick": args.quick,
+        "repeats": repeats,
+        "machine": machine,
+        "similarity": bench_similarity(args.quick, repeats, machine["cores"]),
+        "optical_depth": bench_optical_depth(args.quick, repeats),
+        "frame": bench_frame(args.quick, repeats, machine["gl_renderer"] is not None),
+    }
+    json_path = common.write_json(args.out / "animation.json", result)
+    plot(result, args.out / "animation.png")
+    for r in result["similarity"]["sizes"]:
+        extra = f", all cores ×{r['all_over_1_speedup']:.2f}" if "all_over_1_speedup" in r else ""
+        common.log(
+            f"D: N={r['n']:4d} at {r['resolution']}³: {_med(r['threads_1']) * 1e3:9.2f} ms{extra}"
+        )
+    ref = result["similarity"]["numpy_reference"]
+    common.log(f"D: numpy reference / C++ (1 thread) = ×{ref['numpy_over_cpp']:.1f}")
+    for r in result["optical_depth"]:
+        common.log(
+            f"optical depth {r['resolution']}³: sun {_med(r['sun_per_volume']) * 1e3:.1f} ms, "
+            f"sky SH ({r['directions']} dirs) {_med(r['sky_sh_per_volume']) * 1e3:.1f} ms "
+            "per volume"
+        )
+    fr = result["frame"]
+    parts = ", ".join(
+        f"{k} {_med(fr[k]) * 1e3:.2f} ms"
+        for k in ("blend_density", "blend_depths", "light", "render_cpu", "render_gl")
+        if k in fr
+    )
+    common.log(f"frame: {parts}; total {fr['frame_total_s'] * 1e3:.1f} ms")
+    common.log(f"wrote {json_path} and {args.out / 'animation.png'}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
