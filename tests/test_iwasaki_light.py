@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.animation import sh_basis, sh_optical_depth, sphere_quadrature, sun_optical_depth
+from cumuli.animation import (
+    point_optical_depth,
+    sh_basis,
+    sh_optical_depth,
+    sphere_quadrature,
+    sun_optical_depth,
+)
 
 LO, HI = (0.0, 0.0, 0.0), (2.0, 1.0, 3.0)
 
@@ -108,15 +114,52 @@ def test_light_of_blended_frame_matches_direct_computation(lighting: cu.VolumeLi
     f_sky = sh_optical_depth(
         blended, *db.box, lighting.sh_order, lighting.sh_samples, lighting.step
     )
-    direct = lighting.light_from_depths(f_sun, f_sky)
+    f_pts = point_optical_depth(blended, *db.box, lighting.points, lighting.step)
+    direct = lighting.light_from_depths(f_sun, f_sky, f_pts, blended)
     np.testing.assert_allclose(light, direct, rtol=1e-4, atol=1e-5)
     np.testing.assert_allclose(light[..., 0], np.exp(-1.5 * f_sun), rtol=1e-5)
+    single = lighting.light_from_depths(f_sun, f_sky)
+    assert (light[..., 1:] > single[..., 1:]).all()  # multiple scattering adds light
+
+
+def test_multiple_scattering_of_uniform_volume_matches_formula() -> None:
+    """Uniform ρ and a sun straight down the y axis: every term of eq. (8) is analytic."""
+    shape, rho, sigma_t, albedo = (4, 4, 4), 0.5, 0.8, 0.9
+    db = cu.VolumeDatabase(np.full((1, *shape), rho, np.float32), (0, 0, 0), (1, 1, 1))
+    sun = cu.Sun(direction=(0, 1, 0), colour=(1.0, 0.5, 0.25), intensity=2.0)
+    lit = cu.VolumeLighting(
+        db, sun, sky=(0, 0, 0), sigma_t=sigma_t, sh_order=2, sh_samples=2, ms_points=7, ms_orders=1,
+        albedo=albedo, seed=3,
+    )  # fmt: skip
+    light = lit.light(0)
+    q = lit.points.astype(np.float64)
+    assert q.shape == (7, 3) and (q >= 0).all() and (q <= 1).all()
+    x = (np.stack(np.meshgrid(*(np.arange(4),) * 3, indexing="ij"), -1)[..., ::-1] + 0.5) / 4
+    d = np.linalg.norm(x[..., None, :] - q, axis=-1)  # (4, 4, 4, K)
+    np.testing.assert_allclose(lit.point_depth[0], rho * d, rtol=1e-4, atol=1e-6)
+    # E₁ at the points: trilinear of sun·τ_sun (+ no sky) — τ_sun depends only on y.
+    tau = np.exp(-sigma_t * rho * (1 - x[..., 1]))
+    e1_vox = np.array(sun.radiance) * tau[..., None]
+    y_q = np.clip(q[:, 1] * 4 - 0.5, 0, 3)
+    lo_i = np.floor(y_q).astype(int)
+    hi_i = np.minimum(lo_i + 1, 3)
+    f = y_q - lo_i
+    tau_y = np.exp(-sigma_t * rho * (1 - (np.arange(4) + 0.5) / 4))
+    tau_q = tau_y[lo_i] + f * (tau_y[hi_i] - tau_y[lo_i])
+    e1_q = np.array(sun.radiance) * tau_q[:, None]
+    src = (1 / 7) * sigma_t * rho * albedo * e1_q / (4 * math.pi)  # (K, 3)
+    d_min2 = (0.5 * (1 / 7) ** (1 / 3)) ** 2
+    geo = np.exp(-sigma_t * rho * d) / np.maximum(d**2, d_min2)
+    e2 = geo @ src
+    np.testing.assert_allclose(light[..., 1:], e2, rtol=2e-4, atol=1e-7)
+    np.testing.assert_allclose(light[..., 0], tau, rtol=1e-5)
+    assert e1_vox.shape == (4, 4, 4, 3)
 
 
 def test_empty_volume_sees_the_whole_sky() -> None:
     db = cu.VolumeDatabase(np.zeros((2, 3, 3, 3), np.float32), LO, HI)
     sky = ((0.2, 0.4, 0.9), (0.6, 0.7, 0.8))
-    lit = cu.VolumeLighting(db, cu.Sun(), sky=sky, sh_samples=6)
+    lit = cu.VolumeLighting(db, cu.Sun(), sky=sky, sh_samples=6, ms_points=8)
     light = lit.light(1)
     np.testing.assert_array_equal(light[..., 0], 1.0)
     # ∫ max(0, h + (z − h)ω_y) dω = 4π·h for this sky (the linear term integrates to zero).
@@ -159,6 +202,13 @@ def test_light_bad_input(lighting: cu.VolumeLighting) -> None:
         cu.VolumeLighting(db, cu.Sun(), sky=(1, 2))
     with pytest.raises(ValueError, match="frame"):
         lighting.light(7)
+    with pytest.raises(ValueError, match="ms_points"):
+        cu.VolumeLighting(db, cu.Sun(), ms_points=-1)
+    with pytest.raises(ValueError, match="albedo"):
+        cu.VolumeLighting(db, cu.Sun(), albedo=1.5)
+    with pytest.raises(ValueError, match="density"):
+        f_sun, f_sky, f_pts = lighting.optical_depth(0)
+        lighting.light_from_depths(f_sun, f_sky, f_pts)
     with pytest.raises(ValueError, match="to_sun"):
         sun_optical_depth(np.zeros((2, 2, 2)), LO, HI, (0, 0, 0))
     with pytest.raises(ValueError, match="box_max"):

@@ -350,6 +350,70 @@ void bind_animation(py::module_& m) {
         return to_array(img, {height, width, 4});
       },
       "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top.");
+
+  m.def(
+      "volume_sample_points",
+      [](V3 lo, V3 hi, int count, std::uint64_t seed) {
+        VolumeGrid g;
+        g.box = Box{v3(lo), v3(hi)};
+        const auto pts = volume_sample_points(g, count, seed);
+        auto out = new_array({static_cast<py::ssize_t>(pts.size()), 3});
+        for (std::size_t i = 0; i < pts.size(); ++i)
+          for (int k = 0; k < 3; ++k) out.mutable_data()[3 * i + k] = pts[i][k];
+        return out;
+      },
+      py::arg("box_min"), py::arg("box_max"), py::arg("count"), py::arg("seed"));
+
+  m.def(
+      "point_optical_depth",
+      [](const FloatArray& vols, V3 lo, V3 hi, const FloatArray& points, float step, int threads) {
+        const VolumeGrid g = grid_of(vols, 1, lo, hi, "volumes");
+        require_points(points, "points");
+        std::vector<glm::vec3> pts(static_cast<std::size_t>(points.shape(0)));
+        for (std::size_t i = 0; i < pts.size(); ++i)
+          pts[i] = glm::vec3(points.data()[3 * i], points.data()[3 * i + 1], points.data()[3 * i + 2]);
+        const int n = static_cast<int>(vols.shape(0));
+        const float* v = vols.data();
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          out = point_optical_depth(v, n, g, pts, step, threads);
+        }
+        auto shape = shape_of(vols);
+        shape.push_back(static_cast<py::ssize_t>(pts.size()));
+        return to_array(out, shape);
+      },
+      "Optical depth from every voxel centre to every sample point: (N, D, H, W, K).");
+
+  m.def(
+      "add_multiple_scattering",
+      [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi,
+         const FloatArray& point_depth, const FloatArray& points, V3 sun_radiance, float sigma_t,
+         float albedo, int orders, int threads) {
+        const VolumeGrid g = grid_of(density, 0, lo, hi, "density");
+        const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
+        const VolumeGrid pg = grid_of(point_depth, 0, lo, hi, "point optical depth", 1);
+        require_points(points, "points");
+        const auto np = points.shape(0);
+        if (lg.w != g.w || lg.h != g.h || lg.d != g.d || light.shape(3) != 4)
+          throw py::value_error("light must have shape (D, H, W, 4) matching the density");
+        if (pg.w != g.w || pg.h != g.h || pg.d != g.d || point_depth.shape(3) != np)
+          throw py::value_error("point optical depth must have shape (D, H, W, K)");
+        std::vector<glm::vec3> pts(static_cast<std::size_t>(np));
+        for (std::size_t i = 0; i < pts.size(); ++i)
+          pts[i] = glm::vec3(points.data()[3 * i], points.data()[3 * i + 1], points.data()[3 * i + 2]);
+        auto out = new_array(shape_of(light));
+        std::copy(light.data(), light.data() + light.size(), out.mutable_data());
+        float* po = out.mutable_data();
+        const float *pd = density.data(), *pp = point_depth.data();
+        {
+          py::gil_scoped_release release;
+          add_multiple_scattering(pd, po, g, pp, pts, v3(sun_radiance), sigma_t, albedo, orders,
+                                  threads);
+        }
+        return out;
+      },
+      "Light plus `orders` orders of isotropic multiple scattering through the sample points.");
 }
 
 }  // namespace cumuli::bind

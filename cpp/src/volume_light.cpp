@@ -5,8 +5,11 @@
 #include <stdexcept>
 
 #include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
+#include <glm/ext/vector_double3.hpp>
 
 #include "cumuli/parallel.hpp"
+#include "cumuli/rng.hpp"
 
 namespace cumuli {
 
@@ -305,6 +308,111 @@ std::vector<float> light_volume(const float* f_sun, const float* f_sh, const Vol
     }
   });
   return out;
+}
+
+// --- multiple scattering ---------------------------------------------------------------------
+
+std::vector<glm::vec3> volume_sample_points(const VolumeGrid& g, int count, std::uint64_t seed) {
+  g.validate();
+  if (count < 1 || count > (1 << 20)) throw std::invalid_argument("ms_points must be in [1, 2^20]");
+  int m = 1;
+  while (m * m * m < count) ++m;
+  const int cells = m * m * m;
+  std::vector<int> order(static_cast<std::size_t>(cells));
+  for (int i = 0; i < cells; ++i) order[i] = i;
+  Rng rng(seed);
+  for (int i = cells - 1; i > 0; --i) {  // Fisher–Yates with cumuli's own uniform
+    const int j = static_cast<int>(rng.uniform_double() * (i + 1));
+    std::swap(order[i], order[std::min(j, i)]);
+  }
+  std::vector<glm::vec3> pts;
+  pts.reserve(static_cast<std::size_t>(count));
+  const glm::vec3 cell = (g.box.hi - g.box.lo) / static_cast<float>(m);
+  for (int i = 0; i < count; ++i) {
+    const int c = order[i];
+    const glm::vec3 idx(c % m, (c / m) % m, c / (m * m));
+    const glm::vec3 jitter(rng.uniform(), rng.uniform(), rng.uniform());
+    pts.push_back(g.box.lo + (idx + jitter) * cell);
+  }
+  return pts;
+}
+
+float optical_depth_segment(const float* vol, const VolumeGrid& g, glm::vec3 a, glm::vec3 b,
+                            float step_voxels) {
+  const float len = glm::length(b - a);
+  if (len <= 0.0f) return 0.0f;
+  const glm::vec3 vs = g.voxel_size();
+  const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
+  const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
+  const float h = len / static_cast<float>(n);
+  const glm::vec3 dir = (b - a) / len;
+  double sum = 0.0;
+  for (int i = 0; i < n; ++i) sum += sample_trilinear(vol, g, a + ((i + 0.5f) * h) * dir);
+  return static_cast<float>(sum * h);
+}
+
+std::vector<float> point_optical_depth(const float* volumes, int count, const VolumeGrid& g,
+                                       const std::vector<glm::vec3>& points, float step_voxels,
+                                       int threads) {
+  g.validate();
+  check_step(step_voxels);
+  const std::size_t nv = g.voxels(), np = points.size();
+  std::vector<float> out(static_cast<std::size_t>(count) * nv * np);
+  parallel_for(static_cast<std::size_t>(count) * nv, threads, [&](std::size_t i) {
+    const std::size_t v = i % nv;
+    const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),
+              z = static_cast<int>(v / (static_cast<std::size_t>(g.w) * g.h));
+    const glm::vec3 p = g.centre(x, y, z);
+    const float* vol = volumes + (i / nv) * nv;
+    for (std::size_t k = 0; k < np; ++k)
+      out[i * np + k] = optical_depth_segment(vol, g, p, points[k], step_voxels);
+  });
+  return out;
+}
+
+void add_multiple_scattering(const float* density, float* light, const VolumeGrid& g,
+                             const float* point_depth, const std::vector<glm::vec3>& points,
+                             glm::vec3 sun_radiance, float sigma_t, float albedo, int orders,
+                             int threads) {
+  g.validate();
+  if (orders < 0 || orders > 16) throw std::invalid_argument("ms_orders must be in [0, 16]");
+  if (orders == 0 || points.empty()) return;
+  const std::size_t nv = g.voxels(), np = points.size();
+  const glm::vec3 size = g.box.hi - g.box.lo;
+  const double volume = static_cast<double>(size.x) * size.y * size.z;
+  const float weight = static_cast<float>(volume / np);
+  const float d_min = 0.5f * static_cast<float>(std::cbrt(volume / np));
+  const float d2_min = d_min * d_min;
+  // E of the previous order at the voxels (RGB), starting with the single scattering.
+  std::vector<float> prev(nv * 3), total(nv * 3, 0.0f);
+  for (std::size_t v = 0; v < nv; ++v)
+    for (int c = 0; c < 3; ++c) prev[v * 3 + c] = sun_radiance[c] * light[v * 4] + light[v * 4 + 1 + c];
+  std::vector<glm::vec3> src(np);
+  std::vector<float> next(nv * 3);
+  for (int n = 0; n < orders; ++n) {
+    for (std::size_t k = 0; k < np; ++k) {
+      float e[3];
+      sample_trilinear(prev.data(), g, 3, points[k], e);
+      const float rho = sample_trilinear(density, g, points[k]);
+      src[k] = (weight * sigma_t * rho * albedo * 0.0795774715459477f) * glm::vec3(e[0], e[1], e[2]);
+    }
+    parallel_for(nv, threads, [&](std::size_t v) {
+      const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),
+                z = static_cast<int>(v / (static_cast<std::size_t>(g.w) * g.h));
+      const glm::vec3 p = g.centre(x, y, z);
+      glm::dvec3 acc(0.0);
+      for (std::size_t k = 0; k < np; ++k) {
+        const glm::vec3 d = points[k] - p;
+        const float g2 = std::max(glm::dot(d, d), d2_min);
+        acc += glm::dvec3(src[k] * (std::exp(-sigma_t * point_depth[v * np + k]) / g2));
+      }
+      for (int c = 0; c < 3; ++c) next[v * 3 + c] = static_cast<float>(acc[c]);
+    });
+    for (std::size_t i = 0; i < nv * 3; ++i) total[i] += next[i];
+    prev.swap(next);
+  }
+  for (std::size_t v = 0; v < nv; ++v)
+    for (int c = 0; c < 3; ++c) light[v * 4 + 1 + c] += total[v * 3 + c];
 }
 
 }  // namespace cumuli

@@ -16,6 +16,7 @@
 #pragma once
 
 #include <cstddef>
+#include <cstdint>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -98,5 +99,38 @@ ShExpTable fit_shexp(const float* f, std::size_t count, int order, float sigma_t
 std::vector<float> light_volume(const float* f_sun, const float* f_sh, const VolumeGrid& g,
                                 const ShExpTable& table, const float* sky_coeffs, float sigma_t,
                                 int threads);
+
+// --- multiple isotropic scattering through sample points (§3.2, eq. 8) ------------------------
+//
+// K points q_k uniform in the box (seeded, the same for every database volume). The optical depth
+// between every voxel centre and every q_k is precomputed per database volume; it is linear in ρ,
+// so a blended frame's is the blend (the paper's eq. 9 blends log τ̃, which is −σ_t·f + log G with
+// the same G for both volumes: the same thing). Instead of the paper's cuts the K terms are
+// summed directly (K is small here).
+
+// `count` points uniform in the box (xyz): jittered over a ⌈∛count⌉³ lattice, then the first
+// `count` cells in a seeded shuffle, so the points cover the box evenly.
+std::vector<glm::vec3> volume_sample_points(const VolumeGrid& g, int count, std::uint64_t seed);
+
+// ∫ ρ along the segment a → b (midpoint rule, steps ≤ step_voxels voxel sizes).
+float optical_depth_segment(const float* vol, const VolumeGrid& g, glm::vec3 a, glm::vec3 b,
+                            float step_voxels);
+
+// Optical depth from every voxel centre to every point: count × voxels × points floats.
+std::vector<float> point_optical_depth(const float* volumes, int count, const VolumeGrid& g,
+                                       const std::vector<glm::vec3>& points, float step_voxels,
+                                       int threads);
+
+// Adds `orders` orders of isotropic multiple scattering to `light` (voxels × 4, from
+// light_volume) in place, as irradiance in channels 1..3. The first order's isotropic irradiance
+// is E₁ = sun·τ_sun + E_sky; order n: at each q_k, ρ_k and E_{n−1}(q_k) are trilinear
+// (eq. 8's "interpolated from the neighbouring voxels"), and
+//   E_n(x) = Σ_k (V/K)·σ_t·ρ_k·albedo·E_{n−1}(q_k)/4π · exp(−σ_t f(x, q_k)) / max(d², d_min²)
+// with d = |x − q_k| and d_min half the mean spacing of the points (the geometric term, clamped
+// where the Monte Carlo estimate of the 1/d² singularity is unreliable).
+void add_multiple_scattering(const float* density, float* light, const VolumeGrid& g,
+                             const float* point_depth, const std::vector<glm::vec3>& points,
+                             glm::vec3 sun_radiance, float sigma_t, float albedo, int orders,
+                             int threads);
 
 }  // namespace cumuli
