@@ -7,6 +7,9 @@ Measured (median / best / worst wall time of repeats, plus process CPU time):
   (ratio: C++ speed-up).
 * ``optical_depth``: per database volume, the sun optical depth (one march per voxel) and the SH
   optical depth (one march per voxel and quadrature direction), against resolution.
+* ``sky_accuracy``: the SH exponential (the paper's fitted eq. 7 against scaling and squaring)
+  at SH orders 2–4: median / 90th-percentile relative error of the uniform-sky visibility
+  ``∫τ dω`` against brute-force marching along every quadrature direction, and the light time.
 * ``frame``: one displayed frame of a cross-dissolve: blend the densities and the optical depths,
   evaluate the light (SH exponential), render on the CPU and (where a GL context exists) with
   the GL marcher — the shares of the frame time.
@@ -26,7 +29,11 @@ import _common as common  # noqa: E402
 import numpy as np  # noqa: E402
 
 import cumuli as cu  # noqa: E402
-from cumuli.animation import sh_optical_depth, sun_optical_depth  # noqa: E402
+from cumuli.animation import (  # noqa: E402
+    sh_optical_depth,
+    sphere_quadrature,
+    sun_optical_depth,
+)
 
 
 def _timed(fn, repeats: int) -> dict[str, Any]:
@@ -105,12 +112,43 @@ def bench_optical_depth(quick: bool, repeats: int) -> list[dict[str, Any]]:
     return rows
 
 
+def bench_sky_accuracy(quick: bool, repeats: int) -> list[dict[str, Any]]:
+    res, samples = (12, 4) if quick else (24, 6)
+    db = _cloud_volumes(res, 1)
+    dirs, w = sphere_quadrature(samples)
+    depth = np.stack([sun_optical_depth(db.volumes[0], *db.box, d) for d in dirs], -1)
+    true = (np.exp(-depth) * w).sum(-1)
+    inside = db.volumes[0] > 0
+    rows = []
+    for order in (2, 3, 4):
+        for method in ("fit", "squaring"):
+            lit = cu.VolumeLighting(
+                db, cu.Sun(), sky=(1, 1, 1), sh_order=order, sh_samples=samples, shexp=method,
+                ms_points=0,
+            )  # fmt: skip
+            vis = lit.light(0)[..., 1]
+            rel = np.abs(vis - true) / true
+            rows.append(
+                {
+                    "sh_order": order,
+                    "shexp": method,
+                    "resolution": res,
+                    "directions": int(len(dirs)),
+                    "median_rel_error": float(np.median(rel)),
+                    "p90_rel_error": float(np.percentile(rel, 90)),
+                    "median_rel_error_in_cloud": float(np.median(rel[inside])),
+                    "light": _timed(lambda lit=lit: lit.light(0), repeats),
+                }
+            )
+    return rows
+
+
 def bench_frame(quick: bool, repeats: int, gl_ok: bool) -> dict[str, Any]:
     res = 20 if quick else 40
     width, height = (64, 48) if quick else (320, 240)
     db = _cloud_volumes(res, 8)
     sun = cu.Sun(direction=(0.5, 0.7, 0.3), intensity=10.0)
-    lighting = cu.VolumeLighting(db, sun, sh_samples=3 if quick else 6)
+    lighting = cu.VolumeLighting(db, sun, sh_order=3 if quick else 4, sh_samples=3 if quick else 6)
     frame = cu.AnimationFrame(0, 2, 5, 0.5, True)
     density = cu.blend_volumes(db[2], db[5], 0.5)
     light = lighting.light(frame)
@@ -184,6 +222,7 @@ def main(argv: list[str] | None = None) -> int:
         "machine": machine,
         "similarity": bench_similarity(args.quick, repeats, machine["cores"]),
         "optical_depth": bench_optical_depth(args.quick, repeats),
+        "sky_accuracy": bench_sky_accuracy(args.quick, repeats),
         "frame": bench_frame(args.quick, repeats, machine["gl_renderer"] is not None),
     }
     json_path = common.write_json(args.out / "animation.json", result)
@@ -200,6 +239,12 @@ def main(argv: list[str] | None = None) -> int:
             f"optical depth {r['resolution']}³: sun {_med(r['sun_per_volume']) * 1e3:.1f} ms, "
             f"sky SH ({r['directions']} dirs) {_med(r['sky_sh_per_volume']) * 1e3:.1f} ms "
             "per volume"
+        )
+    for r in result["sky_accuracy"]:
+        common.log(
+            f"sky visibility, order {r['sh_order']} {r['shexp']:8s}: median rel. error "
+            f"{r['median_rel_error']:.3f} (p90 {r['p90_rel_error']:.3f}), "
+            f"light {_med(r['light']) * 1e3:.1f} ms"
         )
     fr = result["frame"]
     parts = ", ".join(

@@ -33,6 +33,11 @@ def test_bench_animation_quick(tmp_path: Path) -> None:
         assert w["min"] <= w["median"] <= w["max"] and w["n"] == data["repeats"]
     assert data["similarity"]["numpy_reference"]["numpy_over_cpp"] > 0
     assert [r["resolution"] for r in data["optical_depth"]] == [12, 16, 24]
+    acc = data["sky_accuracy"]
+    assert {(r["sh_order"], r["shexp"]) for r in acc} == {
+        (o, m) for o in (2, 3, 4) for m in ("fit", "squaring")
+    }
+    assert all(r["median_rel_error"] >= 0 for r in acc)
     frame = data["frame"]
     assert frame["frame_total_s"] > 0
     assert ("render_gl" in frame) == (data["machine"]["gl_renderer"] is not None)

@@ -57,7 +57,9 @@ def test_uniform_volume_matches_emission_absorption() -> None:
 def lit_frame() -> tuple[np.ndarray, np.ndarray, tuple]:
     cloud = cu.gaussian_cumulus(centre=(0, 0, 0), n=10, seed=2)
     db = cu.evolving_cloud_volumes(cloud, cu.Noise(seed=3, size=32), 2, 16, density_scale=2.0)
-    lighting = cu.VolumeLighting(db, cu.Sun(direction=(0.4, 0.8, 0.3)), SKY, sh_samples=3)
+    lighting = cu.VolumeLighting(
+        db, cu.Sun(direction=(0.4, 0.8, 0.3)), SKY, sh_order=3, sh_samples=3, ms_points=16
+    )
     frame = cu.AnimationFrame(0, 0, 1, 0.5, True)
     anim_density = cu.blend_volumes(db[0], db[1], 0.5)
     return anim_density, lighting.light(frame), db.box

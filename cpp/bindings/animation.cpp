@@ -75,7 +75,8 @@ EvolutionParams evolution(int frames, std::array<int, 3> res, float growth, V3 d
 }
 
 ShExpTable table_of(const py::array_t<float>& a, const py::array_t<float>& b, float max_norm,
-                    int order) {
+                    int order, bool squaring) {
+  if (squaring) return shexp_squaring(order);
   ShExpTable t;
   t.order = order;
   t.max_norm = max_norm;
@@ -286,22 +287,25 @@ void bind_animation(py::module_& m) {
 
   m.def(
       "shexp_apply",
-      [](const FloatArray& g, const FloatArray& a, const FloatArray& b, float max_norm, int order) {
+      [](const FloatArray& g, const FloatArray& a, const FloatArray& b, float max_norm, int order,
+         bool squaring) {
         if (g.ndim() != 2 || g.shape(1) != order * order)
           throw py::value_error("SH vectors must have shape (M, order²)");
-        const ShExpTable t = table_of(a, b, max_norm, order);
+        if (order < 1 || order > kMaxShOrder) throw py::value_error("sh_order must be in [1, 4]");
+        const ShExpTable t = table_of(a, b, max_norm, order, squaring);
         auto out = new_array(shape_of(g));
         for (py::ssize_t i = 0; i < g.shape(0); ++i)
           t.apply(g.data() + i * order * order, out.mutable_data() + i * order * order);
         return out;
       },
-      py::arg("g"), py::arg("a"), py::arg("b"), py::arg("max_norm"), py::arg("order"));
+      py::arg("g"), py::arg("a"), py::arg("b"), py::arg("max_norm"), py::arg("order"),
+      py::arg("squaring") = false);
 
   m.def(
       "light_volume",
       [](const FloatArray& f_sun, const FloatArray& f_sh, V3 lo, V3 hi, const FloatArray& a,
-         const FloatArray& b, float max_norm, int order, const FloatArray& sky, float sigma_t,
-         int threads) {
+         const FloatArray& b, float max_norm, int order, bool squaring, const FloatArray& sky,
+         float sigma_t, int threads) {
         const VolumeGrid g = grid_of(f_sun, 0, lo, hi, "sun optical depth");
         const VolumeGrid gs = grid_of(f_sh, 0, lo, hi, "sky optical depth", 1);
         if (gs.w != g.w || gs.h != g.h || gs.d != g.d || f_sh.shape(3) != order * order)
@@ -309,7 +313,7 @@ void bind_animation(py::module_& m) {
         if (sky.ndim() != 2 || sky.shape(0) != 3 || sky.shape(1) != order * order)
           throw py::value_error("sky SH must have shape (3, order²)");
         if (!(sigma_t >= 0.0f)) throw py::value_error("sigma_t must be >= 0");
-        const ShExpTable t = table_of(a, b, max_norm, order);
+        const ShExpTable t = table_of(a, b, max_norm, order, squaring);
         const float *ps = f_sun.data(), *ph = f_sh.data(), *pk = sky.data();
         std::vector<float> out;
         {

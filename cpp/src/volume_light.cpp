@@ -205,8 +205,73 @@ std::vector<float> sky_sh(glm::vec3 zenith, glm::vec3 horizon, int order, int n_
   return std::vector<float>(acc.begin(), acc.end());
 }
 
+std::vector<float> sh_triple(int order) {
+  check_order(order);
+  // Degree 3(order − 1) polynomials need n_theta ≥ (3(order − 1) + 1)/2; 2·order is enough.
+  const SphereQuadrature quad(2 * order);
+  const int nc = order * order;
+  std::vector<double> acc(static_cast<std::size_t>(nc) * nc * nc, 0.0);
+  float y[kMaxShOrder * kMaxShOrder];
+  for (std::size_t q = 0; q < quad.dirs.size(); ++q) {
+    sh_eval(order, quad.dirs[q], y);
+    for (int i = 0; i < nc; ++i)
+      for (int j = 0; j < nc; ++j)
+        for (int k = 0; k < nc; ++k)
+          acc[(static_cast<std::size_t>(i) * nc + j) * nc + k] +=
+              static_cast<double>(quad.weights[q]) * y[i] * y[j] * y[k];
+  }
+  return std::vector<float>(acc.begin(), acc.end());
+}
+
+ShExpTable shexp_squaring(int order) {
+  ShExpTable t;
+  t.order = order;
+  t.squaring = true;
+  t.triple = sh_triple(order);
+  t.a.assign(1, 1.0f);
+  t.b.assign(1, 1.0f);
+  return t;
+}
+
+namespace {
+// c = projection of the product of the functions with coefficients a and b.
+void sh_product(int nc, const float* triple, const double* a, const double* b, double* c) {
+  for (int k = 0; k < nc; ++k) c[k] = 0.0;
+  for (int i = 0; i < nc; ++i) {
+    if (a[i] == 0.0) continue;
+    for (int j = 0; j < nc; ++j) {
+      const double ab = a[i] * b[j];
+      const float* t = triple + (static_cast<std::size_t>(i) * nc + j) * nc;
+      for (int k = 0; k < nc; ++k) c[k] += ab * t[k];
+    }
+  }
+}
+}  // namespace
+
 void ShExpTable::apply(const float* g, float* out) const {
   const int nc = order * order;
+  if (squaring) {
+    double n2 = 0.0;
+    for (int c = 1; c < nc; ++c) n2 += static_cast<double>(g[c]) * g[c];
+    const double norm = std::sqrt(n2);
+    int k = 0;
+    while (norm / std::ldexp(1.0, k) > 0.25 && k < 40) ++k;
+    const double s = std::ldexp(1.0, -k);
+    double h[kMaxShOrder * kMaxShOrder], e[kMaxShOrder * kMaxShOrder],
+        tmp[kMaxShOrder * kMaxShOrder];
+    h[0] = 0.0;
+    for (int c = 1; c < nc; ++c) h[c] = s * g[c];
+    sh_product(nc, triple.data(), h, h, tmp);  // exp*(ĥ) ≈ 1 + ĥ + ½ ĥ*ĥ
+    for (int c = 0; c < nc; ++c) e[c] = h[c] + 0.5 * tmp[c];
+    e[0] += kSqrt4Pi;
+    for (int i = 0; i < k; ++i) {
+      sh_product(nc, triple.data(), e, e, tmp);
+      for (int c = 0; c < nc; ++c) e[c] = tmp[c];
+    }
+    const double scale = std::exp(static_cast<double>(g[0]) / kSqrt4Pi);
+    for (int c = 0; c < nc; ++c) out[c] = static_cast<float>(scale * e[c]);
+    return;
+  }
   double n2 = 0.0;
   for (int c = 1; c < nc; ++c) n2 += static_cast<double>(g[c]) * g[c];
   const float norm = static_cast<float>(std::sqrt(n2));

@@ -77,15 +77,30 @@ std::vector<float> sh_optical_depth(const float* volumes, int count, const Volum
 // L(ω) = max(0, horizon + (zenith − horizon)·ω_y).
 std::vector<float> sky_sh(glm::vec3 zenith, glm::vec3 horizon, int order, int n_theta);
 
-// The tabulated a, b of the SH exponential over ‖ĝ‖ ∈ [0, max_norm].
+// Tripling coefficients C_ijk = ∫ y_i y_j y_k dω (order⁶ floats), exact by quadrature.
+std::vector<float> sh_triple(int order);
+
+// SH exponential τ = exp*(g) of an SH vector g (order² coefficients), two ways:
+// - the paper's (Ren et al. 2006's optimal linear form, eq. 7):
+//   exp*(g) ≈ exp(g₀/√4π)·(a(‖ĝ‖)·1 + b(‖ĝ‖)·ĝ) with a, b tabulated over ‖ĝ‖ ∈ [0, max_norm]
+//   (linear between bin centres, clamped at the ends);
+// - scaling and squaring (Ren et al. 2006 use it for large ‖ĝ‖): exp(g₀/√4π) is isolated,
+//   ĥ = ĝ/2^k with ‖ĥ‖ ≤ ¼, exp*(ĥ) ≈ 1 + ĥ + ½ ĥ*ĥ, then k SH self-products (each truncated
+//   to the kept bands). Far more accurate where optical depths vary strongly over directions
+//   (a cloud's interior against its edge), at k+1 triple products per voxel.
 struct ShExpTable {
   int order = 3;
   float max_norm = 0.0f;
-  std::vector<float> a, b;  // one entry per bin centre
+  std::vector<float> a, b;  // one entry per bin centre (the paper's method)
+  bool squaring = false;
+  std::vector<float> triple;  // sh_triple(order) when squaring
 
   // τ = exp*(g): order² coefficients of exp(g·y(ω)) from g (order² coefficients) into out.
   void apply(const float* g, float* out) const;
 };
+
+// A scaling-and-squaring SH exponential for `order`.
+ShExpTable shexp_squaring(int order);
 
 // Fit a, b by least squares: for `count` SH vectors f (optical depths), g = −σ_t·f; the target is
 // the quadrature projection of exp(g·y(ω)) (the exponential of the band-limited optical depth)
