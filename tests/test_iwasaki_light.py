@@ -244,3 +244,28 @@ def test_light_bad_input(lighting: cu.VolumeLighting) -> None:
         sun_optical_depth(np.zeros((2, 2, 2)), LO, HI, (0, 0, 0))
     with pytest.raises(ValueError, match="box_max"):
         sun_optical_depth(np.zeros((2, 2, 2)), HI, LO, (0, 1, 0))
+
+
+def test_precompute_is_thread_count_independent() -> None:
+    vols = _random_volumes(2, (5, 6, 7), 9)
+    db = cu.VolumeDatabase(vols, LO, HI)
+    kw = {"sh_order": 3, "sh_samples": 3, "ms_points": 9, "seed": 4}
+    one = cu.VolumeLighting(db, cu.Sun(), threads=1, **kw)
+    two = cu.VolumeLighting(db, cu.Sun(), threads=2, **kw)
+    for name in ("sun_depth", "sky_depth", "point_depth", "points"):
+        np.testing.assert_array_equal(getattr(one, name), getattr(two, name))
+    frame = cu.AnimationFrame(0, 0, 1, 0.25, True)
+    np.testing.assert_array_equal(one.light(frame, threads=1), two.light(frame, threads=2))
+
+
+def test_sky_given_as_object_pair_or_colour() -> None:
+    from types import SimpleNamespace
+
+    from cumuli.animation import sky_colours
+
+    z, h = (0.1, 0.2, 0.3), (0.4, 0.5, 0.6)
+    assert sky_colours(SimpleNamespace(zenith=z, horizon=h)) == (z, h)
+    assert sky_colours((z, h)) == (z, h)
+    assert sky_colours(z) == (z, z)
+    with pytest.raises(ValueError, match="non-negative"):
+        sky_colours((-1, 0, 0))
