@@ -9,7 +9,8 @@ from __future__ import annotations
 
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
+from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
 from cumuli.sun import Sun
 
-__all__ = ["Cloud", "Noise", "Sun", "__version__"]
+__all__ = ["Cloud", "LightStats", "Noise", "Sun", "__version__", "light_grid"]
