@@ -29,7 +29,7 @@ struct Accum {
 // (Noise::fbm_batch); they are then folded into the sums in march order, so the result is the
 // same as evaluating them one by one. Fixed size: nothing is allocated per voxel.
 struct SampleQueue {
-  static constexpr int kSize = 64;
+  static constexpr int kSize = 64;  // a multiple of 4 (see flush)
   float x[kSize], y[kSize], z[kSize], len[kSize], rho[kSize];
   int primitive[kSize];
   int n = 0;
@@ -54,7 +54,13 @@ inline void flush(const RayContext& r) {
   if (r.density.constant >= 0.0f) {
     for (int i = 0; i < q.n; ++i) q.rho[i] = r.density.constant;
   } else {
-    r.density.noise->fbm_batch(q.x, q.y, q.z, static_cast<std::size_t>(q.n), q.rho,
+    // Pad to a multiple of four with copies of the last point so that every point takes the
+    // vector path (the padding lanes are computed and ignored).
+    int padded = q.n;
+    for (; padded % 4 != 0; ++padded) {
+      q.x[padded] = q.x[q.n - 1], q.y[padded] = q.y[q.n - 1], q.z[padded] = q.z[q.n - 1];
+    }
+    r.density.noise->fbm_batch(q.x, q.y, q.z, static_cast<std::size_t>(padded), q.rho,
                                r.density.fbm);
   }
   // The fBm value goes through DensitySource's constant hook, so cloud_density (eq. 2's

@@ -92,6 +92,8 @@ void Noise::fbm_batch(const float* xs, const float* ys, const float* zs, std::si
   // vector operation is the IEEE operation the scalar code does, so the results are identical.
   const int size = size_;
   const bool pow2 = (size & (size - 1)) == 0;
+  int log2 = 0;
+  while ((1 << log2) < size) ++log2;
   const float* lat = lattice_.data();
   const auto wrap4 = [&](v4i a) {
     if (pow2) return a & (size - 1);
@@ -121,8 +123,16 @@ void Noise::fbm_batch(const float* xs, const float* ys, const float* zs, std::si
       const v4i x0 = wrap4(fx), x1 = wrap4(x0 + 1);
       const v4i y0 = wrap4(fy), y1 = wrap4(y0 + 1);
       const v4i z0 = wrap4(fz), z1 = wrap4(z0 + 1);
-      const v4i r00 = (z0 * size + y0) * size, r10 = (z0 * size + y1) * size;
-      const v4i r01 = (z1 * size + y0) * size, r11 = (z1 * size + y1) * size;
+      // Row offsets (z·size + y)·size; shifts for a power-of-two size (same numbers, and SSE2
+      // has no 32-bit lane multiply).
+      v4i r00, r10, r01, r11;
+      if (pow2) {
+        r00 = (z0 << (2 * log2)) | (y0 << log2), r10 = (z0 << (2 * log2)) | (y1 << log2);
+        r01 = (z1 << (2 * log2)) | (y0 << log2), r11 = (z1 << (2 * log2)) | (y1 << log2);
+      } else {
+        r00 = (z0 * size + y0) * size, r10 = (z0 * size + y1) * size;
+        r01 = (z1 * size + y0) * size, r11 = (z1 * size + y1) * size;
+      }
       v4f t000, t100, t010, t110, t001, t101, t011, t111;
       for (int k = 0; k < 4; ++k) {
         t000[k] = lat[r00[k] + x0[k]], t100[k] = lat[r00[k] + x1[k]];

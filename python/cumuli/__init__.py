@@ -7,10 +7,37 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 
 from __future__ import annotations
 
+from cumuli import meshes
 from cumuli._version import __version__
-from cumuli.cloud import Cloud
+from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
+from cumuli.shapes import (
+    ellipsoids_from_mesh,
+    gaussian_cumulus,
+    lsystem_cloud,
+    lsystem_expand,
+    lsystem_length,
+    mesh_cloud,
+    metaball_cumulus,
+)
 from cumuli.sun import Sun
 
-__all__ = ["Cloud", "LightStats", "Noise", "Sun", "__version__", "light_grid"]
+__all__ = [
+    "Cloud",
+    "LightStats",
+    "Noise",
+    "Sun",
+    "__version__",
+    "ellipsoids_from_mesh",
+    "gaussian_cumulus",
+    "light_grid",
+    "load_cloud",
+    "lsystem_cloud",
+    "lsystem_expand",
+    "lsystem_length",
+    "merge",
+    "mesh_cloud",
+    "meshes",
+    "metaball_cumulus",
+]

@@ -1,0 +1,302 @@
+// Bindings for the cloud-shape generators: gaussian.hpp (and the L-system and mesh generators).
+#include <algorithm>
+#include <array>
+#include <map>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <pybind11/stl.h>
+
+#include "common.hpp"
+#include "cumuli/cloud.hpp"
+#include "cumuli/gaussian.hpp"
+#include "cumuli/lsystem.hpp"
+#include "cumuli/mesh_ellipsoids.hpp"
+#include "cumuli/noise.hpp"
+#include "cumuli/parallel.hpp"
+
+namespace cumuli::bind {
+
+namespace {
+
+glm::vec3 to_vec3(const std::array<float, 3>& a) { return glm::vec3(a[0], a[1], a[2]); }
+
+py::array_t<float> points_array(const std::vector<glm::vec3>& pts) {
+  auto out = new_array({static_cast<py::ssize_t>(pts.size()), 3});
+  float* d = out.mutable_data();
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (int k = 0; k < 3; ++k) d[3 * i + k] = pts[i][k];
+  return out;
+}
+
+py::array_t<float> scalar_array(const std::vector<float>& v) {
+  auto out = new_array({static_cast<py::ssize_t>(v.size())});
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+RadiusModel parse_radius_model(const std::string& s) {
+  if (s == "eq15") return RadiusModel::Eq15;
+  if (s == "eq16") return RadiusModel::Eq16;
+  if (s == "uniform") return RadiusModel::Uniform;
+  throw py::value_error("radius_model must be 'eq15', 'eq16' or 'uniform', got '" + s + "'");
+}
+
+LSystemRules make_rules(const std::map<std::string, std::string>& rules) {
+  LSystemRules r;
+  for (const auto& [key, value] : rules) {
+    if (key.size() != 1) throw py::value_error("rules: every key must be one symbol, got '" + key + "'");
+    r.set(key[0], value);
+  }
+  return r;
+}
+
+glm::dvec3 to_dvec3(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[1], a[2]); }
+
+}  // namespace
+
+void bind_shapes(py::module_& m) {
+  m.def(
+      "gaussian_cumulus",
+      [](std::array<float, 3> centre, int n, std::array<float, 3> mu, std::array<float, 3> sigma,
+         std::array<float, 3> clamp_lo, std::array<float, 3> clamp_hi,
+         const std::string& clamp_mode, const std::string& radius_model,
+         const std::string& eq16_combine, float epsilon, float radius_scale, float radius_lo,
+         float radius_hi, bool hollow, std::array<float, 3> hollow_box, bool remove_contained,
+         std::uint64_t seed) {
+        GaussianCumulusParams p;
+        p.centre = to_vec3(centre);
+        p.n = n;
+        p.mu = to_vec3(mu);
+        p.sigma = to_vec3(sigma);
+        p.clamp_lo = to_vec3(clamp_lo);
+        p.clamp_hi = to_vec3(clamp_hi);
+        if (clamp_mode == "saturate") p.clamp_mode = ClampMode::Saturate;
+        else if (clamp_mode == "resample") p.clamp_mode = ClampMode::Resample;
+        else throw py::value_error("clamp_mode must be 'saturate' or 'resample', got '" + clamp_mode + "'");
+        p.radius_model = parse_radius_model(radius_model);
+        if (eq16_combine == "sum") p.eq16_combine = Eq16Combine::Sum;
+        else if (eq16_combine == "product") p.eq16_combine = Eq16Combine::Product;
+        else throw py::value_error("eq16_combine must be 'sum' or 'product', got '" + eq16_combine + "'");
+        p.epsilon = epsilon;
+        p.radius_scale = radius_scale;
+        p.radius_lo = radius_lo;
+        p.radius_hi = radius_hi;
+        p.hollow = hollow;
+        p.hollow_box = to_vec3(hollow_box);
+        p.remove_contained = remove_contained;
+        p.seed = seed;
+        p.validate();  // std::invalid_argument → ValueError
+        GaussianCumulusResult r;
+        {
+          py::gil_scoped_release release;
+          r = gaussian_cumulus(p);
+        }
+        py::dict stats;
+        stats["drawn"] = r.drawn;
+        stats["clamped"] = r.clamped;
+        stats["removed_by_hollow"] = r.removed_by_hollow;
+        stats["removed_by_containment"] = r.removed_by_containment;
+        stats["kept"] = static_cast<int>(r.centres.size());
+        return py::make_tuple(points_array(r.centres), scalar_array(r.radii), stats);
+      },
+      py::arg("centre"), py::arg("n"), py::arg("mu"), py::arg("sigma"), py::arg("clamp_lo"),
+      py::arg("clamp_hi"), py::arg("clamp_mode"), py::arg("radius_model"), py::arg("eq16_combine"),
+      py::arg("epsilon"), py::arg("radius_scale"), py::arg("radius_lo"), py::arg("radius_hi"),
+      py::arg("hollow"), py::arg("hollow_box"), py::arg("remove_contained"), py::arg("seed"),
+      "Gaussian cumulus (§3.6.1): returns (centres (N,3), radii (N,), stats dict).");
+
+  m.def(
+      "remove_contained_spheres",
+      [](const FloatArray& centres, const FloatArray& radii) {
+        require_points(centres, "centres");
+        if (radii.ndim() != 1 || radii.shape(0) != centres.shape(0))
+          throw py::value_error("radii must have shape (N,) matching centres");
+        const std::size_t n = static_cast<std::size_t>(centres.shape(0));
+        std::vector<glm::vec3> c(n);
+        std::vector<float> r(radii.data(), radii.data() + n);
+        for (std::size_t i = 0; i < n; ++i)
+          c[i] = glm::vec3(centres.data()[3 * i], centres.data()[3 * i + 1], centres.data()[3 * i + 2]);
+        std::vector<int> keep;
+        {
+          py::gil_scoped_release release;
+          keep = remove_contained_spheres(c, r);
+        }
+        py::array_t<std::int64_t> out(static_cast<py::ssize_t>(keep.size()));
+        std::copy(keep.begin(), keep.end(), out.mutable_data());
+        return out;
+      },
+      py::arg("centres"), py::arg("radii"),
+      "Eq. (17): indices of the spheres kept so that none lies inside another.");
+
+  m.def(
+      "lsystem_length",
+      [](const std::string& axiom, const std::map<std::string, std::string>& rules, int iterations) {
+        const LSystemRules r = make_rules(rules);
+        const LSystemLength n = lsystem_length(axiom, r, iterations, UINT64_MAX - 1);
+        return py::make_tuple(n.final_length, n.peak_length);
+      },
+      py::arg("axiom"), py::arg("rules"), py::arg("iterations"),
+      "(final, peak) symbol counts of the expansion, saturating at 2**64 - 1; allocates nothing.");
+
+  m.def(
+      "lsystem_expand",
+      [](const std::string& axiom, const std::map<std::string, std::string>& rules, int iterations,
+         std::uint64_t max_length) {
+        const LSystemRules r = make_rules(rules);
+        std::string out;
+        {
+          py::gil_scoped_release release;
+          out = lsystem_expand(axiom, r, iterations, max_length);
+        }
+        return out;
+      },
+      py::arg("axiom"), py::arg("rules"), py::arg("iterations"), py::arg("max_length"),
+      "Rewrite the axiom `iterations` times; refuses (ValueError) before allocating when any "
+      "string would exceed max_length symbols.");
+
+  m.def(
+      "lsystem_interpret",
+      [](const std::string& symbols, double angle_lo, double angle_hi, double radius_lo,
+         double radius_hi, double step_lo, double step_hi, const std::string& draw_symbols,
+         const std::string& move_symbols, std::array<double, 3> start,
+         std::array<double, 3> heading, std::array<double, 3> up, std::uint64_t seed,
+         std::uint64_t max_spheres) {
+        TurtleParams p;
+        p.angle_lo = angle_lo;
+        p.angle_hi = angle_hi;
+        p.radius_lo = radius_lo;
+        p.radius_hi = radius_hi;
+        p.step_lo = step_lo;
+        p.step_hi = step_hi;
+        p.draw_symbols = draw_symbols;
+        p.move_symbols = move_symbols;
+        p.start = to_dvec3(start);
+        p.heading = to_dvec3(heading);
+        p.up = to_dvec3(up);
+        p.seed = seed;
+        p.max_spheres = max_spheres;
+        p.validate();
+        TurtleResult r;
+        {
+          py::gil_scoped_release release;
+          r = lsystem_interpret(symbols, p);
+        }
+        py::dict stats;
+        stats["symbols"] = symbols.size();
+        stats["spheres"] = r.centres.size();
+        stats["turns"] = r.turns;
+        stats["moves"] = r.moves;
+        stats["max_depth"] = r.max_depth;
+        stats["final_position"] = py::make_tuple(r.final_position.x, r.final_position.y, r.final_position.z);
+        stats["final_heading"] = py::make_tuple(r.final_heading.x, r.final_heading.y, r.final_heading.z);
+        return py::make_tuple(points_array(r.centres), scalar_array(r.radii), stats);
+      },
+      py::arg("symbols"), py::arg("angle_lo"), py::arg("angle_hi"), py::arg("radius_lo"),
+      py::arg("radius_hi"), py::arg("step_lo"), py::arg("step_hi"), py::arg("draw_symbols"),
+      py::arg("move_symbols"), py::arg("start"), py::arg("heading"), py::arg("up"),
+      py::arg("seed"), py::arg("max_spheres"),
+      "Walk an L-system string with the 3D turtle: returns (centres (N,3), radii (N,), stats).");
+
+  m.def(
+      "cloud_density",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+         const std::string& model, float kappa, float phi, const FloatArray& points,
+         const Noise* noise, float constant, int octaves, float gain, float lacunarity,
+         float frequency, int threads) {
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+        require_points(points, "points");
+        DensitySource src;
+        src.noise = noise;
+        src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+        src.fbm.validate();
+        src.constant = constant;
+        if (constant < 0.0f && noise == nullptr)
+          throw py::value_error("give a noise or a constant density >= 0");
+        const std::size_t n = static_cast<std::size_t>(points.shape(0));
+        auto rho = new_array({static_cast<py::ssize_t>(n)});
+        auto gamma = new_array({static_cast<py::ssize_t>(n)});
+        const float* p = points.data();
+        float* r = rho.mutable_data();
+        float* g = gamma.mutable_data();
+        {
+          py::gil_scoped_release release;
+          parallel_for(n, threads, [&](std::size_t i) {
+            const glm::vec3 x(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
+            // Pseudo-spheroids: attribute the sample to the primitive whose surface it is
+            // deepest inside (smallest |q|), as a ray marching that primitive would see it.
+            int j = 0;
+            if (cloud.density.model == DensityModel::Spheroid) {
+              float best = INFINITY;
+              for (std::size_t k = 0; k < cloud.primitives.size(); ++k) {
+                const float q = cloud.primitives[k].normalised_distance(x);
+                if (q < best) {
+                  best = q;
+                  j = static_cast<int>(k);
+                }
+              }
+            }
+            const DensitySample s = cloud_density(cloud, j, x, src);
+            r[i] = s.rho;
+            g[i] = s.gamma;
+          });
+        }
+        return py::make_tuple(rho, gamma);
+      },
+      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
+      py::arg("kappa"), py::arg("phi"), py::arg("points"), py::arg("noise"), py::arg("constant"),
+      py::arg("octaves") = 5, py::arg("gain") = 0.5f, py::arg("lacunarity") = 2.0f,
+      py::arg("frequency") = 1.0f, py::arg("threads") = 0,
+      "Density (rho, gamma) of a cloud at points (eq. 2 or eqs. 19-21).");
+
+  m.def(
+      "ellipsoids_from_mesh",
+      [](const FloatArray& vertices, const py::array& faces_in, float scale, bool rotate,
+         float min_radius, int threads) {
+        require_points(vertices, "vertices");
+        const char kind = faces_in.dtype().kind();
+        if (kind != 'i' && kind != 'u')
+          throw py::type_error("faces must be an integer array, got dtype " +
+                               std::string(py::str(faces_in.dtype())));
+        if (faces_in.ndim() != 2 || faces_in.shape(1) != 3)
+          throw py::value_error("faces must have shape (F, 3)");
+        // uint64 indices above 2⁶³ wrap to negative int64 here: still reported as out of range.
+        using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+        const IndexArray faces = IndexArray::ensure(faces_in);
+        const std::size_t nv = static_cast<std::size_t>(vertices.shape(0));
+        const std::size_t nf = static_cast<std::size_t>(faces.shape(0));
+        MeshEllipsoidsResult r;
+        {
+          py::gil_scoped_release release;
+          r = ellipsoids_from_mesh(vertices.data(), nv, faces.data(), nf, scale, rotate, min_radius,
+                                   threads);
+        }
+        auto centres = new_array({static_cast<py::ssize_t>(nf), 3});
+        auto radii = new_array({static_cast<py::ssize_t>(nf), 3});
+        auto rotations = new_array({static_cast<py::ssize_t>(nf), 3, 3});
+        float* c = centres.mutable_data();
+        float* rr = radii.mutable_data();
+        float* m = rotations.mutable_data();
+        for (std::size_t i = 0; i < nf; ++i) {
+          const Ellipsoid& e = r.ellipsoids[i];
+          for (int k = 0; k < 3; ++k) {
+            c[3 * i + k] = e.centre[k];
+            rr[3 * i + k] = e.radii[k];
+          }
+          // glm column-major rotation[col][row] → numpy row-major R[row][col].
+          for (int row = 0; row < 3; ++row)
+            for (int col = 0; col < 3; ++col) m[9 * i + 3 * row + col] = e.rotation[col][row];
+        }
+        py::dict stats;
+        stats["faces"] = nf;
+        stats["floored_faces"] = r.floored_faces;
+        return py::make_tuple(centres, radii, rotations, stats);
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("scale"), py::arg("rotate"),
+      py::arg("min_radius"), py::arg("threads") = 0,
+      "Mesh → ellipsoids (§3.6.4, eqs. 22–30): returns (centres (F,3), radii (F,3), "
+      "rotations (F,3,3), stats).");
+}
+
+}  // namespace cumuli::bind
