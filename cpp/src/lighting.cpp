@@ -25,12 +25,13 @@ struct Accum {
   std::uint32_t samples = 0;
 };
 
-// Samples waiting for their densities. Queuing them lets fBm run four points at a time
-// (Noise::fbm_batch); they are then folded into the sums in march order, so the result is the
-// same as evaluating them one by one. Fixed size: nothing is allocated per voxel.
+// Samples waiting for their densities. Queuing them lets fBm run on a block of points
+// (Noise::fbm_many on the calling thread, whose index arithmetic is vectorised); they are then
+// folded into the sums in march order, so the result is the same as evaluating them one by one.
+// Fixed size: nothing is allocated per voxel.
 struct SampleQueue {
-  static constexpr int kSize = 64;  // a multiple of 4 (see flush)
-  float x[kSize], y[kSize], z[kSize], len[kSize], rho[kSize];
+  static constexpr int kSize = 64;
+  float xyz[3 * kSize], len[kSize], rho[kSize];
   int primitive[kSize];
   int n = 0;
 };
@@ -54,14 +55,7 @@ inline void flush(const RayContext& r) {
   if (r.density.constant >= 0.0f) {
     for (int i = 0; i < q.n; ++i) q.rho[i] = r.density.constant;
   } else {
-    // Pad to a multiple of four with copies of the last point so that every point takes the
-    // vector path (the padding lanes are computed and ignored).
-    int padded = q.n;
-    for (; padded % 4 != 0; ++padded) {
-      q.x[padded] = q.x[q.n - 1], q.y[padded] = q.y[q.n - 1], q.z[padded] = q.z[q.n - 1];
-    }
-    r.density.noise->fbm_batch(q.x, q.y, q.z, static_cast<std::size_t>(padded), q.rho,
-                               r.density.fbm);
+    r.density.noise->fbm_many(q.xyz, static_cast<std::size_t>(q.n), q.rho, r.density.fbm, 1);
   }
   // The fBm value goes through DensitySource's constant hook, so cloud_density (eq. 2's
   // gating, or eqs. 19–21) sees exactly the number it would have computed itself.
@@ -69,7 +63,8 @@ inline void flush(const RayContext& r) {
   for (int i = 0; i < q.n; ++i) {
     known.constant = q.rho[i];
     const DensitySample d =
-        cloud_density(r.cloud, q.primitive[i], glm::vec3(q.x[i], q.y[i], q.z[i]), known);
+        cloud_density(r.cloud, q.primitive[i],
+                      glm::vec3(q.xyz[3 * i], q.xyz[3 * i + 1], q.xyz[3 * i + 2]), known);
     if (d.rho > 0.0f) {
       r.acc.scatter += r.scatter * (q.len[i] / r.step) * r.acc.transmittance;
       r.acc.transmittance *= std::exp(-r.extinction * d.rho * q.len[i]);
@@ -83,7 +78,7 @@ inline void flush(const RayContext& r) {
 inline void take_sample(const RayContext& r, int j, float s, float len) {
   const glm::vec3 p = r.origin + s * r.dir;
   SampleQueue& q = r.queue;
-  q.x[q.n] = p.x, q.y[q.n] = p.y, q.z[q.n] = p.z;
+  q.xyz[3 * q.n] = p.x, q.xyz[3 * q.n + 1] = p.y, q.xyz[3 * q.n + 2] = p.z;
   q.len[q.n] = len;
   q.primitive[q.n] = j;
   if (++q.n == SampleQueue::kSize) flush(r);

@@ -10,6 +10,7 @@ from __future__ import annotations
 from cumuli import meshes
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
+from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
 from cumuli.shapes import (
@@ -30,6 +31,7 @@ __all__ = [
     "Sun",
     "__version__",
     "ellipsoids_from_mesh",
+    "from_srgb8",
     "gaussian_cumulus",
     "light_grid",
     "load_cloud",
@@ -40,4 +42,7 @@ __all__ = [
     "mesh_cloud",
     "meshes",
     "metaball_cumulus",
+    "read_image",
+    "to_srgb8",
+    "write_image",
 ]
