@@ -97,37 +97,6 @@ inline void march_interval(const RayContext& r, float a, float b, Attribute&& at
   }
 }
 
-// Primitive of the chain cand[first, last) that covers s with the smallest |q| (ties: the
-// earlier candidate). If rounding leaves s uncovered, the last candidate starting before s.
-inline int attribute_union(const RayContext& r, const Candidate* cand, int first, int last,
-                           float s) {
-  int best = -1;
-  int covering = 0;
-  float best_q = INFINITY;
-  int fallback = cand[first].primitive;
-  for (int c = first; c < last && cand[c].t_in <= s; ++c) {
-    fallback = cand[c].primitive;
-    if (s > cand[c].t_out) continue;
-    ++covering;
-    if (covering == 1) {
-      best = cand[c].primitive;
-      continue;
-    }
-    if (covering == 2) {  // only now does |q| matter
-      best_q = r.cloud.primitives[static_cast<std::size_t>(best)].normalised_distance(
-          r.origin + s * r.dir);
-    }
-    const float q =
-        r.cloud.primitives[static_cast<std::size_t>(cand[c].primitive)].normalised_distance(
-            r.origin + s * r.dir);
-    if (q < best_q) {
-      best_q = q;
-      best = cand[c].primitive;
-    }
-  }
-  return best >= 0 ? best : fallback;
-}
-
 // collect_candidates for many rays sharing one direction (every sun ray of a grid). The per
 // primitive parts of the ray–ellipsoid test that depend only on the direction (Rᵀ, d' = Rᵀd/r,
 // a = d'·d') are computed once, and the per-ray part runs over the primitives in
@@ -158,15 +127,19 @@ class SunCandidates {
 
   std::size_t size() const { return n_; }
 
-  // Scratch for one thread: b and the discriminant per primitive.
+  // Per-thread results of the last collect(), per primitive j (in its grown unit-sphere frame):
+  // b = o'·d', oo = |o'|², disc the discriminant; with a = d'·d', |q_j(s)|² = oo + 2bs + as².
   struct Scratch {
-    std::vector<float> b, disc;
-    explicit Scratch(std::size_t n) : b(n), disc(n) {}
+    std::vector<float> b, oo, disc;
+    explicit Scratch(std::size_t n) : b(n), oo(n), disc(n) {}
   };
+
+  const float* a() const { return a_.data(); }
 
   int collect(glm::vec3 origin, Scratch& scratch, Candidate* out) const {
     float* __restrict bs = scratch.b.data();
     float* __restrict ds = scratch.disc.data();
+    float* __restrict oos = scratch.oo.data();
     const float* m0 = m_[0].data(); const float* m1 = m_[1].data(); const float* m2 = m_[2].data();
     const float* m3 = m_[3].data(); const float* m4 = m_[4].data(); const float* m5 = m_[5].data();
     const float* m6 = m_[6].data(); const float* m7 = m_[7].data(); const float* m8 = m_[8].data();
@@ -176,8 +149,10 @@ class SunCandidates {
       const float oy = (m3[j] * wx + m4[j] * wy + m5[j] * wz) / ry_[j];
       const float oz = (m6[j] * wx + m7[j] * wy + m8[j] * wz) / rz_[j];
       const float b = ox * dx_[j] + oy * dy_[j] + oz * dz_[j];
-      const float c = (ox * ox + oy * oy + oz * oz) - 1.0f;
+      const float oo = ox * ox + oy * oy + oz * oz;
+      const float c = oo - 1.0f;
       bs[j] = b;
+      oos[j] = oo;
       ds[j] = b * b - a_[j] * c;
     }
     int count = 0;
@@ -203,9 +178,57 @@ class SunCandidates {
   std::vector<float> m_[9];
 };
 
+// Attribution of union samples (RENDER_CONTRACT march="union"): the covering candidate whose
+// primitive gives the smallest |q|, ties to the earlier candidate. Samples come in increasing s,
+// so the covering set is kept as a list of "active" candidates (entered: t_in ≤ s; dropped for
+// good once t_out < s), and |q_j(s)|² is the quadratic oo + 2bs + as² from the candidate test,
+// three multiply-adds instead of a transform. A near-tie decided differently by rounding picks a
+// primitive with the same |q| to float precision, hence the same γ of eq. (2).
+class UnionAttribution {
+ public:
+  UnionAttribution(const Candidate* cand, int first, int last, int* active, const float* a,
+                   const SunCandidates::Scratch& sc)
+      : cand_(cand), next_(first), last_(last), active_(active), a_(a), sc_(sc),
+        fallback_(cand[first].primitive) {}
+
+  int operator()(float s) {
+    while (next_ < last_ && cand_[next_].t_in <= s) active_[count_++] = next_++;
+    int kept = 0;
+    for (int i = 0; i < count_; ++i)
+      if (cand_[active_[i]].t_out >= s) active_[kept++] = active_[i];
+    if (kept == 0) {  // rounding left s just past every interval: keep the last one entered
+      if (count_ > 0) fallback_ = cand_[active_[count_ - 1]].primitive;
+      count_ = 0;
+      return fallback_;
+    }
+    count_ = kept;
+    int best = cand_[active_[0]].primitive;
+    if (kept == 1) return best;
+    float best_q2 = q2(best, s);
+    for (int i = 1; i < kept; ++i) {
+      const int j = cand_[active_[i]].primitive;
+      const float v = q2(j, s);
+      if (v < best_q2) best_q2 = v, best = j;
+    }
+    return best;
+  }
+
+ private:
+  float q2(int j, float s) const { return sc_.oo[j] + s * (2.0f * sc_.b[j] + s * a_[j]); }
+
+  const Candidate* cand_;
+  int next_, last_;
+  int* active_;
+  int count_ = 0;
+  const float* a_;
+  const SunCandidates::Scratch& sc_;
+  int fallback_;
+};
+
 // L(v) for the ray in `r` (whose accumulator starts empty) over the sorted candidates.
 float light_at(const RayContext& r, LightMethod method, const Candidate* cand, int n,
-               float intensity) {
+               float intensity, const SunCandidates& collector,
+               const SunCandidates::Scratch& scratch, int* active) {
   if (method == LightMethod::Naive) {
     for (int c = 0; c < n; ++c) {
       const int j = cand[c].primitive;
@@ -213,19 +236,19 @@ float light_at(const RayContext& r, LightMethod method, const Candidate* cand, i
     }
   } else {
     // Algorithm 2: merge the sorted intervals into their union, march each piece once.
+    const bool attribute = r.cloud.density.model == DensityModel::Spheroid;
     int c = 0;
     while (c < n) {
       const int first = c;
       float end = cand[c].t_out;
       for (++c; c < n && cand[c].t_in <= end; ++c) end = std::max(end, cand[c].t_out);
       const int last = c;
-      if (last - first == 1) {
+      if (last - first == 1 || !attribute) {  // metaball density ignores the primitive
         const int j = cand[first].primitive;
         march_interval(r, cand[first].t_in, end, [j](float) { return j; });
       } else {
-        march_interval(
-            r, cand[first].t_in, end,
-            [&](float s) { return attribute_union(r, cand, first, last, s); });
+        march_interval(r, cand[first].t_in, end,
+                       UnionAttribution(cand, first, last, active, collector.a(), scratch));
       }
     }
   }
@@ -315,6 +338,7 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
     std::vector<Candidate> cand(static_cast<std::size_t>(capacity));
     SunCandidates::Scratch scratch(collector.size());
     SampleQueue queue;
+    std::vector<int> active(static_cast<std::size_t>(capacity));
     for (std::size_t row = b; row < e; ++row) {
       const int z = static_cast<int>(row / ry), y = static_cast<int>(row % ry);
       for (int x = 0; x < rx; ++x) {
@@ -323,7 +347,8 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
         Accum acc;
         const RayContext r{cloud, density, v, s.sun_dir, s.step, s.extinction, scatter, queue, acc};
         const std::size_t idx = row * rx + x;
-        light[idx] = light_at(r, s.method, cand.data(), n, s.intensity);
+        light[idx] = light_at(r, s.method, cand.data(), n, s.intensity, collector, scratch,
+                              active.data());
         if (samples) samples[idx] = acc.samples;
         row_samples[row] += acc.samples;
       }
