@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 
 #include "cumuli/candidates.hpp"
 #include "cumuli/parallel.hpp"
@@ -97,85 +98,153 @@ inline void march_interval(const RayContext& r, float a, float b, Attribute&& at
   }
 }
 
-// collect_candidates for many rays sharing one direction (every sun ray of a grid). The per
-// primitive parts of the ray–ellipsoid test that depend only on the direction (Rᵀ, d' = Rᵀd/r,
-// a = d'·d') are computed once, and the per-ray part runs over the primitives in
-// structure-of-arrays form, which the compiler vectorises. The arithmetic is that of
-// intersect(Ellipsoid, ...) operation for operation, so the intervals are the same numbers, and
-// the clipping and insertion sort are collect_candidates' (t ≥ 0, nothing dropped: the buffer
-// holds every primitive).
+// collect_candidates for many rays sharing one direction (every sun ray of a grid).
+//
+// Culling: all rays are parallel to d, so a ray meets primitive j only if its origin, projected
+// on the plane ⊥ d, lies within j's projected bounding disc (radius = largest grown radius). The
+// discs are binned on a 2D grid of that plane once per call; a ray tests only the primitives
+// listed in its bin (in increasing j). The bins are conservative (discs inflated by a relative
+// margin far above float rounding), so no hit is lost.
+//
+// Exact test: the parts of the ray–ellipsoid test that depend only on the direction
+// (Rᵀ, d' = Rᵀd/r, a = d'·d') are computed once per primitive; the per-ray part is the
+// arithmetic of intersect(Ellipsoid, ...) operation for operation, so the intervals are the same
+// numbers, and clipping (t ≥ 0) and the insertion sort (primitives visited in increasing j) are
+// collect_candidates', with nothing dropped: the buffer holds every primitive.
 class SunCandidates {
  public:
+  static constexpr int kMaxBins = 128;  // per axis of the projected plane
+
   SunCandidates(const CloudShape& cloud, glm::vec3 dir) : n_(cloud.primitives.size()) {
     const float scale = candidate_scale(cloud);
-    for (auto* v : {&cx_, &cy_, &cz_, &rx_, &ry_, &rz_, &dx_, &dy_, &dz_, &a_}) v->resize(n_);
-    for (auto& row : m_) row.resize(n_);
+    prim_.resize(n_);
+    a_.resize(n_);
+    std::vector<float> pu(n_), pw(n_), pr(n_);
+    // An orthonormal basis (e1, e2) of the plane ⊥ dir.
+    const glm::vec3 d = glm::normalize(dir);
+    const glm::vec3 helper = std::fabs(d.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    e1_ = glm::normalize(glm::cross(d, helper));
+    e2_ = glm::cross(d, e1_);
+    float lo_u = INFINITY, lo_w = INFINITY, hi_u = -INFINITY, hi_w = -INFINITY, sum_r = 0.0f;
     for (std::size_t j = 0; j < n_; ++j) {
       Ellipsoid e = cloud.primitives[j];
       e.radii *= scale;
-      const glm::mat3 rt = glm::transpose(e.rotation);
-      const glm::vec3 d = (rt * dir) / e.radii;
-      cx_[j] = e.centre.x, cy_[j] = e.centre.y, cz_[j] = e.centre.z;
-      rx_[j] = e.radii.x, ry_[j] = e.radii.y, rz_[j] = e.radii.z;
-      dx_[j] = d.x, dy_[j] = d.y, dz_[j] = d.z;
-      a_[j] = glm::dot(d, d);
-      // (rt * w)[k] = rt[0][k]·w.x + rt[1][k]·w.y + rt[2][k]·w.z, as glm evaluates it.
-      for (int k = 0; k < 3; ++k)
-        for (int c = 0; c < 3; ++c) m_[3 * k + c][j] = rt[c][k];
+      Prim& p = prim_[j];
+      p.centre = e.centre;
+      p.radii = e.radii;
+      p.rt = glm::transpose(e.rotation);
+      p.d = (p.rt * dir) / e.radii;
+      a_[j] = glm::dot(p.d, p.d);
+      const float r = std::max(e.radii.x, std::max(e.radii.y, e.radii.z));
+      pu[j] = glm::dot(e.centre, e1_);
+      pw[j] = glm::dot(e.centre, e2_);
+      // Margin: relative 1e-4 of the radius and of the coordinates' magnitude.
+      pr[j] = r * 1.0001f + 1e-4f * (std::fabs(pu[j]) + std::fabs(pw[j])) + 1e-6f;
+      lo_u = std::min(lo_u, pu[j] - pr[j]), hi_u = std::max(hi_u, pu[j] + pr[j]);
+      lo_w = std::min(lo_w, pw[j] - pr[j]), hi_w = std::max(hi_w, pw[j] + pr[j]);
+      sum_r += pr[j];
+    }
+    // Bins about one mean disc radius wide, at most kMaxBins per axis.
+    const float mean_r = n_ ? sum_r / static_cast<float>(n_) : 1.0f;
+    const auto bins_for = [&](float extent) {
+      const float want = std::ceil(extent / std::max(mean_r, 1e-12f));
+      return static_cast<int>(std::min(std::max(want, 1.0f), static_cast<float>(kMaxBins)));
+    };
+    nu_ = bins_for(hi_u - lo_u);
+    nw_ = bins_for(hi_w - lo_w);
+    lo_u_ = lo_u, lo_w_ = lo_w;
+    inv_u_ = static_cast<float>(nu_) / std::max(hi_u - lo_u, 1e-30f);
+    inv_w_ = static_cast<float>(nw_) / std::max(hi_w - lo_w, 1e-30f);
+    // Counting pass, then fill (CSR layout), primitives in increasing j within each bin.
+    std::vector<int> count(static_cast<std::size_t>(nu_) * nw_ + 1, 0);
+    const auto range = [&](std::size_t j, int& u0, int& u1, int& w0, int& w1) {
+      u0 = bin(pu[j] - pr[j] - lo_u_, inv_u_, nu_), u1 = bin(pu[j] + pr[j] - lo_u_, inv_u_, nu_);
+      w0 = bin(pw[j] - pr[j] - lo_w_, inv_w_, nw_), w1 = bin(pw[j] + pr[j] - lo_w_, inv_w_, nw_);
+    };
+    for (std::size_t j = 0; j < n_; ++j) {
+      int u0, u1, w0, w1;
+      range(j, u0, u1, w0, w1);
+      for (int w = w0; w <= w1; ++w)
+        for (int u = u0; u <= u1; ++u) ++count[static_cast<std::size_t>(w) * nu_ + u + 1];
+    }
+    for (std::size_t i = 1; i < count.size(); ++i) count[i] += count[i - 1];
+    start_ = count;
+    list_.resize(static_cast<std::size_t>(count.back()));
+    for (std::size_t j = 0; j < n_; ++j) {
+      int u0, u1, w0, w1;
+      range(j, u0, u1, w0, w1);
+      for (int w = w0; w <= w1; ++w)
+        for (int u = u0; u <= u1; ++u)
+          list_[static_cast<std::size_t>(count[static_cast<std::size_t>(w) * nu_ + u]++)] =
+              static_cast<int>(j);
     }
   }
 
   std::size_t size() const { return n_; }
-
-  // Per-thread results of the last collect(), per primitive j (in its grown unit-sphere frame):
-  // b = o'·d', oo = |o'|², disc the discriminant; with a = d'·d', |q_j(s)|² = oo + 2bs + as².
-  struct Scratch {
-    std::vector<float> b, oo, disc;
-    explicit Scratch(std::size_t n) : b(n), oo(n), disc(n) {}
-  };
-
   const float* a() const { return a_.data(); }
 
+  // Per-thread results of the last collect(), per primitive j (in its grown unit-sphere frame):
+  // b = o'·d', oo = |o'|²; with a = d'·d', |q_j(s)|² = oo + 2bs + as². Valid for candidates.
+  struct Scratch {
+    std::vector<float> b, oo;
+    explicit Scratch(std::size_t n) : b(n), oo(n) {}
+  };
+
   int collect(glm::vec3 origin, Scratch& scratch, Candidate* out) const {
-    float* __restrict bs = scratch.b.data();
-    float* __restrict ds = scratch.disc.data();
-    float* __restrict oos = scratch.oo.data();
-    const float* m0 = m_[0].data(); const float* m1 = m_[1].data(); const float* m2 = m_[2].data();
-    const float* m3 = m_[3].data(); const float* m4 = m_[4].data(); const float* m5 = m_[5].data();
-    const float* m6 = m_[6].data(); const float* m7 = m_[7].data(); const float* m8 = m_[8].data();
-    for (std::size_t j = 0; j < n_; ++j) {
-      const float wx = origin.x - cx_[j], wy = origin.y - cy_[j], wz = origin.z - cz_[j];
-      const float ox = (m0[j] * wx + m1[j] * wy + m2[j] * wz) / rx_[j];
-      const float oy = (m3[j] * wx + m4[j] * wy + m5[j] * wz) / ry_[j];
-      const float oz = (m6[j] * wx + m7[j] * wy + m8[j] * wz) / rz_[j];
-      const float b = ox * dx_[j] + oy * dy_[j] + oz * dz_[j];
-      const float oo = ox * ox + oy * oy + oz * oz;
-      const float c = oo - 1.0f;
-      bs[j] = b;
-      oos[j] = oo;
-      ds[j] = b * b - a_[j] * c;
-    }
+    const float u = glm::dot(origin, e1_) - lo_u_, w = glm::dot(origin, e2_) - lo_w_;
+    if (!(u >= 0.0f && w >= 0.0f)) return 0;
+    const int bu = static_cast<int>(u * inv_u_), bw = static_cast<int>(w * inv_w_);
+    if (bu >= nu_ + 1 || bw >= nw_ + 1) return 0;  // beyond every disc
+    const std::size_t cell = static_cast<std::size_t>(std::min(bw, nw_ - 1)) * nu_ +
+                             static_cast<std::size_t>(std::min(bu, nu_ - 1));
     int count = 0;
-    for (std::size_t j = 0; j < n_; ++j) {
-      if (ds[j] < 0.0f || !(a_[j] > 0.0f)) continue;
-      const float sq = std::sqrt(ds[j]);
-      const float t0 = std::max((-bs[j] - sq) / a_[j], 0.0f);
-      const float t1 = (-bs[j] + sq) / a_[j];
+    for (int k = start_[cell]; k < start_[cell + 1]; ++k) {
+      const int j = list_[static_cast<std::size_t>(k)];
+      const Prim& p = prim_[static_cast<std::size_t>(j)];
+      const float a = a_[static_cast<std::size_t>(j)];
+      // intersect(Ellipsoid, ...): o = (Rᵀ(origin − c)) / r, b = o·d, c = o·o − 1.
+      const glm::vec3 o = (p.rt * (origin - p.centre)) / p.radii;
+      if (!(a > 0.0f)) continue;
+      const float b = glm::dot(o, p.d);
+      const float oo = glm::dot(o, o);
+      const float c = oo - 1.0f;
+      const float disc = b * b - a * c;
+      if (disc < 0.0f) continue;
+      const float sq = std::sqrt(disc);
+      const float t0 = std::max((-b - sq) / a, 0.0f);
+      const float t1 = (-b + sq) / a;
       if (!(t1 > t0)) continue;
+      scratch.b[static_cast<std::size_t>(j)] = b;
+      scratch.oo[static_cast<std::size_t>(j)] = oo;
       int pos = count++;
       while (pos > 0 && out[pos - 1].t_in > t0) {
         out[pos] = out[pos - 1];
         --pos;
       }
-      out[pos] = Candidate{t0, t1, static_cast<int>(j)};
+      out[pos] = Candidate{t0, t1, j};
     }
     return count;
   }
 
  private:
+  struct Prim {
+    glm::vec3 centre, radii, d;
+    glm::mat3 rt;
+  };
+
+  // Bin of offset x (≥ 0 up to rounding) at `inv` bins per unit, clamped to [0, n − 1].
+  static int bin(float x, float inv, int n) {
+    const float f = std::floor(x * inv);
+    return static_cast<int>(std::min(std::max(f, 0.0f), static_cast<float>(n - 1)));
+  }
+
   std::size_t n_;
-  std::vector<float> cx_, cy_, cz_, rx_, ry_, rz_, dx_, dy_, dz_, a_;
-  std::vector<float> m_[9];
+  std::vector<Prim> prim_;
+  std::vector<float> a_;
+  glm::vec3 e1_{}, e2_{};
+  float lo_u_ = 0, lo_w_ = 0, inv_u_ = 1, inv_w_ = 1;
+  int nu_ = 1, nw_ = 1;
+  std::vector<int> start_, list_;
 };
 
 // Attribution of union samples (RENDER_CONTRACT march="union"): the covering candidate whose
