@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.light import MAX_RESOLUTION
+from cumuli.light import DEFAULT_EXTINCTION, MAX_RESOLUTION
 
 C_DEFAULT = 0.5 * 1e-4 / (4 * math.pi)
 
@@ -70,7 +70,7 @@ def reference_light(
     res,
     method="ndt",
     step=0.1,
-    extinction=1.0,
+    extinction=DEFAULT_EXTINCTION,
     solid_angle=1e-4,
     constant=None,
 ):
@@ -293,8 +293,10 @@ def test_rotated_ellipsoids(noise):
     np.testing.assert_allclose(cloud.light_box[0], lo, atol=1e-5)
     # Constant density, single rotated ellipsoid: T_D = exp(−σ·chord) with the rotated chord.
     one = cu.Cloud(centres=np.zeros((1, 3)), radii=[[2.0, 0.6, 0.8]], rotations=rots[:1], kappa=0.0)
-    g = cu.light_grid(one, sun, None, resolution=5, density_override=0.3, solid_angle=0.0)
-    ref1, _, _ = reference_light(one, sun, None, 5, constant=0.3, solid_angle=0.0)
+    g = cu.light_grid(
+        one, sun, None, resolution=5, density_override=0.3, solid_angle=0.0, extinction=1.0
+    )
+    ref1, _, _ = reference_light(one, sun, None, 5, constant=0.3, solid_angle=0.0, extinction=1.0)
     np.testing.assert_allclose(g, ref1, atol=1e-5, rtol=0)
     assert g.min() < 0.7
 
@@ -393,3 +395,41 @@ def test_many_rotated_primitives_match_reference(noise):
         np.testing.assert_array_equal(st.samples, count)
         np.testing.assert_allclose(grid, ref, atol=1e-5, rtol=0)
     assert (count > 0).sum() > 20
+
+
+def test_bench_light_quick_writes_json_and_plot(tmp_path):
+    import json
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, MPLBACKEND="Agg")
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
+    res = subprocess.run(
+        [
+            sys.executable,
+            str(root / "benchmarks" / "bench_light.py"),
+            "--quick",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=env,
+    )
+    assert res.returncode == 0, res.stderr + res.stdout
+    data = json.loads((tmp_path / "light.json").read_text())
+    assert (tmp_path / "light.png").stat().st_size > 1000
+    assert data["benchmark"] == "light" and data["quick"] is True
+    assert {"cumulus", "mesh300"} == set(data["clouds"])
+    assert data["clouds"]["mesh300"]["primitives"] == 300
+    for cloud in data["clouds"].values():
+        for row in cloud["resolutions"].values():
+            # The naive method marches at least as many samples as NDT; medians are positive.
+            assert row["naive_over_ndt_samples"] >= 1.0
+            assert row["ndt"]["march_s"]["median"] > 0
+            assert row["ndt"]["samples_per_voxel"] > 0
+    assert "targets" in data and "reached" in data and "cpu_model" in data["machine"]

@@ -32,11 +32,12 @@ from cumuli.sun import Sun
 MAX_RESOLUTION: int = int(_core.LIGHT_MAX_RESOLUTION)
 #: A ray may need at most this many steps (light-box diagonal / step); smaller steps are refused.
 MAX_STEPS_PER_RAY: int = int(_core.LIGHT_MAX_STEPS_PER_RAY)
-#: Default extinction A of eq. (3) (per world unit at density 1). fBm densities are ≈ 0.3–0.6
-#: inside a pseudo-spheroid, so A = 1 gives a mean free path of about 2–3 units: a default
-#: cumulus (10–20 units across) is then a few optical depths thick, and the grid spans bright
-#: sunlit tops to dark (L ≈ 0.05) cores instead of saturating at either end.
-DEFAULT_EXTINCTION: float = 1.0
+#: Default extinction A of eq. (3), per world unit at density 1. Inside a pseudo-spheroid the fBm
+#: densities that pass eq. (2)'s gating are ≈ 0.3–0.6, so A = 0.3 gives a mean free path of about
+#: 5–10 units: the default cumulus (`gaussian_cumulus`, ≈ 26 units wide, 17 tall) is then 1–3
+#: optical depths thick along a sun ray, and its grid spans bright sunlit tops (L ≈ 1) to dim
+#: cores (L ≈ 0.1) instead of saturating black (A = 1 leaves most of the interior below 0.01).
+DEFAULT_EXTINCTION: float = 0.3
 METHODS = ("ndt", "naive")
 
 

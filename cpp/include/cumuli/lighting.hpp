@@ -50,7 +50,7 @@ struct LightSettings {
   glm::vec3 sun_dir{0.0f, 1.0f, 0.0f};  // towards the sun; normalised by validate()
   int resolution[3] = {20, 20, 20};     // voxels along x, y, z
   float step = 0.1f;                    // Δ, world units
-  float extinction = 1.0f;              // A of eq. (3): σ = ρ · A, per world unit
+  float extinction = 0.3f;              // A of eq. (3): σ = ρ · A, per world unit (see light.py)
   float solid_angle = 1e-4f;            // γ of eq. (6), steradians
   float intensity = 1.0f;               // I₀
   LightMethod method = LightMethod::Ndt;
