@@ -247,6 +247,13 @@ class SunCandidates {
   std::vector<int> start_, list_;
 };
 
+// Per-thread storage for UnionAttribution's active candidates, structure of arrays.
+struct ActiveBuffers {
+  std::vector<int> primitive;
+  std::vector<float> oo, b2, a, t_out, q2;
+  explicit ActiveBuffers(std::size_t n) : primitive(n), oo(n), b2(n), a(n), t_out(n), q2(n) {}
+};
+
 // Attribution of union samples (RENDER_CONTRACT march="union"): the covering candidate whose
 // primitive gives the smallest |q|, ties to the earlier candidate. Samples come in increasing s,
 // so the covering set is kept as a list of "active" candidates (entered: t_in ≤ s; dropped for
@@ -255,49 +262,73 @@ class SunCandidates {
 // primitive with the same |q| to float precision, hence the same γ of eq. (2).
 class UnionAttribution {
  public:
-  UnionAttribution(const Candidate* cand, int first, int last, int* active, const float* a,
-                   const SunCandidates::Scratch& sc)
-      : cand_(cand), next_(first), last_(last), active_(active), a_(a), sc_(sc),
+  UnionAttribution(const Candidate* cand, int first, int last, ActiveBuffers& buf,
+                   const float* a, const SunCandidates::Scratch& sc)
+      : cand_(cand), next_(first), last_(last), buf_(buf), a_(a), sc_(sc),
         fallback_(cand[first].primitive) {}
 
   int operator()(float s) {
-    while (next_ < last_ && cand_[next_].t_in <= s) active_[count_++] = next_++;
-    int kept = 0;
-    for (int i = 0; i < count_; ++i)
-      if (cand_[active_[i]].t_out >= s) active_[kept++] = active_[i];
-    if (kept == 0) {  // rounding left s just past every interval: keep the last one entered
-      if (count_ > 0) fallback_ = cand_[active_[count_ - 1]].primitive;
-      count_ = 0;
-      return fallback_;
-    }
-    count_ = kept;
-    int best = cand_[active_[0]].primitive;
-    if (kept == 1) return best;
-    float best_q2 = q2(best, s);
-    for (int i = 1; i < kept; ++i) {
-      const int j = cand_[active_[i]].primitive;
-      const float v = q2(j, s);
-      if (v < best_q2) best_q2 = v, best = j;
-    }
-    return best;
+    while (next_ < last_ && cand_[next_].t_in <= s) enter(next_++);
+    if (s > min_t_out_) drop_ended(s);  // only when some candidate has ended
+    if (count_ <= 1) return count_ == 1 ? buf_.primitive[0] : fallback_;
+    // |q|² of every active candidate (a vectorisable loop), then the first smallest.
+    const float* __restrict oo = buf_.oo.data();
+    const float* __restrict b2 = buf_.b2.data();
+    const float* __restrict a = buf_.a.data();
+    float* __restrict q2 = buf_.q2.data();
+    for (int i = 0; i < count_; ++i) q2[i] = oo[i] + s * (b2[i] + s * a[i]);
+    int best = 0;
+    for (int i = 1; i < count_; ++i)
+      if (q2[i] < q2[best]) best = i;
+    return buf_.primitive[best];
   }
 
  private:
-  float q2(int j, float s) const { return sc_.oo[j] + s * (2.0f * sc_.b[j] + s * a_[j]); }
+  void enter(int c) {
+    const int j = cand_[c].primitive;
+    const auto js = static_cast<std::size_t>(j);
+    const auto k = static_cast<std::size_t>(count_++);
+    buf_.primitive[k] = j;
+    buf_.oo[k] = sc_.oo[js];
+    buf_.b2[k] = 2.0f * sc_.b[js];
+    buf_.a[k] = a_[js];
+    buf_.t_out[k] = cand_[c].t_out;
+    min_t_out_ = std::min(min_t_out_, cand_[c].t_out);
+  }
+
+  // Drops the candidates with t_out < s for good (samples only move forward), keeping order.
+  void drop_ended(float s) {
+    int kept = 0;
+    min_t_out_ = INFINITY;
+    for (int i = 0; i < count_; ++i) {
+      if (buf_.t_out[static_cast<std::size_t>(i)] < s) continue;
+      const auto from = static_cast<std::size_t>(i), to = static_cast<std::size_t>(kept++);
+      buf_.primitive[to] = buf_.primitive[from];
+      buf_.oo[to] = buf_.oo[from];
+      buf_.b2[to] = buf_.b2[from];
+      buf_.a[to] = buf_.a[from];
+      buf_.t_out[to] = buf_.t_out[from];
+      min_t_out_ = std::min(min_t_out_, buf_.t_out[to]);
+    }
+    // Rounding can leave s just past every interval: keep the last one entered.
+    if (kept == 0 && count_ > 0) fallback_ = buf_.primitive[static_cast<std::size_t>(count_ - 1)];
+    count_ = kept;
+  }
 
   const Candidate* cand_;
   int next_, last_;
-  int* active_;
-  int count_ = 0;
+  ActiveBuffers& buf_;
   const float* a_;
   const SunCandidates::Scratch& sc_;
   int fallback_;
+  int count_ = 0;
+  float min_t_out_ = INFINITY;
 };
 
 // L(v) for the ray in `r` (whose accumulator starts empty) over the sorted candidates.
 float light_at(const RayContext& r, LightMethod method, const Candidate* cand, int n,
                float intensity, const SunCandidates& collector,
-               const SunCandidates::Scratch& scratch, int* active) {
+               const SunCandidates::Scratch& scratch, ActiveBuffers& active) {
   if (method == LightMethod::Naive) {
     for (int c = 0; c < n; ++c) {
       const int j = cand[c].primitive;
@@ -407,7 +438,7 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
     std::vector<Candidate> cand(static_cast<std::size_t>(capacity));
     SunCandidates::Scratch scratch(collector.size());
     SampleQueue queue;
-    std::vector<int> active(static_cast<std::size_t>(capacity));
+    ActiveBuffers active(static_cast<std::size_t>(capacity));
     for (std::size_t row = b; row < e; ++row) {
       const int z = static_cast<int>(row / ry), y = static_cast<int>(row % ry);
       for (int x = 0; x < rx; ++x) {
@@ -417,7 +448,7 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
         const RayContext r{cloud, density, v, s.sun_dir, s.step, s.extinction, scatter, queue, acc};
         const std::size_t idx = row * rx + x;
         light[idx] = light_at(r, s.method, cand.data(), n, s.intensity, collector, scratch,
-                              active.data());
+                              active);
         if (samples) samples[idx] = acc.samples;
         row_samples[row] += acc.samples;
       }
