@@ -433,3 +433,36 @@ def test_bench_light_quick_writes_json_and_plot(tmp_path):
             assert row["ndt"]["march_s"]["median"] > 0
             assert row["ndt"]["samples_per_voxel"] > 0
     assert "targets" in data and "reached" in data and "cpu_model" in data["machine"]
+
+
+def test_zero_density_or_zero_extinction_leaves_full_light(noise):
+    cloud = spheres(**OVERLAP)
+    # ρ = 0 is not cloud: no extinction and no scattering anywhere.
+    g0 = cu.light_grid(cloud, (0, 1, 0), None, resolution=6, density_override=0.0)
+    assert (g0 == 1.0).all()
+    # A = 0 and γ = 0: nothing attenuates or scatters, whatever the fBm.
+    g1 = cu.light_grid(cloud, (0, 1, 0), noise, resolution=6, extinction=0.0, solid_angle=0.0)
+    assert (g1 == 1.0).all()
+
+
+def test_values_bounded_and_sun_forms_equivalent(noise):
+    cloud = spheres(**OVERLAP)
+    grid, st = cu.light_grid(cloud, cu.Sun((0.3, 0.8, 0.2)), noise, resolution=8, return_stats=True)
+    # 0 < L ≤ 1 + C·(samples): transmittance ≤ 1 plus at most C per sample of scattering.
+    assert (grid > 0).all()
+    assert (grid <= 1.0 + C_DEFAULT * st.samples + 1e-6).all()
+    # Forward scattering (eq. 6) only adds light: without it every voxel is darker or equal.
+    dark = cu.light_grid(cloud, (0.3, 0.8, 0.2), noise, resolution=8, solid_angle=0.0, store=False)
+    assert (dark <= grid).all() and (dark < grid).any()
+    same = cu.light_grid(cloud, np.array([0.6, 1.6, 0.4]), noise, resolution=8, store=False)
+    np.testing.assert_array_equal(grid, same)  # directions are normalised
+
+
+def test_light_sun_survives_save_and_load(noise, tmp_path):
+    cloud = spheres(**OVERLAP)
+    cu.light_grid(cloud, (0.0, 3.0, 4.0), noise, resolution=4)
+    assert cloud.light_sun == pytest.approx((0.0, 0.6, 0.8))
+    back = cu.load_cloud(cloud.save(tmp_path / "c.npz"))
+    np.testing.assert_array_equal(back.light, cloud.light)
+    assert back.light_sun == pytest.approx(cloud.light_sun)
+    np.testing.assert_allclose(np.array(back.light_box), np.array(cloud.light_box))

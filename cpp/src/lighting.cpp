@@ -125,6 +125,7 @@ class SunCandidates {
     const glm::vec3 helper = std::fabs(d.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
     e1_ = glm::normalize(glm::cross(d, helper));
     e2_ = glm::cross(d, e1_);
+    dir_ = d;
     float lo_u = INFINITY, lo_w = INFINITY, hi_u = -INFINITY, hi_w = -INFINITY, sum_r = 0.0f;
     for (std::size_t j = 0; j < n_; ++j) {
       Ellipsoid e = cloud.primitives[j];
@@ -144,10 +145,11 @@ class SunCandidates {
       lo_w = std::min(lo_w, pw[j] - pr[j]), hi_w = std::max(hi_w, pw[j] + pr[j]);
       sum_r += pr[j];
     }
-    // Bins about one mean disc radius wide, at most kMaxBins per axis.
+    // Bins about half a mean disc radius wide (lists close to the discs that really cover a
+    // bin, few copies per disc), at most kMaxBins per axis.
     const float mean_r = n_ ? sum_r / static_cast<float>(n_) : 1.0f;
     const auto bins_for = [&](float extent) {
-      const float want = std::ceil(extent / std::max(mean_r, 1e-12f));
+      const float want = std::ceil(2.0f * extent / std::max(mean_r, 1e-12f));
       return static_cast<int>(std::min(std::max(want, 1.0f), static_cast<float>(kMaxBins)));
     };
     nu_ = bins_for(hi_u - lo_u);
@@ -176,7 +178,8 @@ class SunCandidates {
       for (int w = w0; w <= w1; ++w)
         for (int u = u0; u <= u1; ++u)
           list_[static_cast<std::size_t>(count[static_cast<std::size_t>(w) * nu_ + u]++)] =
-              static_cast<int>(j);
+              Entry{pu[j], pw[j], pr[j] * pr[j], glm::dot(cloud.primitives[j].centre, d) + pr[j],
+                    static_cast<int>(j)};
     }
   }
 
@@ -191,15 +194,23 @@ class SunCandidates {
   };
 
   int collect(glm::vec3 origin, Scratch& scratch, Candidate* out) const {
-    const float u = glm::dot(origin, e1_) - lo_u_, w = glm::dot(origin, e2_) - lo_w_;
+    const float u_abs = glm::dot(origin, e1_), w_abs = glm::dot(origin, e2_);
+    const float u = u_abs - lo_u_, w = w_abs - lo_w_;
     if (!(u >= 0.0f && w >= 0.0f)) return 0;
     const int bu = static_cast<int>(u * inv_u_), bw = static_cast<int>(w * inv_w_);
     if (bu >= nu_ + 1 || bw >= nw_ + 1) return 0;  // beyond every disc
     const std::size_t cell = static_cast<std::size_t>(std::min(bw, nw_ - 1)) * nu_ +
                              static_cast<std::size_t>(std::min(bu, nu_ - 1));
+    const float h = glm::dot(origin, dir_);
     int count = 0;
     for (int k = start_[cell]; k < start_[cell + 1]; ++k) {
-      const int j = list_[static_cast<std::size_t>(k)];
+      const Entry& en = list_[static_cast<std::size_t>(k)];
+      // Cheap conservative rejections: the whole primitive behind the origin along the ray, or
+      // the origin outside its projected disc. Either way the exact test would find no t > 0.
+      if (h > en.h_max) continue;
+      const float du = u_abs - en.u, dw = w_abs - en.w;
+      if (du * du + dw * dw > en.r2) continue;
+      const int j = en.j;
       const Prim& p = prim_[static_cast<std::size_t>(j)];
       const float a = a_[static_cast<std::size_t>(j)];
       // intersect(Ellipsoid, ...): o = (Rᵀ(origin − c)) / r, b = o·d, c = o·o − 1.
@@ -244,7 +255,15 @@ class SunCandidates {
   glm::vec3 e1_{}, e2_{};
   float lo_u_ = 0, lo_w_ = 0, inv_u_ = 1, inv_w_ = 1;
   int nu_ = 1, nw_ = 1;
-  std::vector<int> start_, list_;
+  // A bin's entry: projected centre (u, w), squared disc radius, the largest ray coordinate
+  // dot(p, d) of the primitive's bounding sphere, and the primitive.
+  struct Entry {
+    float u, w, r2, h_max;
+    int j;
+  };
+  glm::vec3 dir_{};
+  std::vector<int> start_;
+  std::vector<Entry> list_;
 };
 
 // Per-thread storage for UnionAttribution's active candidates, structure of arrays.
