@@ -155,8 +155,23 @@ class SunCandidates {
     nu_ = bins_for(hi_u - lo_u);
     nw_ = bins_for(hi_w - lo_w);
     lo_u_ = lo_u, lo_w_ = lo_w;
-    inv_u_ = static_cast<float>(nu_) / std::max(hi_u - lo_u, 1e-30f);
-    inv_w_ = static_cast<float>(nw_) / std::max(hi_w - lo_w, 1e-30f);
+    // Big discs (metaballs grow by √N) can cover many bins each: coarsen the bins until the
+    // lists hold at most max(8N, 2²⁰) entries, so memory stays proportional to the cloud.
+    const std::size_t max_entries = std::max<std::size_t>(8 * n_, std::size_t{1} << 20);
+    for (;;) {
+      inv_u_ = static_cast<float>(nu_) / std::max(hi_u - lo_u, 1e-30f);
+      inv_w_ = static_cast<float>(nw_) / std::max(hi_w - lo_w, 1e-30f);
+      std::size_t entries = 0;
+      for (std::size_t j = 0; j < n_; ++j) {
+        const auto cu = static_cast<std::size_t>(bin(pu[j] + pr[j] - lo_u_, inv_u_, nu_) -
+                                                  bin(pu[j] - pr[j] - lo_u_, inv_u_, nu_) + 1);
+        const auto cw = static_cast<std::size_t>(bin(pw[j] + pr[j] - lo_w_, inv_w_, nw_) -
+                                                  bin(pw[j] - pr[j] - lo_w_, inv_w_, nw_) + 1);
+        entries += cu * cw;
+      }
+      if (entries <= max_entries || (nu_ == 1 && nw_ == 1)) break;
+      nu_ = std::max(1, nu_ / 2), nw_ = std::max(1, nw_ / 2);
+    }
     // Counting pass, then fill (CSR layout), primitives in increasing j within each bin.
     std::vector<int> count(static_cast<std::size_t>(nu_) * nw_ + 1, 0);
     const auto range = [&](std::size_t j, int& u0, int& u1, int& w0, int& w1) {
