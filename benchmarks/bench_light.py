@@ -158,6 +158,8 @@ def plot(data: dict[str, Any], path: Path) -> None:
                          label=f"{name} {method}")  # fmt: skip
             axes[1].plot(res, [r["samples_per_voxel"] for r in rows], style,
                          label=f"{name} {method}")  # fmt: skip
+    axes[0].plot([20, 64], [TARGET_20_MS, TARGET_64_MS], "k*", markersize=10,
+                 label="issue targets (cumulus NDT)")  # fmt: skip
     axes[0].set(xlabel="grid resolution R (R³ voxels)", ylabel="median time (ms)",
                 yscale="log", title="light grid time, all cores")  # fmt: skip
     axes[1].set(xlabel="grid resolution R", ylabel="samples marched per voxel",
