@@ -11,6 +11,7 @@ from cumuli import meshes
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
+from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
 from cumuli.shapes import (
     ellipsoids_from_mesh,
@@ -25,11 +26,14 @@ from cumuli.sun import Sun
 
 __all__ = [
     "Cloud",
+    "LightStats",
     "Noise",
     "Sun",
     "__version__",
     "ellipsoids_from_mesh",
+    "from_srgb8",
     "gaussian_cumulus",
+    "light_grid",
     "load_cloud",
     "lsystem_cloud",
     "lsystem_expand",
