@@ -10,6 +10,7 @@ from __future__ import annotations
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
 from cumuli.noise import Noise
+from cumuli.renderer import Renderer, prepare_light, render
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
 from cumuli.sun import Sun
 
@@ -18,9 +19,12 @@ __all__ = [
     "Cloud",
     "Noise",
     "RenderSettings",
+    "Renderer",
     "Scene",
     "Sky",
     "Sun",
     "__version__",
     "load_scene",
+    "prepare_light",
+    "render",
 ]
