@@ -12,6 +12,7 @@ from cumuli.cloud import Cloud
 from cumuli.noise import Noise
 from cumuli.renderer import Renderer, prepare_light, render
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
+from cumuli.shapes import gaussian_cumulus, metaball_cumulus
 from cumuli.sun import Sun
 
 __all__ = [
@@ -24,7 +25,9 @@ __all__ = [
     "Sky",
     "Sun",
     "__version__",
+    "gaussian_cumulus",
     "load_scene",
+    "metaball_cumulus",
     "prepare_light",
     "render",
 ]
