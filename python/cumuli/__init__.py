@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
+from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
 from cumuli.renderer import Renderer, prepare_light, render
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
@@ -18,6 +19,7 @@ from cumuli.sun import Sun
 __all__ = [
     "Camera",
     "Cloud",
+    "LightStats",
     "Noise",
     "RenderSettings",
     "Renderer",
@@ -26,6 +28,7 @@ __all__ = [
     "Sun",
     "__version__",
     "gaussian_cumulus",
+    "light_grid",
     "load_scene",
     "metaball_cumulus",
     "prepare_light",
