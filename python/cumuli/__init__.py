@@ -10,6 +10,17 @@ from __future__ import annotations
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
 from cumuli.noise import Noise
+from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
 from cumuli.sun import Sun
 
-__all__ = ["Cloud", "Noise", "Sun", "__version__"]
+__all__ = [
+    "Camera",
+    "Cloud",
+    "Noise",
+    "RenderSettings",
+    "Scene",
+    "Sky",
+    "Sun",
+    "__version__",
+    "load_scene",
+]
