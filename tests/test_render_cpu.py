@@ -329,7 +329,7 @@ def ref_render(args, lattice=None):
     u = cross(r, f)
     th = np.tan(F(args["fov"]) * F(0.017453292519943295) / F(2))
     aspect = F(W) / F(H)
-    if args["density_constant"] >= 0:
+    if args.get("density_constant", -1.0) >= 0:
         const = F(args["density_constant"])
 
         def src(p):
@@ -581,3 +581,56 @@ def test_cloud_missing_a_field_or_not_a_dict():
         _core.render_cpu(**make_args([cloud]))
     with pytest.raises(TypeError, match=r"clouds\[0\]"):
         _core.render_cpu(**make_args([42]))
+
+
+# --------------------------------------------------------------------------------------------
+# The Python entry point on scene objects
+def scene_cloud(centres, radii, **kw):
+    import cumuli as cu
+
+    d = cloud_dict(centres, radii, **kw)
+    cloud = cu.Cloud(centres=d["centres"], radii=d["radii"], kappa=d["kappa"])
+    cloud.light = d["light"]
+    cloud.light_box = (d["light_lo"], d["light_hi"])
+    return cloud
+
+
+def test_render_cpu_on_scene_objects_follows_the_contract():
+    import cumuli as cu
+
+    cloud = scene_cloud([[0.0, 0.0, 0.0], [1.1, 0.3, 0.2]], [1.0, 0.8], kappa=0.3)
+    settings = cu.RenderSettings(kappa=0.7, frequency=1.5, march="union", lod_a=0.1)
+    scene = cu.Scene(clouds=[cloud], noise=cu.Noise(seed=4, size=16), settings=settings)
+    camera = cu.Camera(position=(0.3, 0.4, -6.0), target=(0.2, 0.1, 0.0), fov=40)
+    img = cu.render_cpu(scene, camera, 8, 6)
+    args = cu.cpu_render.render_cpu_args(scene, camera, 8, 6)
+    assert args["clouds"][0]["kappa"] == pytest.approx(0.7)  # settings.kappa overrides the cloud's
+    assert args["ref_step"] == settings.step_ref and args["march"] == "union"
+    assert (img[..., 3] > 0.05).sum() >= 4
+    np.testing.assert_allclose(img, ref_render(args, np.asarray(scene.noise.lattice)), atol=1e-5)
+
+
+def test_render_cpu_sky_agrees_with_the_scene_sky_reference():
+    import cumuli as cu
+
+    scene = cu.Scene(clouds=[], sky=cu.Sky.sunset(), sun=cu.Sun(direction=(0.2, 0.05, 1.0)))
+    camera = cu.Camera(position=(0.0, 1.0, 0.0), target=(0.2, 1.05, 5.0), fov=60)
+    img = cu.render_cpu(scene, camera, 32, 24)
+    dirs = camera.ray_directions(32, 24)
+    np.testing.assert_allclose(img[..., :3], scene.sky.colour(dirs, scene.sun), atol=2e-5, rtol=0)
+    assert (img[..., 3] == 0).all()
+    # The sun disc is in view and bright.
+    assert img[..., :3].max() > 5
+
+
+def test_render_cpu_bad_arguments():
+    import cumuli as cu
+
+    scene = cu.Scene(clouds=[scene_cloud([[0.0, 0.0, 0.0]], [1.0])])
+    camera = cu.Camera(position=(0.0, 0.0, -5.0), target=(0.0, 0.0, 0.0))
+    with pytest.raises(ValueError, match="width"):
+        cu.render_cpu(scene, camera, 0, 4)
+    with pytest.raises(TypeError, match="height"):
+        cu.render_cpu(scene, camera, 4, 2.5)
+    with pytest.raises(ValueError, match="threads"):
+        cu.render_cpu(scene, camera, 4, 4, threads=-2)

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
+from cumuli.cpu_render import render_cpu
 from cumuli.noise import Noise
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
 from cumuli.sun import Sun
@@ -23,4 +24,5 @@ __all__ = [
     "Sun",
     "__version__",
     "load_scene",
+    "render_cpu",
 ]
