@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
+from cumuli.cpu_render import render_cpu
 from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
 from cumuli.renderer import Renderer, prepare_light, render
@@ -33,4 +34,5 @@ __all__ = [
     "metaball_cumulus",
     "prepare_light",
     "render",
+    "render_cpu",
 ]
