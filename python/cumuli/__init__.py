@@ -7,15 +7,24 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 
 from __future__ import annotations
 
+from cumuli import meshes
 from cumuli._version import __version__
-from cumuli.cloud import Cloud
+from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.cpu_render import render_cpu
 from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
 from cumuli.renderer import Renderer, prepare_light, render
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
-from cumuli.shapes import gaussian_cumulus, metaball_cumulus
+from cumuli.shapes import (
+    ellipsoids_from_mesh,
+    gaussian_cumulus,
+    lsystem_cloud,
+    lsystem_expand,
+    lsystem_length,
+    mesh_cloud,
+    metaball_cumulus,
+)
 from cumuli.sun import Sun
 
 __all__ = [
@@ -29,10 +38,18 @@ __all__ = [
     "Sky",
     "Sun",
     "__version__",
+    "ellipsoids_from_mesh",
     "from_srgb8",
     "gaussian_cumulus",
     "light_grid",
+    "load_cloud",
     "load_scene",
+    "lsystem_cloud",
+    "lsystem_expand",
+    "lsystem_length",
+    "merge",
+    "mesh_cloud",
+    "meshes",
     "metaball_cumulus",
     "prepare_light",
     "read_image",
