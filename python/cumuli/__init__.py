@@ -12,6 +12,7 @@ from cumuli.cloud import Cloud
 from cumuli.cpu_render import render_cpu
 from cumuli.noise import Noise
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
+from cumuli.shapes import gaussian_cumulus, metaball_cumulus
 from cumuli.sun import Sun
 
 __all__ = [
@@ -23,6 +24,8 @@ __all__ = [
     "Sky",
     "Sun",
     "__version__",
+    "gaussian_cumulus",
     "load_scene",
+    "metaball_cumulus",
     "render_cpu",
 ]

@@ -1,0 +1,117 @@
+// Bindings for the cloud-shape generators: gaussian.hpp (and the L-system and mesh generators).
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <pybind11/stl.h>
+
+#include "common.hpp"
+#include "cumuli/gaussian.hpp"
+
+namespace cumuli::bind {
+
+namespace {
+
+glm::vec3 to_vec3(const std::array<float, 3>& a) { return glm::vec3(a[0], a[1], a[2]); }
+
+py::array_t<float> points_array(const std::vector<glm::vec3>& pts) {
+  auto out = new_array({static_cast<py::ssize_t>(pts.size()), 3});
+  float* d = out.mutable_data();
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    for (int k = 0; k < 3; ++k) d[3 * i + k] = pts[i][k];
+  return out;
+}
+
+py::array_t<float> scalar_array(const std::vector<float>& v) {
+  auto out = new_array({static_cast<py::ssize_t>(v.size())});
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+RadiusModel parse_radius_model(const std::string& s) {
+  if (s == "eq15") return RadiusModel::Eq15;
+  if (s == "eq16") return RadiusModel::Eq16;
+  if (s == "uniform") return RadiusModel::Uniform;
+  throw py::value_error("radius_model must be 'eq15', 'eq16' or 'uniform', got '" + s + "'");
+}
+
+}  // namespace
+
+void bind_shapes(py::module_& m) {
+  m.def(
+      "gaussian_cumulus",
+      [](std::array<float, 3> centre, int n, std::array<float, 3> mu, std::array<float, 3> sigma,
+         std::array<float, 3> clamp_lo, std::array<float, 3> clamp_hi,
+         const std::string& clamp_mode, const std::string& radius_model,
+         const std::string& eq16_combine, float epsilon, float radius_scale, float radius_lo,
+         float radius_hi, bool hollow, std::array<float, 3> hollow_box, bool remove_contained,
+         std::uint64_t seed) {
+        GaussianCumulusParams p;
+        p.centre = to_vec3(centre);
+        p.n = n;
+        p.mu = to_vec3(mu);
+        p.sigma = to_vec3(sigma);
+        p.clamp_lo = to_vec3(clamp_lo);
+        p.clamp_hi = to_vec3(clamp_hi);
+        if (clamp_mode == "saturate") p.clamp_mode = ClampMode::Saturate;
+        else if (clamp_mode == "resample") p.clamp_mode = ClampMode::Resample;
+        else throw py::value_error("clamp_mode must be 'saturate' or 'resample', got '" + clamp_mode + "'");
+        p.radius_model = parse_radius_model(radius_model);
+        if (eq16_combine == "sum") p.eq16_combine = Eq16Combine::Sum;
+        else if (eq16_combine == "product") p.eq16_combine = Eq16Combine::Product;
+        else throw py::value_error("eq16_combine must be 'sum' or 'product', got '" + eq16_combine + "'");
+        p.epsilon = epsilon;
+        p.radius_scale = radius_scale;
+        p.radius_lo = radius_lo;
+        p.radius_hi = radius_hi;
+        p.hollow = hollow;
+        p.hollow_box = to_vec3(hollow_box);
+        p.remove_contained = remove_contained;
+        p.seed = seed;
+        p.validate();  // std::invalid_argument → ValueError
+        GaussianCumulusResult r;
+        {
+          py::gil_scoped_release release;
+          r = gaussian_cumulus(p);
+        }
+        py::dict stats;
+        stats["drawn"] = r.drawn;
+        stats["clamped"] = r.clamped;
+        stats["removed_by_hollow"] = r.removed_by_hollow;
+        stats["removed_by_containment"] = r.removed_by_containment;
+        stats["kept"] = static_cast<int>(r.centres.size());
+        return py::make_tuple(points_array(r.centres), scalar_array(r.radii), stats);
+      },
+      py::arg("centre"), py::arg("n"), py::arg("mu"), py::arg("sigma"), py::arg("clamp_lo"),
+      py::arg("clamp_hi"), py::arg("clamp_mode"), py::arg("radius_model"), py::arg("eq16_combine"),
+      py::arg("epsilon"), py::arg("radius_scale"), py::arg("radius_lo"), py::arg("radius_hi"),
+      py::arg("hollow"), py::arg("hollow_box"), py::arg("remove_contained"), py::arg("seed"),
+      "Gaussian cumulus (§3.6.1): returns (centres (N,3), radii (N,), stats dict).");
+
+  m.def(
+      "remove_contained_spheres",
+      [](const FloatArray& centres, const FloatArray& radii) {
+        require_points(centres, "centres");
+        if (radii.ndim() != 1 || radii.shape(0) != centres.shape(0))
+          throw py::value_error("radii must have shape (N,) matching centres");
+        const std::size_t n = static_cast<std::size_t>(centres.shape(0));
+        std::vector<glm::vec3> c(n);
+        std::vector<float> r(radii.data(), radii.data() + n);
+        for (std::size_t i = 0; i < n; ++i)
+          c[i] = glm::vec3(centres.data()[3 * i], centres.data()[3 * i + 1], centres.data()[3 * i + 2]);
+        std::vector<int> keep;
+        {
+          py::gil_scoped_release release;
+          keep = remove_contained_spheres(c, r);
+        }
+        py::array_t<std::int64_t> out(static_cast<py::ssize_t>(keep.size()));
+        std::copy(keep.begin(), keep.end(), out.mutable_data());
+        return out;
+      },
+      py::arg("centres"), py::arg("radii"),
+      "Eq. (17): indices of the spheres kept so that none lies inside another.");
+}
+
+}  // namespace cumuli::bind
