@@ -10,7 +10,9 @@ from __future__ import annotations
 from cumuli._version import __version__
 from cumuli.cloud import Cloud
 from cumuli.cpu_render import render_cpu
+from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
+from cumuli.renderer import Renderer, prepare_light, render
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
 from cumuli.shapes import gaussian_cumulus, metaball_cumulus
 from cumuli.sun import Sun
@@ -18,14 +20,19 @@ from cumuli.sun import Sun
 __all__ = [
     "Camera",
     "Cloud",
+    "LightStats",
     "Noise",
     "RenderSettings",
+    "Renderer",
     "Scene",
     "Sky",
     "Sun",
     "__version__",
     "gaussian_cumulus",
+    "light_grid",
     "load_scene",
     "metaball_cumulus",
+    "prepare_light",
+    "render",
     "render_cpu",
 ]

@@ -35,6 +35,8 @@ class Cloud:
     params: dict[str, Any] = field(default_factory=dict)
     light: np.ndarray | None = None
     light_box: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
+    #: Normalised sun direction the light grid was computed for (a different sun: stale grid).
+    light_sun: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         self.centres = check.points3(self.centres, "centres", allow_empty=False)
