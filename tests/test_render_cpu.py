@@ -634,3 +634,25 @@ def test_render_cpu_bad_arguments():
         cu.render_cpu(scene, camera, 4, 2.5)
     with pytest.raises(ValueError, match="threads"):
         cu.render_cpu(scene, camera, 4, 4, threads=-2)
+
+
+def test_render_cpu_computes_missing_light_grids_and_dispatches():
+    import cumuli as cu
+
+    cloud = cu.Cloud(centres=[[0.0, 0.0, 0.0], [1.0, 0.2, 0.0]], radii=[1.0, 0.8])
+    scene = cu.Scene(
+        clouds=[cloud],
+        noise=cu.Noise(seed=2, size=16),
+        settings=cu.RenderSettings(light_resolution=6, lod_a=0.1),
+    )
+    camera = cu.Camera(position=(0.5, 0.5, -6.0), target=(0.5, 0.0, 0.0))
+    assert cloud.light is None
+    img = cu.render_cpu(scene, camera, 12, 9)
+    assert cloud.light is not None and cloud.light.shape == (6, 6, 6)
+    assert (img[..., 3] > 0.05).sum() >= 4
+    # cumuli.render(backend="cpu") is this marcher.
+    assert np.array_equal(cu.render(scene, camera, 12, 9, backend="cpu"), img)
+    with pytest.raises(TypeError, match="scene"):
+        cu.render_cpu("scene", camera, 4, 4)
+    with pytest.raises(TypeError, match="camera"):
+        cu.render_cpu(scene, (0, 0, 0), 4, 4)
