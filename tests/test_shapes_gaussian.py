@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-import cumuli
 import numpy as np
 import pytest
+
+import cumuli
 from cumuli import _core
 
 SIGMA = np.array([3.8, 1.7, 3.7], dtype=np.float64)

@@ -1,6 +1,7 @@
 // Bindings for the cloud-shape generators: gaussian.hpp (and the L-system and mesh generators).
 #include <algorithm>
 #include <array>
+#include <map>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -9,6 +10,7 @@
 
 #include "common.hpp"
 #include "cumuli/gaussian.hpp"
+#include "cumuli/lsystem.hpp"
 
 namespace cumuli::bind {
 
@@ -36,6 +38,17 @@ RadiusModel parse_radius_model(const std::string& s) {
   if (s == "uniform") return RadiusModel::Uniform;
   throw py::value_error("radius_model must be 'eq15', 'eq16' or 'uniform', got '" + s + "'");
 }
+
+LSystemRules make_rules(const std::map<std::string, std::string>& rules) {
+  LSystemRules r;
+  for (const auto& [key, value] : rules) {
+    if (key.size() != 1) throw py::value_error("rules: every key must be one symbol, got '" + key + "'");
+    r.set(key[0], value);
+  }
+  return r;
+}
+
+glm::dvec3 to_dvec3(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[1], a[2]); }
 
 }  // namespace
 
@@ -112,6 +125,75 @@ void bind_shapes(py::module_& m) {
       },
       py::arg("centres"), py::arg("radii"),
       "Eq. (17): indices of the spheres kept so that none lies inside another.");
+
+  m.def(
+      "lsystem_length",
+      [](const std::string& axiom, const std::map<std::string, std::string>& rules, int iterations) {
+        const LSystemRules r = make_rules(rules);
+        const LSystemLength n = lsystem_length(axiom, r, iterations, UINT64_MAX - 1);
+        return py::make_tuple(n.final_length, n.peak_length);
+      },
+      py::arg("axiom"), py::arg("rules"), py::arg("iterations"),
+      "(final, peak) symbol counts of the expansion, saturating at 2**64 - 1; allocates nothing.");
+
+  m.def(
+      "lsystem_expand",
+      [](const std::string& axiom, const std::map<std::string, std::string>& rules, int iterations,
+         std::uint64_t max_length) {
+        const LSystemRules r = make_rules(rules);
+        std::string out;
+        {
+          py::gil_scoped_release release;
+          out = lsystem_expand(axiom, r, iterations, max_length);
+        }
+        return out;
+      },
+      py::arg("axiom"), py::arg("rules"), py::arg("iterations"), py::arg("max_length"),
+      "Rewrite the axiom `iterations` times; refuses (ValueError) before allocating when any "
+      "string would exceed max_length symbols.");
+
+  m.def(
+      "lsystem_interpret",
+      [](const std::string& symbols, double angle_lo, double angle_hi, double radius_lo,
+         double radius_hi, double step_lo, double step_hi, const std::string& draw_symbols,
+         const std::string& move_symbols, std::array<double, 3> start,
+         std::array<double, 3> heading, std::array<double, 3> up, std::uint64_t seed,
+         std::uint64_t max_spheres) {
+        TurtleParams p;
+        p.angle_lo = angle_lo;
+        p.angle_hi = angle_hi;
+        p.radius_lo = radius_lo;
+        p.radius_hi = radius_hi;
+        p.step_lo = step_lo;
+        p.step_hi = step_hi;
+        p.draw_symbols = draw_symbols;
+        p.move_symbols = move_symbols;
+        p.start = to_dvec3(start);
+        p.heading = to_dvec3(heading);
+        p.up = to_dvec3(up);
+        p.seed = seed;
+        p.max_spheres = max_spheres;
+        p.validate();
+        TurtleResult r;
+        {
+          py::gil_scoped_release release;
+          r = lsystem_interpret(symbols, p);
+        }
+        py::dict stats;
+        stats["symbols"] = symbols.size();
+        stats["spheres"] = r.centres.size();
+        stats["turns"] = r.turns;
+        stats["moves"] = r.moves;
+        stats["max_depth"] = r.max_depth;
+        stats["final_position"] = py::make_tuple(r.final_position.x, r.final_position.y, r.final_position.z);
+        stats["final_heading"] = py::make_tuple(r.final_heading.x, r.final_heading.y, r.final_heading.z);
+        return py::make_tuple(points_array(r.centres), scalar_array(r.radii), stats);
+      },
+      py::arg("symbols"), py::arg("angle_lo"), py::arg("angle_hi"), py::arg("radius_lo"),
+      py::arg("radius_hi"), py::arg("step_lo"), py::arg("step_hi"), py::arg("draw_symbols"),
+      py::arg("move_symbols"), py::arg("start"), py::arg("heading"), py::arg("up"),
+      py::arg("seed"), py::arg("max_spheres"),
+      "Walk an L-system string with the 3D turtle: returns (centres (N,3), radii (N,), stats).");
 }
 
 }  // namespace cumuli::bind

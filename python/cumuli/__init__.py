@@ -8,13 +8,19 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 from __future__ import annotations
 
 from cumuli._version import __version__
-from cumuli.cloud import Cloud
+from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.cpu_render import render_cpu
 from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
 from cumuli.renderer import Renderer, prepare_light, render
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
-from cumuli.shapes import gaussian_cumulus, metaball_cumulus
+from cumuli.shapes import (
+    gaussian_cumulus,
+    lsystem_cloud,
+    lsystem_expand,
+    lsystem_length,
+    metaball_cumulus,
+)
 from cumuli.sun import Sun
 
 __all__ = [
@@ -30,7 +36,12 @@ __all__ = [
     "__version__",
     "gaussian_cumulus",
     "light_grid",
+    "load_cloud",
     "load_scene",
+    "lsystem_cloud",
+    "lsystem_expand",
+    "lsystem_length",
+    "merge",
     "metaball_cumulus",
     "prepare_light",
     "render",

@@ -5,11 +5,22 @@ Primitives are numpy arrays: ``centres (N, 3)``, ``radii (N, 3)`` and ``rotation
 and the identity). The density model is ``"spheroid"`` (eq. 2, parameter κ) or ``"metaball"``
 (eqs. 19–21, parameter φ and the mean squared radius r̄² of eq. 20). Once computed, the light grid
 (``light``, ``[z, y, x]`` float32) and its world box (``light_box``) ride along for the renderer.
+
+Clouds are values: `Cloud.translated`, `Cloud.scaled`, `Cloud.with_model` and `merge` return new
+clouds (without a light grid, which no longer fits) and append what they did to
+``params["transforms"]``, so that a saved cloud says how it was made. `Cloud.save` writes
+``.npz`` or ``.json`` atomically; `load_cloud` reads either back.
 """
 
 from __future__ import annotations
 
+import json
+import os
+import tempfile
+import zipfile
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -19,6 +30,13 @@ from cumuli import _validate as check
 DENSITY_MODELS = ("spheroid", "metaball")
 #: Most primitives a cloud may hold.
 MAX_PRIMITIVES = 1 << 20
+#: Tag and version written into saved clouds.
+FILE_FORMAT = "cumuli.cloud"
+FILE_VERSION = 1
+#: Largest cloud file `load_cloud` reads (a light grid of 512³ float32 is 512 MiB).
+MAX_FILE_BYTES = 1 << 31
+#: Largest light grid accepted from a file (voxels).
+MAX_LIGHT_VOXELS = 512**3
 
 
 @dataclass(eq=False)
@@ -102,9 +120,300 @@ class Cloud:
         """The arguments the C++ core takes for a cloud."""
         return (self.centres, self.radii, self.rotations, self.model, self.kappa, self.phi)
 
+    # --- transforms (new clouds; the light grid is dropped) --------------------------------
+    def _derived(self, transform: dict[str, Any], **changes: Any) -> Cloud:
+        params = json.loads(json.dumps(self.params, default=_json_default))
+        params.setdefault("transforms", []).append(transform)
+        fields: dict[str, Any] = {
+            "centres": self.centres.copy(),
+            "radii": self.radii.copy(),
+            "rotations": self.rotations.copy(),
+            "model": self.model,
+            "kappa": self.kappa,
+            "phi": self.phi,
+            "stats": dict(self.stats),
+            "params": params,
+        }
+        fields.update(changes)
+        return Cloud(**fields)
+
+    def translated(self, offset: Sequence[float]) -> Cloud:
+        """A copy moved by ``offset`` (world units); the light grid is dropped."""
+        off = check.vec3(offset, "offset")
+        centres = (self.centres.astype(np.float64) + np.array(off)).astype(np.float32)
+        return self._derived({"translate": list(off)}, centres=centres)
+
+    def scaled(self, factor: float, about: Sequence[float] | None = None) -> Cloud:
+        """A copy scaled uniformly by ``factor`` > 0 about ``about`` (default: the cloud's centre).
+
+        Centres move away from ``about`` and every radius is multiplied by ``factor``; rotations
+        are unchanged. The light grid is dropped.
+        """
+        f = check.real(factor, "factor", 0.0, lo_open=True)
+        pivot = check.vec3(about, "about") if about is not None else tuple(map(float, self.centre))
+        p = np.array(pivot)
+        centres = ((self.centres.astype(np.float64) - p) * f + p).astype(np.float32)
+        radii = (self.radii.astype(np.float64) * f).astype(np.float32)
+        if not (np.isfinite(centres).all() and np.isfinite(radii).all() and (radii > 0).all()):
+            raise ValueError(f"factor {f} makes the cloud's primitives non-finite or zero")
+        return self._derived({"scale": f, "about": list(pivot)}, centres=centres, radii=radii)
+
+    def with_model(self, model: str, kappa: float | None = None, phi: float | None = None) -> Cloud:
+        """A copy filled by another density model (``"spheroid"`` or ``"metaball"``).
+
+        The metaball model (eqs. 19–21) works on any primitive set: its iso-surface
+        ``Σ 1/|q_i|² ≥ 1`` uses each primitive's unit-sphere frame. The light grid is dropped.
+        """
+        if model not in DENSITY_MODELS:
+            raise ValueError(f"model must be one of {DENSITY_MODELS}, got {model!r}")
+        return self._derived(
+            {"model": model, "kappa": kappa, "phi": phi},
+            model=model,
+            kappa=self.kappa if kappa is None else kappa,
+            phi=self.phi if phi is None else phi,
+        )
+
+    def merged(self, *others: Cloud) -> Cloud:
+        """This cloud and ``others`` as one cloud (see `merge`)."""
+        return merge([self, *others])
+
+    # --- files --------------------------------------------------------------------------------
+    def save(self, path: str | os.PathLike[str]) -> Path:
+        """Write the cloud to ``path`` (``.npz`` or ``.json``, by extension), atomically.
+
+        Everything needed to use or rebuild it is kept: primitives, density model and parameters,
+        ``stats``, ``params`` (generator, arguments, seed, transforms) and the light grid if any.
+        The file is written to a temporary in the same folder and renamed into place, so a failed
+        save leaves no partial file. Returns the path written.
+        """
+        path = Path(os.fspath(path))
+        suffix = path.suffix.lower()
+        if suffix not in (".npz", ".json"):
+            raise ValueError(f"path must end in .npz or .json, got {path.name!r}")
+        meta = self._meta()
+        try:
+            meta_text = json.dumps(meta, default=_json_default, allow_nan=False)
+        except (TypeError, ValueError) as exc:
+            raise TypeError(f"params/stats must be JSON-serialisable: {exc}") from None
+        if not path.parent.is_dir():
+            raise FileNotFoundError(f"folder of path does not exist: {str(path.parent)!r}")
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as fh:
+                if suffix == ".npz":
+                    arrays: dict[str, np.ndarray] = {
+                        "centres": self.centres,
+                        "radii": self.radii,
+                        "rotations": self.rotations,
+                        "meta": np.frombuffer(meta_text.encode("utf-8"), dtype=np.uint8),
+                    }
+                    if self.light is not None:
+                        arrays["light"] = np.asarray(self.light, dtype=np.float32)
+                    np.savez_compressed(fh, **arrays)
+                else:
+                    doc = dict(meta)
+                    doc["centres"] = self.centres.tolist()
+                    doc["radii"] = self.radii.tolist()
+                    doc["rotations"] = self.rotations.tolist()
+                    if self.light is not None:
+                        light = np.asarray(self.light, dtype=np.float32)
+                        doc["light_shape"] = list(light.shape)
+                        doc["light"] = light.ravel().tolist()
+                    text = json.dumps(doc, default=_json_default, allow_nan=False)
+                    fh.write(text.encode("utf-8"))
+            os.replace(tmp, path)
+        except BaseException:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
+            raise
+        return path
+
+    def _meta(self) -> dict[str, Any]:
+        return {
+            "format": FILE_FORMAT,
+            "version": FILE_VERSION,
+            "model": self.model,
+            "kappa": self.kappa,
+            "phi": self.phi,
+            "stats": self.stats,
+            "params": self.params,
+            "light_box": None
+            if self.light_box is None
+            else [list(map(float, self.light_box[0])), list(map(float, self.light_box[1]))],
+        }
+
     def __repr__(self) -> str:
         lo, hi = self.bbox
         return (
             f"Cloud(n={self.n}, model={self.model!r}, bbox=({lo.round(2).tolist()}, "
             f"{hi.round(2).tolist()}), light={'yes' if self.light is not None else 'no'})"
         )
+
+
+def merge(clouds: Iterable[Cloud]) -> Cloud:
+    """One cloud holding the primitives of all ``clouds`` (in order).
+
+    All clouds must share the density model and its parameters (κ, φ): one cloud has one density
+    model. ``params`` records the parts' params; ``stats`` their stats. No light grid.
+    """
+    parts = list(clouds)
+    if not parts:
+        raise ValueError("clouds must not be empty")
+    for i, c in enumerate(parts):
+        if not isinstance(c, Cloud):
+            raise TypeError(f"clouds[{i}] must be a Cloud, got {type(c).__name__}")
+    first = parts[0]
+    for i, c in enumerate(parts[1:], 1):
+        if (c.model, c.kappa, c.phi) != (first.model, first.kappa, first.phi):
+            raise ValueError(
+                f"clouds[{i}] has model={c.model!r}, kappa={c.kappa}, phi={c.phi}; "
+                f"clouds[0] has model={first.model!r}, kappa={first.kappa}, phi={first.phi}: "
+                "convert with Cloud.with_model first"
+            )
+    total = sum(c.n for c in parts)
+    if total > MAX_PRIMITIVES:
+        raise ValueError(f"merged cloud would hold {total} primitives, more than {MAX_PRIMITIVES}")
+    return Cloud(
+        np.concatenate([c.centres for c in parts]),
+        np.concatenate([c.radii for c in parts]),
+        np.concatenate([c.rotations for c in parts]),
+        model=first.model,
+        kappa=first.kappa,
+        phi=first.phi,
+        stats={"parts": [dict(c.stats) for c in parts], "n": total},
+        params={
+            "generator": "merge",
+            "parts": [json.loads(json.dumps(c.params, default=_json_default)) for c in parts],
+        },
+    )
+
+
+def load_cloud(path: str | os.PathLike[str]) -> Cloud:
+    """Read a cloud written by `Cloud.save` (``.npz`` or ``.json``).
+
+    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` (naming the file) for an
+    empty, truncated, foreign or inconsistent one.
+    """
+    path = Path(os.fspath(path))
+    suffix = path.suffix.lower()
+    if suffix not in (".npz", ".json"):
+        raise ValueError(f"path must end in .npz or .json, got {path.name!r}")
+    if not path.exists():
+        raise FileNotFoundError(f"no such cloud file: {str(path)!r}")
+    if not path.is_file():
+        raise OSError(f"not a file: {str(path)!r}")
+    size = path.stat().st_size
+    if size == 0:
+        raise ValueError(f"{path.name}: empty file")
+    if size > MAX_FILE_BYTES:
+        raise ValueError(f"{path.name}: {size} bytes, more than the limit {MAX_FILE_BYTES}")
+    try:
+        if suffix == ".npz":
+            meta, arrays = _read_npz(path)
+        else:
+            meta, arrays = _read_json(path)
+    except (zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError, EOFError) as exc:
+        raise ValueError(f"{path.name}: not a readable cumuli cloud file ({exc})") from None
+    if not isinstance(meta, dict) or meta.get("format") != FILE_FORMAT:
+        raise ValueError(f"{path.name}: not a cumuli cloud file (format tag missing)")
+    if meta.get("version") != FILE_VERSION:
+        raise ValueError(f"{path.name}: unsupported cloud file version {meta.get('version')!r}")
+    for key in ("model", "kappa", "phi"):
+        if key not in meta:
+            raise ValueError(f"{path.name}: missing {key!r}")
+    light = arrays.get("light")
+    light_box = meta.get("light_box")
+    if light is not None:
+        if light.dtype.kind not in "fiu":
+            raise ValueError(f"{path.name}: light must be numeric")
+        light = np.ascontiguousarray(light, dtype=np.float32)
+        if light.ndim != 3 or light.size > MAX_LIGHT_VOXELS or not np.isfinite(light).all():
+            raise ValueError(f"{path.name}: light must be a finite 3D grid")
+        if light_box is None:
+            raise ValueError(f"{path.name}: light grid without light_box")
+    try:
+        if light_box is not None:
+            light_box = (
+                check.vec3(light_box[0], "light_box"),
+                check.vec3(light_box[1], "light_box"),
+            )
+        return Cloud(
+            arrays["centres"],
+            arrays["radii"],
+            arrays["rotations"],
+            model=meta["model"],
+            kappa=meta["kappa"],
+            phi=meta["phi"],
+            stats=dict(meta.get("stats") or {}),
+            params=dict(meta.get("params") or {}),
+            light=light,
+            light_box=light_box,
+        )
+    except (ValueError, TypeError, KeyError, IndexError) as exc:
+        raise ValueError(f"{path.name}: invalid cloud data: {exc}") from None
+
+
+def _read_npz(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
+    arrays: dict[str, np.ndarray] = {}
+    with zipfile.ZipFile(path) as zf:
+        names = set(zf.namelist())
+        for key in ("centres", "radii", "rotations", "meta", "light"):
+            member = key + ".npy"
+            if member not in names:
+                if key == "light":
+                    continue
+                raise ValueError(f"{path.name}: missing array {key!r}")
+            with zf.open(member) as fh:
+                # Check the declared shape before numpy allocates it.
+                version = np.lib.format.read_magic(fh)
+                if version == (1, 0):
+                    shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+                else:
+                    shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+                count = int(np.prod(shape, dtype=np.int64)) if shape else 1
+                limit = MAX_LIGHT_VOXELS if key == "light" else MAX_FILE_BYTES
+                if dtype.hasobject or count > limit:
+                    raise ValueError(f"{path.name}: array {key!r} has unacceptable shape/dtype")
+                data = fh.read(count * dtype.itemsize)
+                if len(data) != count * dtype.itemsize:
+                    raise ValueError(f"{path.name}: array {key!r} is truncated")
+                arrays[key] = np.frombuffer(data, dtype=dtype).reshape(shape).copy()
+    meta = json.loads(arrays.pop("meta").tobytes().decode("utf-8"))
+    return meta, arrays
+
+
+def _read_json(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
+    doc = json.loads(path.read_text(encoding="utf-8"))
+    if not isinstance(doc, dict):
+        raise ValueError(f"{path.name}: not a cumuli cloud file (top level is not an object)")
+    if doc.get("format") != FILE_FORMAT:
+        raise ValueError(f"{path.name}: not a cumuli cloud file (format tag missing)")
+    arrays: dict[str, np.ndarray] = {}
+    for key in ("centres", "radii", "rotations"):
+        if key not in doc:
+            raise ValueError(f"{path.name}: missing {key!r}")
+        try:
+            arrays[key] = np.asarray(doc[key], dtype=np.float32)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{path.name}: {key} is not a numeric array ({exc})") from None
+    if doc.get("light") is not None:
+        shape = doc.get("light_shape")
+        try:
+            light = np.asarray(doc["light"], dtype=np.float32).reshape(shape)
+        except (TypeError, ValueError) as exc:
+            raise ValueError(f"{path.name}: light does not match light_shape ({exc})") from None
+        arrays["light"] = light
+    return doc, arrays
+
+
+def _json_default(obj: Any) -> Any:
+    """Let numpy scalars and arrays inside params/stats serialise as plain JSON."""
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, (tuple, set)):
+        return list(obj)
+    raise TypeError(f"{type(obj).__name__} is not JSON-serialisable")
