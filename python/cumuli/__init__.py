@@ -10,6 +10,7 @@ from __future__ import annotations
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.cpu_render import render_cpu
+from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
 from cumuli.renderer import Renderer, prepare_light, render
@@ -34,6 +35,7 @@ __all__ = [
     "Sky",
     "Sun",
     "__version__",
+    "from_srgb8",
     "gaussian_cumulus",
     "light_grid",
     "load_cloud",
@@ -44,6 +46,9 @@ __all__ = [
     "merge",
     "metaball_cumulus",
     "prepare_light",
+    "read_image",
     "render",
     "render_cpu",
+    "to_srgb8",
+    "write_image",
 ]

@@ -7,14 +7,22 @@ every GL object with the context.
 
 from __future__ import annotations
 
+import atexit
 import logging
 import re
+import threading
 from functools import cache
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import moderngl
+import numpy as np
+
+from cumuli import _validate as check
+
+if TYPE_CHECKING:
+    from cumuli.noise import Noise
 
 log = logging.getLogger("cumuli.gl")
 
@@ -117,3 +125,189 @@ def available() -> tuple[bool, str]:
             return True, ctx.renderer
     except GLUnavailableError as exc:
         return False, str(exc)
+
+
+# --- the process-wide context used by convenience functions -------------------------------------
+
+_default_context: GLContext | None = None
+_default_lock = threading.Lock()
+
+
+def default_context() -> GLContext:
+    """A process-wide :class:`GLContext`, created on first use and closed at interpreter exit.
+
+    Convenience functions (``cumuli.gl.fbm`` and the like) use it when no ``context`` is given, so
+    that repeated calls do not pay for a new EGL context each time.
+    """
+    global _default_context
+    with _default_lock:
+        if _default_context is None or _default_context.closed:
+            _default_context = GLContext()
+        return _default_context
+
+
+def close_default_context() -> None:
+    """Close the process-wide context if it exists (a later call makes a new one)."""
+    global _default_context
+    with _default_lock:
+        if _default_context is not None:
+            _default_context.close()
+            _default_context = None
+
+
+atexit.register(close_default_context)
+
+
+def _resolve_context(context: GLContext | None) -> GLContext:
+    if context is None:
+        return default_context()
+    if not isinstance(context, GLContext):
+        raise TypeError(f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}")
+    if context.closed:
+        raise ValueError("context is closed")
+    return context
+
+
+# --- fBm on the GPU (shaders/noise.glsl through shaders/fbm_points.comp.glsl) ---------------------
+
+#: Points per dispatch: 4 Mi points is 48 MiB of xyz, under llvmpipe's 128 MiB storage-block limit;
+#: drivers with a smaller GL_MAX_SHADER_STORAGE_BLOCK_SIZE get smaller batches.
+_FBM_BATCH = 1 << 22
+_LOCAL_SIZE = 64  # local_size_x in fbm_points.comp.glsl
+_MAX_GROUPS = 65535  # guaranteed minimum of GL_MAX_COMPUTE_WORK_GROUP_COUNT per axis
+
+
+class FbmProgram:
+    """The fBm compute program with one noise's lattice uploaded, reusable for many calls.
+
+    The lattice goes to an R32F 3D texture with LINEAR filtering and REPEAT wrapping, which is
+    what the paper's GPU implementation samples. Call the object like :func:`fbm`; after each call
+    :attr:`gpu_time_ns` holds the dispatch time measured with a GL timer query (uploads and
+    read-back excluded). Release with :meth:`release` or use it as a context manager; closing its
+    context releases it too.
+    """
+
+    def __init__(self, noise: Noise, context: GLContext | None = None) -> None:
+        from cumuli.noise import Noise
+
+        if not isinstance(noise, Noise):
+            raise TypeError(f"noise must be a cumuli.Noise, got {type(noise).__name__}")
+        self.context = _resolve_context(context)
+        self.noise = noise
+        self.gpu_time_ns: int | None = None
+        self._objects: list[Any] = []
+        ctx = self.context.ctx
+        size = noise.size
+        if size > int(self.context.info.get("GL_MAX_3D_TEXTURE_SIZE", 2048)):
+            raise ValueError(f"noise size {size} exceeds this GL's largest 3D texture")
+        try:
+            self.program = self.context.compute("fbm_points.comp.glsl")
+            self._objects.append(self.program)
+            lattice = np.ascontiguousarray(noise.lattice, dtype=np.float32)
+            self.texture = ctx.texture3d((size, size, size), 1, data=lattice.tobytes(), dtype="f4")
+            self._objects.append(self.texture)
+            self.texture.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            self.texture.repeat_x = self.texture.repeat_y = self.texture.repeat_z = True
+            # moderngl (5.x) cannot release a query on its own; it goes with the context, so
+            # make one per program rather than one per call.
+            self._query = ctx.query(time=True)
+            max_block = int(self.context.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 24))
+            self._batch = max(_LOCAL_SIZE, min(_FBM_BATCH, max_block // 12))
+        except Exception:
+            self.release()
+            raise
+
+    def __call__(
+        self,
+        points: np.ndarray,
+        octaves: int = 5,
+        gain: float = 0.5,
+        lacunarity: float = 2.0,
+        frequency: float = 1.0,
+        exact: bool = False,
+    ) -> np.ndarray:
+        """fBm at ``(N, 3)`` points on the GPU; returns ``(N,)`` float32."""
+        from cumuli.noise import _fbm_params
+
+        if self.program is None or self.context.closed:
+            raise ValueError("this FbmProgram has been released")
+        pts = check.points3(points, "points")
+        octaves, gain, lacunarity, frequency = _fbm_params(octaves, gain, lacunarity, frequency)
+        if not isinstance(exact, (bool, np.bool_)):
+            raise TypeError(f"exact must be a bool, got {type(exact).__name__}")
+        n = pts.shape[0]
+        out = np.empty(n, dtype=np.float32)
+        self.gpu_time_ns = 0
+        if n == 0:
+            return out
+        ctx = self.context.ctx
+        prog = self.program
+        prog["u_octaves"].value = octaves
+        prog["u_gain"].value = gain
+        prog["u_lacunarity"].value = lacunarity
+        prog["u_frequency"].value = frequency
+        prog["u_exact"].value = bool(exact)
+        prog["u_lattice"].value = 0
+        batch = min(n, self._batch)
+        made: list[Any] = []
+        try:
+            src = ctx.buffer(reserve=batch * 12)
+            made.append(src)
+            dst = ctx.buffer(reserve=batch * 4)
+            made.append(dst)
+            self.texture.use(location=0)
+            src.bind_to_storage_buffer(0)
+            dst.bind_to_storage_buffer(1)
+            for start in range(0, n, batch):
+                count = min(batch, n - start)
+                src.write(pts[start : start + count].tobytes())
+                prog["u_count"].value = count
+                groups = -(-count // _LOCAL_SIZE)
+                gx = min(groups, _MAX_GROUPS)
+                gy = -(-groups // gx)
+                with self._query:
+                    prog.run(gx, gy, 1)
+                ctx.memory_barrier()
+                out[start : start + count] = np.frombuffer(dst.read(size=count * 4), np.float32)
+                self.gpu_time_ns += int(self._query.elapsed)
+        finally:
+            for obj in made:
+                obj.release()
+        return out
+
+    def release(self) -> None:
+        """Release the program and the lattice texture (idempotent)."""
+        if not self.context.closed:
+            for obj in self._objects:
+                obj.release()
+        self._objects.clear()
+        self.program = None
+
+    def __enter__(self) -> FbmProgram:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.release()
+
+
+def fbm(
+    noise: Noise,
+    points: np.ndarray,
+    octaves: int = 5,
+    gain: float = 0.5,
+    lacunarity: float = 2.0,
+    frequency: float = 1.0,
+    exact: bool = False,
+    context: GLContext | None = None,
+) -> np.ndarray:
+    """fBm (eq. 1) of ``noise`` at ``(N, 3)`` points, evaluated by ``shaders/noise.glsl`` on the GPU.
+
+    This is the GLSL twin of :meth:`cumuli.Noise.fbm`, used to check that the shaders and the C++
+    core agree. ``exact=True`` blends the 8 texels by hand with float weights (agrees with the
+    C++ to float rounding); ``exact=False`` uses the hardware trilinear filter of the R32F
+    LINEAR/REPEAT texture, as the renderer does, whose weights have reduced precision on most
+    GPUs. Uses the process-wide :func:`default_context` unless ``context`` is given; every GL
+    object made here is released before returning. Returns ``(N,)`` float32.
+    """
+    with FbmProgram(noise, context) as program:
+        return program(points, octaves, gain, lacunarity, frequency, exact)

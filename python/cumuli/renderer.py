@@ -66,24 +66,28 @@ def _check_light(cloud: Cloud, index: int) -> None:
 
 
 def prepare_light(scene: Scene) -> None:
-    """Make sure every cloud of ``scene`` has a light grid for the scene's sun and noise.
+    """Make sure every cloud of ``scene`` has a current light grid for the scene's sun and noise.
 
-    A cloud without a grid gets one from :func:`cumuli.light_grid`; so does a cloud whose grid
-    this function computed earlier for another sun direction, noise, fBm, κ or resolution. A
-    grid set by hand (or by a direct ``light_grid`` call) is trusted as it is.
+    A cloud gets a grid from :func:`cumuli.light_grid` (NDT, ``settings.light_resolution``, the
+    settings' fBm and κ) when it has none; when its grid was made for another sun direction
+    (``cloud.light_sun``, recorded by ``light_grid``); or when this function made it for other
+    noise / fBm / κ / resolution. A grid set by hand without ``light_sun`` is trusted as it is.
     """
     for k, cloud in enumerate(scene.clouds):
-        key = _light_key(cloud, scene)
-        stored = getattr(cloud, _LIGHT_KEY, None)
-        ours = stored is not None and stored[1] is cloud.light
-        if cloud.light is not None and (not ours or stored[0] == key):
-            _check_light(cloud, k)
-            continue
-        _compute_light(cloud, scene, key)
+        if cloud.light is None or _stale(cloud, scene):
+            _compute_light(cloud, scene)
         _check_light(cloud, k)
 
 
-def _compute_light(cloud: Cloud, scene: Scene, key: tuple[Any, ...]) -> None:
+def _stale(cloud: Cloud, scene: Scene) -> bool:
+    sun = getattr(cloud, "light_sun", None)
+    if sun is not None and not np.allclose(sun, scene.sun.direction, rtol=0, atol=1e-6):
+        return True
+    stored = getattr(cloud, _LIGHT_KEY, None)
+    return stored is not None and stored[1] is cloud.light and stored[0] != _light_key(cloud, scene)
+
+
+def _compute_light(cloud: Cloud, scene: Scene) -> None:
     import cumuli
 
     light_grid = getattr(cumuli, "light_grid", None)
@@ -95,13 +99,22 @@ def _compute_light(cloud: Cloud, scene: Scene, key: tuple[Any, ...]) -> None:
     s = scene.settings
     target = cloud
     if s.kappa is not None and s.kappa != cloud.kappa:
+        # The grid must see the density the marcher sees: κ overridden by the settings.
         target = dataclasses.replace(cloud, kappa=s.kappa, light=None, light_box=None)
-    result = light_grid(target, scene.sun, scene.noise, resolution=s.light_resolution)
+    light_grid(
+        target,
+        scene.sun,
+        scene.noise,
+        resolution=s.light_resolution,
+        octaves=s.octaves,
+        gain=s.gain,
+        lacunarity=s.lacunarity,
+        frequency=s.frequency,
+    )
     if target is not cloud:
         cloud.light, cloud.light_box = target.light, target.light_box
-    if cloud.light is None and isinstance(result, np.ndarray):
-        cloud.light = result
-    setattr(cloud, _LIGHT_KEY, (key, cloud.light))
+        cloud.light_sun = target.light_sun  # type: ignore[attr-defined]
+    setattr(cloud, _LIGHT_KEY, (_light_key(cloud, scene), cloud.light))
 
 
 # --------------------------------------------------------------------------------------------

@@ -228,7 +228,7 @@ class RenderSettings:
     octaves: int = 5
     gain: float = 0.5
     lacunarity: float = 2.0
-    frequency: float = 0.6
+    frequency: float = 0.3
     light_resolution: int = 20
 
     def __post_init__(self) -> None:

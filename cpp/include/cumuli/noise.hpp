@@ -39,17 +39,26 @@ class Noise {
   float fbm(glm::vec3 p, const FbmParams& params) const;
 
   // fBm of `count` points (xyz interleaved) into `out`, on `threads` threads (0 = all).
+  // Bit-identical to calling fbm() on each point, whatever the thread count.
   void fbm_many(const float* points, std::size_t count, float* out, const FbmParams& params,
                 int threads) const;
 
  private:
-  float texel(int x, int y, int z) const {
-    return lattice_[(static_cast<std::size_t>(z) * size_ + y) * size_ + x];
-  }
+  // One axis of a lookup: the wrapped index of the lower texel and the blend weight.
+  void split(float x, int& index, float& weight) const;
+  // Trilinear blend of the 2×2×2 texels whose lower corner is (ix, iy, iz) (already wrapped).
+  float blend(int ix, int iy, int iz, float wx, float wy, float wz) const;
+  // fbm() of a block of up to kBlock points (xyz interleaved), octave-major so the index and
+  // weight arithmetic runs as vector loops.
+  void fbm_block(const float* points, std::size_t count, float* out, const FbmParams& params) const;
 
   std::uint64_t seed_;
   int size_;
-  std::vector<float> lattice_;
+  int mask_;                    // size - 1 when size is a power of two (wrap = and), else -1
+  std::vector<float> lattice_;  // size³, [z][y][x]: the public lattice
+  // (size+1)³ copy whose last x, y and z planes repeat the first ones, so that the upper corner
+  // of a trilinear cell is always at index + 1 / + stride and never needs a second wrap.
+  std::vector<float> padded_;
 };
 
 }  // namespace cumuli

@@ -1,0 +1,163 @@
+"""The ``cumuli`` command: ``cumuli info`` and ``cumuli demo -o PATH``.
+
+User errors (bad arguments, unwritable paths, a missing GL) print one ``cumuli: error: ...`` line
+to stderr and exit non-zero; they never show a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+#: Exit status for a user error found after argument parsing (argparse itself exits with 2).
+EXIT_ERROR = 1
+
+
+def _versions() -> dict[str, str]:
+    import moderngl
+    import OpenImageIO
+
+    import cumuli
+
+    return {
+        "cumuli": cumuli.__version__,
+        "python": platform.python_version(),
+        "numpy": np.__version__,
+        "moderngl": moderngl.__version__,
+        "OpenImageIO": OpenImageIO.__version__,
+    }
+
+
+def _info() -> dict[str, object]:
+    from cumuli import gl
+
+    ok, text = gl.available()
+    cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return {
+        **_versions(),
+        "gl_available": ok,
+        "gl_renderer" if ok else "gl_unavailable_reason": text,
+        "threads": cores or 1,
+        "shader_dir": str(gl.shader_dir()),
+    }
+
+
+def _cmd_info(args: argparse.Namespace) -> int:
+    info = _info()
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    for key in ("cumuli", "python", "numpy", "moderngl", "OpenImageIO"):
+        print(f"{key:<12} {info[key]}")
+    if info["gl_available"]:
+        print(f"{'GL renderer':<12} {info['gl_renderer']}")
+    else:
+        print(f"{'GL renderer':<12} unavailable: {info['gl_unavailable_reason']}")
+    print(f"{'threads':<12} {info['threads']} (threads=0 uses all of them)")
+    print(f"{'shaders':<12} {info['shader_dir']}")
+    return 0
+
+
+def _demo_noise(width: int, height: int, seed: int) -> np.ndarray:
+    """The paper's Figures 2 and 3 side by side: a slice of the uniform lattice (left, nearest
+    texels) and the same slice of its 5-octave fBm (right). Returns (H, W, 4) linear RGBA.
+    """
+    from cumuli.imageio import srgb_to_linear
+    from cumuli.noise import Noise
+
+    noise = Noise(seed=seed)
+    half = width // 2
+    size = noise.size
+    # Left: the z = 0 plane of the lattice, one texel per size/half pixels, aspect kept.
+    px = (np.arange(half) + 0.5) * size / half
+    py = (np.arange(height) + 0.5) * size / half
+    lattice = noise.lattice[0]
+    left = lattice[(py.astype(int) % size)[:, None], (px.astype(int) % size)[None, :]]
+    # Right: fBm on the plane z = 0.5 over the same span; octave 1 (s = 2) covers the lattice once.
+    span_x = size / 2.0
+    span_y = span_x * height / half
+    right = noise.fbm_grid((1, height, width - half), (0.0, 0.0, 0.0), (span_x, span_y, 1.0))[0]
+    values = np.concatenate([left, right], axis=1)[::-1]  # +y up in the world, row 0 on top
+    # Show the values as display grey levels (as the paper's figures do): the linear pixel is the
+    # one that sRGB-encodes back to the value.
+    img = np.ones((height, width, 4), dtype=np.float32)
+    img[..., :3] = srgb_to_linear(values)[..., None]
+    return img
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    from cumuli.imageio import write_image
+
+    img = _demo_noise(args.width, args.height, args.seed)
+    path = write_image(args.output, img)
+    print(f"wrote {path} ({args.width}×{args.height})")
+    return 0
+
+
+def _positive(limit: int):
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+        if not 2 <= value <= limit:
+            raise argparse.ArgumentTypeError(f"must be between 2 and {limit}, got {value}")
+        return value
+
+    return parse
+
+
+def _seed(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
+    if not 0 <= value < 2**64:
+        raise argparse.ArgumentTypeError(f"must be in [0, 2^64), got {value}")
+    return value
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="cumuli", description="Volumetric clouds: information and demos."
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
+
+    info = sub.add_parser("info", help="versions, GL renderer and thread count")
+    info.add_argument("--json", action="store_true", help="print as JSON")
+    info.set_defaults(run=_cmd_info)
+
+    demo = sub.add_parser("demo", help="render the demo image")
+    demo.add_argument(
+        "-o", "--output", required=True, type=Path, help="image to write (.png or .exr)"
+    )
+    demo.add_argument("--width", type=_positive(4096), default=512, help="pixels (default 512)")
+    demo.add_argument("--height", type=_positive(4096), default=256, help="pixels (default 256)")
+    demo.add_argument("--seed", type=_seed, default=7, help="noise seed (default 7)")
+    demo.set_defaults(run=_cmd_demo)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``cumuli`` console script; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    try:
+        return int(args.run(args))
+    except (ValueError, TypeError, OSError) as exc:
+        print(f"cumuli: error: {exc}", file=sys.stderr)
+        return EXIT_ERROR
+    except KeyboardInterrupt:
+        print("cumuli: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
