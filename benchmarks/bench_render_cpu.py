@@ -36,31 +36,18 @@ def timed(fn: Any, repeats: int) -> tuple[float, list[float]]:
     return statistics.median(times), times
 
 
-def give_light(scene: cu.Scene) -> str:
-    """Light grids as the renderers compute them; a flat grid if this build has no light pass."""
+def gl_renderer() -> tuple[Any, str]:
+    """A GL Renderer and its renderer string, or (None, the reason there is none)."""
     try:
-        from cumuli.renderer import prepare_light
-
-        prepare_light(scene)
-        return "light_grid"
-    except (ImportError, ValueError):
-        for cloud in scene.clouds:
-            if cloud.light is None:
-                lo, hi = cloud.bbox
-                cloud.light = np.ones((8, 8, 8), np.float32)
-                cloud.light_box = (tuple(map(float, lo)), tuple(map(float, hi)))
-        return "flat (cumuli.light_grid unavailable)"
-
-
-def gl_info() -> tuple[Any, str]:
-    """The GL render function and renderer string, or (None, reason)."""
-    try:
-        from cumuli.gl import available
-        from cumuli.renderer import render
+        from cumuli.gl import GLUnavailableError
+        from cumuli.renderer import Renderer
     except ImportError as exc:
         return None, f"no GL renderer in this build ({exc})"
-    ok, info = available()
-    return (render if ok else None), info
+    try:
+        r = Renderer()
+    except GLUnavailableError as exc:
+        return None, str(exc)
+    return r, r.renderer_string
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -74,15 +61,16 @@ def main(argv: list[str] | None = None) -> int:
     scenes = {
         "gaussian_cumulus": cu.Scene(clouds=[cu.gaussian_cumulus(seed=1)]),
         "metaball_cumulus": cu.Scene(clouds=[cu.metaball_cumulus(seed=2)]),
+        "lsystem_cloud": cu.Scene(clouds=[cu.lsystem_cloud(iterations=7, seed=2)]),
     }
-    gl_render, gl_renderer = gl_info()
+    renderer, gl_name = gl_renderer()
     results: list[dict[str, Any]] = []
     for name, scene in scenes.items():
-        light = give_light(scene)
+        cu.prepare_light(scene)  # once, outside the timings: both marchers reuse the grids
         camera = scene.default_camera()
         for march in ("paper", "union"):
             sc = scene.replace(settings=scene.settings.replace(march=march))
-            row: dict[str, Any] = {"scene": name, "march": march, "light": light}
+            row: dict[str, Any] = {"scene": name, "march": march, "primitives": scene.clouds[0].n}
             for threads in sorted({1, cores}):
                 med, _ = timed(
                     lambda sc=sc, t=threads, c=camera: cu.render_cpu(sc, c, width, height, t),
@@ -91,10 +79,18 @@ def main(argv: list[str] | None = None) -> int:
                 row[f"cpu_{threads}t_s"] = med
             row["cpu_all_s"] = row[f"cpu_{cores}t_s"]
             row["thread_speedup"] = row["cpu_1t_s"] / row["cpu_all_s"]
-            if gl_render is not None:
-                med, _ = timed(lambda sc=sc, c=camera: gl_render(sc, c, width, height), repeats)
+            if renderer is not None:
+                gpu: list[float] = []
+
+                def gl(sc: cu.Scene = sc, c: cu.Camera = camera, gpu: list[float] = gpu) -> None:
+                    renderer.render(sc, c, width, height)
+                    if renderer.last_gpu_ns is not None:
+                        gpu.append(renderer.last_gpu_ns * 1e-9)
+
+                med, _ = timed(gl, repeats)
                 row["gl_wall_s"] = med
-                row["cpu_over_gl"] = row["cpu_all_s"] / med
+                row["gl_gpu_s"] = statistics.median(gpu[1:]) if len(gpu) > 1 else None
+                row["cpu_over_gl_wall"] = row["cpu_all_s"] / med
             results.append(row)
             print(json.dumps(row), flush=True)
 
@@ -111,8 +107,12 @@ def main(argv: list[str] | None = None) -> int:
             "cpu_count": cores,
             "python": sys.version.split()[0],
         },
-        "gl_renderer": gl_renderer,
-        "timing": "wall clock medians; GL includes upload, draw and read-back",
+        "gl_renderer": gl_name,
+        "timing": (
+            "medians; cpu_*: wall clock of cumuli.render_cpu (light grids precomputed); "
+            "gl_wall_s: Renderer.render wall clock (upload, draw, read-back); "
+            "gl_gpu_s: GL timer queries of the draws"
+        ),
         "results": results,
     }
     tmp = out / ".bench_render_cpu.json.tmp"
@@ -126,19 +126,21 @@ def main(argv: list[str] | None = None) -> int:
 
         labels = [f"{r['scene']}\n{r['march']}" for r in results]
         x = np.arange(len(results))
-        keys = [k for k in ("cpu_1t_s", "cpu_all_s", "gl_wall_s") if k in results[0]]
+        keys = [k for k in ("cpu_1t_s", "cpu_all_s", "gl_wall_s", "gl_gpu_s") if results[0].get(k)]
         fig, ax = plt.subplots(figsize=(8, 4))
         for i, k in enumerate(keys):
-            ax.bar(x + (i - 1) * 0.25, [r[k] * 1e3 for r in results], 0.25, label=k)
+            ax.bar(x + (i - 1.5) * 0.2, [r[k] * 1e3 for r in results], 0.2, label=k)
         ax.set_xticks(x, labels)
         ax.set_ylabel(f"ms per {width}x{height} image (median)")
         ax.set_yscale("log")
         ax.legend()
-        ax.set_title(f"CPU marcher vs GL ({gl_renderer[:40]})")
+        ax.set_title(f"CPU marcher vs GL ({gl_name[:40]})")
         fig.tight_layout()
         fig.savefig(out / "bench_render_cpu.png", dpi=100)
     except ImportError:
         pass
+    if renderer is not None:
+        renderer.close()
     print(f"wrote {out / 'bench_render_cpu.json'}")
     return 0
 

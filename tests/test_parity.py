@@ -49,9 +49,12 @@ def renderer(gl_context):
 def _scenes() -> dict[str, cu.Scene]:
     cumulus = cu.gaussian_cumulus(seed=1)
     metaball = cu.metaball_cumulus(seed=2)
+    # The paper's castellanus grammar (X → X+Y, Y → X&Y), 2⁶ = 64 spheres.
+    castle = cu.lsystem_cloud(iterations=6, angle=(10.0, 30.0), seed=2)
     scenes = {
         "gaussian_cumulus": cu.Scene(clouds=[cumulus]),
         "metaball_cumulus": cu.Scene(clouds=[metaball]),
+        "lsystem_cloud": cu.Scene(clouds=[castle]),
     }
     return scenes
 
