@@ -656,3 +656,23 @@ def test_render_cpu_computes_missing_light_grids_and_dispatches():
         cu.render_cpu("scene", camera, 4, 4)
     with pytest.raises(TypeError, match="camera"):
         cu.render_cpu(scene, (0, 0, 0), 4, 4)
+
+
+def test_rotation_columns_are_the_ellipsoid_axes():
+    # Radii (2, 1, 0.7) with axes (+y, +z, +x) (the rotation's columns) is the axis-aligned
+    # ellipsoid with radii (0.7, 2, 1): the two images agree (an exact permutation matrix; only
+    # the summation order of |q|² differs, so agreement is to float rounding).
+    noise = _core.Noise(9, 16)
+    light = np.random.default_rng(4).random((4, 5, 6)).astype(np.float32)
+    aligned = cloud_dict([[0.2, 0.1, 0.0]], np.array([[0.7, 2.0, 1.0]]), light=light)
+    rotated = {**aligned, "radii": np.array([[2.0, 1.0, 0.7]], np.float32)}
+    rotated["rotations"] = np.array([[[0, 0, 1], [1, 0, 0], [0, 1, 0]]], np.float32)
+    args = make_args([aligned], width=20, height=15, noise=noise, density_constant=-1.0)
+    a = _core.render_cpu(**args)
+    b = _core.render_cpu(**{**args, "clouds": [rotated]})
+    assert (a[..., 3] > 0.05).sum() > 10
+    np.testing.assert_allclose(a, b, atol=1e-5, rtol=0)
+    # Rows as axes would be another ellipsoid (radii (1, 0.7, 2)): visibly different.
+    wrong = {**rotated, "rotations": np.transpose(rotated["rotations"], (0, 2, 1)).copy()}
+    c = _core.render_cpu(**{**args, "clouds": [wrong]})
+    assert np.abs(c - a)[..., 3].max() > 0.2
