@@ -11,6 +11,7 @@
 #include "common.hpp"
 #include "cumuli/gaussian.hpp"
 #include "cumuli/lsystem.hpp"
+#include "cumuli/mesh_ellipsoids.hpp"
 
 namespace cumuli::bind {
 
@@ -194,6 +195,54 @@ void bind_shapes(py::module_& m) {
       py::arg("move_symbols"), py::arg("start"), py::arg("heading"), py::arg("up"),
       py::arg("seed"), py::arg("max_spheres"),
       "Walk an L-system string with the 3D turtle: returns (centres (N,3), radii (N,), stats).");
+
+  m.def(
+      "ellipsoids_from_mesh",
+      [](const FloatArray& vertices, const py::array& faces_in, float scale, bool rotate,
+         float min_radius, int threads) {
+        require_points(vertices, "vertices");
+        const char kind = faces_in.dtype().kind();
+        if (kind != 'i' && kind != 'u')
+          throw py::type_error("faces must be an integer array, got dtype " +
+                               std::string(py::str(faces_in.dtype())));
+        if (faces_in.ndim() != 2 || faces_in.shape(1) != 3)
+          throw py::value_error("faces must have shape (F, 3)");
+        // uint64 indices above 2⁶³ wrap to negative int64 here: still reported as out of range.
+        using IndexArray = py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>;
+        const IndexArray faces = IndexArray::ensure(faces_in);
+        const std::size_t nv = static_cast<std::size_t>(vertices.shape(0));
+        const std::size_t nf = static_cast<std::size_t>(faces.shape(0));
+        MeshEllipsoidsResult r;
+        {
+          py::gil_scoped_release release;
+          r = ellipsoids_from_mesh(vertices.data(), nv, faces.data(), nf, scale, rotate, min_radius,
+                                   threads);
+        }
+        auto centres = new_array({static_cast<py::ssize_t>(nf), 3});
+        auto radii = new_array({static_cast<py::ssize_t>(nf), 3});
+        auto rotations = new_array({static_cast<py::ssize_t>(nf), 3, 3});
+        float* c = centres.mutable_data();
+        float* rr = radii.mutable_data();
+        float* m = rotations.mutable_data();
+        for (std::size_t i = 0; i < nf; ++i) {
+          const Ellipsoid& e = r.ellipsoids[i];
+          for (int k = 0; k < 3; ++k) {
+            c[3 * i + k] = e.centre[k];
+            rr[3 * i + k] = e.radii[k];
+          }
+          // glm column-major rotation[col][row] → numpy row-major R[row][col].
+          for (int row = 0; row < 3; ++row)
+            for (int col = 0; col < 3; ++col) m[9 * i + 3 * row + col] = e.rotation[col][row];
+        }
+        py::dict stats;
+        stats["faces"] = nf;
+        stats["floored_faces"] = r.floored_faces;
+        return py::make_tuple(centres, radii, rotations, stats);
+      },
+      py::arg("vertices"), py::arg("faces"), py::arg("scale"), py::arg("rotate"),
+      py::arg("min_radius"), py::arg("threads") = 0,
+      "Mesh → ellipsoids (§3.6.4, eqs. 22–30): returns (centres (F,3), radii (F,3), "
+      "rotations (F,3,3), stats).");
 }
 
 }  // namespace cumuli::bind

@@ -7,6 +7,7 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 
 from __future__ import annotations
 
+from cumuli import meshes
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.cpu_render import render_cpu
@@ -16,10 +17,12 @@ from cumuli.noise import Noise
 from cumuli.renderer import Renderer, prepare_light, render
 from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
 from cumuli.shapes import (
+    ellipsoids_from_mesh,
     gaussian_cumulus,
     lsystem_cloud,
     lsystem_expand,
     lsystem_length,
+    mesh_cloud,
     metaball_cumulus,
 )
 from cumuli.sun import Sun
@@ -35,6 +38,7 @@ __all__ = [
     "Sky",
     "Sun",
     "__version__",
+    "ellipsoids_from_mesh",
     "from_srgb8",
     "gaussian_cumulus",
     "light_grid",
@@ -44,6 +48,8 @@ __all__ = [
     "lsystem_expand",
     "lsystem_length",
     "merge",
+    "mesh_cloud",
+    "meshes",
     "metaball_cumulus",
     "prepare_light",
     "read_image",
