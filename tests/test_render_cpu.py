@@ -634,3 +634,45 @@ def test_render_cpu_bad_arguments():
         cu.render_cpu(scene, camera, 4, 2.5)
     with pytest.raises(ValueError, match="threads"):
         cu.render_cpu(scene, camera, 4, 4, threads=-2)
+
+
+def test_render_cpu_computes_missing_light_grids_and_dispatches():
+    import cumuli as cu
+
+    cloud = cu.Cloud(centres=[[0.0, 0.0, 0.0], [1.0, 0.2, 0.0]], radii=[1.0, 0.8])
+    scene = cu.Scene(
+        clouds=[cloud],
+        noise=cu.Noise(seed=2, size=16),
+        settings=cu.RenderSettings(light_resolution=6, lod_a=0.1),
+    )
+    camera = cu.Camera(position=(0.5, 0.5, -6.0), target=(0.5, 0.0, 0.0))
+    assert cloud.light is None
+    img = cu.render_cpu(scene, camera, 12, 9)
+    assert cloud.light is not None and cloud.light.shape == (6, 6, 6)
+    assert (img[..., 3] > 0.05).sum() >= 4
+    # cumuli.render(backend="cpu") is this marcher.
+    assert np.array_equal(cu.render(scene, camera, 12, 9, backend="cpu"), img)
+    with pytest.raises(TypeError, match="scene"):
+        cu.render_cpu("scene", camera, 4, 4)
+    with pytest.raises(TypeError, match="camera"):
+        cu.render_cpu(scene, (0, 0, 0), 4, 4)
+
+
+def test_rotation_columns_are_the_ellipsoid_axes():
+    # Radii (2, 1, 0.7) with axes (+y, +z, +x) (the rotation's columns) is the axis-aligned
+    # ellipsoid with radii (0.7, 2, 1): the two images agree (an exact permutation matrix; only
+    # the summation order of |q|² differs, so agreement is to float rounding).
+    noise = _core.Noise(9, 16)
+    light = np.random.default_rng(4).random((4, 5, 6)).astype(np.float32)
+    aligned = cloud_dict([[0.2, 0.1, 0.0]], np.array([[0.7, 2.0, 1.0]]), light=light)
+    rotated = {**aligned, "radii": np.array([[2.0, 1.0, 0.7]], np.float32)}
+    rotated["rotations"] = np.array([[[0, 0, 1], [1, 0, 0], [0, 1, 0]]], np.float32)
+    args = make_args([aligned], width=20, height=15, noise=noise, density_constant=-1.0)
+    a = _core.render_cpu(**args)
+    b = _core.render_cpu(**{**args, "clouds": [rotated]})
+    assert (a[..., 3] > 0.05).sum() > 10
+    np.testing.assert_allclose(a, b, atol=1e-5, rtol=0)
+    # Rows as axes would be another ellipsoid (radii (1, 0.7, 2)): visibly different.
+    wrong = {**rotated, "rotations": np.transpose(rotated["rotations"], (0, 2, 1)).copy()}
+    c = _core.render_cpu(**{**args, "clouds": [wrong]})
+    assert np.abs(c - a)[..., 3].max() > 0.2

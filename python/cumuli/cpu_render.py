@@ -25,7 +25,7 @@ def cloud_core_dict(cloud: Any, kappa: float | None = None) -> dict[str, Any]:
     ``kappa`` overrides the cloud's own κ when given (``RenderSettings.kappa``).
     """
     if cloud.light is None or cloud.light_box is None:
-        raise ValueError("cloud has no light grid (cloud.light / cloud.light_box)")
+        raise ValueError("cloud has no light grid (cloud.light / light_box); see prepare_light")
     centres, radii, rotations, model, cloud_kappa, phi = cloud.core_args()
     lo, hi = cloud.light_box
     return {
@@ -94,16 +94,20 @@ def render_cpu_args(
 def render_cpu(scene: Any, camera: Any, width: int, height: int, threads: int = 0) -> np.ndarray:
     """Render ``scene`` seen by ``camera`` on the CPU; returns ``(height, width, 4)`` float32.
 
-    Linear RGBA, row 0 at the top; alpha is ``1 − T``. Clouds without a light grid get one
-    computed first (as the GL renderer does). ``threads=0`` uses every core; the image does not
-    depend on the thread count.
+    Linear RGBA, row 0 at the top; alpha is ``1 − T``. Clouds without a (current) light grid get
+    one first, by the same helper the GL renderer uses (:func:`cumuli.prepare_light`).
+    ``threads=0`` uses every core; the image does not depend on the thread count.
     """
-    ensure_light_grids(scene)
+    from cumuli.renderer import prepare_light
+    from cumuli.scene import Camera, Scene
+
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
+    # Arguments are checked before the (possibly long) light pass runs.
+    width = check.integer(width, "width", 1, MAX_EDGE)
+    height = check.integer(height, "height", 1, MAX_EDGE)
+    threads = check.threads(threads)
+    prepare_light(scene)
     return _core.render_cpu(**render_cpu_args(scene, camera, width, height, threads))
-
-
-def ensure_light_grids(scene: Any) -> None:
-    """Placeholder until the shared helper lands: every cloud must carry its light grid."""
-    for k, cloud in enumerate(scene.clouds):
-        if cloud.light is None or cloud.light_box is None:
-            raise ValueError(f"scene.clouds[{k}] has no light grid")
