@@ -100,14 +100,22 @@ def _opaque(img: np.ndarray) -> np.ndarray:
     return out
 
 
+def _check_output(output: Path) -> None:
+    """Refuse a bad output path before spending time on the render."""
+    if output.suffix.lower() not in (".png", ".exr"):
+        raise ValueError(f"output {str(output)!r} has an unsupported extension (use .png or .exr)")
+    folder = output.parent
+    if not folder.is_dir():
+        raise FileNotFoundError(f"output folder {str(folder)!r} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise PermissionError(f"output folder {str(folder)!r} is not writable")
+
+
 def _write_pair(output: Path, img: np.ndarray) -> list[Path]:
     """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR)."""
     from cumuli.imageio import write_image
 
-    ext = output.suffix.lower()
-    if ext not in (".png", ".exr"):
-        raise ValueError(f"output must end in .png or .exr, got {str(output)!r}")
-    other = output.with_suffix(".exr" if ext == ".png" else ".png")
+    other = output.with_suffix(".exr" if output.suffix.lower() == ".png" else ".png")
     return [write_image(output, img), write_image(other, img)]
 
 
@@ -122,6 +130,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     from cumuli.demo import default_scene
     from cumuli.renderer import render
 
+    _check_output(args.output)
     scene = default_scene()
     img = render(scene, scene.default_camera(), args.width, args.height, backend=args.backend)
     paths = _write_pair(args.output, _opaque(img))
@@ -147,8 +156,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     scene = load_scene(args.scene)
     w, h = args.size
     output = Path(args.output)
-    if not output.parent.is_dir():
-        raise OSError(f"output folder {str(output.parent)!r} does not exist")
+    _check_output(output)
     img = render(scene, scene.default_camera(), w, h, backend=args.backend)
     path = write_image(output, img if args.alpha else _opaque(img))
     print(f"wrote {path} ({w}×{h}, {args.backend})")
