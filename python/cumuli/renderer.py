@@ -376,6 +376,9 @@ class Renderer:
                 self._set("u_tile_height", h)
                 with self._query:
                     self.vao.render(mode=moderngl.TRIANGLES, vertices=3)
+                    # Software rasterisers (llvmpipe) defer the draw until a flush, so without
+                    # this the query would time the submission, not the work.
+                    self.gl.ctx.finish()
                 elapsed = int(self._query.elapsed)
                 # llvmpipe answers 2³²−1 for a query it could not time (seen on the first draw).
                 if total is not None and 0 <= elapsed < 0xFFFFFFFF:
