@@ -115,12 +115,12 @@ def plot(result: dict[str, Any], path: Path) -> None:
     hi = np.array([methods[n]["samples_per_s"]["best"] for n in names]) / 1e6 - med
     fig, ax = plt.subplots(figsize=(7.5, 3.8))
     ax.bar(names, med, yerr=[lo, hi], capsize=4, color="#6a8fc7", label="wall time")
-    gpu = [
-        methods[n]["gpu_samples_per_s"]["median"] / 1e6 if "gpu_samples_per_s" in methods[n] else 0
-        for n in names
-    ]
-    if any(gpu):
-        ax.scatter(names, gpu, color="#c7506a", zorder=3, label="GPU dispatch only")
+    gl_names = [n for n in names if "gpu_samples_per_s" in methods[n]]
+    if gl_names:
+        gpu = [methods[n]["gpu_samples_per_s"]["median"] / 1e6 for n in gl_names]
+        ax.scatter(gl_names, gpu, color="#c7506a", zorder=3, label="GPU dispatch only")
+    per_cpu = [(methods[n]["samples_per_cpu_s"] or 0) / 1e6 for n in names]
+    ax.scatter(names, per_cpu, color="k", marker="x", zorder=3, label="per CPU-second (best)")
     ax.set_ylabel("M samples / s")
     m = result["machine"]
     ax.set_title(
@@ -164,6 +164,10 @@ def main(argv: list[str] | None = None) -> int:
 
     ratios: dict[str, float] = {
         "cpp_2_threads_over_1": med("cpp_2_threads") / med("cpp_1_thread"),
+        # Work per CPU-second with 2 threads relative to 1: near 1 means the threads do not slow
+        # each other down, so the wall-time speed-up is limited only by free cores.
+        "cpp_2_threads_cpu_efficiency": methods["cpp_2_threads"]["samples_per_cpu_s"]
+        / methods["cpp_1_thread"]["samples_per_cpu_s"],
     }
     targets: dict[str, Any] = {}
     if "pyfastnoiselite" in methods:
@@ -173,16 +177,21 @@ def main(argv: list[str] | None = None) -> int:
             methods["cpp_1_thread"]["samples_per_cpu_s"]
             / methods["pyfastnoiselite"]["samples_per_cpu_s"]
         )
+        # Judged on CPU time: both run on one thread, and CPU seconds do not count the time
+        # other processes take the core away (the wall-time ratio is in `ratios` too).
+        value = ratios["cpp_1_thread_over_fastnoise_cpu_time"]
         targets["cpp_per_thread_vs_fastnoise"] = {
             "target": f">= {TARGET_VS_FASTNOISE}",
-            "value": ratios["cpp_1_thread_over_fastnoise"],
-            "met": ratios["cpp_1_thread_over_fastnoise"] >= TARGET_VS_FASTNOISE,
+            "value": value,
+            "met": value >= TARGET_VS_FASTNOISE,
+            "measure": "samples per CPU-second, 1 thread each",
         }
     targets["cpp_2_threads_over_1"] = {
         "target": f">= {TARGET_2_THREADS}",
         "value": ratios["cpp_2_threads_over_1"],
         "met": ratios["cpp_2_threads_over_1"] >= TARGET_2_THREADS,
-        "note": "needs two idle cores; see machine.load_average",
+        "measure": "wall-time throughput, median of repeats",
+        "note": "needs two idle cores; see machine.load_average and cpp_2_threads_cpu_efficiency",
     }
     for key in ("glsl_texture", "glsl_exact"):
         if key in methods:

@@ -108,6 +108,9 @@ def test_fbm_releases_every_gl_object_it_makes(
         monkeypatch.setattr(ctx, name, recording(name))
     noise = cu.Noise(seed=5, size=16)
     cgl.fbm(noise, _points(1000, -5, 5), context=gl_context)
+    queries_before = gl_context.timer_query()
+    cgl.fbm(noise, _points(10, -5, 5), context=gl_context)
+    assert gl_context.timer_query() is queries_before  # one shared query, not one per call
     kinds = {type(o).__name__ for o in made}
     assert {"Buffer", "Texture3D", "ComputeShader"} <= kinds
     assert all(isinstance(o.mglo, moderngl.InvalidObject) for o in made)

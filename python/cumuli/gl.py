@@ -86,6 +86,7 @@ class GLContext:
             ) from exc
         self.renderer: str = self.ctx.info.get("GL_RENDERER", "unknown")
         self.closed = False
+        self._timer_query: moderngl.Query | None = None
         log.info("GL_RENDERER: %s", self.renderer)
 
     @property
@@ -101,6 +102,16 @@ class GLContext:
     def compute(self, name: str) -> moderngl.ComputeShader:
         """Compile a compute shader from a file name under ``shaders/``."""
         return self.ctx.compute_shader(load_shader(name))
+
+    def timer_query(self) -> moderngl.Query:
+        """This context's GL_TIME_ELAPSED query, made on first use and shared by every caller.
+
+        moderngl (5.x) cannot release a query on its own (it goes with the context), so one per
+        context, reused, keeps long-lived contexts from accumulating them.
+        """
+        if self._timer_query is None:
+            self._timer_query = self.ctx.query(time=True)
+        return self._timer_query
 
     def close(self) -> None:
         """Release the context and every GL object made with it (idempotent)."""
@@ -216,9 +227,7 @@ class FbmProgram:
             self._objects.append(self.texture)
             self.texture.filter = (moderngl.LINEAR, moderngl.LINEAR)
             self.texture.repeat_x = self.texture.repeat_y = self.texture.repeat_z = True
-            # moderngl (5.x) cannot release a query on its own; it goes with the context, so
-            # make one per program rather than one per call.
-            self._query = ctx.query(time=True)
+            self._query = self.context.timer_query()
             max_block = int(self.context.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 24))
             self._batch = max(_LOCAL_SIZE, min(_FBM_BATCH, max_block // 12))
         except Exception:
