@@ -371,3 +371,25 @@ def test_bad_sun_object_and_empty_cloud():
         cu.Sun((0, 0, 0))
     with pytest.raises(ValueError, match="centres"):
         cu.light_grid(cu.Cloud(centres=np.zeros((0, 3)), radii=[]), (0, 1, 0), None)
+
+
+def test_many_rotated_primitives_match_reference(noise):
+    # Enough primitives that the sun-plane binning of the candidate search has many bins.
+    rng = np.random.default_rng(5)
+    n = 40
+    rots = np.stack([_rot(rng.normal(size=3), rng.uniform(0, 180)) for _ in range(n)])
+    cloud = cu.Cloud(
+        centres=rng.uniform(-4, 4, (n, 3)).astype(np.float32),
+        radii=rng.uniform(0.3, 1.0, (n, 3)).astype(np.float32),
+        rotations=rots.astype(np.float32),
+        kappa=0.5,
+    )
+    sun = (-0.2, 0.7, 0.5)
+    for method in ("ndt", "naive"):
+        grid, st = cu.light_grid(
+            cloud, sun, noise, resolution=5, method=method, step=0.2, return_stats=True
+        )
+        ref, count, _ = reference_light(cloud, sun, noise, 5, method=method, step=0.2)
+        np.testing.assert_array_equal(st.samples, count)
+        np.testing.assert_allclose(grid, ref, atol=1e-5, rtol=0)
+    assert (count > 0).sum() > 20

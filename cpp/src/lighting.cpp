@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 
 #include "cumuli/candidates.hpp"
 #include "cumuli/parallel.hpp"
@@ -25,6 +26,17 @@ struct Accum {
   std::uint32_t samples = 0;
 };
 
+// Samples waiting for their densities. Queuing them lets fBm run on a block of points
+// (Noise::fbm_many on the calling thread, whose index arithmetic is vectorised); they are then
+// folded into the sums in march order, so the result is the same as evaluating them one by one.
+// Fixed size: nothing is allocated per voxel.
+struct SampleQueue {
+  static constexpr int kSize = 64;
+  float xyz[3 * kSize], len[kSize], rho[kSize];
+  int primitive[kSize];
+  int n = 0;
+};
+
 struct RayContext {
   const CloudShape& cloud;
   const DensitySource& density;
@@ -33,92 +45,284 @@ struct RayContext {
   float step;
   float extinction;
   float scatter;  // C
+  SampleQueue& queue;
+  Accum& acc;
 };
 
-// One sample: segment of length `len` with midpoint `s`, attributed to primitive j.
-inline void take_sample(const RayContext& r, int j, float s, float len, Accum& acc) {
-  const glm::vec3 p = r.origin + s * r.dir;
-  const DensitySample d = cloud_density(r.cloud, j, p, r.density);
-  ++acc.samples;
-  if (d.rho > 0.0f) {
-    acc.scatter += r.scatter * (len / r.step) * acc.transmittance;
-    acc.transmittance *= std::exp(-r.extinction * d.rho * len);
+// Densities of the queued samples, then eq. (7)'s sums over them in order.
+inline void flush(const RayContext& r) {
+  SampleQueue& q = r.queue;
+  if (q.n == 0) return;
+  if (r.density.constant >= 0.0f) {
+    for (int i = 0; i < q.n; ++i) q.rho[i] = r.density.constant;
+  } else {
+    r.density.noise->fbm_many(q.xyz, static_cast<std::size_t>(q.n), q.rho, r.density.fbm, 1);
   }
+  // The fBm value goes through DensitySource's constant hook, so cloud_density (eq. 2's
+  // gating, or eqs. 19–21) sees exactly the number it would have computed itself.
+  DensitySource known;
+  for (int i = 0; i < q.n; ++i) {
+    known.constant = q.rho[i];
+    const DensitySample d =
+        cloud_density(r.cloud, q.primitive[i],
+                      glm::vec3(q.xyz[3 * i], q.xyz[3 * i + 1], q.xyz[3 * i + 2]), known);
+    if (d.rho > 0.0f) {
+      r.acc.scatter += r.scatter * (q.len[i] / r.step) * r.acc.transmittance;
+      r.acc.transmittance *= std::exp(-r.extinction * d.rho * q.len[i]);
+    }
+  }
+  r.acc.samples += static_cast<std::uint32_t>(q.n);
+  q.n = 0;
+}
+
+// One sample: segment of length `len` with midpoint `s`, attributed to primitive j.
+inline void take_sample(const RayContext& r, int j, float s, float len) {
+  const glm::vec3 p = r.origin + s * r.dir;
+  SampleQueue& q = r.queue;
+  q.xyz[3 * q.n] = p.x, q.xyz[3 * q.n + 1] = p.y, q.xyz[3 * q.n + 2] = p.z;
+  q.len[q.n] = len;
+  q.primitive[q.n] = j;
+  if (++q.n == SampleQueue::kSize) flush(r);
 }
 
 // The k-th segment of [a, b] is [a + kΔ, min(a + (k+1)Δ, b)]; positions are computed from k, not
 // accumulated, so long intervals do not drift.
 template <class Attribute>
-inline void march_interval(const RayContext& r, float a, float b, Attribute&& attribute,
-                           Accum& acc) {
+inline void march_interval(const RayContext& r, float a, float b, Attribute&& attribute) {
   for (int k = 0;; ++k) {
     const float t0 = a + static_cast<float>(k) * r.step;
     if (!(t0 < b)) break;
     const float t1 = std::min(a + static_cast<float>(k + 1) * r.step, b);
     const float s = 0.5f * (t0 + t1);
-    take_sample(r, attribute(s), s, t1 - t0, acc);
+    take_sample(r, attribute(s), s, t1 - t0);
   }
 }
 
-// Primitive of the chain cand[first, last) that covers s with the smallest |q| (ties: the
-// earlier candidate). If rounding leaves s uncovered, the last candidate starting before s.
-inline int attribute_union(const RayContext& r, const Candidate* cand, int first, int last,
-                           float s) {
-  int best = -1;
-  int covering = 0;
-  float best_q = INFINITY;
-  int fallback = cand[first].primitive;
-  for (int c = first; c < last && cand[c].t_in <= s; ++c) {
-    fallback = cand[c].primitive;
-    if (s > cand[c].t_out) continue;
-    ++covering;
-    if (covering == 1) {
-      best = cand[c].primitive;
-      continue;
+// collect_candidates for many rays sharing one direction (every sun ray of a grid).
+//
+// Culling: all rays are parallel to d, so a ray meets primitive j only if its origin, projected
+// on the plane ⊥ d, lies within j's projected bounding disc (radius = largest grown radius). The
+// discs are binned on a 2D grid of that plane once per call; a ray tests only the primitives
+// listed in its bin (in increasing j). The bins are conservative (discs inflated by a relative
+// margin far above float rounding), so no hit is lost.
+//
+// Exact test: the parts of the ray–ellipsoid test that depend only on the direction
+// (Rᵀ, d' = Rᵀd/r, a = d'·d') are computed once per primitive; the per-ray part is the
+// arithmetic of intersect(Ellipsoid, ...) operation for operation, so the intervals are the same
+// numbers, and clipping (t ≥ 0) and the insertion sort (primitives visited in increasing j) are
+// collect_candidates', with nothing dropped: the buffer holds every primitive.
+class SunCandidates {
+ public:
+  static constexpr int kMaxBins = 128;  // per axis of the projected plane
+
+  SunCandidates(const CloudShape& cloud, glm::vec3 dir) : n_(cloud.primitives.size()) {
+    const float scale = candidate_scale(cloud);
+    prim_.resize(n_);
+    a_.resize(n_);
+    std::vector<float> pu(n_), pw(n_), pr(n_);
+    // An orthonormal basis (e1, e2) of the plane ⊥ dir.
+    const glm::vec3 d = glm::normalize(dir);
+    const glm::vec3 helper = std::fabs(d.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0);
+    e1_ = glm::normalize(glm::cross(d, helper));
+    e2_ = glm::cross(d, e1_);
+    float lo_u = INFINITY, lo_w = INFINITY, hi_u = -INFINITY, hi_w = -INFINITY, sum_r = 0.0f;
+    for (std::size_t j = 0; j < n_; ++j) {
+      Ellipsoid e = cloud.primitives[j];
+      e.radii *= scale;
+      Prim& p = prim_[j];
+      p.centre = e.centre;
+      p.radii = e.radii;
+      p.rt = glm::transpose(e.rotation);
+      p.d = (p.rt * dir) / e.radii;
+      a_[j] = glm::dot(p.d, p.d);
+      const float r = std::max(e.radii.x, std::max(e.radii.y, e.radii.z));
+      pu[j] = glm::dot(e.centre, e1_);
+      pw[j] = glm::dot(e.centre, e2_);
+      // Margin: relative 1e-4 of the radius and of the coordinates' magnitude.
+      pr[j] = r * 1.0001f + 1e-4f * (std::fabs(pu[j]) + std::fabs(pw[j])) + 1e-6f;
+      lo_u = std::min(lo_u, pu[j] - pr[j]), hi_u = std::max(hi_u, pu[j] + pr[j]);
+      lo_w = std::min(lo_w, pw[j] - pr[j]), hi_w = std::max(hi_w, pw[j] + pr[j]);
+      sum_r += pr[j];
     }
-    if (covering == 2) {  // only now does |q| matter
-      best_q = r.cloud.primitives[static_cast<std::size_t>(best)].normalised_distance(
-          r.origin + s * r.dir);
+    // Bins about one mean disc radius wide, at most kMaxBins per axis.
+    const float mean_r = n_ ? sum_r / static_cast<float>(n_) : 1.0f;
+    const auto bins_for = [&](float extent) {
+      const float want = std::ceil(extent / std::max(mean_r, 1e-12f));
+      return static_cast<int>(std::min(std::max(want, 1.0f), static_cast<float>(kMaxBins)));
+    };
+    nu_ = bins_for(hi_u - lo_u);
+    nw_ = bins_for(hi_w - lo_w);
+    lo_u_ = lo_u, lo_w_ = lo_w;
+    inv_u_ = static_cast<float>(nu_) / std::max(hi_u - lo_u, 1e-30f);
+    inv_w_ = static_cast<float>(nw_) / std::max(hi_w - lo_w, 1e-30f);
+    // Counting pass, then fill (CSR layout), primitives in increasing j within each bin.
+    std::vector<int> count(static_cast<std::size_t>(nu_) * nw_ + 1, 0);
+    const auto range = [&](std::size_t j, int& u0, int& u1, int& w0, int& w1) {
+      u0 = bin(pu[j] - pr[j] - lo_u_, inv_u_, nu_), u1 = bin(pu[j] + pr[j] - lo_u_, inv_u_, nu_);
+      w0 = bin(pw[j] - pr[j] - lo_w_, inv_w_, nw_), w1 = bin(pw[j] + pr[j] - lo_w_, inv_w_, nw_);
+    };
+    for (std::size_t j = 0; j < n_; ++j) {
+      int u0, u1, w0, w1;
+      range(j, u0, u1, w0, w1);
+      for (int w = w0; w <= w1; ++w)
+        for (int u = u0; u <= u1; ++u) ++count[static_cast<std::size_t>(w) * nu_ + u + 1];
     }
-    const float q =
-        r.cloud.primitives[static_cast<std::size_t>(cand[c].primitive)].normalised_distance(
-            r.origin + s * r.dir);
-    if (q < best_q) {
-      best_q = q;
-      best = cand[c].primitive;
+    for (std::size_t i = 1; i < count.size(); ++i) count[i] += count[i - 1];
+    start_ = count;
+    list_.resize(static_cast<std::size_t>(count.back()));
+    for (std::size_t j = 0; j < n_; ++j) {
+      int u0, u1, w0, w1;
+      range(j, u0, u1, w0, w1);
+      for (int w = w0; w <= w1; ++w)
+        for (int u = u0; u <= u1; ++u)
+          list_[static_cast<std::size_t>(count[static_cast<std::size_t>(w) * nu_ + u]++)] =
+              static_cast<int>(j);
     }
   }
-  return best >= 0 ? best : fallback;
-}
 
+  std::size_t size() const { return n_; }
+  const float* a() const { return a_.data(); }
+
+  // Per-thread results of the last collect(), per primitive j (in its grown unit-sphere frame):
+  // b = o'·d', oo = |o'|²; with a = d'·d', |q_j(s)|² = oo + 2bs + as². Valid for candidates.
+  struct Scratch {
+    std::vector<float> b, oo;
+    explicit Scratch(std::size_t n) : b(n), oo(n) {}
+  };
+
+  int collect(glm::vec3 origin, Scratch& scratch, Candidate* out) const {
+    const float u = glm::dot(origin, e1_) - lo_u_, w = glm::dot(origin, e2_) - lo_w_;
+    if (!(u >= 0.0f && w >= 0.0f)) return 0;
+    const int bu = static_cast<int>(u * inv_u_), bw = static_cast<int>(w * inv_w_);
+    if (bu >= nu_ + 1 || bw >= nw_ + 1) return 0;  // beyond every disc
+    const std::size_t cell = static_cast<std::size_t>(std::min(bw, nw_ - 1)) * nu_ +
+                             static_cast<std::size_t>(std::min(bu, nu_ - 1));
+    int count = 0;
+    for (int k = start_[cell]; k < start_[cell + 1]; ++k) {
+      const int j = list_[static_cast<std::size_t>(k)];
+      const Prim& p = prim_[static_cast<std::size_t>(j)];
+      const float a = a_[static_cast<std::size_t>(j)];
+      // intersect(Ellipsoid, ...): o = (Rᵀ(origin − c)) / r, b = o·d, c = o·o − 1.
+      const glm::vec3 o = (p.rt * (origin - p.centre)) / p.radii;
+      if (!(a > 0.0f)) continue;
+      const float b = glm::dot(o, p.d);
+      const float oo = glm::dot(o, o);
+      const float c = oo - 1.0f;
+      const float disc = b * b - a * c;
+      if (disc < 0.0f) continue;
+      const float sq = std::sqrt(disc);
+      const float t0 = std::max((-b - sq) / a, 0.0f);
+      const float t1 = (-b + sq) / a;
+      if (!(t1 > t0)) continue;
+      scratch.b[static_cast<std::size_t>(j)] = b;
+      scratch.oo[static_cast<std::size_t>(j)] = oo;
+      int pos = count++;
+      while (pos > 0 && out[pos - 1].t_in > t0) {
+        out[pos] = out[pos - 1];
+        --pos;
+      }
+      out[pos] = Candidate{t0, t1, j};
+    }
+    return count;
+  }
+
+ private:
+  struct Prim {
+    glm::vec3 centre, radii, d;
+    glm::mat3 rt;
+  };
+
+  // Bin of offset x (≥ 0 up to rounding) at `inv` bins per unit, clamped to [0, n − 1].
+  static int bin(float x, float inv, int n) {
+    const float f = std::floor(x * inv);
+    return static_cast<int>(std::min(std::max(f, 0.0f), static_cast<float>(n - 1)));
+  }
+
+  std::size_t n_;
+  std::vector<Prim> prim_;
+  std::vector<float> a_;
+  glm::vec3 e1_{}, e2_{};
+  float lo_u_ = 0, lo_w_ = 0, inv_u_ = 1, inv_w_ = 1;
+  int nu_ = 1, nw_ = 1;
+  std::vector<int> start_, list_;
+};
+
+// Attribution of union samples (RENDER_CONTRACT march="union"): the covering candidate whose
+// primitive gives the smallest |q|, ties to the earlier candidate. Samples come in increasing s,
+// so the covering set is kept as a list of "active" candidates (entered: t_in ≤ s; dropped for
+// good once t_out < s), and |q_j(s)|² is the quadratic oo + 2bs + as² from the candidate test,
+// three multiply-adds instead of a transform. A near-tie decided differently by rounding picks a
+// primitive with the same |q| to float precision, hence the same γ of eq. (2).
+class UnionAttribution {
+ public:
+  UnionAttribution(const Candidate* cand, int first, int last, int* active, const float* a,
+                   const SunCandidates::Scratch& sc)
+      : cand_(cand), next_(first), last_(last), active_(active), a_(a), sc_(sc),
+        fallback_(cand[first].primitive) {}
+
+  int operator()(float s) {
+    while (next_ < last_ && cand_[next_].t_in <= s) active_[count_++] = next_++;
+    int kept = 0;
+    for (int i = 0; i < count_; ++i)
+      if (cand_[active_[i]].t_out >= s) active_[kept++] = active_[i];
+    if (kept == 0) {  // rounding left s just past every interval: keep the last one entered
+      if (count_ > 0) fallback_ = cand_[active_[count_ - 1]].primitive;
+      count_ = 0;
+      return fallback_;
+    }
+    count_ = kept;
+    int best = cand_[active_[0]].primitive;
+    if (kept == 1) return best;
+    float best_q2 = q2(best, s);
+    for (int i = 1; i < kept; ++i) {
+      const int j = cand_[active_[i]].primitive;
+      const float v = q2(j, s);
+      if (v < best_q2) best_q2 = v, best = j;
+    }
+    return best;
+  }
+
+ private:
+  float q2(int j, float s) const { return sc_.oo[j] + s * (2.0f * sc_.b[j] + s * a_[j]); }
+
+  const Candidate* cand_;
+  int next_, last_;
+  int* active_;
+  int count_ = 0;
+  const float* a_;
+  const SunCandidates::Scratch& sc_;
+  int fallback_;
+};
+
+// L(v) for the ray in `r` (whose accumulator starts empty) over the sorted candidates.
 float light_at(const RayContext& r, LightMethod method, const Candidate* cand, int n,
-               float intensity, std::uint32_t& samples) {
-  Accum acc;
+               float intensity, const SunCandidates& collector,
+               const SunCandidates::Scratch& scratch, int* active) {
   if (method == LightMethod::Naive) {
     for (int c = 0; c < n; ++c) {
       const int j = cand[c].primitive;
-      march_interval(r, cand[c].t_in, cand[c].t_out, [j](float) { return j; }, acc);
+      march_interval(r, cand[c].t_in, cand[c].t_out, [j](float) { return j; });
     }
   } else {
     // Algorithm 2: merge the sorted intervals into their union, march each piece once.
+    const bool attribute = r.cloud.density.model == DensityModel::Spheroid;
     int c = 0;
     while (c < n) {
       const int first = c;
       float end = cand[c].t_out;
       for (++c; c < n && cand[c].t_in <= end; ++c) end = std::max(end, cand[c].t_out);
       const int last = c;
-      if (last - first == 1) {
+      if (last - first == 1 || !attribute) {  // metaball density ignores the primitive
         const int j = cand[first].primitive;
-        march_interval(r, cand[first].t_in, end, [j](float) { return j; }, acc);
+        march_interval(r, cand[first].t_in, end, [j](float) { return j; });
       } else {
-        march_interval(
-            r, cand[first].t_in, end,
-            [&](float s) { return attribute_union(r, cand, first, last, s); }, acc);
+        march_interval(r, cand[first].t_in, end,
+                       UnionAttribution(cand, first, last, active, collector.a(), scratch));
       }
     }
   }
-  samples = acc.samples;
-  return acc.scatter + intensity * acc.transmittance;
+  flush(r);
+  return r.acc.scatter + intensity * r.acc.transmittance;
 }
 
 }  // namespace
@@ -192,6 +396,7 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
   const glm::vec3 cell = (box.hi - box.lo) / glm::vec3(rx, ry, rz);
   const float scatter = s.scatter_constant();
   const int capacity = static_cast<int>(cloud.primitives.size());
+  const SunCandidates collector(cloud, s.sun_dir);
 
   const auto start = std::chrono::steady_clock::now();
   // Samples per row of voxels, summed after the loop (no shared counter between threads).
@@ -200,18 +405,21 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
     // One candidate buffer per chunk, big enough for every primitive: nothing is dropped and
     // nothing is allocated per voxel.
     std::vector<Candidate> cand(static_cast<std::size_t>(capacity));
+    SunCandidates::Scratch scratch(collector.size());
+    SampleQueue queue;
+    std::vector<int> active(static_cast<std::size_t>(capacity));
     for (std::size_t row = b; row < e; ++row) {
       const int z = static_cast<int>(row / ry), y = static_cast<int>(row % ry);
       for (int x = 0; x < rx; ++x) {
         const glm::vec3 v = box.lo + (glm::vec3(x, y, z) + 0.5f) * cell;
-        const int n =
-            collect_candidates(cloud, v, s.sun_dir, 0.0f, INFINITY, cand.data(), capacity);
-        const RayContext r{cloud, density, v, s.sun_dir, s.step, s.extinction, scatter};
-        std::uint32_t count = 0;
+        const int n = collector.collect(v, scratch, cand.data());
+        Accum acc;
+        const RayContext r{cloud, density, v, s.sun_dir, s.step, s.extinction, scatter, queue, acc};
         const std::size_t idx = row * rx + x;
-        light[idx] = light_at(r, s.method, cand.data(), n, s.intensity, count);
-        if (samples) samples[idx] = count;
-        row_samples[row] += count;
+        light[idx] = light_at(r, s.method, cand.data(), n, s.intensity, collector, scratch,
+                              active.data());
+        if (samples) samples[idx] = acc.samples;
+        row_samples[row] += acc.samples;
       }
     }
   });
