@@ -15,8 +15,9 @@ sample of ρ ≈ 0.33 has Δτ ≈ 0.45, enough to move alpha by 0.1. Measured o
 15.0.6, 256 bits) in ``test_gl_matches_cpu_with_two_clouds_close_up`` (fBm frequency 0.6):
 pixel (10, 54), sample at t = 18.877 in primitive 26 of the cumulus with ρ = 0.3268603,
 γ = 0.3268611 (ρ − γ = −8e-7): the C++ counts it as cloud, llvmpipe does not (alpha 0.909 vs
-0.796); every other pixel agrees to 1e-5. The same gate (and |q| ≤ 1, and a ray parameter crossing an interval end,
-which adds or drops one sample) can flip on any GPU, so the exception applies to every scene.
+0.796); every other pixel agrees to 1e-5. The same gate (and |q| ≤ 1, and a ray parameter
+crossing an interval end, which adds or drops one sample) can flip on any GPU, so the exception
+applies to every scene.
 The mesh cloud shows the same effect at lower weight: one pixel in each mode, (30, 37) in
 "paper" (ρ − γ = +3.6e-6 at t = 5.334 in ellipsoid 113; |Δrgb| = 3.4e-3, the ray was already nearly
 opaque) and (52, 41) in "union" (ρ − γ = +3.5e-6 at t = 5.472; |Δalpha| = 1.2e-2).
