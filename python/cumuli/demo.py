@@ -25,10 +25,10 @@ def cumulus_scene(seed: int = 1, settings: RenderSettings | None = None) -> Scen
 
 
 def default_scene(settings: RenderSettings | None = None) -> Scene:
-    """Three Gaussian cumuli in a sunset sky, the sun low behind them (paper Fig. 10).
+    """Three Gaussian cumuli in a sunset sky (paper Fig. 10).
 
-    The sun sits low in front of the camera so that the clouds' thin edges light up through the
-    forward (HG) scattering: the silver lining.
+    A low orange sun from the right and slightly behind the camera lights the clouds' sides
+    and leaves their far sides and bases in shadow.
     """
     clouds = [
         gaussian_cumulus(centre=(-26.0, 2.0, 30.0), seed=11),
@@ -37,7 +37,7 @@ def default_scene(settings: RenderSettings | None = None) -> Scene:
     ]
     return Scene(
         clouds=clouds,
-        sun=Sun(direction=(0.9, 0.25, 0.45), colour=(1.0, 0.72, 0.45), intensity=1.6),
+        sun=Sun(direction=(0.8, 0.3, -0.15), colour=(1.0, 0.72, 0.45), intensity=1.6),
         sky=Sky.sunset(),
         noise=Noise(seed=7),
         settings=settings or RenderSettings(),

@@ -11,6 +11,7 @@ import atexit
 import logging
 import re
 import threading
+import time
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -93,7 +94,9 @@ class GLContext:
 
     def program(self, vertex: str, fragment: str) -> moderngl.Program:
         """Compile a program from two shader file names under ``shaders/``."""
-        return self.ctx.program(vertex_shader=load_shader(vertex), fragment_shader=load_shader(fragment))
+        return self.ctx.program(
+            vertex_shader=load_shader(vertex), fragment_shader=load_shader(fragment)
+        )
 
     def compute(self, name: str) -> moderngl.ComputeShader:
         """Compile a compute shader from a file name under ``shaders/``."""
@@ -162,7 +165,9 @@ def _resolve_context(context: GLContext | None) -> GLContext:
     if context is None:
         return default_context()
     if not isinstance(context, GLContext):
-        raise TypeError(f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}")
+        raise TypeError(
+            f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
+        )
     if context.closed:
         raise ValueError("context is closed")
     return context
@@ -183,8 +188,10 @@ class FbmProgram:
     The lattice goes to an R32F 3D texture with LINEAR filtering and REPEAT wrapping, which is
     what the paper's GPU implementation samples. Call the object like :func:`fbm`; after each call
     :attr:`gpu_time_ns` holds the dispatch time measured with a GL timer query (uploads and
-    read-back excluded). Release with :meth:`release` or use it as a context manager; closing its
-    context releases it too.
+    read-back excluded) and :attr:`dispatch_wall_s` the wall time from the dispatch to
+    ``glFinish`` (llvmpipe runs compute work inside ``glDispatchCompute``, outside its timer
+    queries, which then read ~0; the wall time is the meaningful number there). Release with
+    :meth:`release` or use it as a context manager; closing its context releases it too.
     """
 
     def __init__(self, noise: Noise, context: GLContext | None = None) -> None:
@@ -195,6 +202,7 @@ class FbmProgram:
         self.context = _resolve_context(context)
         self.noise = noise
         self.gpu_time_ns: int | None = None
+        self.dispatch_wall_s: float | None = None
         self._objects: list[Any] = []
         ctx = self.context.ctx
         size = noise.size
@@ -238,6 +246,7 @@ class FbmProgram:
         n = pts.shape[0]
         out = np.empty(n, dtype=np.float32)
         self.gpu_time_ns = 0
+        self.dispatch_wall_s = 0.0
         if n == 0:
             return out
         ctx = self.context.ctx
@@ -265,9 +274,13 @@ class FbmProgram:
                 groups = -(-count // _LOCAL_SIZE)
                 gx = min(groups, _MAX_GROUPS)
                 gy = -(-groups // gx)
+                ctx.finish()  # uploads done: time the dispatch alone
+                start_s = time.perf_counter()
                 with self._query:
                     prog.run(gx, gy, 1)
                 ctx.memory_barrier()
+                ctx.finish()
+                self.dispatch_wall_s += time.perf_counter() - start_s
                 out[start : start + count] = np.frombuffer(dst.read(size=count * 4), np.float32)
                 self.gpu_time_ns += int(self._query.elapsed)
         finally:
@@ -300,7 +313,7 @@ def fbm(
     exact: bool = False,
     context: GLContext | None = None,
 ) -> np.ndarray:
-    """fBm (eq. 1) of ``noise`` at ``(N, 3)`` points, evaluated by ``shaders/noise.glsl`` on the GPU.
+    """fBm (eq. 1) of ``noise`` at ``(N, 3)`` points, evaluated by ``shaders/noise.glsl`` on a GPU.
 
     This is the GLSL twin of :meth:`cumuli.Noise.fbm`, used to check that the shaders and the C++
     core agree. ``exact=True`` blends the 8 texels by hand with float weights (agrees with the

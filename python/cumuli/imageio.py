@@ -51,7 +51,7 @@ def _as_rgba(img: Any, name: str = "img") -> np.ndarray:
         raise ValueError(f"{name} must have shape (H, W, 3) or (H, W, 4), got {img.shape}")
     h, w = img.shape[:2]
     if not (1 <= h <= MAX_EDGE and 1 <= w <= MAX_EDGE):
-        raise ValueError(f"{name} must be between 1 and {MAX_EDGE} pixels on each side, got {h}×{w}")
+        raise ValueError(f"{name} must be 1 to {MAX_EDGE} pixels on each side, got {h}×{w}")
     if not np.isfinite(img).all():
         raise ValueError(f"{name} contains NaN or infinite values")
     if img.shape[2] == 3:

@@ -85,7 +85,7 @@ class Noise:
         frequency: float = 1.0,
         threads: int = 0,
     ) -> np.ndarray:
-        """fBm sampled at voxel centres of a box; returns a ``(D, H, W)`` volume indexed ``[z, y, x]``.
+        """fBm at the voxel centres of a box: a ``(D, H, W)`` float32 volume indexed ``[z, y, x]``.
 
         ``shape`` is one int (a cube) or ``(D, H, W)``.
         """

@@ -395,7 +395,9 @@ class Renderer:
             return
         self.closed = True
         extra = [self._fbo, self._fbo_tex, self._noise_tex] if hasattr(self, "_fbo") else []
-        for obj in [*extra, *reversed(self._objects)]:
+        # Objects of a context that is already gone were released with it.
+        live = not getattr(self, "gl", None) or not self.gl.closed
+        for obj in [*extra, *reversed(self._objects)] if live else []:
             if obj is not None:
                 try:
                     obj.release()
@@ -403,7 +405,7 @@ class Renderer:
                     pass
         self._objects.clear()
         self._fbo = self._fbo_tex = self._noise_tex = None
-        if self._owns_context:
+        if self._owns_context and hasattr(self, "gl"):
             self.gl.close()
 
     def __enter__(self) -> Renderer:
@@ -428,11 +430,11 @@ def shared_renderer() -> Renderer:
     """The process-wide renderer used by :func:`render` (created on first use)."""
     global _shared
     with _shared_lock:
-        if _shared is None or _shared.closed:
-            _shared = Renderer()
-            import atexit
+        if _shared is None or _shared.closed or _shared.gl.closed:
+            from cumuli.gl import default_context
 
-            atexit.register(_shared.close)
+            # Shares the process-wide context with the other GL conveniences (one EGL context).
+            _shared = Renderer(context=default_context())
         return _shared
 
 

@@ -22,9 +22,7 @@ class Sun:
         if min(colour) < 0:
             raise ValueError(f"sun.colour must be non-negative, got {colour}")
         object.__setattr__(self, "colour", colour)
-        object.__setattr__(
-            self, "intensity", check.real(self.intensity, "sun.intensity", 0.0)
-        )
+        object.__setattr__(self, "intensity", check.real(self.intensity, "sun.intensity", 0.0))
 
     @property
     def radiance(self) -> tuple[float, float, float]:

@@ -1,0 +1,232 @@
+"""fBm throughput: C++ core on 1 and 2 threads, GLSL on the headless GL device, pyfastnoiselite.
+
+All methods evaluate 5-octave fBm (w = 1/2, s = 2) at the same random points (uniform in
+[-50, 50]³, 1 M of them; 100 k with --quick). Reported per method: median / best / worst wall
+time of the repeats, samples per second, and the process CPU time (for single-threaded methods it
+gives per-thread speed that is robust to other load on a shared machine). GLSL is timed twice:
+the dispatch alone with a GL timer query (GL_TIME_ELAPSED) and the wall time of the whole call
+(upload, dispatch, read-back; the program and lattice texture are made once, outside the timing).
+
+pyfastnoiselite (FastNoiseLite, NoiseType_Value, FractalType_FBm, 5 octaves, gen_from_coords) is
+the reference point: a hashed value noise, single-threaded (its CPU time equals its wall time;
+the JSON records the ratio). Targets: C++ per-thread throughput ≥ pyfastnoiselite's, and ≥ 1.8×
+from 1 to 2 threads (only meaningful when two cores are free; the load average is recorded).
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common as common  # noqa: E402
+
+import cumuli as cu  # noqa: E402
+
+OCTAVES = 5
+TARGET_VS_FASTNOISE = 1.0
+TARGET_2_THREADS = 1.8
+
+
+def _method(count: int, wall: list[float], cpu: list[float], **extra: Any) -> dict[str, Any]:
+    w = common.spread(wall)
+    c = common.spread(cpu)
+    return {
+        "wall_s": w,
+        "cpu_s": c,
+        "samples_per_s": common.rate(count, w),
+        "samples_per_cpu_s": count / c["min"] if c["min"] > 0 else None,
+        "cpu_over_wall": c["median"] / w["median"] if w["median"] > 0 else None,
+        **extra,
+    }
+
+
+def bench_cpp(noise: cu.Noise, pts: np.ndarray, repeats: int, threads: int) -> dict[str, Any]:
+    wall, cpu = common.time_repeats(
+        lambda: noise.fbm(pts, octaves=OCTAVES, threads=threads), repeats
+    )
+    return _method(len(pts), wall, cpu, threads=threads)
+
+
+def bench_glsl(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, Any]:
+    from cumuli import gl
+
+    out: dict[str, Any] = {}
+    with gl.GLContext() as context, gl.FbmProgram(noise, context) as program:
+        for exact in (False, True):
+            gpu_ns: list[int] = []
+            dispatch: list[float] = []
+
+            def call(
+                exact: bool = exact, gpu_ns: list[int] = gpu_ns, dispatch: list[float] = dispatch
+            ) -> None:
+                program(pts, octaves=OCTAVES, exact=exact)
+                gpu_ns.append(int(program.gpu_time_ns or 0))
+                dispatch.append(float(program.dispatch_wall_s or 0.0))
+
+            wall, cpu = common.time_repeats(call, repeats)
+            query = common.spread([ns * 1e-9 for ns in gpu_ns[-repeats:]])
+            disp = common.spread(dispatch[-repeats:])
+            # A timer query that reads far less than the dispatch took did not see the work
+            # (llvmpipe runs compute synchronously inside glDispatchCompute, outside queries).
+            query_valid = query["median"] >= 0.1 * disp["median"]
+            key = "glsl_exact" if exact else "glsl_texture"
+            out[key] = _method(
+                len(pts),
+                wall,
+                cpu,
+                gpu_query_s=query,
+                gpu_query_valid=query_valid,
+                dispatch_wall_s=disp,
+                dispatch_samples_per_s=common.rate(len(pts), disp),
+                gpu_samples_per_s=common.rate(len(pts), query if query_valid else disp),
+                gpu_time_source="GL timer query" if query_valid else "dispatch → glFinish wall",
+                renderer=context.renderer,
+                lookup="texelFetch + float weights" if exact else "texture() LINEAR/REPEAT",
+            )
+    return out
+
+
+def bench_fastnoise(pts: np.ndarray, repeats: int) -> dict[str, Any]:
+    from pyfastnoiselite.pyfastnoiselite import FastNoiseLite, FractalType, NoiseType
+
+    fnl = FastNoiseLite(7)
+    fnl.noise_type = NoiseType.NoiseType_Value
+    fnl.fractal_type = FractalType.FractalType_FBm
+    fnl.fractal_octaves = OCTAVES
+    fnl.fractal_gain = 0.5
+    fnl.fractal_lacunarity = 2.0
+    fnl.frequency = 1.0
+    coords = np.ascontiguousarray(pts.T, dtype=np.float32)  # it wants (3, N)
+    wall, cpu = common.time_repeats(lambda: fnl.gen_from_coords(coords), repeats)
+    return _method(len(pts), wall, cpu, noise="FastNoiseLite value fBm, gen_from_coords")
+
+
+def plot(result: dict[str, Any], path: Path) -> None:
+    plt = common.pyplot()
+    methods = result["methods"]
+    names = list(methods)
+    med = np.array([methods[n]["samples_per_s"]["median"] for n in names]) / 1e6
+    lo = med - np.array([methods[n]["samples_per_s"]["worst"] for n in names]) / 1e6
+    hi = np.array([methods[n]["samples_per_s"]["best"] for n in names]) / 1e6 - med
+    fig, ax = plt.subplots(figsize=(7.5, 3.8))
+    ax.bar(names, med, yerr=[lo, hi], capsize=4, color="#6a8fc7", label="wall time")
+    gpu = [
+        methods[n]["gpu_samples_per_s"]["median"] / 1e6 if "gpu_samples_per_s" in methods[n] else 0
+        for n in names
+    ]
+    if any(gpu):
+        ax.scatter(names, gpu, color="#c7506a", zorder=3, label="GPU dispatch only")
+    ax.set_ylabel("M samples / s")
+    m = result["machine"]
+    ax.set_title(
+        f"5-octave fBm, {result['points']:,} points\n{m['cpu_model']} ×{m['cores']}; "
+        f"GL: {m['gl_renderer'] or 'unavailable'}",
+        fontsize=9,
+    )
+    ax.legend(fontsize=8)
+    ax.tick_params(axis="x", labelsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = common.parse_args(__doc__.splitlines()[0], argv)
+    count = 100_000 if args.quick else 1_000_000
+    repeats = 3 if args.quick else 7
+    pts = np.random.default_rng(0).uniform(-50.0, 50.0, (count, 3)).astype(np.float32)
+    noise = cu.Noise(seed=7)
+    machine = common.machine_info()
+    common.log(f"machine: {machine['cpu_model']} ×{machine['cores']}, GL: {machine['gl_renderer']}")
+
+    methods: dict[str, Any] = {}
+    skipped: dict[str, str] = {}
+    methods["cpp_1_thread"] = bench_cpp(noise, pts, repeats, 1)
+    methods["cpp_2_threads"] = bench_cpp(noise, pts, repeats, 2)
+    if machine["cores"] > 2:
+        methods["cpp_all_threads"] = bench_cpp(noise, pts, repeats, 0)
+    try:
+        methods["pyfastnoiselite"] = bench_fastnoise(pts, repeats)
+    except ImportError as exc:
+        skipped["pyfastnoiselite"] = f"not installed ({exc})"
+    if machine["gl_renderer"]:
+        methods.update(bench_glsl(noise, pts, repeats))
+    else:
+        skipped["glsl"] = machine.get("gl_unavailable_reason", "no GL")
+
+    def med(name: str) -> float:
+        return methods[name]["samples_per_s"]["median"]
+
+    ratios: dict[str, float] = {
+        "cpp_2_threads_over_1": med("cpp_2_threads") / med("cpp_1_thread"),
+    }
+    targets: dict[str, Any] = {}
+    if "pyfastnoiselite" in methods:
+        ratios["cpp_1_thread_over_fastnoise"] = med("cpp_1_thread") / med("pyfastnoiselite")
+        # Per-thread speed from CPU time is robust to other processes on a shared machine.
+        ratios["cpp_1_thread_over_fastnoise_cpu_time"] = (
+            methods["cpp_1_thread"]["samples_per_cpu_s"]
+            / methods["pyfastnoiselite"]["samples_per_cpu_s"]
+        )
+        targets["cpp_per_thread_vs_fastnoise"] = {
+            "target": f">= {TARGET_VS_FASTNOISE}",
+            "value": ratios["cpp_1_thread_over_fastnoise"],
+            "met": ratios["cpp_1_thread_over_fastnoise"] >= TARGET_VS_FASTNOISE,
+        }
+    targets["cpp_2_threads_over_1"] = {
+        "target": f">= {TARGET_2_THREADS}",
+        "value": ratios["cpp_2_threads_over_1"],
+        "met": ratios["cpp_2_threads_over_1"] >= TARGET_2_THREADS,
+        "note": "needs two idle cores; see machine.load_average",
+    }
+    for key in ("glsl_texture", "glsl_exact"):
+        if key in methods:
+            ratios[f"{key}_over_cpp_1_thread"] = med(key) / med("cpp_1_thread")
+
+    result = {
+        "benchmark": "noise",
+        "description": "5-octave fBm throughput on random points",
+        "quick": args.quick,
+        "points": count,
+        "repeats": repeats,
+        "octaves": OCTAVES,
+        "machine": machine,
+        "methods": methods,
+        "skipped": skipped,
+        "ratios": ratios,
+        "targets": targets,
+    }
+    json_path = common.write_json(args.out / "noise.json", result)
+    plot_path = args.out / "noise.png"
+    plot(result, plot_path)
+
+    for name, m in methods.items():
+        extra = ""
+        if "gpu_samples_per_s" in m:
+            extra = (
+                f"   (dispatch {m['dispatch_samples_per_s']['median'] / 1e6:.2f} M/s; timer query"
+                f" {m['gpu_query_s']['median'] * 1e3:.3f} ms"
+                f"{'' if m['gpu_query_valid'] else ' - did not see the compute work'})"
+            )
+        common.log(
+            f"{name:<16} {m['samples_per_s']['median'] / 1e6:7.2f} M samples/s "
+            f"(CPU time: {m['samples_per_cpu_s'] / 1e6:6.2f} M/cpu-s){extra}"
+        )
+    for name, value in ratios.items():
+        common.log(f"{name:<40} {value:6.2f}")
+    for name, t in targets.items():
+        verdict = "met" if t["met"] else "NOT met"
+        common.log(f"target {name}: {t['target']}, got {t['value']:.2f} -> {verdict}")
+    for name, why in skipped.items():
+        common.log(f"skipped {name}: {why}")
+    common.log(f"wrote {json_path} and {plot_path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

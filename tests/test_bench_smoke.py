@@ -1,0 +1,92 @@
+"""The noise benchmark runs in --quick mode and writes the documented JSON (speed not checked)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _env() -> dict[str, str]:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
+    env["MPLBACKEND"] = "Agg"
+    return env
+
+
+def test_bench_noise_quick_writes_json_and_plot(tmp_path: Path) -> None:
+    res = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "bench_noise.py"),
+            "--quick",
+            "--out",
+            str(tmp_path),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=_env(),
+    )
+    assert res.returncode == 0, res.stderr + res.stdout
+    data = json.loads((tmp_path / "noise.json").read_text())
+    assert (tmp_path / "noise.png").stat().st_size > 1000
+
+    assert data["benchmark"] == "noise" and data["quick"] is True
+    assert data["points"] == 100_000 and data["octaves"] == 5
+    machine = data["machine"]
+    for key in ("cpu_model", "cores", "gl_renderer", "commit", "date", "python", "numpy"):
+        assert key in machine
+    assert machine["cores"] >= 1 and len(machine["commit"]) >= 7
+
+    methods = data["methods"]
+    assert {"cpp_1_thread", "cpp_2_threads"} <= set(methods)
+    for m in methods.values():
+        for stat in ("median", "min", "max", "iqr", "n"):
+            assert stat in m["wall_s"]
+        assert m["wall_s"]["n"] == data["repeats"]
+        assert m["wall_s"]["min"] <= m["wall_s"]["median"] <= m["wall_s"]["max"]
+        assert m["samples_per_s"]["median"] > 0
+    if machine["gl_renderer"]:
+        for key in ("glsl_texture", "glsl_exact"):
+            assert key in methods
+            assert "gpu_query_s" in methods[key] and "dispatch_wall_s" in methods[key]
+            assert methods[key]["renderer"] == machine["gl_renderer"]
+    else:
+        assert "glsl" in data["skipped"]
+    if "pyfastnoiselite" in methods:
+        assert "cpp_1_thread_over_fastnoise" in data["ratios"]
+        assert data["targets"]["cpp_per_thread_vs_fastnoise"]["met"] in (True, False)
+    assert data["ratios"]["cpp_2_threads_over_1"] > 0
+    assert "target" in res.stdout and "noise.json" in res.stdout
+
+
+def test_run_all_passes_quick_and_out_through(tmp_path: Path) -> None:
+    res = subprocess.run(
+        [
+            sys.executable,
+            str(ROOT / "benchmarks" / "run_all.py"),
+            "--quick",
+            "--out",
+            str(tmp_path),
+            "noise",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=_env(),
+    )
+    assert res.returncode == 0, res.stderr + res.stdout
+    assert json.loads((tmp_path / "noise.json").read_text())["quick"] is True
+    bad = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "run_all.py"), "no_such_bench"],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        env=_env(),
+    )
+    assert bad.returncode == 2 and "no benchmark matches" in bad.stderr

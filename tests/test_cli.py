@@ -1,0 +1,98 @@
+"""The `cumuli` command, run as a subprocess the way a user runs it."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cumuli as cu
+from cumuli import cli
+
+
+def _env() -> dict[str, str]:
+    # The child sees exactly this interpreter's import path (in-tree PYTHONPATH=python runs and
+    # editable installs alike).
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
+    return env
+
+
+def run(*args: str, cwd: Path | None = None) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "cumuli", *args],
+        capture_output=True,
+        text=True,
+        timeout=120,
+        env=_env(),
+        cwd=cwd,
+    )
+
+
+def test_info_prints_versions_renderer_and_threads() -> None:
+    res = run("info")
+    assert res.returncode == 0, res.stderr
+    out = res.stdout
+    for key in ("cumuli", "numpy", "moderngl", "OpenImageIO", "GL renderer", "threads"):
+        assert key in out
+    assert cu.__version__ in out and np.__version__ in out
+
+
+def test_info_json() -> None:
+    res = run("info", "--json")
+    assert res.returncode == 0, res.stderr
+    info = json.loads(res.stdout)
+    assert info["cumuli"] == cu.__version__
+    assert isinstance(info["threads"], int) and info["threads"] >= 1
+    if info["gl_available"]:
+        assert info["gl_renderer"]
+    else:
+        assert info["gl_unavailable_reason"]
+
+
+def test_demo_writes_the_noise_image(tmp_path: Path) -> None:
+    res = run(
+        "demo", "--noise", "-o", str(tmp_path / "demo.png"), "--width", "96", "--height", "40"
+    )
+    assert res.returncode == 0, res.stderr
+    img = cu.read_image(tmp_path / "demo.png")
+    assert img.shape == (40, 96, 4)
+    left, right = img[..., :48, 0], img[..., 48:, 0]
+    # Left: raw lattice (wide spread); right: fBm (narrower), as in the paper's Figs. 2 and 3.
+    assert left.std() > 2 * right.std() > 0
+    np.testing.assert_array_equal(img[..., 3], 1.0)
+
+
+def test_demo_image_matches_the_function_it_calls(tmp_path: Path) -> None:
+    path = tmp_path / "demo.exr"
+    args = ["demo", "--noise", "-o", str(path), "--width", "32", "--height", "16", "--seed", "3"]
+    assert cli.main(args) == 0
+    np.testing.assert_array_equal(cu.read_image(path), cli._demo_noise(32, 16, 3))
+
+
+@pytest.mark.parametrize(
+    ("args", "code", "message"),
+    [
+        (["demo", "-o", "x.png", "--width", "abc"], 2, "--width"),
+        (["demo", "-o", "x.png", "--height", "0"], 2, "--height"),
+        (["demo", "-o", "x.png", "--seed", "-4"], 2, "--seed"),
+        (["demo"], 2, "-o"),
+        (["frobnicate"], 2, "invalid choice"),
+        ([], 2, "required"),
+        (["demo", "-o", "x.jpg"], 1, "extension"),
+        (["demo", "-o", "no/such/folder/x.png"], 1, "does not exist"),
+    ],
+)
+def test_bad_arguments_give_a_clear_error(
+    tmp_path: Path, args: list[str], code: int, message: str
+) -> None:
+    res = run(*args, cwd=tmp_path)
+    assert res.returncode == code
+    assert message in res.stderr
+    assert "Traceback" not in res.stderr + res.stdout
+    assert list(tmp_path.iterdir()) == []
