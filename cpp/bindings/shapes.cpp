@@ -9,9 +9,12 @@
 #include <pybind11/stl.h>
 
 #include "common.hpp"
+#include "cumuli/cloud.hpp"
 #include "cumuli/gaussian.hpp"
 #include "cumuli/lsystem.hpp"
 #include "cumuli/mesh_ellipsoids.hpp"
+#include "cumuli/noise.hpp"
+#include "cumuli/parallel.hpp"
 
 namespace cumuli::bind {
 
@@ -195,6 +198,57 @@ void bind_shapes(py::module_& m) {
       py::arg("move_symbols"), py::arg("start"), py::arg("heading"), py::arg("up"),
       py::arg("seed"), py::arg("max_spheres"),
       "Walk an L-system string with the 3D turtle: returns (centres (N,3), radii (N,), stats).");
+
+  m.def(
+      "cloud_density",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+         const std::string& model, float kappa, float phi, const FloatArray& points,
+         const Noise* noise, float constant, int octaves, float gain, float lacunarity,
+         float frequency, int threads) {
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+        require_points(points, "points");
+        DensitySource src;
+        src.noise = noise;
+        src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+        src.fbm.validate();
+        src.constant = constant;
+        if (constant < 0.0f && noise == nullptr)
+          throw py::value_error("give a noise or a constant density >= 0");
+        const std::size_t n = static_cast<std::size_t>(points.shape(0));
+        auto rho = new_array({static_cast<py::ssize_t>(n)});
+        auto gamma = new_array({static_cast<py::ssize_t>(n)});
+        const float* p = points.data();
+        float* r = rho.mutable_data();
+        float* g = gamma.mutable_data();
+        {
+          py::gil_scoped_release release;
+          parallel_for(n, threads, [&](std::size_t i) {
+            const glm::vec3 x(p[3 * i], p[3 * i + 1], p[3 * i + 2]);
+            // Pseudo-spheroids: attribute the sample to the primitive whose surface it is
+            // deepest inside (smallest |q|), as a ray marching that primitive would see it.
+            int j = 0;
+            if (cloud.density.model == DensityModel::Spheroid) {
+              float best = INFINITY;
+              for (std::size_t k = 0; k < cloud.primitives.size(); ++k) {
+                const float q = cloud.primitives[k].normalised_distance(x);
+                if (q < best) {
+                  best = q;
+                  j = static_cast<int>(k);
+                }
+              }
+            }
+            const DensitySample s = cloud_density(cloud, j, x, src);
+            r[i] = s.rho;
+            g[i] = s.gamma;
+          });
+        }
+        return py::make_tuple(rho, gamma);
+      },
+      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
+      py::arg("kappa"), py::arg("phi"), py::arg("points"), py::arg("noise"), py::arg("constant"),
+      py::arg("octaves") = 5, py::arg("gain") = 0.5f, py::arg("lacunarity") = 2.0f,
+      py::arg("frequency") = 1.0f, py::arg("threads") = 0,
+      "Density (rho, gamma) of a cloud at points (eq. 2 or eqs. 19-21).");
 
   m.def(
       "ellipsoids_from_mesh",

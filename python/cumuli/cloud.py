@@ -120,6 +120,50 @@ class Cloud:
         """The arguments the C++ core takes for a cloud."""
         return (self.centres, self.radii, self.rotations, self.model, self.kappa, self.phi)
 
+    def density(
+        self,
+        points: Any,
+        noise: Any = None,
+        constant: float | None = None,
+        octaves: int = 5,
+        gain: float = 0.5,
+        lacunarity: float = 2.0,
+        frequency: float = 1.0,
+        threads: int = 0,
+    ) -> tuple[np.ndarray, np.ndarray]:
+        """The core's density at ``(N, 3)`` points: ``(rho, gamma)``, float32 ``(N,)`` each.
+
+        ``model="spheroid"``: eq. (2) for the primitive the point is deepest inside (smallest
+        normalised distance); ``gamma`` is eq. (2)'s γ. ``model="metaball"``: eqs. (19)–(21),
+        ``rho = fbm · r̄² · φ`` where ``Σ 1/|q_i|² ≥ 1`` (``Σ r_i²/|p − c_i|²`` for spheres), else 0;
+        ``gamma`` = 1. The noise is a `cumuli.Noise` (fBm with the given parameters) or, for
+        analytic checks, a ``constant`` value in place of fBm.
+        """
+        from cumuli import _core
+
+        pts = check.points3(points, "points")
+        if (noise is None) == (constant is None):
+            raise ValueError("give exactly one of noise or constant")
+        core_noise = None
+        const = -1.0
+        if noise is not None:
+            core_noise = getattr(noise, "_core", None)
+            if core_noise is None:
+                raise TypeError(f"noise must be a cumuli.Noise, got {type(noise).__name__}")
+        else:
+            const = check.real(constant, "constant", 0.0)
+        return _core.cloud_density(
+            *self.core_args(),
+            pts,
+            core_noise,
+            const,
+            check.integer(octaves, "octaves", 1, 16),
+            check.real(gain, "gain", 0.0, lo_open=True),
+            check.real(lacunarity, "lacunarity", 0.0, lo_open=True),
+            check.real(frequency, "frequency", 0.0, lo_open=True),
+            check.threads(threads),
+        )
+
     # --- transforms (new clouds; the light grid is dropped) --------------------------------
     def _derived(self, transform: dict[str, Any], **changes: Any) -> Cloud:
         params = json.loads(json.dumps(self.params, default=_json_default))
@@ -242,6 +286,7 @@ class Cloud:
             "light_box": None
             if self.light_box is None
             else [list(map(float, self.light_box[0])), list(map(float, self.light_box[1]))],
+            "light_sun": None if self.light_sun is None else list(map(float, self.light_sun)),
         }
 
     def __repr__(self) -> str:
@@ -339,6 +384,9 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
                 check.vec3(light_box[0], "light_box"),
                 check.vec3(light_box[1], "light_box"),
             )
+        light_sun = meta.get("light_sun")
+        if light_sun is not None:
+            light_sun = check.direction(light_sun, "light_sun")
         return Cloud(
             arrays["centres"],
             arrays["radii"],
@@ -350,6 +398,7 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             params=dict(meta.get("params") or {}),
             light=light,
             light_box=light_box,
+            light_sun=light_sun,
         )
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise ValueError(f"{path.name}: invalid cloud data: {exc}") from None
