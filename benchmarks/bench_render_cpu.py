@@ -1,149 +1,146 @@
-"""Benchmark of the CPU reference marcher (``backend="cpu"``), with the GL marcher as reference.
+"""The CPU reference marcher (``backend="cpu"``): thread scaling and cloud shapes, against GL.
 
-Renders the default Gaussian cumulus (and the metaball cumulus) with the C++ marcher on one
-thread and on every core, with ``march="paper"`` and ``"union"``, and, where a headless GL
-context exists, with the GLSL marcher in the same run, so that the GL/CPU ratio compares
-like with like. Medians of repeats; JSON and a PNG plot under ``benchmarks/out/``.
-
-    python benchmarks/bench_render_cpu.py [--quick] [--out benchmarks/out]
+``bench_render.py`` times the default cumulus on both backends at two image sizes; this script
+looks at the C++ marcher itself: one thread against every core (the image is the same bit for
+bit), ``march="paper"`` against ``"union"``, on the four cloud kinds of the paper (Gaussian
+cumulus, metaball cumulus, L-system castellanus, mesh → ellipsoids), with the GLSL marcher of the
+same run (GL timer queries of the draws, and wall time) for the CPU/GL ratios. Light grids are
+computed once, outside the timings. Writes ``render_cpu.json`` and ``render_cpu.png`` under
+``benchmarks/out/`` (or ``--out``); ``--quick`` renders 96×72 with fewer repeats.
 """
 
 from __future__ import annotations
 
-import argparse
-import json
-import os
-import platform
-import statistics
 import sys
-import time
 from pathlib import Path
 from typing import Any
 
-import numpy as np
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-import cumuli as cu
+import _common as common  # noqa: E402
 
-
-def timed(fn: Any, repeats: int) -> tuple[float, list[float]]:
-    """Median wall time of ``fn()`` over ``repeats`` runs (after one warm-up)."""
-    fn()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        fn()
-        times.append(time.perf_counter() - t0)
-    return statistics.median(times), times
+import cumuli as cu  # noqa: E402
 
 
-def gl_renderer() -> tuple[Any, str]:
-    """A GL Renderer and its renderer string, or (None, the reason there is none)."""
-    try:
-        from cumuli.gl import GLUnavailableError
-        from cumuli.renderer import Renderer
-    except ImportError as exc:
-        return None, f"no GL renderer in this build ({exc})"
-    try:
-        r = Renderer()
-    except GLUnavailableError as exc:
-        return None, str(exc)
-    return r, r.renderer_string
-
-
-def main(argv: list[str] | None = None) -> int:
-    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--quick", action="store_true", help="small image, few repeats")
-    ap.add_argument("--out", default=str(Path(__file__).parent / "out"))
-    args = ap.parse_args(argv)
-    width, height, repeats = (96, 72, 3) if args.quick else (320, 240, 5)
-    cores = os.cpu_count() or 1
-
-    scenes = {
+def scenes() -> dict[str, cu.Scene]:
+    """The paper's four cloud kinds, each alone in the default scene settings."""
+    rabbit = cu.mesh_cloud(cu.meshes.bunny_like(1), scale=1.2)
+    return {
         "gaussian_cumulus": cu.Scene(clouds=[cu.gaussian_cumulus(seed=1)]),
         "metaball_cumulus": cu.Scene(clouds=[cu.metaball_cumulus(seed=2)]),
         "lsystem_cloud": cu.Scene(clouds=[cu.lsystem_cloud(iterations=7, seed=2)]),
+        # The paper marches its mesh clouds with a fixed step smaller than the ellipsoids.
+        "mesh_cloud": cu.Scene(
+            clouds=[rabbit], settings=cu.RenderSettings(fixed_step=0.03, absorption=3.0)
+        ),
     }
-    renderer, gl_name = gl_renderer()
-    results: list[dict[str, Any]] = []
-    for name, scene in scenes.items():
-        cu.prepare_light(scene)  # once, outside the timings: both marchers reuse the grids
-        camera = scene.default_camera()
-        for march in ("paper", "union"):
-            sc = scene.replace(settings=scene.settings.replace(march=march))
-            row: dict[str, Any] = {"scene": name, "march": march, "primitives": scene.clouds[0].n}
-            for threads in sorted({1, cores}):
-                med, _ = timed(
-                    lambda sc=sc, t=threads, c=camera: cu.render_cpu(sc, c, width, height, t),
-                    repeats,
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = common.parse_args(__doc__.splitlines()[0], argv)
+    width, height = (96, 72) if args.quick else (320, 240)
+    repeats = 3 if args.quick else 5
+    machine = common.machine_info()
+    cores = machine["cores"]
+    threads = sorted({1, cores})
+    common.log(f"GL renderer: {machine['gl_renderer']}; {cores} cores; {width}x{height}")
+
+    renderer = cu.Renderer() if machine["gl_renderer"] else None
+    results: dict[str, dict[str, Any]] = {}
+    try:
+        for name, base in scenes().items():
+            cu.prepare_light(base)  # once; every march mode and backend reuses the grids
+            camera = base.default_camera()
+            for march in ("paper", "union"):
+                scene = base.replace(settings=base.settings.replace(march=march))
+                key = f"{name}/{march}"
+                entry: dict[str, Any] = {"primitives": scene.clouds[0].n}
+                for t in threads:
+                    wall, _ = common.time_repeats(
+                        lambda s=scene, c=camera, t=t: cu.render_cpu(s, c, width, height, t),
+                        repeats,
+                    )
+                    entry[f"cpu_{t}t_wall_s"] = common.spread(wall)
+                if renderer is not None:
+                    gpu: list[float] = []
+
+                    def draw(s: cu.Scene = scene, c: cu.Camera = camera, gpu=gpu) -> None:
+                        renderer.render(s, c, width, height)
+                        if renderer.last_gpu_ns is not None:
+                            gpu.append(renderer.last_gpu_ns * 1e-9)
+
+                    wall, _ = common.time_repeats(draw, repeats)
+                    entry["gl_wall_s"] = common.spread(wall)
+                    if len(gpu) > 1:
+                        entry["gl_time_s"] = common.spread(gpu[1:])  # gpu[0] is the warm-up
+                results[key] = entry
+                common.log(
+                    f"{key}: "
+                    + ", ".join(
+                        f"{k} {v['median'] * 1e3:.1f} ms"
+                        for k, v in entry.items()
+                        if isinstance(v, dict)
+                    )
                 )
-                row[f"cpu_{threads}t_s"] = med
-            row["cpu_all_s"] = row[f"cpu_{cores}t_s"]
-            row["thread_speedup"] = row["cpu_1t_s"] / row["cpu_all_s"]
-            if renderer is not None:
-                gpu: list[float] = []
+    finally:
+        if renderer is not None:
+            renderer.close()
 
-                def gl(sc: cu.Scene = sc, c: cu.Camera = camera, gpu: list[float] = gpu) -> None:
-                    renderer.render(sc, c, width, height)
-                    if renderer.last_gpu_ns is not None:
-                        gpu.append(renderer.last_gpu_ns * 1e-9)
-
-                med, _ = timed(gl, repeats)
-                row["gl_wall_s"] = med
-                row["gl_gpu_s"] = statistics.median(gpu[1:]) if len(gpu) > 1 else None
-                row["cpu_over_gl_wall"] = row["cpu_all_s"] / med
-            results.append(row)
-            print(json.dumps(row), flush=True)
-
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    report = {
+    ratios: dict[str, dict[str, float]] = {}
+    for key, e in results.items():
+        cpu_all = e[f"cpu_{cores}t_wall_s"]["median"]
+        r = {"cpu_1t_over_all": e["cpu_1t_wall_s"]["median"] / cpu_all}
+        if "gl_wall_s" in e:
+            r["cpu_all_over_gl_wall"] = cpu_all / e["gl_wall_s"]["median"]
+        if "gl_time_s" in e:
+            r["cpu_all_over_gl_time"] = cpu_all / e["gl_time_s"]["median"]
+        ratios[key] = r
+    for name in {k.split("/")[0] for k in results}:
+        paper, union = results[f"{name}/paper"], results[f"{name}/union"]
+        ratios[f"{name}/union_over_paper_cpu"] = {
+            "value": union[f"cpu_{cores}t_wall_s"]["median"]
+            / paper[f"cpu_{cores}t_wall_s"]["median"]
+        }
+    data = {
         "benchmark": "render_cpu",
         "quick": args.quick,
         "image": [width, height],
         "repeats": repeats,
-        "machine": {
-            "platform": platform.platform(),
-            "processor": platform.processor() or platform.machine(),
-            "cpu_count": cores,
-            "python": sys.version.split()[0],
-        },
-        "gl_renderer": gl_name,
+        "threads": threads,
+        "machine": machine,
         "timing": (
-            "medians; cpu_*: wall clock of cumuli.render_cpu (light grids precomputed); "
-            "gl_wall_s: Renderer.render wall clock (upload, draw, read-back); "
-            "gl_gpu_s: GL timer queries of the draws"
+            "cpu_*: wall clock of cumuli.render_cpu; gl_wall_s: Renderer.render wall clock "
+            "(upload, draws, read-back); gl_time_s: GL timer queries of the draws"
         ),
-        "results": results,
+        "methods": results,
+        "ratios": ratios,
     }
-    tmp = out / ".bench_render_cpu.json.tmp"
-    tmp.write_text(json.dumps(report, indent=1))
-    os.replace(tmp, out / "bench_render_cpu.json")
-    try:
-        import matplotlib
+    path = common.write_json(args.out / "render_cpu.json", data)
+    common.log(f"wrote {path}")
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-
-        labels = [f"{r['scene']}\n{r['march']}" for r in results]
-        x = np.arange(len(results))
-        keys = [k for k in ("cpu_1t_s", "cpu_all_s", "gl_wall_s", "gl_gpu_s") if results[0].get(k)]
-        fig, ax = plt.subplots(figsize=(8, 4))
-        for i, k in enumerate(keys):
-            ax.bar(x + (i - 1.5) * 0.2, [r[k] * 1e3 for r in results], 0.2, label=k)
-        ax.set_xticks(x, labels)
-        ax.set_ylabel(f"ms per {width}x{height} image (median)")
-        ax.set_yscale("log")
-        ax.legend()
-        ax.set_title(f"CPU marcher vs GL ({gl_name[:40]})")
-        fig.tight_layout()
-        fig.savefig(out / "bench_render_cpu.png", dpi=100)
-    except ImportError:
-        pass
-    if renderer is not None:
-        renderer.close()
-    print(f"wrote {out / 'bench_render_cpu.json'}")
+    plt = common.pyplot()
+    fig, ax = plt.subplots(figsize=(9, 4))
+    series = [f"cpu_{t}t_wall_s" for t in threads] + ["gl_time_s", "gl_wall_s"]
+    series = [s for s in series if all(s in e for e in results.values())]
+    keys = list(results)
+    bar = 0.8 / max(1, len(series))
+    for k, s in enumerate(series):
+        ax.bar(
+            [i + (k - (len(series) - 1) / 2) * bar for i in range(len(keys))],
+            [results[key][s]["median"] * 1e3 for key in keys],
+            bar,
+            label=s,
+        )
+    ax.set_xticks(range(len(keys)), [k.replace("/", "\n") for k in keys], fontsize=7)
+    ax.set_yscale("log")
+    ax.set_ylabel(f"ms per {width}x{height} frame (median)")
+    ax.set_title(f"CPU reference marcher vs GL\n{machine['gl_renderer']}", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(args.out / "render_cpu.png", dpi=100)
+    plt.close(fig)
     return 0
 
 
 if __name__ == "__main__":
-    raise SystemExit(main())
+    sys.exit(main())

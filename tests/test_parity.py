@@ -12,13 +12,18 @@ pixels (6 of the 6912 here). Why the exception: eq. (2) is a hard gate, a sample
 the last-bit differences above decide it differently on the two sides, and that one sample's whole
 extinction appears or vanishes: with the default absorption 1.2 and a LOD step Δ = 2·Δ_ref, one
 sample of ρ ≈ 0.33 has Δτ ≈ 0.45, enough to move alpha by 0.1. Measured on Mesa llvmpipe (LLVM
-15.0.6, 256 bits) in ``test_gl_matches_cpu_with_two_clouds_close_up``: pixel (10, 54) of the
-union/paper image, sample at t = 18.877 in primitive 26 with ρ = 0.3268603, γ = 0.3268611
-(ρ − γ = −8e-7): the C++ counts it as cloud, llvmpipe does not (alpha 0.909 vs 0.796); every other
-pixel agrees to 3e-5. The same gate (and |q| ≤ 1, and a ray parameter crossing an interval end,
-which adds or drops one sample) can flip on any GPU, so the exception applies to every scene.
-Other measurements on llvmpipe, 96×72: mean about 2e-7 and max about 5e-5 per channel for the
-Gaussian cumulus, 1e-7 / 5e-6 for the metaball cumulus.
+15.0.6, 256 bits) in ``test_gl_matches_cpu_with_two_clouds_close_up`` (fBm frequency 0.6):
+pixel (10, 54), sample at t = 18.877 in primitive 26 of the cumulus with ρ = 0.3268603,
+γ = 0.3268611 (ρ − γ = −8e-7): the C++ counts it as cloud, llvmpipe does not (alpha 0.909 vs
+0.796); every other pixel agrees to 1e-5. The same gate (and |q| ≤ 1, and a ray parameter
+crossing an interval end, which adds or drops one sample) can flip on any GPU, so the exception
+applies to every scene.
+The mesh cloud shows the same effect at lower weight: one pixel in each mode, (30, 37) in
+"paper" (ρ − γ = +3.6e-6 at t = 5.334 in ellipsoid 113; |Δrgb| = 3.4e-3, the ray was already nearly
+opaque) and (52, 41) in "union" (ρ − γ = +3.5e-6 at t = 5.472; |Δalpha| = 1.2e-2).
+Measured on llvmpipe, 96×72, mean / max |GL − CPU| over RGBA (exact_noise=True):
+gaussian_cumulus 2.6e-7 / 3.8e-5, metaball_cumulus 9.2e-8 / 4.8e-6, lsystem_cloud 4.3e-7 / 9.1e-5,
+mesh_cloud 1.8e-6 / 1.2e-2 (the gate pixel above; 1.5e-5 without it).
 """
 
 from __future__ import annotations
@@ -51,7 +56,12 @@ def _scenes() -> dict[str, cu.Scene]:
     metaball = cu.metaball_cumulus(seed=2)
     # The paper's castellanus grammar (X → X+Y, Y → X&Y), 2⁶ = 64 spheres.
     castle = cu.lsystem_cloud(iterations=6, angle=(10.0, 30.0), seed=2)
+    # One ellipsoid per face of a 560-triangle rabbit (rotated ellipsoids), with a fixed step
+    # smaller than the ellipsoids as the paper uses for its mesh tests.
+    rabbit = cu.mesh_cloud(cu.meshes.bunny_like(1), scale=1.2)
+    mesh_settings = cu.RenderSettings(fixed_step=0.03, absorption=3.0, frequency=1.0)
     scenes = {
+        "mesh_cloud": cu.Scene(clouds=[rabbit], settings=mesh_settings),
         "gaussian_cumulus": cu.Scene(clouds=[cumulus]),
         "metaball_cumulus": cu.Scene(clouds=[metaball]),
         "lsystem_cloud": cu.Scene(clouds=[castle]),
@@ -95,7 +105,9 @@ def test_gl_matches_cpu_with_two_clouds_close_up(renderer):
     """Two clouds whose boxes overlap (front-to-back order), LOD step, camera near both."""
     a = cu.gaussian_cumulus(seed=3, centre=(0.0, 0.0, 0.0))
     b = cu.metaball_cumulus(seed=4, centre=(4.0, 1.0, 6.0))
-    settings = cu.RenderSettings(exact_noise=True, lod_a=0.3, lod_delta=0.02, march="union")
+    settings = cu.RenderSettings(
+        exact_noise=True, lod_a=0.3, lod_delta=0.02, march="union", frequency=0.6
+    )
     scene = cu.Scene(clouds=[a, b], settings=settings, sun=cu.Sun(direction=(-0.4, 0.6, 0.5)))
     camera = cu.Camera(position=(-2.0, 3.0, -18.0), target=(2.0, 2.0, 3.0), fov=60)
     diff = compare(renderer, scene, camera)

@@ -676,3 +676,26 @@ def test_rotation_columns_are_the_ellipsoid_axes():
     wrong = {**rotated, "rotations": np.transpose(rotated["rotations"], (0, 2, 1)).copy()}
     c = _core.render_cpu(**{**args, "clouds": [wrong]})
     assert np.abs(c - a)[..., 3].max() > 0.2
+
+
+def test_axis_aligned_rays_with_zero_direction_components():
+    # Odd image, camera on the z axis: the centre ray is exactly (0, 0, 1), so the slab test sees
+    # 1/0 = inf (and 0·inf where the ray lies in a slab plane). A uniform light grid and constant
+    # density make the image mirror-symmetric.
+    cloud = cloud_dict([[0.0, 0.0, 0.0]], [1.0], light=np.full((3, 3, 3), 0.7, np.float32))
+    cloud["light_lo"], cloud["light_hi"] = (-1.0, -1.0, -1.0), (1.0, 1.0, 1.0)
+    args = make_args(
+        [cloud],
+        width=9,
+        height=7,
+        camera_position=(0.0, 0.0, -6.0),
+        camera_target=(0.0, 0.0, 0.0),
+        sun_direction=(0.0, 1.0, 0.0),
+    )
+    img = _core.render_cpu(**args)
+    assert np.isfinite(img).all()
+    assert img[3, 4, 3] > 0.5  # the centre ray goes through the middle of the sphere
+    np.testing.assert_allclose(img[..., 3], img[:, ::-1, 3], atol=1e-6)
+    # The middle row (d.y = 0) and column (d.x = 0) cross the sphere like their neighbours.
+    assert (img[2:5, 3:6, 3] > 0.5).all()
+    assert (img[[0, 1, 5, 6], :, 3] == 0).all() and (img[:, [0, 1, 2, 6, 7, 8], 3] == 0).all()

@@ -281,22 +281,30 @@ class RayMarcher {
   }
 
   // The covering candidate (t_in ≤ s ≤ t_out) whose primitive gives the smallest |q| at s; the
-  // first in candidate order wins ties; candidate k when none covers s.
+  // first in candidate order wins ties; candidate k when none covers s. |q| is computed only once
+  // a second candidate covers s (the common case of one covering primitive costs nothing).
   static int owner(const CloudShape& shape, const Candidate* cand, int n, int k, float s,
                    glm::vec3 origin, glm::vec3 dir) {
     const glm::vec3 p = origin + s * dir;
-    int best = cand[k].primitive;
+    auto q_of = [&](int m) {
+      return shape.primitives[static_cast<std::size_t>(cand[m].primitive)].normalised_distance(p);
+    };
+    int best = -1;
     float best_q = INFINITY;
     for (int m = 0; m < n && cand[m].t_in <= s; ++m) {
       if (s > cand[m].t_out) continue;
-      const float q =
-          shape.primitives[static_cast<std::size_t>(cand[m].primitive)].normalised_distance(p);
+      if (best < 0) {
+        best = m;
+        continue;
+      }
+      if (best_q == INFINITY) best_q = q_of(best);
+      const float q = q_of(m);
       if (q < best_q) {
         best_q = q;
-        best = cand[m].primitive;
+        best = m;
       }
     }
-    return best;
+    return cand[best < 0 ? k : best].primitive;
   }
 
   const MarchScene& scene_;
