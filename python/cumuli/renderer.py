@@ -217,8 +217,8 @@ class Renderer:
             self._objects.append(self.program)
             self.vao = ctx.vertex_array(self.program, [])
             self._objects.append(self.vao)
-            self._query = ctx.query(time=True)
-            self._objects.append(self._query)
+            # moderngl cannot release a query on its own: share the context's one.
+            self._query = self.gl.timer_query()
         except Exception:
             self.close()
             raise
