@@ -183,6 +183,10 @@ def test_moving_the_sun_recomputes_the_light_grid(renderer: Renderer) -> None:
     b = renderer.render(moved, cam, 48, 36)
     assert not np.array_equal(cloud.light, grid_a)
     assert np.abs(a - b).mean() > 1e-3
+    # Changing how the grid is made (here its resolution) also recomputes it.
+    finer = scene.replace(settings=scene.settings.replace(light_resolution=12))
+    renderer.render(finer, cam, 48, 36)
+    assert cloud.light.shape == (12, 12, 12)
     # Rendering the first scene again restores the first grid and image.
     again = renderer.render(scene, cam, 48, 36)
     np.testing.assert_array_equal(cloud.light, grid_a)

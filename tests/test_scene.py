@@ -104,6 +104,8 @@ def test_sky_presets_and_reference() -> None:
         ({"exact_noise": "yes"}, TypeError, "settings.exact_noise"),
         ({"max_steps": 2.5}, TypeError, "settings.max_steps"),
         ({"frequency": math.nan}, ValueError, "settings.frequency"),
+        ({"light_method": "fast"}, ValueError, "settings.light_method"),
+        ({"light_step": 0}, ValueError, "settings.light_step"),
     ],
 )
 def test_settings_reject_bad_input(kwargs: dict, exc: type, message: str) -> None:

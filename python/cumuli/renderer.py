@@ -43,6 +43,9 @@ def _light_key(cloud: Cloud, scene: Scene) -> tuple[Any, ...]:
         scene.noise.seed,
         scene.noise.size,
         s.light_resolution,
+        s.light_method,
+        s.light_step,
+        s.light_extinction,
         s.octaves,
         s.gain,
         s.lacunarity,
@@ -68,10 +71,10 @@ def _check_light(cloud: Cloud, index: int) -> None:
 def prepare_light(scene: Scene) -> None:
     """Make sure every cloud of ``scene`` has a current light grid for the scene's sun and noise.
 
-    A cloud gets a grid from :func:`cumuli.light_grid` (NDT, ``settings.light_resolution``, the
-    settings' fBm and κ) when it has none; when its grid was made for another sun direction
+    A cloud gets a grid from :func:`cumuli.light_grid` (``settings.light_*``, the settings' fBm
+    and κ) when it has none; when its grid was made for another sun direction
     (``cloud.light_sun``, recorded by ``light_grid``); or when this function made it for other
-    noise / fBm / κ / resolution. A grid set by hand without ``light_sun`` is trusted as it is.
+    noise / fBm / κ / light settings. A grid set by hand without ``light_sun`` is trusted as it is.
     """
     for k, cloud in enumerate(scene.clouds):
         if cloud.light is None or _stale(cloud, scene):
@@ -106,6 +109,9 @@ def _compute_light(cloud: Cloud, scene: Scene) -> None:
         scene.sun,
         scene.noise,
         resolution=s.light_resolution,
+        method=s.light_method,
+        step=s.light_step,
+        extinction=s.light_extinction,
         octaves=s.octaves,
         gain=s.gain,
         lacunarity=s.lacunarity,

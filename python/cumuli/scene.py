@@ -34,6 +34,7 @@ MAX_CANDIDATES = 128
 MAX_STEPS = 1 << 16
 MAX_CLOUDS = 64
 MARCH_MODES = ("paper", "union")
+LIGHT_METHODS = ("ndt", "naive")
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
@@ -210,6 +211,9 @@ class RenderSettings:
         fBm of eq. (1): n, w, s and f (lattice texels per world unit).
     light_resolution:
         Edge of the light grid computed on demand for clouds without one.
+    light_method, light_step, light_extinction:
+        How that grid is computed (:func:`cumuli.light_grid`): ``"ndt"`` (Algorithm 2) or
+        ``"naive"``, its march step and the extinction ``A`` of eq. (3) per world unit.
     """
 
     kappa: float | None = None
@@ -230,6 +234,9 @@ class RenderSettings:
     lacunarity: float = 2.0
     frequency: float = 0.3
     light_resolution: int = 20
+    light_method: str = "ndt"
+    light_step: float = 0.1
+    light_extinction: float = 1.0
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -271,6 +278,16 @@ class RenderSettings:
             self,
             "light_resolution",
             check.integer(self.light_resolution, "settings.light_resolution", 2, 256),
+        )
+        if self.light_method not in LIGHT_METHODS:
+            raise ValueError(
+                f"settings.light_method must be one of {LIGHT_METHODS}, got {self.light_method!r}"
+            )
+        s(self, "light_step", check.real(self.light_step, "settings.light_step", 1e-4))
+        s(
+            self,
+            "light_extinction",
+            check.real(self.light_extinction, "settings.light_extinction", 0.0),
         )
 
     def step_for(self, distance: float) -> float:
