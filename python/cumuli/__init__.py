@@ -10,9 +10,12 @@ from __future__ import annotations
 from cumuli import meshes
 from cumuli._version import __version__
 from cumuli.cloud import Cloud, load_cloud, merge
+from cumuli.cpu_render import render_cpu
 from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
+from cumuli.renderer import Renderer, prepare_light, render
+from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
 from cumuli.shapes import (
     ellipsoids_from_mesh,
     gaussian_cumulus,
@@ -25,16 +28,15 @@ from cumuli.shapes import (
 from cumuli.sun import Sun
 
 __all__ = [
+    "Camera",
     "Cloud",
-    "LightStats",
-    "Noise",
-    "Sun",
-    "__version__",
     "ellipsoids_from_mesh",
     "from_srgb8",
     "gaussian_cumulus",
     "light_grid",
+    "LightStats",
     "load_cloud",
+    "load_scene",
     "lsystem_cloud",
     "lsystem_expand",
     "lsystem_length",
@@ -42,8 +44,17 @@ __all__ = [
     "mesh_cloud",
     "meshes",
     "metaball_cumulus",
-    "from_srgb8",
+    "Noise",
+    "prepare_light",
     "read_image",
+    "render",
+    "render_cpu",
+    "Renderer",
+    "RenderSettings",
+    "Scene",
+    "Sky",
+    "Sun",
     "to_srgb8",
     "write_image",
+    "__version__",
 ]
