@@ -154,7 +154,7 @@ def bench_frame(quick: bool, repeats: int, gl_ok: bool) -> dict[str, Any]:
     light = lighting.light(frame)
     lo, hi = np.array(db.box_min), np.array(db.box_max)
     c = (lo + hi) / 2
-    cam = cu.VolumeCamera(tuple(c + np.array([0, 0.2, 0.9]) * (hi - lo).max()), tuple(c), fov=45)
+    cam = cu.Camera(tuple(c + np.array([0, 0.2, 0.9]) * (hi - lo).max()), tuple(c), fov=45)
     out: dict[str, Any] = {"resolution": res, "width": width, "height": height}
     out["blend_density"] = _timed(lambda: cu.blend_volumes(db[2], db[5], 0.5), repeats)
     out["blend_depths"] = _timed(lambda: lighting.optical_depth(frame), repeats)

@@ -3,7 +3,11 @@
 // GLSL twin of cpp/src/volume_march.cpp: same ray, same equal steps, same trilinear lookups
 // (done by hand with texelFetch so the weights are full float, as in C++), same light:
 //   S = albedo·(sun·τ_sun·HG(g, d·sun) + E_sky/4π), colour += T·(1 − e^{−σ_t ρ h})·S, T *= e^{−σ_t ρ h}.
-// u_density: R32F [z][y][x]; u_light: RGBA32F (τ_sun, E_sky RGB).
+// u_density: R32F [z][y][x]; u_light: RGBA32F (τ_sun, E_sky RGB). The sky (background) and the
+// phase function are the render pass's shared pieces.
+
+#include "sky.glsl"
+#include "phase.glsl"
 
 uniform sampler3D u_density;
 uniform sampler3D u_light;
@@ -17,8 +21,6 @@ uniform float u_tan_half_fov;
 uniform vec2 u_resolution;
 uniform vec3 u_sun_dir;
 uniform vec3 u_sun_radiance;
-uniform vec3 u_zenith;
-uniform vec3 u_horizon;
 uniform float u_sigma_t;
 uniform float u_albedo;
 uniform float u_g;
@@ -55,11 +57,6 @@ vec4 trilinear(sampler3D tex, vec3 p) {
   return c0 + f.z * (c1 - c0);
 }
 
-float henyey_greenstein(float g, float cos_theta) {
-  float d = 1.0 + g * g - 2.0 * g * cos_theta;
-  return INV_4PI * (1.0 - g * g) / (d * sqrt(d));
-}
-
 void main() {
   float aspect = u_resolution.x / u_resolution.y;
   float sx = (2.0 * gl_FragCoord.x / u_resolution.x - 1.0) * u_tan_half_fov * aspect;
@@ -81,7 +78,7 @@ void main() {
     float len = t_out - t0;
     int n = clamp(int(ceil(len / u_step)), 1, u_max_steps);
     float h = len / float(n);
-    float phase = henyey_greenstein(u_g, dot(d, u_sun_dir));
+    float phase = hg_phase(u_g, dot(d, u_sun_dir));
     for (int k = 0; k < n && T >= MIN_TRANSMITTANCE; ++k) {
       vec3 x = u_cam_pos + (t0 + (float(k) + 0.5) * h) * d;
       float rho = trilinear(u_density, x).r;
@@ -93,6 +90,5 @@ void main() {
       T *= dtau;
     }
   }
-  vec3 sky = max(vec3(0.0), u_horizon + (u_zenith - u_horizon) * d.y);
-  frag_colour = vec4(colour + T * sky, 1.0 - T);
+  frag_colour = vec4(colour + T * sky(d, u_sun_dir, u_sun_radiance), 1.0 - T);
 }

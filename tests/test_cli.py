@@ -56,7 +56,9 @@ def test_info_json() -> None:
 
 
 def test_demo_writes_the_noise_image(tmp_path: Path) -> None:
-    res = run("demo", "-o", str(tmp_path / "demo.png"), "--width", "96", "--height", "40")
+    res = run(
+        "demo", "--noise", "-o", str(tmp_path / "demo.png"), "--width", "96", "--height", "40"
+    )
     assert res.returncode == 0, res.stderr
     img = cu.read_image(tmp_path / "demo.png")
     assert img.shape == (40, 96, 4)
@@ -68,7 +70,7 @@ def test_demo_writes_the_noise_image(tmp_path: Path) -> None:
 
 def test_demo_image_matches_the_function_it_calls(tmp_path: Path) -> None:
     path = tmp_path / "demo.exr"
-    args = ["demo", "-o", str(path), "--width", "32", "--height", "16", "--seed", "3"]
+    args = ["demo", "--noise", "-o", str(path), "--width", "32", "--height", "16", "--seed", "3"]
     assert cli.main(args) == 0
     np.testing.assert_array_equal(cu.read_image(path), cli._demo_noise(32, 16, 3))
 

@@ -9,9 +9,11 @@ import pytest
 
 import cumuli as cu
 from cumuli.animation import (
+    as_sky,
     point_optical_depth,
     sh_basis,
     sh_optical_depth,
+    sky_args,
     sphere_quadrature,
     sun_optical_depth,
 )
@@ -56,11 +58,9 @@ def test_sphere_quadrature_and_sh_basis_are_orthonormal() -> None:
 
 
 def test_sh_projection_of_a_constant_is_exact() -> None:
-    # A voxel far from any density sees optical depth 0 in every direction; a uniform volume
-    # seen from its centre is not constant, so build the constant from the sky projection: a
-    # uniform sky L(ω) = c projects onto (c·√4π, 0, ...).
+    # A uniform sky L(ω) = c projects onto (c·√4π, 0, ...).
     c = (0.3, 0.5, 0.9)
-    coeffs = cu.animation._core.sky_sh(c, c, 3, 4)
+    coeffs = cu.animation._core.sky_sh(sky_args(as_sky(c)), 3, 4)
     expect = np.zeros((3, 9))
     expect[:, 0] = np.array(c) * math.sqrt(4 * math.pi)
     np.testing.assert_allclose(coeffs, expect, atol=1e-6)
@@ -158,14 +158,17 @@ def test_multiple_scattering_of_uniform_volume_matches_formula() -> None:
 
 def test_empty_volume_sees_the_whole_sky() -> None:
     db = cu.VolumeDatabase(np.zeros((2, 3, 3, 3), np.float32), LO, HI)
-    sky = ((0.2, 0.4, 0.9), (0.6, 0.7, 0.8))
+    sky = cu.Sky(zenith=(0.2, 0.4, 0.9), horizon=(0.6, 0.7, 0.8), sun_disc_intensity=50.0)
     lit = cu.VolumeLighting(db, cu.Sun(), sky=sky, sh_samples=6, ms_points=8)
     light = lit.light(1)
     np.testing.assert_array_equal(light[..., 0], 1.0)
-    # ∫ max(0, h + (z − h)ω_y) dω = 4π·h for this sky (the linear term integrates to zero).
-    np.testing.assert_allclose(
-        light[..., 1:], np.broadcast_to(4 * math.pi * np.array(sky[1]), (3, 3, 3, 3)), rtol=1e-5
-    )
+    # E_sky = ∫ L_sky dω over the same quadrature, the sun disc left out (it is the τ_sun term).
+    dirs, w = sphere_quadrature(6)
+    no_disc = cu.Sky(zenith=sky.zenith, horizon=sky.horizon, sun_disc_intensity=0.0)
+    expect = (w[:, None] * no_disc.colour(dirs, cu.Sun())).sum(axis=0)
+    np.testing.assert_allclose(light[..., 1:], np.broadcast_to(expect, (3, 3, 3, 3)), rtol=1e-5)
+    uniform = cu.VolumeLighting(db, cu.Sun(), sky=(0.5, 0.5, 0.5), sh_samples=6, ms_points=0)
+    np.testing.assert_allclose(uniform.light(0)[..., 1:], 4 * math.pi * 0.5, rtol=1e-5)
 
 
 @pytest.mark.parametrize("method", ["squaring", "fit"])
@@ -258,14 +261,16 @@ def test_precompute_is_thread_count_independent() -> None:
     np.testing.assert_array_equal(one.light(frame, threads=1), two.light(frame, threads=2))
 
 
-def test_sky_given_as_object_pair_or_colour() -> None:
-    from types import SimpleNamespace
-
-    from cumuli.animation import sky_colours
-
+def test_sky_given_as_sky_pair_or_colour() -> None:
     z, h = (0.1, 0.2, 0.3), (0.4, 0.5, 0.6)
-    assert sky_colours(SimpleNamespace(zenith=z, horizon=h)) == (z, h)
-    assert sky_colours((z, h)) == (z, h)
-    assert sky_colours(z) == (z, z)
+    sky = cu.Sky(zenith=z, horizon=h)
+    assert as_sky(sky) is sky
+    assert as_sky(None) == cu.Sky()
+    pair = as_sky((z, h))
+    assert (pair.zenith, pair.horizon) == (z, h)
+    uniform = as_sky(z)
+    assert uniform.zenith == uniform.horizon == uniform.ground == z
     with pytest.raises(ValueError, match="non-negative"):
-        sky_colours((-1, 0, 0))
+        as_sky((-1, 0, 0))
+    with pytest.raises(ValueError, match="sky"):
+        as_sky((1, 2))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -10,13 +11,8 @@ import pytest
 import cumuli as cu
 
 BOX = ((-1.0, -1.0, -1.0), (1.0, 1.0, 1.0))
-CAMERA = cu.VolumeCamera(position=(0.0, 0.0, 6.0), target=(0.0, 0.0, 0.0), fov=30.0)
-SKY = ((0.2, 0.4, 0.9), (0.6, 0.7, 0.8))
-
-
-def _sky(d: np.ndarray) -> np.ndarray:
-    z, h = np.array(SKY[0]), np.array(SKY[1])
-    return np.maximum(0.0, h + (z - h) * d[..., 1:2])
+CAMERA = cu.Camera(position=(0.0, 0.0, 6.0), target=(0.0, 0.0, 0.0), fov=30.0)
+SKY = cu.Sky(zenith=(0.2, 0.4, 0.9), horizon=(0.6, 0.7, 0.8))
 
 
 def test_empty_volume_shows_the_sky() -> None:
@@ -25,6 +21,9 @@ def test_empty_volume_shows_the_sky() -> None:
     img = cu.render_volume(vol, light, BOX, CAMERA, 16, 12, cu.Sun(), SKY)
     assert img.shape == (12, 16, 4) and img.dtype == np.float32
     np.testing.assert_array_equal(img[..., 3], 0.0)
+    # The render pass's sky (cumuli.Sky.colour) along the camera's rays.
+    ref = SKY.colour(CAMERA.ray_directions(16, 12), cu.Sun())
+    np.testing.assert_allclose(img[..., :3], ref, rtol=1e-5, atol=1e-6)
     # Row 0 looks up (+y): a brighter zenith channel on top than at the bottom.
     assert img[0, 8, 2] > img[-1, 8, 2]
 
@@ -48,7 +47,7 @@ def test_uniform_volume_matches_emission_absorption() -> None:
     hg = (1 - g * g) / (4 * math.pi * (1 + g * g - 2 * g * cos) ** 1.5)
     s = 0.9 * (np.array(sun.radiance) * tau_sun * hg + np.array(e_sky) / (4 * math.pi))
     t = math.exp(-sigma_t * rho * 2.0)
-    expect = (1 - t) * s + t * _sky(d)
+    expect = (1 - t) * s + t * SKY.colour(d.astype(np.float32), sun)
     np.testing.assert_allclose(px[:3], expect, rtol=1e-4)
     assert px[3] == pytest.approx(1 - t, rel=1e-5)
 
@@ -65,10 +64,10 @@ def lit_frame() -> tuple[np.ndarray, np.ndarray, tuple]:
     return anim_density, lighting.light(frame), db.box
 
 
-def _camera_for(box: tuple) -> cu.VolumeCamera:
+def _camera_for(box: tuple) -> cu.Camera:
     lo, hi = np.array(box[0]), np.array(box[1])
     c = (lo + hi) / 2
-    return cu.VolumeCamera(position=tuple(c + np.array([0, 0.2, 2.2]) * (hi - lo).max()),
+    return cu.Camera(position=tuple(c + np.array([0, 0.2, 2.2]) * (hi - lo).max()),
                            target=tuple(c), fov=40)  # fmt: skip
 
 
@@ -110,7 +109,11 @@ def test_gl_matches_cpu(lit_frame: tuple, gl_context) -> None:
         ({"volume": np.full((4, 4, 4), np.nan, np.float32)}, ValueError, "NaN"),
         ({"width": 0}, ValueError, "width"),
         ({"step": 1e-9}, ValueError, "step"),
-        ({"camera": cu.VolumeCamera((0, 5, 0), (0, 0, 0))}, ValueError, "up"),
+        (
+            {"camera": SimpleNamespace(position=(0, 5, 0), target=(0, 0, 0), up=(0, 1, 0), fov=30)},
+            ValueError,
+            "up",
+        ),
         ({"camera": (0, 0, 5)}, TypeError, "camera"),
         ({"box": ((0, 0, 0),)}, TypeError, "box"),
         ({"sun": (0, 1, 0)}, TypeError, "sun"),

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import cumuli as cu
 from cumuli.noise import MAX_SIZE
@@ -324,3 +326,33 @@ def test_lattice_view_is_read_only() -> None:
     noise = cu.Noise(seed=1, size=4)
     with pytest.raises(ValueError):
         noise.lattice[0, 0, 0] = 1.0
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    coords=st.lists(
+        st.tuples(*[st.floats(-1e4, 1e4, allow_nan=False, width=32)] * 3), min_size=1, max_size=80
+    ),
+    octaves=st.integers(1, 16),
+    gain=st.floats(0.05, 1.5),
+    lacunarity=st.floats(0.25, 3.0),
+    frequency=st.floats(0.01, 10.0),
+    size=st.sampled_from([2, 8, 13, 64]),
+)
+def test_fbm_matches_reference_for_any_parameters(
+    coords: list, octaves: int, gain: float, lacunarity: float, frequency: float, size: int
+) -> None:
+    noise = _noise(size)
+    pts = np.array(coords, dtype=F32)
+    want = ref_fbm(noise, pts, octaves, gain, lacunarity, frequency)
+    got = noise.fbm(pts, octaves, gain, lacunarity, frequency)
+    np.testing.assert_array_equal(got, want)
+
+
+_NOISES: dict[int, cu.Noise] = {}
+
+
+def _noise(size: int) -> cu.Noise:
+    if size not in _NOISES:
+        _NOISES[size] = cu.Noise(seed=99, size=size)
+    return _NOISES[size]

@@ -74,6 +74,18 @@ EvolutionParams evolution(int frames, std::array<int, 3> res, float growth, V3 d
   return p;
 }
 
+SkyParams sky_of(const py::tuple& t) {
+  if (t.size() != 6) throw py::value_error("sky must be (zenith, horizon, ground, exponent, disc radius, disc intensity)");
+  SkyParams s;
+  s.zenith = v3(t[0].cast<V3>());
+  s.horizon = v3(t[1].cast<V3>());
+  s.ground = v3(t[2].cast<V3>());
+  s.exponent = t[3].cast<float>();
+  s.sun_disc_radius = t[4].cast<float>();
+  s.sun_disc_intensity = t[5].cast<float>();
+  return s;
+}
+
 ShExpTable table_of(const py::array_t<float>& a, const py::array_t<float>& b, float max_norm,
                     int order, bool squaring) {
   if (squaring) return shexp_squaring(order);
@@ -263,10 +275,10 @@ void bind_animation(py::module_& m) {
 
   m.def(
       "sky_sh",
-      [](V3 zenith, V3 horizon, int order, int n_theta) {
-        return to_array(sky_sh(v3(zenith), v3(horizon), order, n_theta), {3, order * order});
+      [](const py::tuple& sky, int order, int n_theta) {
+        return to_array(sky_sh(sky_of(sky), order, n_theta), {3, order * order});
       },
-      py::arg("zenith"), py::arg("horizon"), py::arg("order"), py::arg("n_theta"));
+      py::arg("sky"), py::arg("order"), py::arg("n_theta"));
 
   m.def(
       "fit_shexp",
@@ -328,7 +340,7 @@ void bind_animation(py::module_& m) {
       "render_volume_cpu",
       [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi, V3 position, V3 forward,
          V3 right, V3 up, float tan_half_fov, int width, int height, V3 sun_dir, V3 sun_radiance,
-         V3 zenith, V3 horizon, float sigma_t, float albedo, float g, float step, int threads) {
+         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads) {
         const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
         const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
         if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
@@ -337,10 +349,9 @@ void bind_animation(py::module_& m) {
         VolumeRenderParams p;
         p.width = width;
         p.height = height;
-        p.sun_dir = v3(sun_dir);
-        p.sun_radiance = v3(sun_radiance);
-        p.zenith = v3(zenith);
-        p.horizon = v3(horizon);
+        p.sun.direction = v3(sun_dir);
+        p.sun.radiance = v3(sun_radiance);
+        p.sky = sky_of(sky);
         p.sigma_t = sigma_t;
         p.albedo = albedo;
         p.g = g;

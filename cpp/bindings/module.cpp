@@ -7,6 +7,8 @@ namespace cumuli::bind {
 void bind_noise(py::module_& m);
 void bind_shapes(py::module_& m);
 void bind_animation(py::module_& m);
+void bind_light(py::module_& m);
+void bind_march(py::module_& m);
 }  // namespace cumuli::bind
 
 PYBIND11_MODULE(_core, m) {
@@ -14,4 +16,6 @@ PYBIND11_MODULE(_core, m) {
   cumuli::bind::bind_noise(m);
   cumuli::bind::bind_shapes(m);
   cumuli::bind::bind_animation(m);
+  cumuli::bind::bind_light(m);
+  cumuli::bind::bind_march(m);
 }

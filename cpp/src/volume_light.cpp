@@ -187,18 +187,20 @@ std::vector<float> sh_optical_depth(const float* volumes, int count, const Volum
   return out;
 }
 
-std::vector<float> sky_sh(glm::vec3 zenith, glm::vec3 horizon, int order, int n_theta) {
+std::vector<float> sky_sh(const SkyParams& sky_params, int order, int n_theta) {
   check_order(order);
+  SkyParams no_disc = sky_params;
+  no_disc.sun_disc_intensity = 0.0f;
+  const SunParams sun;
   const SphereQuadrature quad(n_theta);
   const int nc = order * order;
   std::vector<double> acc(3 * static_cast<std::size_t>(nc), 0.0);
   float y[kMaxShOrder * kMaxShOrder];
   for (std::size_t k = 0; k < quad.dirs.size(); ++k) {
     sh_eval(order, quad.dirs[k], y);
-    const glm::vec3 d = quad.dirs[k];
+    const glm::vec3 L3 = sky_radiance(no_disc, sun, quad.dirs[k]);
     for (int ch = 0; ch < 3; ++ch) {
-      // +y is up: the sky's gradient runs along the direction's y component.
-      const float L = std::max(0.0f, horizon[ch] + (zenith[ch] - horizon[ch]) * d.y);
+      const float L = L3[ch];
       for (int c = 0; c < nc; ++c) acc[ch * nc + c] += static_cast<double>(L) * quad.weights[k] * y[c];
     }
   }

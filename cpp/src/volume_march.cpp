@@ -12,11 +12,6 @@ namespace cumuli {
 
 namespace {
 constexpr float kInv4Pi = 0.0795774715459477f;
-
-float henyey_greenstein(float g, float cos_theta) {
-  const float d = 1.0f + g * g - 2.0f * g * cos_theta;
-  return kInv4Pi * (1.0f - g * g) / (d * std::sqrt(d));
-}
 }  // namespace
 
 std::vector<float> render_volume_cpu(const float* density, const float* light, const VolumeGrid& g,
@@ -41,21 +36,21 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
       const float len = span.t_out - t0;
       const int n = std::max(1, static_cast<int>(std::ceil(len / p.step)));
       const float h = len / static_cast<float>(n);
-      const float phase = henyey_greenstein(p.g, glm::dot(d, p.sun_dir));
+      const float phase = henyey_greenstein(p.g, glm::dot(d, p.sun.direction));
       for (int k = 0; k < n && T >= kVolumeMinTransmittance; ++k) {
         const glm::vec3 x = cam.position + (t0 + (k + 0.5f) * h) * d;
         const float rho = sample_trilinear(density, g, x);
         if (rho <= 0.0f) continue;
         float L[4];
         sample_trilinear(light, g, 4, x, L);
-        const glm::vec3 S = p.albedo * (p.sun_radiance * (L[0] * phase) +
+        const glm::vec3 S = p.albedo * (p.sun.radiance * (L[0] * phase) +
                                         glm::vec3(L[1], L[2], L[3]) * kInv4Pi);
         const float dtau = std::exp(-p.sigma_t * rho * h);
         colour += T * (1.0f - dtau) * S;
         T *= dtau;
       }
     }
-    const glm::vec3 sky = glm::max(glm::vec3(0.0f), p.horizon + (p.zenith - p.horizon) * d.y);
+    const glm::vec3 sky = sky_radiance(p.sky, p.sun, d);
     const glm::vec3 rgb = colour + T * sky;
     float* px = &img[i * 4];
     px[0] = rgb.x;

@@ -21,8 +21,12 @@ from cumuli.animation import (
     transition_matrix,
 )
 from cumuli.cloud import Cloud, load_cloud, merge
+from cumuli.cpu_render import render_cpu
 from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
+from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
+from cumuli.renderer import Renderer, prepare_light, render
+from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
 from cumuli.shapes import (
     ellipsoids_from_mesh,
     gaussian_cumulus,
@@ -33,12 +37,11 @@ from cumuli.shapes import (
     metaball_cumulus,
 )
 from cumuli.sun import Sun
-from cumuli.volume_render import VolumeCamera, VolumeRenderer, render_volume
+from cumuli.volume_render import VolumeRenderer, render_volume
 
 __all__ = [
     "AnimationFrame",
     "EndlessAnimation",
-    "VolumeCamera",
     "VolumeDatabase",
     "VolumeLighting",
     "VolumeRenderer",
@@ -48,13 +51,15 @@ __all__ = [
     "render_volume",
     "similarity_matrix",
     "transition_matrix",
+    "Camera",
     "Cloud",
-    "Noise",
-    "Sun",
-    "__version__",
     "ellipsoids_from_mesh",
+    "from_srgb8",
     "gaussian_cumulus",
+    "light_grid",
+    "LightStats",
     "load_cloud",
+    "load_scene",
     "lsystem_cloud",
     "lsystem_expand",
     "lsystem_length",
@@ -62,8 +67,17 @@ __all__ = [
     "mesh_cloud",
     "meshes",
     "metaball_cumulus",
-    "from_srgb8",
+    "Noise",
+    "prepare_light",
     "read_image",
+    "render",
+    "render_cpu",
+    "Renderer",
+    "RenderSettings",
+    "Scene",
+    "Sky",
+    "Sun",
     "to_srgb8",
     "write_image",
+    "__version__",
 ]

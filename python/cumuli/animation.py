@@ -30,6 +30,7 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.cloud import Cloud
 from cumuli.noise import Noise, _fbm_params
+from cumuli.scene import Sky
 from cumuli.sun import Sun
 
 #: Largest edge of a database volume.
@@ -403,35 +404,39 @@ def evolving_cloud_volumes(
 # --- light --------------------------------------------------------------------------------------
 
 
-def sky_colours(sky: Any) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    """``(zenith, horizon)`` linear RGB of a sky given as an object with ``zenith`` and
-    ``horizon`` (e.g. ``cumuli.scene.Sky``), a pair of colours, or one colour (uniform sky).
-
-    The sky radiance is ``max(0, horizon + (zenith − horizon)·ω_y)`` for a unit direction ω.
-    """
-    if hasattr(sky, "zenith") and hasattr(sky, "horizon"):
-        z, h = check.vec3(sky.zenith, "sky.zenith"), check.vec3(sky.horizon, "sky.horizon")
-    else:
-        try:
-            arr = np.asarray(sky, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise TypeError(
-                f"sky must be a colour, (zenith, horizon) or a Sky, got {sky!r}"
-            ) from None
-        if arr.shape == (3,):
-            z = h = check.vec3(arr, "sky")
-        elif arr.shape == (2, 3):
-            z, h = check.vec3(arr[0], "sky zenith"), check.vec3(arr[1], "sky horizon")
-        else:
-            raise ValueError(
-                f"sky must be a colour (3,) or (zenith, horizon) (2, 3), got {arr.shape}"
-            )
-    if min(z) < 0 or min(h) < 0:
-        raise ValueError("sky colours must be non-negative")
-    return z, h
+def as_sky(sky: Any) -> Sky:
+    """A :class:`cumuli.Sky` from ``None`` (the default sky), a ``Sky``, one colour (a uniform sky:
+    zenith, horizon and ground alike) or a pair ``(zenith, horizon)``."""
+    if sky is None:
+        return Sky()
+    if isinstance(sky, Sky):
+        return sky
+    try:
+        arr = np.asarray(sky, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(
+            f"sky must be a cumuli.Sky, a colour or (zenith, horizon), got {sky!r}"
+        ) from None
+    if arr.shape == (3,):
+        c = check.vec3(arr, "sky")
+        return Sky(zenith=c, horizon=c, ground=c)
+    if arr.shape == (2, 3):
+        return Sky(
+            zenith=check.vec3(arr[0], "sky zenith"), horizon=check.vec3(arr[1], "sky horizon")
+        )
+    raise ValueError(
+        f"sky must be a colour (3,) or (zenith, horizon) (2, 3), got shape {arr.shape}"
+    )
 
 
-DEFAULT_SKY = ((0.20, 0.40, 0.85), (0.62, 0.75, 0.95))
+def sky_args(sky: Sky) -> tuple:
+    """The core's sky tuple (zenith, horizon, ground, exponent, disc radius, disc intensity)."""
+    return (
+        sky.zenith, sky.horizon, sky.ground, float(sky.exponent), float(sky.sun_disc_radius),
+        float(sky.sun_disc_intensity),
+    )  # fmt: skip
+
+
 #: SH exponential methods of VolumeLighting.
 SHEXP_METHODS = ("squaring", "fit")
 
@@ -469,7 +474,7 @@ class VolumeLighting:
         self,
         database: VolumeDatabase,
         sun: Sun,
-        sky: Any = DEFAULT_SKY,
+        sky: Any = None,
         sigma_t: float = 1.0,
         sh_order: int = 4,
         sh_samples: int = 6,
@@ -491,7 +496,7 @@ class VolumeLighting:
             raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
         self.database = database
         self.sun = sun
-        self.zenith, self.horizon = sky_colours(sky)
+        self.sky = as_sky(sky)
         self.sigma_t = check.real(sigma_t, "sigma_t", 0.0)
         self.sh_order = check.integer(sh_order, "sh_order", 1, 4)
         self.sh_samples = check.integer(sh_samples, "sh_samples", self.sh_order, 64)
@@ -520,7 +525,7 @@ class VolumeLighting:
         self.sky_depth = _core.sh_optical_depth(
             vols, lo, hi, self.sh_order, self.sh_samples, self.step, threads
         )
-        self.sky_sh = _core.sky_sh(self.zenith, self.horizon, self.sh_order, self.sh_samples)
+        self.sky_sh = _core.sky_sh(sky_args(self.sky), self.sh_order, self.sh_samples)
         if shexp == "fit":
             flat = self.sky_depth.reshape(-1, nc)
             pick = np.unique(

@@ -1,4 +1,4 @@
-"""The ``cumuli`` command: ``cumuli info`` and ``cumuli demo -o PATH``.
+"""The ``cumuli`` command: ``cumuli info``, ``cumuli demo -o PATH`` and ``cumuli render SCENE``.
 
 User errors (bad arguments, unwritable paths, a missing GL) print one ``cumuli: error: ...`` line
 to stderr and exit non-zero; they never show a traceback.
@@ -92,12 +92,74 @@ def _demo_noise(width: int, height: int, seed: int) -> np.ndarray:
     return img
 
 
-def _cmd_demo(args: argparse.Namespace) -> int:
+def _opaque(img: np.ndarray) -> np.ndarray:
+    """The render is already composited over the sky: alpha 1 so that viewers show the sky
+    (the render's alpha is the clouds' coverage, 1 − T)."""
+    out = img.copy()
+    out[..., 3] = 1.0
+    return out
+
+
+def _check_output(output: Path) -> None:
+    """Refuse a bad output path before spending time on the render."""
+    if output.suffix.lower() not in (".png", ".exr"):
+        raise ValueError(f"output {str(output)!r} has an unsupported extension (use .png or .exr)")
+    folder = output.parent
+    if not folder.is_dir():
+        raise FileNotFoundError(f"output folder {str(folder)!r} does not exist")
+    if not os.access(folder, os.W_OK):
+        raise PermissionError(f"output folder {str(folder)!r} is not writable")
+
+
+def _write_pair(output: Path, img: np.ndarray) -> list[Path]:
+    """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR)."""
     from cumuli.imageio import write_image
 
-    img = _demo_noise(args.width, args.height, args.seed)
-    path = write_image(args.output, img)
-    print(f"wrote {path} ({args.width}×{args.height})")
+    other = output.with_suffix(".exr" if output.suffix.lower() == ".png" else ".png")
+    return [write_image(output, img), write_image(other, img)]
+
+
+def _cmd_demo(args: argparse.Namespace) -> int:
+    if args.noise:
+        from cumuli.imageio import write_image
+
+        img = _demo_noise(args.width, args.height, args.seed)
+        path = write_image(args.output, img)
+        print(f"wrote {path} ({args.width}×{args.height})")
+        return 0
+    from cumuli.demo import default_scene
+    from cumuli.renderer import render
+
+    _check_output(args.output)
+    scene = default_scene()
+    img = render(scene, scene.default_camera(), args.width, args.height, backend=args.backend)
+    paths = _write_pair(args.output, _opaque(img))
+    print(f"wrote {' and '.join(map(str, paths))} ({args.width}×{args.height}, {args.backend})")
+    return 0
+
+
+def _size(text: str) -> tuple[int, int]:
+    try:
+        w, h = (int(v) for v in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, got {text!r}") from None
+    if not (1 <= w <= 16384 and 1 <= h <= 16384):
+        raise argparse.ArgumentTypeError(f"width and height must be in [1, 16384], got {text!r}")
+    return w, h
+
+
+def _cmd_render(args: argparse.Namespace) -> int:
+    from cumuli.imageio import write_image
+    from cumuli.renderer import render
+    from cumuli.scene import load_scene
+
+    scene = load_scene(args.scene)
+    w, h = args.size
+    output = Path(args.output)
+    _check_output(output)
+    img = render(scene, scene.default_camera(), w, h, backend=args.backend)
+    path = write_image(output, img if args.alpha else _opaque(img))
+    print(f"wrote {path} ({w}×{h}, {args.backend})")
     return 0
 
 
@@ -126,7 +188,7 @@ def _seed(text: str) -> int:
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
-        prog="cumuli", description="Volumetric clouds: information and demos."
+        prog="cumuli", description="Volumetric clouds: information, demos and rendering."
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
@@ -134,14 +196,40 @@ def build_parser() -> argparse.ArgumentParser:
     info.add_argument("--json", action="store_true", help="print as JSON")
     info.set_defaults(run=_cmd_info)
 
-    demo = sub.add_parser("demo", help="render the demo image")
-    demo.add_argument(
-        "-o", "--output", required=True, type=Path, help="image to write (.png or .exr)"
+    demo = sub.add_parser(
+        "demo", help="render the demo: three cumuli in a sunset sky (paper Fig. 10)"
     )
-    demo.add_argument("--width", type=_positive(4096), default=512, help="pixels (default 512)")
-    demo.add_argument("--height", type=_positive(4096), default=256, help="pixels (default 256)")
-    demo.add_argument("--seed", type=_seed, default=7, help="noise seed (default 7)")
+    demo.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        type=Path,
+        help="image to write (.png or .exr); the other format is written beside it",
+    )
+    demo.add_argument("--width", type=_positive(4096), default=640, help="pixels (default 640)")
+    demo.add_argument("--height", type=_positive(4096), default=480, help="pixels (default 480)")
+    demo.add_argument("--backend", choices=("gl", "cpu"), default="gl", help="default gl")
+    demo.add_argument(
+        "--noise",
+        action="store_true",
+        help="instead render the noise figure (lattice | fBm, paper Figs. 2-3); one file",
+    )
+    demo.add_argument("--seed", type=_seed, default=7, help="noise seed for --noise (default 7)")
     demo.set_defaults(run=_cmd_demo)
+
+    rend = sub.add_parser("render", help="render a scene file written by Scene.save")
+    rend.add_argument("scene", type=Path, help="scene JSON")
+    rend.add_argument("-o", "--output", required=True, type=Path, help="image (.png or .exr)")
+    rend.add_argument(
+        "--size", type=_size, default=(640, 480), help="WIDTHxHEIGHT (default 640x480)"
+    )
+    rend.add_argument("--backend", choices=("gl", "cpu"), default="gl", help="default gl")
+    rend.add_argument(
+        "--alpha",
+        action="store_true",
+        help="keep the clouds' coverage (1 - T) as alpha instead of writing an opaque image",
+    )
+    rend.set_defaults(run=_cmd_render)
     return parser
 
 
@@ -151,7 +239,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         return int(args.run(args))
-    except (ValueError, TypeError, OSError) as exc:
+    except (ValueError, TypeError, OSError, RuntimeError) as exc:
         print(f"cumuli: error: {exc}", file=sys.stderr)
         return EXIT_ERROR
     except KeyboardInterrupt:

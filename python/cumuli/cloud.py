@@ -14,7 +14,6 @@ clouds (without a light grid, which no longer fits) and append what they did to
 
 from __future__ import annotations
 
-import dataclasses
 import json
 import os
 import tempfile
@@ -54,6 +53,8 @@ class Cloud:
     params: dict[str, Any] = field(default_factory=dict)
     light: np.ndarray | None = None
     light_box: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
+    #: Normalised sun direction the light grid was computed for (a different sun: stale grid).
+    light_sun: tuple[float, float, float] | None = None
 
     def __post_init__(self) -> None:
         self.centres = check.points3(self.centres, "centres", allow_empty=False)
@@ -286,16 +287,10 @@ class Cloud:
             "phi": self.phi,
             "stats": self.stats,
             "params": self.params,
-            # Other light metadata fields (e.g. the sun a grid was made for) ride along when the
-            # Cloud has them, so a saved grid keeps its provenance.
-            "light_extra": {
-                f.name: getattr(self, f.name)
-                for f in dataclasses.fields(self)
-                if f.name.startswith("light_") and f.name != "light_box"
-            },
             "light_box": None
             if self.light_box is None
             else [list(map(float, self.light_box[0])), list(map(float, self.light_box[1]))],
+            "light_sun": None if self.light_sun is None else list(map(float, self.light_sun)),
         }
 
     def __repr__(self) -> str:
@@ -393,22 +388,15 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
                 check.vec3(light_box[0], "light_box"),
                 check.vec3(light_box[1], "light_box"),
             )
-        known = {f.name for f in dataclasses.fields(Cloud)}
-        extra = meta.get("light_extra") or {}
-        if not isinstance(extra, dict):
-            raise ValueError("light_extra must be an object")
-        extra = {
-            k: tuple(v) if isinstance(v, list) else v
-            for k, v in extra.items()
-            if k in known and k.startswith("light_")
-        }
+        light_sun = meta.get("light_sun")
+        if light_sun is not None:
+            light_sun = check.direction(light_sun, "light_sun")
         if light is None:
-            extra = {}
+            light_sun = None
         return Cloud(
             arrays["centres"],
             arrays["radii"],
             arrays["rotations"],
-            **extra,
             model=meta["model"],
             kappa=meta["kappa"],
             phi=meta["phi"],
@@ -416,6 +404,7 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             params=dict(meta.get("params") or {}),
             light=light,
             light_box=light_box,
+            light_sun=light_sun,
         )
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise ValueError(f"{path.name}: invalid cloud data: {exc}") from None

@@ -8,16 +8,17 @@
 ``backend="gl"`` the fragment shader ``shaders/volume_march.frag.glsl`` over 3D textures; both give
 ``(H, W, 4)`` float32 images with row 0 on top.
 
-The camera is any object with ``position``, ``target``, ``fov`` (vertical, degrees) and optionally
-``up`` — :class:`VolumeCamera` here, or ``cumuli.scene.Camera`` where the renderer branch provides
-it. The sky is given as in :func:`cumuli.animation.sky_colours`.
+The camera is a :class:`cumuli.Camera` (or any object with ``position``, ``target``, ``fov`` —
+vertical, degrees — and optionally ``up``); the sky a :class:`cumuli.Sky` (or what
+:func:`cumuli.animation.as_sky` accepts), whose radiance without the sun disc also lights the
+volume through :class:`cumuli.VolumeLighting`. Background, sky model and phase function are the
+render pass's own (``shaders/sky.glsl``, ``shaders/phase.glsl`` and their C++ twins).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import moderngl
@@ -25,8 +26,9 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
-from cumuli.animation import DEFAULT_SKY, _box, _float_volumes, sky_colours
+from cumuli.animation import _box, _float_volumes, as_sky, sky_args
 from cumuli.gl import GLContext, _resolve_context
+from cumuli.scene import Camera
 from cumuli.sun import Sun
 
 BACKENDS = ("cpu", "gl")
@@ -36,26 +38,18 @@ MAX_STEPS = 1 << 16
 MAX_IMAGE = 1 << 14
 
 
-@dataclass(frozen=True)
-class VolumeCamera:
-    """A pinhole camera: ``position`` looks at ``target``; ``fov`` is vertical, in degrees."""
-
-    position: tuple[float, float, float]
-    target: tuple[float, float, float]
-    up: tuple[float, float, float] = (0.0, 1.0, 0.0)
-    fov: float = 50.0
-
-    def __post_init__(self) -> None:
-        object.__setattr__(self, "position", check.vec3(self.position, "camera.position"))
-        object.__setattr__(self, "target", check.vec3(self.target, "camera.target"))
-        object.__setattr__(self, "up", check.direction(self.up, "camera.up"))
-        object.__setattr__(
-            self, "fov", check.real(self.fov, "camera.fov", 0.0, 180.0, lo_open=True, hi_open=True)
-        )
-
-
 def camera_rays(camera: Any) -> dict[str, Any]:
-    """Position, float32 forward/right/up basis and ``tan(fov/2)`` of a duck-typed camera."""
+    """Position, float32 forward/right/up basis and ``tan(fov/2)`` of a camera (a
+    :class:`cumuli.Camera` uses its own :meth:`~cumuli.Camera.basis`)."""
+    if isinstance(camera, Camera):
+        f, r, u = camera.basis()
+        return {
+            "position": tuple(float(v) for v in camera.position),
+            "forward": tuple(float(v) for v in f),
+            "right": tuple(float(v) for v in r),
+            "up": tuple(float(v) for v in u),
+            "tan_half_fov": math.tan(math.radians(camera.fov) / 2),
+        }
     for attr in ("position", "target", "fov"):
         if not hasattr(camera, attr):
             raise TypeError(f"camera must have position, target and fov, missing {attr!r}")
@@ -113,7 +107,7 @@ def render_volume(
     width: int,
     height: int,
     sun: Sun | None = None,
-    sky: Any = DEFAULT_SKY,
+    sky: Any = None,
     backend: str = "cpu",
     *,
     sigma_t: float = 1.0,
@@ -136,19 +130,19 @@ def render_volume(
         raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
     vol, lig, lo, hi, width, height, step = _inputs(volume, light, box, width, height, step)
     cam = camera_rays(camera)
-    zenith, horizon = sky_colours(sky)
+    sky = as_sky(sky)
     sigma_t = check.real(sigma_t, "sigma_t", 0.0)
     albedo = check.real(albedo, "albedo", 0.0, 1.0)
     g = check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True)
     if backend == "cpu":
         return _core.render_volume_cpu(
             vol, lig, lo, hi, cam["position"], cam["forward"], cam["right"], cam["up"],
-            cam["tan_half_fov"], width, height, sun.direction, sun.radiance, zenith, horizon,
+            cam["tan_half_fov"], width, height, sun.direction, sun.radiance, sky_args(sky),
             sigma_t, albedo, g, step, check.threads(threads),
         )  # fmt: skip
     with VolumeRenderer(context) as renderer:
         return renderer.render(
-            vol, lig, (lo, hi), cam, width, height, sun, (zenith, horizon),
+            vol, lig, (lo, hi), cam, width, height, sun, sky,
             sigma_t=sigma_t, albedo=albedo, g=g, step=step,
         )  # fmt: skip
 
@@ -179,7 +173,7 @@ class VolumeRenderer:
         width: int,
         height: int,
         sun: Sun | None = None,
-        sky: Any = DEFAULT_SKY,
+        sky: Any = None,
         *,
         sigma_t: float = 1.0,
         albedo: float = 1.0,
@@ -195,7 +189,8 @@ class VolumeRenderer:
             raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
         vol, lig, lo, hi, width, height, step = _inputs(volume, light, box, width, height, step)
         cam = camera if isinstance(camera, dict) else camera_rays(camera)
-        zenith, horizon = sky_colours(sky)
+        sky = as_sky(sky)
+        rad = math.radians(sky.sun_disc_radius)
         ctx = self.context.ctx
         d, h, w = vol.shape
         limit = int(self.context.info.get("GL_MAX_3D_TEXTURE_SIZE", 2048))
@@ -229,8 +224,12 @@ class VolumeRenderer:
                 "u_resolution": (float(width), float(height)),
                 "u_sun_dir": sun.direction,
                 "u_sun_radiance": sun.radiance,
-                "u_zenith": zenith,
-                "u_horizon": horizon,
+                "u_sky_zenith": sky.zenith,
+                "u_sky_horizon": sky.horizon,
+                "u_sky_ground": sky.ground,
+                "u_sky_exponent": float(sky.exponent),
+                "u_sun_disc": (math.cos(1.5 * rad), math.cos(rad)),
+                "u_sun_disc_intensity": float(sky.sun_disc_intensity),
                 "u_sigma_t": check.real(sigma_t, "sigma_t", 0.0),
                 "u_albedo": check.real(albedo, "albedo", 0.0, 1.0),
                 "u_g": check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True),

@@ -21,6 +21,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"
 
 namespace cumuli {
@@ -73,9 +74,9 @@ struct SphereQuadrature {
 std::vector<float> sh_optical_depth(const float* volumes, int count, const VolumeGrid& g,
                                     int order, int n_theta, float step_voxels, int threads);
 
-// SH projection (order² coefficients per channel, 3 channels) of the gradient sky
-// L(ω) = max(0, horizon + (zenith − horizon)·ω_y).
-std::vector<float> sky_sh(glm::vec3 zenith, glm::vec3 horizon, int order, int n_theta);
+// SH projection (order² coefficients per channel, 3 channels) of the render pass's sky radiance
+// (phase.hpp sky_radiance) without its sun disc: the sun's own light is the τ_sun term.
+std::vector<float> sky_sh(const SkyParams& sky, int order, int n_theta);
 
 // Tripling coefficients C_ijk = ∫ y_i y_j y_k dω (order⁶ floats), exact by quadrature.
 std::vector<float> sh_triple(int order);

@@ -7,14 +7,15 @@
 // ρ and the light (τ_sun, E_sky RGB) are trilinear (clamp to edge); σ = σ_t·ρ;
 // S = albedo·(sun·τ_sun·HG(g, d·sun_dir) + E_sky/4π) (single scattering of sun and sky, eqs. 2–3,
 // isotropic phase for the sky); colour += T·(1 − e^{−σh})·S; T *= e^{−σh}; stop when T < 1e-4.
-// Finally rgb = colour + T·sky(d) with the gradient sky max(0, horizon + (zenith − horizon)·d.y),
-// alpha = 1 − T.
+// Finally rgb = colour + T·sky(d) with the render pass's sky (phase.hpp sky_radiance: gradient and
+// sun disc), alpha = 1 − T. HG is phase.hpp's henyey_greenstein.
 #pragma once
 
 #include <vector>
 
 #include <glm/vec3.hpp>
 
+#include "cumuli/phase.hpp"
 #include "cumuli/volume_light.hpp"
 
 namespace cumuli {
@@ -27,9 +28,8 @@ struct VolumeCameraRays {
 
 struct VolumeRenderParams {
   int width = 64, height = 48;
-  glm::vec3 sun_dir{0.0f, 1.0f, 0.0f};  // towards the sun, unit
-  glm::vec3 sun_radiance{1.0f};
-  glm::vec3 zenith{0.2f, 0.4f, 0.85f}, horizon{0.62f, 0.75f, 0.95f};
+  SunParams sun;  // direction (unit, towards the sun) and radiance
+  SkyParams sky;
   float sigma_t = 1.0f;
   float albedo = 1.0f;
   float g = 0.2f;     // Henyey–Greenstein asymmetry

@@ -1,0 +1,146 @@
+"""The CPU reference marcher (``backend="cpu"``): thread scaling and cloud shapes, against GL.
+
+``bench_render.py`` times the default cumulus on both backends at two image sizes; this script
+looks at the C++ marcher itself: one thread against every core (the image is the same bit for
+bit), ``march="paper"`` against ``"union"``, on the four cloud kinds of the paper (Gaussian
+cumulus, metaball cumulus, L-system castellanus, mesh → ellipsoids), with the GLSL marcher of the
+same run (GL timer queries of the draws, and wall time) for the CPU/GL ratios. Light grids are
+computed once, outside the timings. Writes ``render_cpu.json`` and ``render_cpu.png`` under
+``benchmarks/out/`` (or ``--out``); ``--quick`` renders 96×72 with fewer repeats.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common as common  # noqa: E402
+
+import cumuli as cu  # noqa: E402
+
+
+def scenes() -> dict[str, cu.Scene]:
+    """The paper's four cloud kinds, each alone in the default scene settings."""
+    rabbit = cu.mesh_cloud(cu.meshes.bunny_like(1), scale=1.2)
+    return {
+        "gaussian_cumulus": cu.Scene(clouds=[cu.gaussian_cumulus(seed=1)]),
+        "metaball_cumulus": cu.Scene(clouds=[cu.metaball_cumulus(seed=2)]),
+        "lsystem_cloud": cu.Scene(clouds=[cu.lsystem_cloud(iterations=7, seed=2)]),
+        # The paper marches its mesh clouds with a fixed step smaller than the ellipsoids.
+        "mesh_cloud": cu.Scene(
+            clouds=[rabbit], settings=cu.RenderSettings(fixed_step=0.03, absorption=3.0)
+        ),
+    }
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = common.parse_args(__doc__.splitlines()[0], argv)
+    width, height = (96, 72) if args.quick else (320, 240)
+    repeats = 3 if args.quick else 5
+    machine = common.machine_info()
+    cores = machine["cores"]
+    threads = sorted({1, cores})
+    common.log(f"GL renderer: {machine['gl_renderer']}; {cores} cores; {width}x{height}")
+
+    renderer = cu.Renderer() if machine["gl_renderer"] else None
+    results: dict[str, dict[str, Any]] = {}
+    try:
+        for name, base in scenes().items():
+            cu.prepare_light(base)  # once; every march mode and backend reuses the grids
+            camera = base.default_camera()
+            for march in ("paper", "union"):
+                scene = base.replace(settings=base.settings.replace(march=march))
+                key = f"{name}/{march}"
+                entry: dict[str, Any] = {"primitives": scene.clouds[0].n}
+                for t in threads:
+                    wall, _ = common.time_repeats(
+                        lambda s=scene, c=camera, t=t: cu.render_cpu(s, c, width, height, t),
+                        repeats,
+                    )
+                    entry[f"cpu_{t}t_wall_s"] = common.spread(wall)
+                if renderer is not None:
+                    gpu: list[float] = []
+
+                    def draw(s: cu.Scene = scene, c: cu.Camera = camera, gpu=gpu) -> None:
+                        renderer.render(s, c, width, height)
+                        if renderer.last_gpu_ns is not None:
+                            gpu.append(renderer.last_gpu_ns * 1e-9)
+
+                    wall, _ = common.time_repeats(draw, repeats)
+                    entry["gl_wall_s"] = common.spread(wall)
+                    if len(gpu) > 1:
+                        entry["gl_time_s"] = common.spread(gpu[1:])  # gpu[0] is the warm-up
+                results[key] = entry
+                common.log(
+                    f"{key}: "
+                    + ", ".join(
+                        f"{k} {v['median'] * 1e3:.1f} ms"
+                        for k, v in entry.items()
+                        if isinstance(v, dict)
+                    )
+                )
+    finally:
+        if renderer is not None:
+            renderer.close()
+
+    ratios: dict[str, dict[str, float]] = {}
+    for key, e in results.items():
+        cpu_all = e[f"cpu_{cores}t_wall_s"]["median"]
+        r = {"cpu_1t_over_all": e["cpu_1t_wall_s"]["median"] / cpu_all}
+        if "gl_wall_s" in e:
+            r["cpu_all_over_gl_wall"] = cpu_all / e["gl_wall_s"]["median"]
+        if "gl_time_s" in e:
+            r["cpu_all_over_gl_time"] = cpu_all / e["gl_time_s"]["median"]
+        ratios[key] = r
+    for name in {k.split("/")[0] for k in results}:
+        paper, union = results[f"{name}/paper"], results[f"{name}/union"]
+        ratios[f"{name}/union_over_paper_cpu"] = {
+            "value": union[f"cpu_{cores}t_wall_s"]["median"]
+            / paper[f"cpu_{cores}t_wall_s"]["median"]
+        }
+    data = {
+        "benchmark": "render_cpu",
+        "quick": args.quick,
+        "image": [width, height],
+        "repeats": repeats,
+        "threads": threads,
+        "machine": machine,
+        "timing": (
+            "cpu_*: wall clock of cumuli.render_cpu; gl_wall_s: Renderer.render wall clock "
+            "(upload, draws, read-back); gl_time_s: GL timer queries of the draws"
+        ),
+        "methods": results,
+        "ratios": ratios,
+    }
+    path = common.write_json(args.out / "render_cpu.json", data)
+    common.log(f"wrote {path}")
+
+    plt = common.pyplot()
+    fig, ax = plt.subplots(figsize=(9, 4))
+    series = [f"cpu_{t}t_wall_s" for t in threads] + ["gl_time_s", "gl_wall_s"]
+    series = [s for s in series if all(s in e for e in results.values())]
+    keys = list(results)
+    bar = 0.8 / max(1, len(series))
+    for k, s in enumerate(series):
+        ax.bar(
+            [i + (k - (len(series) - 1) / 2) * bar for i in range(len(keys))],
+            [results[key][s]["median"] * 1e3 for key in keys],
+            bar,
+            label=s,
+        )
+    ax.set_xticks(range(len(keys)), [k.replace("/", "\n") for k in keys], fontsize=7)
+    ax.set_yscale("log")
+    ax.set_ylabel(f"ms per {width}x{height} frame (median)")
+    ax.set_title(f"CPU reference marcher vs GL\n{machine['gl_renderer']}", fontsize=9)
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(args.out / "render_cpu.png", dpi=100)
+    plt.close(fig)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,106 @@
+// CPU reference ray marcher: the render pass of Jiménez de Parga & Gómez Palomo 2018
+// (Algorithms 1 and 3), made exact by RENDER_CONTRACT so that it agrees with the GLSL marcher.
+//
+// Per pixel: a camera ray; clouds whose (candidate-grown) box the ray hits are marched front to
+// back by box entry; each cloud's sorted candidate intervals (collect_candidates) are marched with
+// the LOD step, either every interval on its own as the paper does (overlaps twice, "paper") or
+// their union once ("union"); every sample adds (1 − Δτ)(aL + sL)·T and attenuates T; finally
+// the sky shows through what is left of T. Everything is float32, like the shader.
+#pragma once
+
+#include <vector>
+
+#include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
+
+#include "cumuli/candidates.hpp"
+#include "cumuli/cloud.hpp"
+#include "cumuli/noise.hpp"
+#include "cumuli/phase.hpp"
+#include "cumuli/primitives.hpp"
+
+namespace cumuli {
+
+// A cloud's precomputed light grid L(v) and the world box it spans.
+struct LightGrid {
+  std::vector<float> values;  // [z][y][x], nx·ny·nz floats
+  int nx = 0, ny = 0, nz = 0;
+  Box box;
+
+  // Trilinear lookup at world point p with the GL texel-centre convention and clamp-to-edge:
+  // texel (i, j, k) sits at box.lo + ((i, j, k) + 0.5)·(hi − lo)/R, like a LINEAR /
+  // CLAMP_TO_EDGE 3D texture sampled at (p − lo)/(hi − lo).
+  float sample(glm::vec3 p) const;
+  void validate() const;  // throws std::invalid_argument
+};
+
+struct RenderCloud {
+  CloudShape shape;
+  LightGrid light;
+};
+
+enum class MarchMode { Paper, Union };
+
+struct CameraParams {
+  glm::vec3 position{0.0f, 0.0f, -10.0f};
+  glm::vec3 target{0.0f};
+  glm::vec3 up{0.0f, 1.0f, 0.0f};
+  float fov = 50.0f;  // vertical field of view, degrees
+
+  void validate() const;  // throws std::invalid_argument
+};
+
+// The camera's frame, computed once per image.
+struct CameraRays {
+  glm::vec3 origin, forward, right, up;
+  float tan_half = 0.0f, aspect = 1.0f;
+  int width = 1, height = 1;
+
+  CameraRays(const CameraParams& camera, int width, int height);
+  // Unit direction through pixel (row, col), row 0 at the top.
+  glm::vec3 direction(int row, int col) const;
+};
+
+struct MarchSettings {
+  float absorption = 1.0f;  // φ_s of Δτ = exp(−φ_s·ρ·Δ/Δ_ref)
+  float lod_a = 0.1f;       // A of the LOD step
+  float lod_delta = 0.0f;   // δ of the LOD step
+  float ref_step = 0.1f;    // Δ_ref
+  float step_min = 0.01f;
+  float step_max = 1.0f;
+  float fixed_step = 0.0f;  // > 0 overrides the LOD step
+  float hg_g = 0.5f;
+  int max_steps = 4096;      // samples per pixel, all clouds together
+  int max_candidates = 64;   // candidates kept per cloud and ray
+  MarchMode march = MarchMode::Paper;
+  FbmParams fbm;
+  float density_constant = -1.0f;  // ≥ 0: constant density instead of fBm (analytic tests)
+
+  static constexpr int kMaxStepsLimit = 1 << 24;
+  static constexpr int kMaxCandidatesLimit = 4096;
+
+  void validate() const;  // throws std::invalid_argument naming the setting
+  // Δ for a cloud centred at `centre` seen from `eye`.
+  float step_for(glm::vec3 eye, glm::vec3 centre) const;
+};
+
+// Everything one render needs, read-only while the threads run.
+struct MarchScene {
+  std::vector<RenderCloud> clouds;
+  SunParams sun;
+  SkyParams sky;
+  const Noise* noise = nullptr;  // may be null only when settings.density_constant ≥ 0
+
+  void validate(const MarchSettings& settings) const;
+};
+
+// The box a ray must hit for a cloud to be marched: bounds of its primitives grown by
+// candidate_scale (so that it contains every candidate interval).
+Box march_box(const CloudShape& cloud);
+
+// The (height, width, 4) float32 RGBA image, row 0 at the top, on `threads` threads (0 = all).
+// The result does not depend on the thread count. `out` holds height·width·4 floats.
+void render_image(const MarchScene& scene, const MarchSettings& settings,
+                  const CameraParams& camera, int width, int height, float* out, int threads);
+
+}  // namespace cumuli

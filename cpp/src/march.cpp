@@ -1,0 +1,351 @@
+#include "cumuli/march.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include <glm/geometric.hpp>
+
+#include "cumuli/parallel.hpp"
+
+namespace cumuli {
+
+// ---------------------------------------------------------------------------------------------
+// Light grid
+
+float LightGrid::sample(glm::vec3 p) const {
+  const glm::vec3 res(static_cast<float>(nx), static_cast<float>(ny), static_cast<float>(nz));
+  // Normalised texture coordinate, then texel space shifted to texel centres (GL convention).
+  const glm::vec3 s = (p - box.lo) / (box.hi - box.lo);
+  const glm::vec3 u = s * res - 0.5f;
+  const glm::vec3 f(std::floor(u.x), std::floor(u.y), std::floor(u.z));
+  const glm::vec3 w = u - f;
+  // Clamp-to-edge: both neighbours clamped into the grid (floats first, so huge u cannot overflow).
+  auto idx = [](float v, int n) {
+    return static_cast<int>(std::clamp(v, 0.0f, static_cast<float>(n - 1)));
+  };
+  const int x0 = idx(f.x, nx), x1 = idx(f.x + 1.0f, nx);
+  const int y0 = idx(f.y, ny), y1 = idx(f.y + 1.0f, ny);
+  const int z0 = idx(f.z, nz), z1 = idx(f.z + 1.0f, nz);
+  auto at = [&](int x, int y, int z) {
+    return values[(static_cast<std::size_t>(z) * ny + y) * nx + x];
+  };
+  // Blend along x, then y, then z (as noise.cpp and shaders/noise.glsl do).
+  const float c00 = at(x0, y0, z0) + w.x * (at(x1, y0, z0) - at(x0, y0, z0));
+  const float c10 = at(x0, y1, z0) + w.x * (at(x1, y1, z0) - at(x0, y1, z0));
+  const float c01 = at(x0, y0, z1) + w.x * (at(x1, y0, z1) - at(x0, y0, z1));
+  const float c11 = at(x0, y1, z1) + w.x * (at(x1, y1, z1) - at(x0, y1, z1));
+  const float c0 = c00 + w.y * (c10 - c00);
+  const float c1 = c01 + w.y * (c11 - c01);
+  return c0 + w.z * (c1 - c0);
+}
+
+void LightGrid::validate() const {
+  if (nx < 1 || ny < 1 || nz < 1) throw std::invalid_argument("light grid must not be empty");
+  if (values.size() != static_cast<std::size_t>(nx) * ny * nz)
+    throw std::invalid_argument("light grid size does not match its resolution");
+  for (float v : values)
+    if (!std::isfinite(v)) throw std::invalid_argument("light grid contains NaN or infinite values");
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(box.lo[k]) || !std::isfinite(box.hi[k]))
+      throw std::invalid_argument("light_box must be finite");
+    if (!(box.hi[k] > box.lo[k]))
+      throw std::invalid_argument("light_box hi must be greater than lo on every axis");
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Camera
+
+void CameraParams::validate() const {
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(position[k]) || !std::isfinite(target[k]) || !std::isfinite(up[k]))
+      throw std::invalid_argument("camera position, target and up must be finite");
+  if (!(fov > 0.0f && fov < 180.0f))
+    throw std::invalid_argument("camera fov must be in (0, 180) degrees");
+  const glm::vec3 f = target - position;
+  if (!(glm::dot(f, f) > 0.0f)) throw std::invalid_argument("camera target equals its position");
+  const glm::vec3 r = glm::cross(glm::normalize(f), up);
+  if (!(glm::dot(r, r) > 1e-12f))
+    throw std::invalid_argument("camera up must not be parallel to the view direction");
+}
+
+CameraRays::CameraRays(const CameraParams& camera, int w, int h) : width(w), height(h) {
+  origin = camera.position;
+  forward = glm::normalize(camera.target - camera.position);
+  right = glm::normalize(glm::cross(forward, camera.up));
+  up = glm::cross(right, forward);
+  constexpr float kDegToRad = 0.017453292519943295f;
+  tan_half = std::tan(camera.fov * kDegToRad / 2.0f);
+  aspect = static_cast<float>(w) / static_cast<float>(h);
+}
+
+glm::vec3 CameraRays::direction(int row, int col) const {
+  const float x = (2.0f * (static_cast<float>(col) + 0.5f) / static_cast<float>(width) - 1.0f) *
+                  tan_half * aspect;
+  const float y =
+      (1.0f - 2.0f * (static_cast<float>(row) + 0.5f) / static_cast<float>(height)) * tan_half;
+  return glm::normalize(forward + x * right + y * up);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Settings
+
+namespace {
+void require(bool ok, const std::string& what) {
+  if (!ok) throw std::invalid_argument(what);
+}
+}  // namespace
+
+void MarchSettings::validate() const {
+  require(std::isfinite(absorption) && absorption >= 0.0f, "absorption must be finite and >= 0");
+  require(std::isfinite(lod_a) && lod_a > 0.0f, "lod_a must be finite and > 0");
+  require(std::isfinite(lod_delta) && lod_delta >= 0.0f, "lod_delta must be finite and >= 0");
+  require(std::isfinite(ref_step) && ref_step > 0.0f, "ref_step must be finite and > 0");
+  require(std::isfinite(step_min) && step_min > 0.0f, "step_min must be finite and > 0");
+  require(std::isfinite(step_max) && step_max >= step_min,
+          "step_max must be finite and >= step_min");
+  require(std::isfinite(fixed_step) && fixed_step >= 0.0f, "fixed_step must be finite and >= 0");
+  require(std::isfinite(hg_g) && hg_g > -1.0f && hg_g < 1.0f, "hg_g must be in (-1, 1)");
+  require(max_steps >= 1 && max_steps <= kMaxStepsLimit,
+          "max_steps must be in [1, " + std::to_string(kMaxStepsLimit) + "]");
+  require(max_candidates >= 1 && max_candidates <= kMaxCandidatesLimit,
+          "max_candidates must be in [1, " + std::to_string(kMaxCandidatesLimit) + "]");
+  require(std::isfinite(density_constant), "density_constant must be finite");
+  fbm.validate();
+}
+
+float MarchSettings::step_for(glm::vec3 eye, glm::vec3 centre) const {
+  if (fixed_step > 0.0f) return fixed_step;
+  const float d = glm::length(eye - centre);
+  return std::clamp(lod_a * std::exp(-lod_delta * d), step_min, step_max);
+}
+
+void MarchScene::validate(const MarchSettings& settings) const {
+  if (settings.density_constant < 0.0f && noise == nullptr)
+    throw std::invalid_argument("noise is required unless density_constant >= 0");
+  for (const auto& c : clouds) {
+    c.shape.validate();
+    c.light.validate();
+  }
+  for (int k = 0; k < 3; ++k) {
+    require(std::isfinite(sun.direction[k]) && std::isfinite(sun.radiance[k]),
+            "sun direction and radiance must be finite");
+    require(std::isfinite(sky.zenith[k]) && std::isfinite(sky.horizon[k]) &&
+                std::isfinite(sky.ground[k]),
+            "sky colours must be finite");
+  }
+  require(std::abs(glm::length(sun.direction) - 1.0f) < 1e-3f, "sun direction must be unit length");
+  require(std::isfinite(sky.exponent) && sky.exponent > 0.0f, "sky exponent must be > 0");
+  require(std::isfinite(sky.sun_disc_radius) && sky.sun_disc_radius >= 0.0f &&
+              sky.sun_disc_radius < 60.0f,
+          "sun_disc_radius must be in [0, 60) degrees");
+  require(std::isfinite(sky.sun_disc_intensity) && sky.sun_disc_intensity >= 0.0f,
+          "sun_disc_intensity must be finite and >= 0");
+}
+
+Box march_box(const CloudShape& cloud) {
+  const float scale = candidate_scale(cloud);
+  Box b{glm::vec3(INFINITY), glm::vec3(-INFINITY)};
+  for (Ellipsoid e : cloud.primitives) {
+    e.radii *= scale;
+    glm::vec3 lo, hi;
+    e.bounds(lo, hi);
+    b.lo = glm::min(b.lo, lo);
+    b.hi = glm::max(b.hi, hi);
+  }
+  return b;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The marcher
+
+namespace {
+
+// Per-cloud values that are the same for every ray of an image.
+struct PreparedCloud {
+  const RenderCloud* cloud;
+  Box box;
+  float step;
+};
+
+struct BoxHit {
+  float t_in, t_out;
+  int cloud;
+};
+
+// Per-thread scratch: candidates of one cloud and the clouds a ray hits.
+struct Scratch {
+  std::vector<Candidate> candidates;
+  std::vector<BoxHit> hits;
+};
+
+class RayMarcher {
+ public:
+  RayMarcher(const MarchScene& scene, const MarchSettings& settings,
+             const std::vector<PreparedCloud>& prepared)
+      : scene_(scene), settings_(settings), prepared_(prepared) {
+    src_.noise = scene.noise;
+    src_.fbm = settings.fbm;
+    src_.constant = settings.density_constant;
+  }
+
+  glm::vec4 march(glm::vec3 origin, glm::vec3 dir, Scratch& scratch) const {
+    const glm::vec3 inv_dir = 1.0f / dir;
+    // Clouds whose box the ray meets in front of the camera, sorted by entry (t ≥ 0) with a
+    // stable insertion sort so that ties keep the scene order.
+    auto& hits = scratch.hits;
+    hits.clear();
+    for (std::size_t c = 0; c < prepared_.size(); ++c) {
+      Interval iv;
+      if (!intersect(prepared_[c].box, origin, inv_dir, iv)) continue;
+      if (!(iv.t_out >= 0.0f)) continue;
+      const BoxHit h{std::max(iv.t_in, 0.0f), iv.t_out, static_cast<int>(c)};
+      hits.push_back(h);
+      for (std::size_t k = hits.size() - 1; k > 0 && hits[k - 1].t_in > h.t_in; --k)
+        std::swap(hits[k], hits[k - 1]);
+    }
+
+    State st;
+    st.cos_theta = glm::dot(dir, scene_.sun.direction);
+    st.phase = henyey_greenstein(settings_.hg_g, st.cos_theta);
+    for (const BoxHit& h : hits) {
+      if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch, st))
+        break;
+    }
+    const glm::vec3 rgb = st.colour + st.T * sky_radiance(scene_.sky, scene_.sun, dir);
+    return glm::vec4(rgb, 1.0f - st.T);
+  }
+
+ private:
+  struct State {
+    glm::vec3 colour{0.0f};
+    float T = 1.0f;
+    int steps = 0;
+    float cos_theta = 0.0f;
+    float phase = 0.0f;
+  };
+
+  // One sample at ray parameter s attributed to primitive j (Algorithm 3). Returns false when
+  // the ray is done (opaque or out of samples).
+  bool sample(const PreparedCloud& pc, int j, float s, glm::vec3 origin, glm::vec3 dir,
+              State& st) const {
+    const RenderCloud& rc = *pc.cloud;
+    const glm::vec3 p = origin + s * dir;
+    const DensitySample d = cloud_density(rc.shape, j, p, src_);
+    ++st.steps;
+    if (d.rho > 0.0f) {
+      const float dtau = std::exp(-settings_.absorption * d.rho * pc.step / settings_.ref_step);
+      const float pL = rc.light.sample(p);
+      const glm::vec3 aL = scene_.sun.radiance * pL;
+      const glm::vec3 sL = aL * st.phase * d.gamma;
+      st.colour += (1.0f - dtau) * (aL + sL) * st.T;
+      st.T *= dtau;
+      if (st.T < 1e-6f) return false;
+    }
+    return st.steps < settings_.max_steps;
+  }
+
+  // Marches one cloud; false when the whole ray is done.
+  bool march_cloud(const PreparedCloud& pc, const BoxHit& h, glm::vec3 origin, glm::vec3 dir,
+                   Scratch& scratch, State& st) const {
+    const CloudShape& shape = pc.cloud->shape;
+    Candidate* cand = scratch.candidates.data();
+    const int n = collect_candidates(shape, origin, dir, h.t_in, h.t_out, cand,
+                                     settings_.max_candidates);
+    const float step = pc.step;
+    const float half = step / 2.0f;
+    if (settings_.march == MarchMode::Paper) {
+      // Every candidate interval on its own: overlaps are marched twice, as in the paper.
+      for (int k = 0; k < n; ++k) {
+        for (float t = cand[k].t_in; t < cand[k].t_out; t += step) {
+          if (!sample(pc, cand[k].primitive, t + half, origin, dir, st)) return false;
+        }
+      }
+      return true;
+    }
+    // Union: each point of the union of the intervals once (NDT applied to camera rays).
+    const bool attribute = shape.density.model == DensityModel::Spheroid;
+    float t = -INFINITY;
+    for (int k = 0; k < n; ++k) {
+      if (cand[k].t_out <= t) continue;
+      t = std::max(t, cand[k].t_in);
+      for (; t < cand[k].t_out; t += step) {
+        const float s = t + half;
+        const int j = attribute ? owner(shape, cand, n, k, s, origin, dir) : cand[k].primitive;
+        if (!sample(pc, j, s, origin, dir, st)) return false;
+      }
+    }
+    return true;
+  }
+
+  // The covering candidate (t_in ≤ s ≤ t_out) whose primitive gives the smallest |q| at s; the
+  // first in candidate order wins ties; candidate k when none covers s. |q| is computed only once
+  // a second candidate covers s (the common case of one covering primitive costs nothing).
+  static int owner(const CloudShape& shape, const Candidate* cand, int n, int k, float s,
+                   glm::vec3 origin, glm::vec3 dir) {
+    const glm::vec3 p = origin + s * dir;
+    auto q_of = [&](int m) {
+      return shape.primitives[static_cast<std::size_t>(cand[m].primitive)].normalised_distance(p);
+    };
+    int best = -1;
+    float best_q = INFINITY;
+    for (int m = 0; m < n && cand[m].t_in <= s; ++m) {
+      if (s > cand[m].t_out) continue;
+      if (best < 0) {
+        best = m;
+        continue;
+      }
+      if (best_q == INFINITY) best_q = q_of(best);
+      const float q = q_of(m);
+      if (q < best_q) {
+        best_q = q;
+        best = m;
+      }
+    }
+    return cand[best < 0 ? k : best].primitive;
+  }
+
+  const MarchScene& scene_;
+  const MarchSettings& settings_;
+  const std::vector<PreparedCloud>& prepared_;
+  DensitySource src_;
+};
+
+}  // namespace
+
+void render_image(const MarchScene& scene, const MarchSettings& settings,
+                  const CameraParams& camera, int width, int height, float* out, int threads) {
+  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+  settings.validate();
+  camera.validate();
+  scene.validate(settings);
+
+  std::vector<PreparedCloud> prepared;
+  prepared.reserve(scene.clouds.size());
+  for (const auto& c : scene.clouds)
+    prepared.push_back({&c, march_box(c.shape), settings.step_for(camera.position, c.shape.centre())});
+
+  const CameraRays rays(camera, width, height);
+  const RayMarcher marcher(scene, settings, prepared);
+  // Rows are independent: each pixel is written by exactly one thread.
+  parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
+    Scratch scratch;
+    scratch.candidates.resize(static_cast<std::size_t>(settings.max_candidates));
+    scratch.hits.reserve(scene.clouds.size());
+    for (std::size_t r = r0; r < r1; ++r) {
+      for (int c = 0; c < width; ++c) {
+        const glm::vec3 dir = rays.direction(static_cast<int>(r), c);
+        const glm::vec4 px = marcher.march(rays.origin, dir, scratch);
+        float* o = out + (r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c)) * 4;
+        o[0] = px.x;
+        o[1] = px.y;
+        o[2] = px.z;
+        o[3] = px.w;
+      }
+    }
+  });
+}
+
+}  // namespace cumuli

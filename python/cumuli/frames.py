@@ -1,0 +1,139 @@
+"""Image sequences: camera paths (:func:`fly_towards`, :func:`orbit`) and :func:`render_frames`."""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+
+from cumuli import _validate as check
+from cumuli.scene import Camera, Scene
+
+#: Most frames one call renders (keeps a typo from filling a disk).
+MAX_FRAMES = 100_000
+
+
+def _count(frames: int) -> int:
+    return check.integer(frames, "frames", 1, MAX_FRAMES)
+
+
+def fly_towards(
+    start: Sequence[float],
+    target: Sequence[float],
+    frames: int,
+    stop: float = 0.0,
+    fov: float = 50.0,
+    up: Sequence[float] = (0.0, 1.0, 0.0),
+) -> list[Camera]:
+    """Cameras moving in a straight line from ``start`` towards ``target``, always looking at it.
+
+    The last camera stands ``stop`` units short of ``target`` (0 stops on it, looking the same
+    way; a negative ``stop`` flies past — into the cloud and through). Positions are evenly
+    spaced.
+    """
+    n = _count(frames)
+    a = np.asarray(check.vec3(start, "start"), dtype=np.float64)
+    b = np.asarray(check.vec3(target, "target"), dtype=np.float64)
+    stop = check.real(stop, "stop")
+    dist = float(np.linalg.norm(b - a))
+    if dist < 1e-9:
+        raise ValueError("start and target must differ")
+    view = (b - a) / dist
+    travel = dist - stop
+    cams = []
+    for k in range(n):
+        s = travel * (k / (n - 1) if n > 1 else 0.0)
+        pos = a + s * view
+        cams.append(Camera(position=tuple(pos), target=tuple(pos + view), up=tuple(up), fov=fov))
+    return cams
+
+
+def orbit(
+    centre: Sequence[float],
+    radius: float,
+    frames: int,
+    height: float = 0.0,
+    start_angle: float = -90.0,
+    degrees: float = 360.0,
+    fov: float = 50.0,
+) -> list[Camera]:
+    """Cameras on a horizontal circle around ``centre`` looking at it.
+
+    Angles in degrees about +y, 0 on +x; the default start (−90°) is on −z. ``height`` lifts the
+    circle above ``centre``. A full turn does not repeat its first frame.
+    """
+    n = _count(frames)
+    c = np.asarray(check.vec3(centre, "centre"), dtype=np.float64)
+    radius = check.real(radius, "radius", 0.0, lo_open=True)
+    height = check.real(height, "height")
+    start_angle = check.real(start_angle, "start_angle")
+    degrees = check.real(degrees, "degrees")
+    full = math.isclose(abs(degrees) % 360.0, 0.0) and degrees != 0
+    span = degrees / n if full else (degrees / (n - 1) if n > 1 else 0.0)
+    cams = []
+    for k in range(n):
+        a = math.radians(start_angle + k * span)
+        pos = c + np.array([radius * math.cos(a), height, radius * math.sin(a)])
+        cams.append(Camera(position=tuple(pos), target=tuple(c), fov=fov))
+    return cams
+
+
+def render_frames(
+    scene: Scene,
+    cameras: Sequence[Camera],
+    out_dir: str | os.PathLike[str],
+    width: int = 320,
+    height: int = 240,
+    backend: str = "gl",
+    pattern: str = "frame_{:04d}.png",
+    progress: bool = True,
+    alpha: bool = False,
+) -> list[Path]:
+    """Render ``scene`` from each camera and write numbered images into ``out_dir``.
+
+    ``pattern`` is a ``str.format`` pattern taking the frame number; its extension picks the
+    format (``.png`` sRGB8 or ``.exr`` float32). ``out_dir`` is created if missing. A tqdm bar
+    shows progress unless ``progress=False``. Frames are opaque (the render is already
+    composited over the sky) unless ``alpha=True`` keeps the clouds' coverage ``1 − T`` as alpha.
+    Returns the paths written, in order.
+    """
+    from cumuli.imageio import write_image
+    from cumuli.renderer import render
+
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
+    cams = list(cameras)
+    if not cams:
+        raise ValueError("cameras must not be empty")
+    if len(cams) > MAX_FRAMES:
+        raise ValueError(f"at most {MAX_FRAMES} frames, got {len(cams)}")
+    for k, cam in enumerate(cams):
+        if not isinstance(cam, Camera):
+            raise TypeError(f"cameras[{k}] must be a cumuli.Camera, got {type(cam).__name__}")
+    try:
+        names = [pattern.format(k) for k in range(len(cams))]
+    except (IndexError, KeyError, ValueError) as exc:
+        raise ValueError(f"pattern {pattern!r} must take one frame number: {exc}") from None
+    if len(set(names)) != len(names) or any(os.sep in n for n in names):
+        raise ValueError(f"pattern {pattern!r} must give a distinct file name per frame")
+    folder = Path(out_dir)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise OSError(f"cannot create out_dir {str(folder)!r}: {exc.strerror or exc}") from exc
+    if not os.access(folder, os.W_OK):
+        raise OSError(f"out_dir {str(folder)!r} is not writable")
+    from tqdm.auto import tqdm
+
+    paths = []
+    for cam, name in tqdm(
+        list(zip(cams, names, strict=True)), desc="frames", unit="frame", disable=not progress
+    ):
+        img = render(scene, cam, width=width, height=height, backend=backend)
+        if not alpha:
+            img[..., 3] = 1.0
+        paths.append(write_image(folder / name, img))
+    return paths

@@ -1,0 +1,184 @@
+#version 430
+// The render pass of Jiménez de Parga & Gómez Palomo 2018 (Algorithms 1 and 3), exactly as
+// RENDER_CONTRACT.md states it (the C++ reference marcher implements the same contract).
+// One fragment = one pixel of a tile: camera ray, clouds front to back by their box entry,
+// sorted candidate primitives, "paper" or "union" marching with the LOD step, eq. (2) gating,
+// light-grid lighting with HG scattering, early exit, sky blend.
+
+#include "density.glsl"
+#include "lighting.glsl"
+#include "sky.glsl"
+
+// Compile-time caps: the settings are validated against them on the CPU (cumuli/scene.py).
+#define MAX_CANDIDATES 128
+#define MAX_CLOUDS 64
+
+// Camera (RENDER_CONTRACT): f, r, u unit vectors, th = tan(fov/2), aspect = W/H.
+uniform vec3 u_cam_pos;
+uniform vec3 u_cam_f;
+uniform vec3 u_cam_r;
+uniform vec3 u_cam_u;
+uniform float u_th;
+uniform float u_aspect;
+uniform ivec2 u_image_size;   // W, H
+uniform ivec2 u_tile_origin;  // column and row (row 0 = top of the image) of the tile's top-left
+uniform int u_tile_height;
+
+uniform vec3 u_sun_dir;
+uniform vec3 u_sun_radiance;
+
+uniform int u_cloud_count;
+uniform float u_absorption;   // φ of Δτ = exp(−φ·ρ·Δ/Δ_ref)
+uniform float u_step_ref;     // Δ_ref
+uniform float u_lod_a;        // A
+uniform float u_lod_delta;    // δ
+uniform float u_step_min;
+uniform float u_step_max;
+uniform float u_fixed_step;   // > 0 replaces the LOD step
+uniform float u_g;            // HG asymmetry
+uniform int u_max_steps;
+uniform int u_max_candidates;
+uniform bool u_union;         // march = "union"
+
+out vec4 frag;
+
+// Candidate list of the current cloud (Algorithm 1, GETCANDIDATES + SORTCANDIDATES).
+float cand_in[MAX_CANDIDATES];
+float cand_out[MAX_CANDIDATES];
+int cand_prim[MAX_CANDIDATES];
+
+// Collect the primitives of cloud c hit by the ray (grown by the candidate scale), clipped to
+// [t_min, t_max], insertion-sorted by t_in; when full, keep the nearest `cap`.
+int collect_candidates(CloudData c, vec3 o, vec3 d, float t_min, float t_max, int cap) {
+    float scale = c.box_lo.w;
+    int count = 0;
+    int first = c.info.x;
+    int n = c.info.y;
+    for (int jj = 0; jj < n; ++jj) {
+        int j = first + jj;
+        Primitive e = prims[j];
+        vec2 iv;
+        if (!intersect_ellipsoid(e.centre.xyz, e.radii.xyz * scale, e.ax0.xyz, e.ax1.xyz,
+                                 e.ax2.xyz, o, d, iv)) continue;
+        float t0 = max(iv.x, t_min);
+        float t1 = min(iv.y, t_max);
+        if (!(t1 > t0)) continue;
+        int pos = count;
+        if (count == cap) {
+            if (t0 >= cand_in[cap - 1]) continue;
+            pos = cap - 1;
+        } else {
+            ++count;
+        }
+        while (pos > 0 && cand_in[pos - 1] > t0) {
+            cand_in[pos] = cand_in[pos - 1];
+            cand_out[pos] = cand_out[pos - 1];
+            cand_prim[pos] = cand_prim[pos - 1];
+            --pos;
+        }
+        cand_in[pos] = t0;
+        cand_out[pos] = t1;
+        cand_prim[pos] = j;
+    }
+    return count;
+}
+
+// Union marching: the covering candidate (t_in ≤ s ≤ t_out) whose primitive is nearest in its
+// unit frame; `fallback` when none covers s.
+int attribute_sample(int n, float s, vec3 p, int fallback) {
+    int best = fallback;
+    float best_q = 1e30;
+    for (int m = 0; m < n; ++m) {
+        if (cand_in[m] > s) break;  // sorted by t_in
+        if (s <= cand_out[m]) {
+            float q = primitive_q(cand_prim[m], p);
+            if (q < best_q) { best_q = q; best = m; }
+        }
+    }
+    return best;
+}
+
+void main() {
+    // Pixel (row i from the top, column j) of the whole image.
+    int j = u_tile_origin.x + int(gl_FragCoord.x);
+    int i = u_tile_origin.y + (u_tile_height - 1 - int(gl_FragCoord.y));
+    float W = float(u_image_size.x), H = float(u_image_size.y);
+    float x = (2.0 * (float(j) + 0.5) / W - 1.0) * u_th * u_aspect;
+    float y = (1.0 - 2.0 * (float(i) + 0.5) / H) * u_th;
+    vec3 dir = normalize(u_cam_f + x * u_cam_r + y * u_cam_u);
+    vec3 o = u_cam_pos;
+
+    const float HUGE = 1e30;
+    vec3 inv_d = vec3(dir.x != 0.0 ? 1.0 / dir.x : HUGE,
+                      dir.y != 0.0 ? 1.0 / dir.y : HUGE,
+                      dir.z != 0.0 ? 1.0 / dir.z : HUGE);
+
+    // Clouds whose box the ray meets, sorted front to back by entry t (clipped to ≥ 0); ties keep
+    // the scene order (stable insertion sort).
+    int order[MAX_CLOUDS];
+    float entry[MAX_CLOUDS];
+    float leave[MAX_CLOUDS];
+    int hits = 0;
+    int n_clouds = min(u_cloud_count, MAX_CLOUDS);
+    for (int c = 0; c < n_clouds; ++c) {
+        vec2 tb;
+        if (!intersect_box(clouds[c].box_lo.xyz, clouds[c].box_hi.xyz, o, inv_d, tb)) continue;
+        float t0 = max(tb.x, 0.0);
+        if (tb.y < t0) continue;  // box behind the camera
+        int pos = hits++;
+        while (pos > 0 && entry[pos - 1] > t0) {
+            order[pos] = order[pos - 1];
+            entry[pos] = entry[pos - 1];
+            leave[pos] = leave[pos - 1];
+            --pos;
+        }
+        order[pos] = c;
+        entry[pos] = t0;
+        leave[pos] = tb.y;
+    }
+
+    float cos_theta = dot(dir, u_sun_dir);
+    float phase = hg_phase(u_g, cos_theta);
+    int cap = clamp(u_max_candidates, 1, MAX_CANDIDATES);
+    int max_steps = max(u_max_steps, 1);
+
+    vec3 colour = vec3(0.0);
+    float T = 1.0;
+    int samples = 0;
+    bool done = false;
+    for (int h = 0; h < hits && !done; ++h) {
+        CloudData c = clouds[order[h]];
+        int n = collect_candidates(c, o, dir, entry[h], leave[h], cap);
+        float step = u_fixed_step > 0.0
+            ? u_fixed_step
+            : clamp(u_lod_a * exp(-u_lod_delta * length(o - c.centre.xyz)), u_step_min, u_step_max);
+        float t_union = -HUGE;
+        for (int k = 0; k < n && !done; ++k) {
+            float t = cand_in[k];
+            if (u_union) {
+                if (cand_out[k] <= t_union) continue;
+                t = max(t_union, cand_in[k]);
+            }
+            while (t < cand_out[k]) {
+                if (samples >= max_steps) { done = true; break; }
+                ++samples;
+                float s = t + 0.5 * step;
+                vec3 p = o + s * dir;
+                int a = u_union && c.info.z == 0 ? attribute_sample(n, s, p, k) : k;
+                vec2 dg = cloud_density(c, cand_prim[a], p);
+                if (dg.x > 0.0) {
+                    float dtau = exp(-u_absorption * dg.x * step / u_step_ref);
+                    float pL = light_lookup(c, p, u_exact);
+                    vec3 aL = u_sun_radiance * pL;
+                    vec3 sL = aL * phase * dg.y;
+                    colour += (1.0 - dtau) * (aL + sL) * T;
+                    T *= dtau;
+                    if (T < 1e-6) { done = true; break; }
+                }
+                t += step;
+            }
+            t_union = t;
+        }
+    }
+    frag = vec4(colour + T * sky(dir, u_sun_dir, u_sun_radiance), 1.0 - T);
+}

@@ -1,0 +1,374 @@
+"""The GL volumetric renderer: golden images, physical invariants, bad input and GL lifetime.
+
+Images are small (≤ 96×72) so that the whole file runs in seconds on llvmpipe.
+"""
+
+from __future__ import annotations
+
+import gc
+import math
+import os
+from collections.abc import Iterator
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cumuli as cu
+from cumuli.demo import cumulus_scene, default_scene
+from cumuli.renderer import MAX_PIXELS, Renderer
+
+pytestmark = pytest.mark.gl
+
+DATA = Path(__file__).parent / "data"
+FAILURES = Path(__file__).parent / "_failures"
+W, H = 96, 72
+BLACK_SKY = cu.Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0)
+
+
+@pytest.fixture(scope="module")
+def renderer(gl_context) -> Iterator[Renderer]:
+    with Renderer(context=gl_context) as r:
+        yield r
+
+
+def sphere_cloud(
+    centres, radii, light: float | np.ndarray = 1.0, model: str = "spheroid", **kw
+) -> cu.Cloud:
+    """A cloud from arrays with a hand-made light grid (constant unless an array is given)."""
+    cloud = cu.Cloud(
+        np.asarray(centres, np.float32), np.asarray(radii, np.float32), model=model, **kw
+    )
+    lo, hi = cloud.bbox
+    cloud.light = np.full((4, 4, 4), light, np.float32) if np.isscalar(light) else np.asarray(light)
+    cloud.light_box = (tuple(map(float, lo)), tuple(map(float, hi)))
+    return cloud
+
+
+def front_camera(z: float = -20.0, fov: float = 50.0) -> cu.Camera:
+    return cu.Camera(position=(0, 0, z), target=(0, 0, 0), fov=fov)
+
+
+# --- golden images ----------------------------------------------------------------------------
+def golden_scenes() -> dict[str, tuple[cu.Scene, cu.Camera]]:
+    exact = cu.RenderSettings(exact_noise=True)
+    cumulus = cumulus_scene(seed=1, settings=exact)
+    sunset = default_scene(settings=exact)
+    # Metaballs and rotated ellipsoids, two clouds, union marching.
+    rot = np.array(
+        [
+            [[math.cos(a), -math.sin(a), 0], [math.sin(a), math.cos(a), 0], [0, 0, 1]]
+            for a in (0.5, -0.7, 1.2)
+        ],
+        np.float32,
+    )
+    ellipsoids = cu.Cloud(
+        np.array([[-6, 0, 0], [-3, 1, 1], [-8, 2, -1]], np.float32),
+        np.array([[4, 1.5, 2], [3, 1.2, 1.5], [2.5, 2, 2]], np.float32),
+        rotations=rot,
+        kappa=0.6,
+    )
+    balls = cu.metaball_cumulus(centre=(7, 0, 0), seed=3)
+    mixed = cu.Scene(
+        clouds=[ellipsoids, balls],
+        sun=cu.Sun(direction=(-0.4, 0.8, -0.3)),
+        noise=cu.Noise(seed=5),
+        settings=cu.RenderSettings(exact_noise=True, march="union"),
+    )
+    return {
+        "cumulus": (cumulus, cumulus.default_camera()),
+        "sunset": (sunset, sunset.default_camera()),
+        "mixed": (mixed, cu.Camera(position=(0, 4, -30), target=(0, 1, 0), fov=55)),
+    }
+
+
+# Tolerances. The references were rendered on Mesa llvmpipe with exact (texelFetch, float
+# weight) lookups, so the same build reproduces them to float rounding. Another driver may round
+# transcendental functions (exp, pow, sqrt) differently in the last bits; where that moves fBm
+# across eq. (2)'s threshold ρ < γ a single sample appears or vanishes, which changes a few pixels
+# by up to a few tenths (one sample's (1 − Δτ) share at most) while the mean barely moves.
+GOLDEN_MEAN_ABS = 2e-3
+GOLDEN_MAX_ABS = 0.5
+GOLDEN_BAD_PIXELS = 0.01  # share of pixels allowed beyond 0.05
+
+
+@pytest.mark.parametrize("name", ["cumulus", "sunset", "mixed"])
+def test_golden_images(name: str, renderer: Renderer, regen_references: bool) -> None:
+    scene, camera = golden_scenes()[name]
+    img = renderer.render(scene, camera, W, H)
+    path = DATA / f"render_{name}.exr"
+    if regen_references or not path.exists():
+        if not regen_references:
+            pytest.fail(f"reference {path} is missing; run with CUMULI_REGEN=1 to create it")
+        DATA.mkdir(exist_ok=True)
+        cu.write_image(path, img)
+    ref = cu.read_image(path)
+    assert ref.shape == img.shape
+    diff = np.abs(img - ref)
+    mean, worst = float(diff.mean()), float(diff.max())
+    bad = float((diff.max(axis=-1) > 0.05).mean())
+    ok = mean <= GOLDEN_MEAN_ABS and worst <= GOLDEN_MAX_ABS and bad <= GOLDEN_BAD_PIXELS
+    if not ok:
+        FAILURES.mkdir(exist_ok=True)
+        cu.write_image(FAILURES / f"render_{name}.exr", img)
+        cu.write_image(FAILURES / f"render_{name}_diff.exr", diff)
+    assert ok, f"{name}: mean {mean:.2e}, max {worst:.3f}, bad pixels {bad:.3%} (see {FAILURES})"
+    # The references are not trivial: clouds cover part of the frame and are lit.
+    assert 0.02 < ref[..., 3].mean() < 0.9
+
+
+# --- invariants ---------------------------------------------------------------------------------
+def test_no_cloud_gives_exactly_the_sky(renderer: Renderer) -> None:
+    sun = cu.Sun(direction=(0.1, 0.05, 1))
+    scene = cu.Scene(sun=sun, sky=cu.Sky.sunset())
+    cam = cu.Camera(position=(0, 1, 0), target=(0, 1.2, 10), fov=60)
+    img = renderer.render(scene, cam, W, H)
+    assert (img[..., 3] == 0).all()
+    dirs = cam.ray_directions(W, H)
+    ref = scene.sky.colour(dirs, sun)
+    # Away from the disc's rim only float32 rounding of the ray directions and pow() differ.
+    angle = np.degrees(np.arccos(np.clip(dirs @ np.asarray(sun.direction, np.float32), -1, 1)))
+    r = scene.sky.sun_disc_radius
+    rim = (angle > 0.9 * r) & (angle < 1.6 * r)
+    np.testing.assert_allclose(img[~rim, :3], ref[~rim], rtol=1e-4, atol=1e-4)
+    # On the rim the smoothstep is steep (≈ intensity / (cos r − cos 1.5r) per radian): a 1e-7
+    # change of the direction moves it by ~1e-3 relative.
+    np.testing.assert_allclose(img[rim, :3], ref[rim], rtol=1e-2, atol=1e-3)
+    assert rim.sum() > 0
+    assert img[..., :3].max() > 5  # the sun disc is in view
+
+
+def test_cloud_in_front_covers_only_its_pixels(renderer: Renderer) -> None:
+    cloud = sphere_cloud([[0, 0, 0]], [3.0])
+    scene = cu.Scene(clouds=[cloud], settings=cu.RenderSettings(absorption=5.0))
+    cam = front_camera()
+    img = renderer.render(scene, cam, W, H)
+    empty = renderer.render(cu.Scene(), cam, W, H)
+    assert img[H // 2, W // 2, 3] > 0.9
+    # The sphere subtends asin(3/20) ≈ 8.6° of a 50° vertical field: outside a disc of radius
+    # ≈ 0.16·H around the centre every pixel is the sky.
+    yy, xx = np.mgrid[0:H, 0:W]
+    far = np.hypot(yy - (H - 1) / 2, xx - (W - 1) / 2) > 0.25 * H
+    assert (img[far, 3] == 0).all()
+    np.testing.assert_array_equal(img[far], empty[far])
+    assert (img[..., 3] > 0).sum() > 50
+
+
+def test_forward_scattering_is_brighter_towards_the_sun(renderer: Renderer) -> None:
+    cloud = sphere_cloud([[0, 0, 0]], [3.0])
+    settings = cu.RenderSettings(absorption=0.05, hg_g=0.7)  # thin: single scattering dominates
+    cam = front_camera()
+    toward = cu.Scene(
+        clouds=[cloud], sun=cu.Sun(direction=(0, 0, 1)), sky=BLACK_SKY, settings=settings
+    )
+    away = toward.replace(sun=cu.Sun(direction=(0, 0, -1)))
+    a = renderer.render(toward, cam, W, H)[..., :3].sum()
+    b = renderer.render(away, cam, W, H)[..., :3].sum()
+    # aL·(1 + HG·γ): HG(0.7, 1) ≈ 1.5 against HG(0.7, −1) ≈ 0.008, with γ ≤ 1.
+    assert a > 1.3 * b > 0
+    iso = toward.replace(settings=settings.replace(hg_g=0.0))
+    c = renderer.render(iso, cam, W, H)[..., :3].sum()
+    d = renderer.render(iso.replace(sun=cu.Sun(direction=(0, 0, -1))), cam, W, H)[..., :3].sum()
+    assert math.isclose(c, d, rel_tol=1e-4)  # g = 0: no preferred direction
+
+
+def test_moving_the_sun_recomputes_the_light_grid(renderer: Renderer) -> None:
+    scene = cumulus_scene(seed=2)
+    cloud = scene.clouds[0]
+    assert cloud.light is None
+    cam = scene.default_camera()
+    a = renderer.render(scene, cam, 48, 36)
+    grid_a = cloud.light.copy()
+    moved = scene.replace(sun=cu.Sun(direction=(-0.6, 0.5, -0.4)))
+    b = renderer.render(moved, cam, 48, 36)
+    assert not np.array_equal(cloud.light, grid_a)
+    assert np.abs(a - b).mean() > 1e-3
+    # Changing how the grid is made (here its resolution) also recomputes it.
+    finer = scene.replace(settings=scene.settings.replace(light_resolution=12))
+    renderer.render(finer, cam, 48, 36)
+    assert cloud.light.shape == (12, 12, 12)
+    # Rendering the first scene again restores the first grid and image.
+    again = renderer.render(scene, cam, 48, 36)
+    np.testing.assert_array_equal(cloud.light, grid_a)
+    np.testing.assert_array_equal(again, a)
+
+
+def test_cloud_without_light_grid_gets_one_on_demand(renderer: Renderer) -> None:
+    cloud = cu.Cloud(np.array([[0, 0, 0]], np.float32), np.array([3.0], np.float32))
+    assert cloud.light is None
+    img = renderer.render(cu.Scene(clouds=[cloud]), front_camera(), 32, 24)
+    assert cloud.light is not None and cloud.light.ndim == 3 and cloud.light_box is not None
+    assert img[12, 16, 3] > 0
+
+
+def test_camera_inside_a_cloud_gives_finite_values(renderer: Renderer) -> None:
+    scene = cumulus_scene(seed=1)
+    lo, hi = scene.bounds()
+    centre = (lo + hi) / 2
+    cam = cu.Camera(position=tuple(centre), target=tuple(centre + [0, 0, 10]), fov=70)
+    for march in ("paper", "union"):
+        s = scene.replace(settings=scene.settings.replace(march=march))
+        img = renderer.render(s, cam, 48, 36)
+        assert np.isfinite(img).all()
+        assert img[..., 3].mean() > 0.5  # surrounded by cloud
+        assert (img[..., 3] >= 0).all() and (img[..., 3] <= 1).all()
+
+
+def test_halving_the_step_barely_changes_the_image(renderer: Renderer) -> None:
+    # Δτ = exp(−φρΔ/Δ_ref) makes the result step-size independent up to discretisation: halving
+    # a 0.2 step moves the mean pixel by far less than the cloud's own contrast (~0.3).
+    scene = cumulus_scene(seed=1)
+    cam = scene.default_camera()
+    coarse = renderer.render(
+        scene.replace(settings=scene.settings.replace(fixed_step=0.2)), cam, W, H
+    )
+    fine = renderer.render(
+        scene.replace(settings=scene.settings.replace(fixed_step=0.1)), cam, W, H
+    )
+    assert abs(float(coarse.mean()) - float(fine.mean())) < 5e-3
+    assert float(np.abs(coarse - fine).mean()) < 0.02
+    assert coarse[..., 3].mean() > 0.05
+
+
+def test_paper_and_union_agree_without_overlaps_and_differ_with_them(renderer: Renderer) -> None:
+    apart = sphere_cloud([[-4, 0, 0], [4, 0, 0]], [2.5, 2.5])
+    cam = front_camera()
+    paper = cu.Scene(clouds=[apart], settings=cu.RenderSettings(march="paper", absorption=0.05))
+    union = paper.replace(settings=paper.settings.replace(march="union"))
+    np.testing.assert_allclose(
+        renderer.render(paper, cam, W, H), renderer.render(union, cam, W, H), atol=1e-6
+    )
+    overlap = sphere_cloud([[-1, 0, 0], [1, 0, 0]], [2.5, 2.5], kappa=0.0)
+    p = renderer.render(paper.replace(clouds=[overlap]), cam, W, H)
+    u = renderer.render(union.replace(clouds=[overlap]), cam, W, H)
+    # The paper marches the lens where both spheres overlap twice: more opacity there.
+    assert p[H // 2, W // 2, 3] > u[H // 2, W // 2, 3]
+
+
+def test_each_cloud_uses_its_own_light_grid(renderer: Renderer) -> None:
+    dim = sphere_cloud([[-5, 0, 0]], [2.5], light=0.2)
+    bright = sphere_cloud([[5, 0, 0]], [2.5], light=1.0)
+    ramp = sphere_cloud(
+        [[0, 0, 0]],
+        [2.5],
+        light=np.linspace(0, 1, 8, dtype=np.float32)[None, None].repeat(8, 0).repeat(8, 1),
+    )
+    scene = cu.Scene(clouds=[dim, bright], sky=BLACK_SKY, settings=cu.RenderSettings(hg_g=0.0))
+    img = renderer.render(scene, front_camera(), W, H)
+    # Looking along +z, world +x is on the image's left (r = f × up = −x).
+    left, right = img[:, : W // 2, :3].sum(), img[:, W // 2 :, :3].sum()
+    assert math.isclose(left / right, 5.0, rel_tol=0.05)  # colour ∝ pL for the same density
+    # A grid ramping up along x: brighter on the image's left.
+    img = renderer.render(scene.replace(clouds=[ramp]), front_camera(), W, H)
+    row = img[H // 2, :, 0]
+    assert row[W // 2 - 8] > row[W // 2 + 8]
+
+
+def test_metaballs_and_rotated_ellipsoids(renderer: Renderer) -> None:
+    # An ellipsoid long along its own x axis, turned 90° about z, stands upright on screen.
+    rot = np.array([[[0, -1, 0], [1, 0, 0], [0, 0, 1]]], np.float32)
+    tall = sphere_cloud([[0, 0, 0]], [[5, 1, 1]], rotations=rot)
+    img = renderer.render(
+        cu.Scene(clouds=[tall], settings=cu.RenderSettings(absorption=5)), front_camera(), W, H
+    )
+    rows, cols = np.nonzero(img[..., 3] > 0.01)
+    assert np.ptp(rows) > 2.5 * np.ptp(cols)
+    balls = sphere_cloud([[-1.5, 0, 0], [1.5, 0, 0]], [1.5, 1.5], model="metaball")
+    img = renderer.render(cu.Scene(clouds=[balls]), front_camera(), W, H)
+    # The metaball surface bridges the two centres: the midpoint is cloud.
+    assert img[H // 2, W // 2, 3] > 0.2
+
+
+def test_tiles_give_the_same_image(gl_context) -> None:
+    scene = cumulus_scene(seed=1)
+    cam = scene.default_camera()
+    with Renderer(context=gl_context, tile=32) as small, Renderer(context=gl_context) as big:
+        a = small.render(scene, cam, W, H)
+        b = big.render(scene, cam, W, H)
+    np.testing.assert_array_equal(a, b)
+
+
+def test_max_steps_bounds_the_march(renderer: Renderer) -> None:
+    scene = cumulus_scene(seed=1)
+    cam = scene.default_camera()
+    full = renderer.render(scene, cam, 48, 36)
+    capped = renderer.render(
+        scene.replace(settings=scene.settings.replace(max_steps=3)), cam, 48, 36
+    )
+    assert np.isfinite(capped).all()
+    assert capped[..., 3].sum() < full[..., 3].sum()
+
+
+def test_render_convenience_and_backends() -> None:
+    scene = cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [3.0])])
+    img = cu.render(scene, front_camera(), width=32, height=24)
+    assert img.shape == (24, 32, 4) and img.dtype == np.float32
+    cpu = cu.render(scene, front_camera(), width=32, height=24, backend="cpu")
+    assert float(np.abs(img - cpu).mean()) < 1e-3
+    with pytest.raises(ValueError, match="backend"):
+        cu.render(scene, front_camera(), 32, 24, backend="vulkan")
+
+
+# --- bad input ----------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("size", "exc", "message"),
+    [
+        ((0, 10), ValueError, "width"),
+        ((10, -3), ValueError, "height"),
+        ((10.5, 10), TypeError, "width"),
+        ((10, True), TypeError, "height"),
+        ((1 << 20, 10), ValueError, "GL_MAX_TEXTURE_SIZE"),
+        ((16384, 16384), ValueError, "larger than the limit"),
+    ],
+)
+def test_bad_sizes(renderer: Renderer, size, exc, message) -> None:
+    with pytest.raises(exc, match=message):
+        renderer.render(cu.Scene(), front_camera(), *size)
+    assert 16384 * 16384 > MAX_PIXELS
+
+
+def test_bad_arguments(renderer: Renderer, gl_context) -> None:
+    with pytest.raises(TypeError, match="scene"):
+        renderer.render("scene.json", front_camera(), 8, 8)
+    with pytest.raises(TypeError, match="camera"):
+        renderer.render(cu.Scene(), (0, 0, -5), 8, 8)
+    bad = sphere_cloud([[0, 0, 0]], [1.0])
+    bad.light = np.full((2, 2, 2), np.nan, np.float32)
+    with pytest.raises(ValueError, match="light"):
+        renderer.render(cu.Scene(clouds=[bad]), front_camera(), 8, 8)
+    closed = Renderer(context=gl_context)
+    closed.close()
+    with pytest.raises(RuntimeError, match="closed"):
+        closed.render(cu.Scene(), front_camera(), 8, 8)
+
+
+# --- lifetime -----------------------------------------------------------------------------------
+def _open_fds() -> int:
+    return len(os.listdir("/proc/self/fd"))
+
+
+def _rss_kib() -> int:
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1])
+    return 0
+
+
+@pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs /proc")
+def test_creating_and_closing_renderers_does_not_leak() -> None:
+    scene = cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [3.0])])
+    cam = front_camera()
+
+    def cycle(n: int) -> None:
+        for _ in range(n):
+            with Renderer() as r:
+                r.render(scene, cam, 8, 8)
+        gc.collect()
+
+    cycle(20)  # warm up driver caches
+    fds, rss = _open_fds(), _rss_kib()
+    cycle(200)
+    # A leaked context costs file descriptors and megabytes each: 200 of them would show.
+    assert _open_fds() <= fds + 5
+    assert _rss_kib() - rss < 64 * 1024

@@ -1,0 +1,208 @@
+"""Scene description: validation of Camera, Sky, RenderSettings, Scene and the JSON round trip."""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import cumuli as cu
+
+
+def two_clouds() -> list[cu.Cloud]:
+    a = cu.Cloud(np.array([[0, 2, 0], [1.5, 2.5, 0]], np.float32), np.array([2.0, 1.5], np.float32))
+    rot = np.array([[[0, -1, 0], [1, 0, 0], [0, 0, 1]]], np.float32)
+    b = cu.Cloud(
+        np.array([[10, 3, 5]], np.float32),
+        np.array([[3.0, 1.0, 2.0]], np.float32),
+        rotations=rot,
+        model="metaball",
+        phi=0.7,
+        params={"generator": "test", "sigma": np.float32(1.5), "shape": (1, 2)},
+    )
+    return [a, b]
+
+
+# --- Camera -----------------------------------------------------------------------------------
+def test_camera_basis_is_orthonormal_and_right_handed() -> None:
+    cam = cu.Camera(position=(0, 3, -40), target=(0, 3, 0))
+    f, r, u = cam.basis()
+    np.testing.assert_allclose(f, [0, 0, 1], atol=1e-7)
+    # Looking along +z with +y up, right is -x in a right-handed frame (r = f × up).
+    np.testing.assert_allclose(r, [-1, 0, 0], atol=1e-7)
+    np.testing.assert_allclose(u, [0, 1, 0], atol=1e-7)
+
+
+def test_camera_rays_follow_the_contract() -> None:
+    cam = cu.Camera(position=(0, 0, 0), target=(0, 0, 1), fov=60)
+    d = cam.ray_directions(4, 2)
+    assert d.shape == (2, 4, 3) and d.dtype == np.float32
+    np.testing.assert_allclose(np.linalg.norm(d, axis=-1), 1, atol=1e-6)
+    # Top rows look up, left columns look towards +x (r = -x).
+    assert (d[0, :, 1] > 0).all() and (d[1, :, 1] < 0).all()
+    assert d[0, 0, 0] > 0 > d[0, -1, 0]
+    # Vertical fov: the ray through the top edge of a 1-pixel-high column makes fov/2 with f.
+    th = math.tan(math.radians(30))
+    tall = cam.ray_directions(1, 1000)
+    assert math.isclose(tall[0, 0, 1] / tall[0, 0, 2], th * (1 - 1 / 1000), rel_tol=1e-5)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [
+        ({"position": (math.nan, 0, 0), "target": (0, 0, 1)}, "camera.position"),
+        ({"position": (0, 0, 0), "target": (0, 0, math.inf)}, "camera.target"),
+        ({"position": (1, 2, 3), "target": (1, 2, 3)}, "differ"),
+        ({"position": (0, 0, 0), "target": (0, 5, 0)}, "parallel"),
+        ({"position": (0, 0, 0), "target": (0, 0, 1), "up": (0, 0, 0)}, "camera.up"),
+        ({"position": (0, 0, 0), "target": (0, 0, 1), "fov": 0}, "camera.fov"),
+        ({"position": (0, 0, 0), "target": (0, 0, 1), "fov": 180}, "camera.fov"),
+    ],
+)
+def test_camera_rejects_bad_input(kwargs: dict, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        cu.Camera(**kwargs)
+
+
+def test_camera_rejects_non_numbers() -> None:
+    with pytest.raises(TypeError, match="camera.position"):
+        cu.Camera(position="abc", target=(0, 0, 1))
+
+
+# --- Sky, settings ------------------------------------------------------------------------------
+def test_sky_presets_and_reference() -> None:
+    day, dusk = cu.Sky(), cu.Sky.sunset()
+    sun = cu.Sun(direction=(0, 0.1, 1))
+    up = np.array([[0, 1, 0]], np.float32)
+    horizon = np.array([[1, 0, 0]], np.float32)
+    np.testing.assert_allclose(day.colour(up, sun)[0], day.zenith, rtol=1e-6)
+    np.testing.assert_allclose(day.colour(horizon, sun)[0], day.horizon, rtol=1e-6)
+    assert day.zenith[2] > day.zenith[0]  # blue daylight
+    assert dusk.horizon[0] > dusk.horizon[2]  # orange sunset horizon
+    # Looking at the sun adds the disc on top of the base.
+    at_sun = dusk.colour(np.array([sun.direction], np.float32), sun)[0]
+    assert (at_sun > np.asarray(dusk.horizon) + 1).all()
+    with pytest.raises(ValueError, match="sky.zenith"):
+        cu.Sky(zenith=(-1, 0, 0))
+    with pytest.raises(ValueError, match="sky.sun_disc_radius"):
+        cu.Sky(sun_disc_radius=0)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "exc", "message"),
+    [
+        ({"kappa": 1.5}, ValueError, "settings.kappa"),
+        ({"absorption": -1}, ValueError, "settings.absorption"),
+        ({"step_min": 0.5, "step_max": 0.1}, ValueError, "settings.step_max"),
+        ({"hg_g": 1.0}, ValueError, "settings.hg_g"),
+        ({"max_steps": 0}, ValueError, "settings.max_steps"),
+        ({"max_candidates": 10_000}, ValueError, "settings.max_candidates"),
+        ({"march": "fast"}, ValueError, "settings.march"),
+        ({"exact_noise": "yes"}, TypeError, "settings.exact_noise"),
+        ({"max_steps": 2.5}, TypeError, "settings.max_steps"),
+        ({"frequency": math.nan}, ValueError, "settings.frequency"),
+        ({"light_method": "fast"}, ValueError, "settings.light_method"),
+        ({"light_step": 0}, ValueError, "settings.light_step"),
+    ],
+)
+def test_settings_reject_bad_input(kwargs: dict, exc: type, message: str) -> None:
+    with pytest.raises(exc, match=message):
+        cu.RenderSettings(**kwargs)
+
+
+def test_lod_step_follows_the_paper_and_clamps() -> None:
+    s = cu.RenderSettings(lod_a=0.5, lod_delta=0.01, step_min=0.05, step_max=0.4)
+    assert s.step_for(0) == 0.4  # 0.5 clamped
+    assert math.isclose(s.step_for(50), 0.5 * math.exp(-0.5))
+    assert s.step_for(1e4) == 0.05
+    assert s.replace(fixed_step=0.1).step_for(1e4) == 0.1
+
+
+# --- Scene and JSON -----------------------------------------------------------------------------
+def test_scene_round_trips_through_json(tmp_path: Path) -> None:
+    scene = cu.Scene(
+        clouds=two_clouds(),
+        sun=cu.Sun(direction=(0.2, 0.3, 1), colour=(1, 0.6, 0.3), intensity=2),
+        sky=cu.Sky.sunset(),
+        noise=cu.Noise(seed=2**63 + 5, size=32),
+        settings=cu.RenderSettings(march="union", kappa=0.3, max_steps=500),
+        camera=cu.Camera(position=(0, 3, -40), target=(0, 3, 0), fov=40),
+    )
+    path = scene.save(tmp_path / "s.json")
+    back = cu.load_scene(path)
+    assert back.sun == scene.sun and back.sky == scene.sky and back.settings == scene.settings
+    assert back.camera == scene.camera and back.noise == scene.noise
+    assert back.noise.seed == 2**63 + 5
+    assert len(back.clouds) == 2
+    for a, b in zip(scene.clouds, back.clouds, strict=True):
+        np.testing.assert_array_equal(a.centres, b.centres)
+        np.testing.assert_array_equal(a.radii, b.radii)
+        np.testing.assert_array_equal(a.rotations, b.rotations)
+        assert (a.model, a.kappa, a.phi) == (b.model, b.kappa, b.phi)
+    assert back.clouds[1].params["sigma"] == 1.5
+    # Only the final file is left behind (atomic write through a temporary).
+    assert [p.name for p in tmp_path.iterdir()] == ["s.json"]
+
+
+def test_load_scene_errors(tmp_path: Path) -> None:
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(ValueError, match="not valid JSON"):
+        cu.load_scene(bad)
+    good = cu.Scene(clouds=two_clouds()).to_dict()
+    for key in ("clouds", "sun", "settings"):
+        data = dict(good)
+        del data[key]
+        bad.write_text(json.dumps(data))
+        with pytest.raises(ValueError, match=f"missing field.*{key}"):
+            cu.load_scene(bad)
+    data = json.loads(json.dumps(good))
+    del data["clouds"][0]["radii"]
+    bad.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match=r"clouds\[0\].*radii"):
+        cu.load_scene(bad)
+    data = json.loads(json.dumps(good))
+    data["settings"]["warp_speed"] = 9
+    bad.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match="warp_speed"):
+        cu.load_scene(bad)
+    data = json.loads(json.dumps(good))
+    data["settings"]["march"] = "fast"
+    bad.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match="settings.march"):
+        cu.load_scene(bad)
+    bad.write_text("[1, 2]")
+    with pytest.raises(ValueError, match="JSON object"):
+        cu.load_scene(bad)
+    with pytest.raises(OSError, match="cannot read"):
+        cu.load_scene(tmp_path / "missing.json")
+
+
+def test_save_to_unwritable_place_leaves_nothing(tmp_path: Path) -> None:
+    scene = cu.Scene(clouds=two_clouds())
+    with pytest.raises(OSError):
+        scene.save(tmp_path / "no" / "such" / "folder" / "s.json")
+    target = tmp_path / "dir.json"
+    target.mkdir()  # a folder where the file should go: os.replace fails
+    with pytest.raises(OSError):
+        scene.save(target)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["dir.json"]
+
+
+def test_scene_validation() -> None:
+    with pytest.raises(TypeError, match=r"scene.clouds\[0\]"):
+        cu.Scene(clouds=[np.zeros((3, 3))])
+    with pytest.raises(TypeError, match="scene.sun"):
+        cu.Scene(sun=(0, 1, 0))
+    c = two_clouds()[0]
+    with pytest.raises(ValueError, match="at most"):
+        cu.Scene(clouds=[c] * 65)
+    scene = cu.Scene(clouds=[c])
+    cam = scene.default_camera()
+    lo, hi = scene.bounds()
+    # The default camera looks at the clouds' centre.
+    np.testing.assert_allclose(cam.target, (lo + hi) / 2, rtol=1e-6)
+    assert scene.replace(sky=cu.Sky.sunset()).sky == cu.Sky.sunset()
