@@ -57,6 +57,7 @@ glm::dvec3 to_dvec3(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[
 }  // namespace
 
 void bind_shapes(py::module_& m) {
+  m.attr("LSYSTEM_MAX_LENGTH") = kMaxLSystemLength;
   m.def(
       "gaussian_cumulus",
       [](std::array<float, 3> centre, int n, std::array<float, 3> mu, std::array<float, 3> sigma,
