@@ -49,3 +49,62 @@ def test_lsystem_max_length_is_capped_before_allocating() -> None:
     cap = int(_core.LSYSTEM_MAX_LENGTH)
     assert cu.lsystem_expand("X", {"X": "XX"}, 3, max_length=cap) == "X" * 8
 
+
+# --- Cloud files ------------------------------------------------------------------------------
+def test_npz_member_declaring_too_many_primitives_is_refused_before_inflating(
+    tmp_path: Path,
+) -> None:
+    good = small_cloud()
+    rows = 2 * MAX_PRIMITIVES  # 24 MiB of zeros, a few KiB compressed
+    path = tmp_path / "bomb.npz"
+    with zipfile.ZipFile(path, "w", zipfile.ZIP_DEFLATED) as zf:
+        _npz_member(zf, "centres", np.zeros((rows, 3), np.float32))
+        _npz_member(zf, "radii", good.radii)
+        _npz_member(zf, "rotations", good.rotations)
+        _npz_member(zf, "meta", _meta(good))
+    assert path.stat().st_size < 1 << 20
+    with pytest.raises(ValueError, match="'centres' has unacceptable shape"):
+        cu.load_cloud(path)
+
+
+def test_npz_fortran_order_arrays_are_read_in_their_order(tmp_path: Path) -> None:
+    good = cu.Cloud(np.arange(9, dtype=np.float32).reshape(3, 3), np.ones(3))
+    path = tmp_path / "f.npz"
+    np.savez(
+        path,
+        centres=np.asfortranarray(good.centres),
+        radii=np.asfortranarray(good.radii),
+        rotations=good.rotations,
+        meta=_meta(good),
+    )
+    loaded = cu.load_cloud(path)
+    np.testing.assert_array_equal(loaded.centres, good.centres)
+
+
+@pytest.mark.parametrize("suffix", [".json", ".npz"])
+def test_inverted_light_box_in_a_file_is_refused(tmp_path: Path, suffix: str) -> None:
+    c = small_cloud()
+    c.light = np.ones((2, 2, 2), np.float32)
+    c.light_box = ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
+    path = c.save(tmp_path / f"c{suffix}")
+    with pytest.raises(ValueError, match="light_box"):
+        cu.load_cloud(path)
+
+
+def test_deeply_nested_json_is_a_value_error(tmp_path: Path) -> None:
+    text = "[" * 100_000 + "]" * 100_000
+    (tmp_path / "deep.json").write_text(text)
+    with pytest.raises(ValueError, match="deep.json"):
+        cu.load_cloud(tmp_path / "deep.json")
+    with pytest.raises(ValueError, match="not valid JSON"):
+        cu.load_scene(tmp_path / "deep.json")
+
+
+def test_oversized_scene_file_is_refused_before_reading(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    path = cu.Scene([small_cloud()], noise=cu.Noise(0, 4)).save(tmp_path / "s.json")
+    monkeypatch.setattr("cumuli.scene.MAX_SCENE_BYTES", 100)
+    with pytest.raises(ValueError, match="more than 100"):
+        cu.load_scene(path)
+

@@ -37,6 +37,14 @@ FILE_VERSION = 1
 MAX_FILE_BYTES = 1 << 31
 #: Largest light grid accepted from a file (voxels).
 MAX_LIGHT_VOXELS = 512**3
+#: Largest element count of each array in a saved ``.npz`` (checked before it is inflated).
+_NPZ_LIMITS = {
+    "centres": 3 * MAX_PRIMITIVES,
+    "radii": 3 * MAX_PRIMITIVES,
+    "rotations": 9 * MAX_PRIMITIVES,
+    "meta": 1 << 28,
+    "light": MAX_LIGHT_VOXELS,
+}
 
 
 @dataclass(eq=False)
@@ -363,7 +371,13 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             meta, arrays = _read_npz(path)
         else:
             meta, arrays = _read_json(path)
-    except (zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError, EOFError) as exc:
+    except (
+        zipfile.BadZipFile,
+        json.JSONDecodeError,
+        UnicodeDecodeError,
+        EOFError,
+        RecursionError,  # absurdly nested JSON
+    ) as exc:
         raise ValueError(f"{path.name}: not a readable cumuli cloud file ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != FILE_FORMAT:
         raise ValueError(f"{path.name}: not a cumuli cloud file (format tag missing)")
@@ -384,10 +398,14 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             raise ValueError(f"{path.name}: light grid without light_box")
     try:
         if light_box is not None:
+            if not isinstance(light_box, (list, tuple)) or len(light_box) != 2:
+                raise ValueError(f"light_box must be [lo, hi], got {light_box!r}")
             light_box = (
                 check.vec3(light_box[0], "light_box"),
                 check.vec3(light_box[1], "light_box"),
             )
+            if not all(h > lo for lo, h in zip(*light_box, strict=True)):
+                raise ValueError(f"light_box must have hi > lo on every axis, got {light_box}")
         light_sun = meta.get("light_sun")
         if light_sun is not None:
             light_sun = check.direction(light_sun, "light_sun")
@@ -424,17 +442,19 @@ def _read_npz(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
                 # Check the declared shape before numpy allocates it.
                 version = np.lib.format.read_magic(fh)
                 if version == (1, 0):
-                    shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+                    shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
                 else:
-                    shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+                    shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
                 count = int(np.prod(shape, dtype=np.int64)) if shape else 1
-                limit = MAX_LIGHT_VOXELS if key == "light" else MAX_FILE_BYTES
-                if dtype.hasobject or count > limit:
+                # Per-array limits: a compressed member can declare (and inflate to) far more
+                # than the file's size, so the file-size limit alone does not bound memory.
+                if dtype.hasobject or count > _NPZ_LIMITS[key]:
                     raise ValueError(f"{path.name}: array {key!r} has unacceptable shape/dtype")
                 data = fh.read(count * dtype.itemsize)
                 if len(data) != count * dtype.itemsize:
                     raise ValueError(f"{path.name}: array {key!r} is truncated")
-                arrays[key] = np.frombuffer(data, dtype=dtype).reshape(shape).copy()
+                order = "F" if fortran else "C"
+                arrays[key] = np.frombuffer(data, dtype=dtype).reshape(shape, order=order).copy()
     meta = json.loads(arrays.pop("meta").tobytes().decode("utf-8"))
     return meta, arrays
 

@@ -34,6 +34,8 @@ MAX_CANDIDATES = 128
 MAX_STEPS = 1 << 16
 MAX_CLOUDS = 64
 MARCH_MODES = ("paper", "union")
+#: Largest scene file `load_scene` reads (clouds are stored inline as JSON arrays).
+MAX_SCENE_BYTES = 1 << 30
 LIGHT_METHODS = ("ndt", "naive")
 
 
@@ -511,6 +513,12 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     """
     path = Path(path)
     try:
+        size = path.stat().st_size if path.is_file() else 0
+    except OSError:
+        size = 0  # read_text below reports the problem
+    if size > MAX_SCENE_BYTES:
+        raise ValueError(f"scene file {str(path)!r} has {size} bytes, more than {MAX_SCENE_BYTES}")
+    try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise OSError(f"cannot read scene file {str(path)!r}: {exc.strerror or exc}") from exc
@@ -518,7 +526,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
         raise ValueError(f"scene file {str(path)!r} is not UTF-8 JSON: {exc}") from None
     try:
         data = json.loads(text)
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, RecursionError) as exc:  # RecursionError: absurd nesting
         raise ValueError(f"scene file {str(path)!r} is not valid JSON: {exc}") from None
     try:
         return Scene.from_dict(data)
