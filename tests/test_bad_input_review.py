@@ -108,3 +108,25 @@ def test_oversized_scene_file_is_refused_before_reading(
     with pytest.raises(ValueError, match="more than 100"):
         cu.load_scene(path)
 
+
+# --- Atomic writes share one helper: same permissions, nothing left on failure ----------------
+def test_scene_cloud_and_image_files_get_the_same_permissions(tmp_path: Path) -> None:
+    scene_path = cu.Scene([small_cloud()], noise=cu.Noise(0, 4)).save(tmp_path / "s.json")
+    cloud_path = small_cloud().save(tmp_path / "c.npz")
+    image_path = cu.write_image(tmp_path / "i.png", np.zeros((2, 3, 4), np.float32))
+    umask = os.umask(0)
+    os.umask(umask)
+    want = 0o666 & ~umask
+    for p in (scene_path, cloud_path, image_path):
+        assert stat.S_IMODE(p.stat().st_mode) == want, p.name
+
+
+def test_failed_saves_leave_no_temporary(tmp_path: Path) -> None:
+    (tmp_path / "taken.json").mkdir()
+    (tmp_path / "taken.npz").mkdir()
+    with pytest.raises(OSError):
+        cu.Scene([small_cloud()], noise=cu.Noise(0, 4)).save(tmp_path / "taken.json")
+    with pytest.raises(OSError):
+        small_cloud().save(tmp_path / "taken.npz")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.json", "taken.npz"]
+

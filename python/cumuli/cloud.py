@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import zipfile
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -26,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli._atomic import atomic_target
 
 DENSITY_MODELS = ("spheroid", "metaball")
 #: Most primitives a cloud may hold.
@@ -249,41 +249,28 @@ class Cloud:
             raise TypeError(f"params/stats must be JSON-serialisable: {exc}") from None
         if not path.parent.is_dir():
             raise FileNotFoundError(f"folder of path does not exist: {str(path.parent)!r}")
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                if suffix == ".npz":
-                    arrays: dict[str, np.ndarray] = {
-                        "centres": self.centres,
-                        "radii": self.radii,
-                        "rotations": self.rotations,
-                        "meta": np.frombuffer(meta_text.encode("utf-8"), dtype=np.uint8),
-                    }
-                    if self.light is not None:
-                        arrays["light"] = np.asarray(self.light, dtype=np.float32)
-                    np.savez_compressed(fh, **arrays)
-                else:
-                    doc = dict(meta)
-                    doc["centres"] = self.centres.tolist()
-                    doc["radii"] = self.radii.tolist()
-                    doc["rotations"] = self.rotations.tolist()
-                    if self.light is not None:
-                        light = np.asarray(self.light, dtype=np.float32)
-                        doc["light_shape"] = list(light.shape)
-                        doc["light"] = light.ravel().tolist()
-                    text = json.dumps(doc, default=_json_default, allow_nan=False)
-                    fh.write(text.encode("utf-8"))
-            # mkstemp makes the file private (0600); give it the permissions a plain open() would.
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)
-            os.replace(tmp, path)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        with atomic_target(path) as tmp, open(tmp, "wb") as fh:
+            if suffix == ".npz":
+                arrays: dict[str, np.ndarray] = {
+                    "centres": self.centres,
+                    "radii": self.radii,
+                    "rotations": self.rotations,
+                    "meta": np.frombuffer(meta_text.encode("utf-8"), dtype=np.uint8),
+                }
+                if self.light is not None:
+                    arrays["light"] = np.asarray(self.light, dtype=np.float32)
+                np.savez_compressed(fh, **arrays)
+            else:
+                doc = dict(meta)
+                doc["centres"] = self.centres.tolist()
+                doc["radii"] = self.radii.tolist()
+                doc["rotations"] = self.rotations.tolist()
+                if self.light is not None:
+                    light = np.asarray(self.light, dtype=np.float32)
+                    doc["light_shape"] = list(light.shape)
+                    doc["light"] = light.ravel().tolist()
+                text = json.dumps(doc, default=_json_default, allow_nan=False)
+                fh.write(text.encode("utf-8"))
         return path
 
     def _meta(self) -> dict[str, Any]:

@@ -18,12 +18,13 @@ temporary behind. Errors: unsupported extension â†’ ``ValueError``; bad array â†
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import OpenImageIO as oiio
+
+from cumuli._atomic import atomic_target
 
 #: Extensions write_image and read_image handle, and what they store.
 FORMATS = {".exr": "float32 linear RGBA (OpenEXR, ZIP)", ".png": "8-bit sRGB RGBA"}
@@ -155,19 +156,9 @@ def write_image(path: str | os.PathLike[str], img: np.ndarray) -> Path:
         raise FileNotFoundError(f"path's folder {str(folder)!r} does not exist")
     if target.is_dir():
         raise IsADirectoryError(f"path {str(target)!r} is a directory")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{ext}", dir=folder)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
+    # The temporary keeps the extension: OpenImageIO picks the format from it.
+    with atomic_target(target, suffix=f".tmp{ext}") as tmp:
         _write_with_oiio(tmp, ext, rgba)
-        # mkstemp makes the file private (0600); give it the permissions a plain open() would.
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return target
 
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
@@ -22,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli._atomic import atomic_target
 from cumuli.cloud import Cloud
 from cumuli.noise import Noise
 from cumuli.sun import Sun
@@ -494,14 +494,8 @@ class Scene:
         folder = path.parent if str(path.parent) else Path(".")
         if not folder.is_dir():
             raise OSError(f"cannot save the scene: folder {str(folder)!r} does not exist")
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(text)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic_target(folder / path.name) as tmp:
+            tmp.write_text(text, encoding="utf-8")
         return path
 
 
