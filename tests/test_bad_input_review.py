@@ -130,3 +130,51 @@ def test_failed_saves_leave_no_temporary(tmp_path: Path) -> None:
         small_cloud().save(tmp_path / "taken.npz")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.json", "taken.npz"]
 
+
+# --- Light grids set by hand ------------------------------------------------------------------
+def _cpu_scene(cloud: cu.Cloud) -> cu.Scene:
+    return cu.Scene([cloud], noise=cu.Noise(0, 4), settings=cu.RenderSettings(light_resolution=4))
+
+
+@pytest.mark.parametrize("dtype", [object, complex])
+def test_hand_set_light_grid_of_wrong_dtype_names_the_grid(dtype: type) -> None:
+    c = small_cloud()
+    c.light = np.zeros((2, 2, 2), dtype)
+    c.light_box = ((-2.0, -2.0, -2.0), (3.0, 2.0, 2.0))
+    cam = cu.Camera((0, 0, -10), (0, 0, 0))
+    with pytest.raises(TypeError, match=r"clouds\[0\]\.light must be a real numeric"):
+        cu.render(_cpu_scene(c), cam, 4, 3, backend="cpu")
+
+
+@pytest.mark.parametrize(
+    "box", ["ab", ((0, 0, 0),), ((0, 0, 0), (1, 1, np.inf)), (("a", 0, 0), (1, 1, 1)), 5]
+)
+def test_hand_set_light_box_that_is_not_two_vectors_names_the_box(box: object) -> None:
+    c = small_cloud()
+    c.light = np.zeros((2, 2, 2), np.float32)
+    c.light_box = box  # type: ignore[assignment]
+    cam = cu.Camera((0, 0, -10), (0, 0, 0))
+    with pytest.raises(ValueError, match=r"clouds\[0\]\.light_box"):
+        cu.render(_cpu_scene(c), cam, 4, 3, backend="cpu")
+
+
+# --- Renderer arguments are checked before a GL context is made -------------------------------
+def test_renderer_checks_arguments_before_making_a_context(monkeypatch: pytest.MonkeyPatch) -> None:
+    made: list[object] = []
+
+    class FakeContext:
+        closed = False
+
+        def __init__(self) -> None:
+            made.append(self)
+            raise AssertionError("no context should be made for bad arguments")
+
+    monkeypatch.setattr(renderer_mod, "GLContext", FakeContext)
+    with pytest.raises(TypeError, match="tile"):
+        cu.Renderer(tile="big")
+    with pytest.raises(ValueError, match="tile"):
+        cu.Renderer(tile=1)
+    with pytest.raises(TypeError, match="context must be a cumuli.gl.GLContext"):
+        cu.Renderer(context="egl")
+    assert made == []
+

@@ -58,14 +58,25 @@ def _check_light(cloud: Cloud, index: int) -> None:
     grid = cloud.light
     if not isinstance(grid, np.ndarray) or grid.ndim != 3 or min(grid.shape) < 1:
         raise ValueError(f"scene.clouds[{index}].light must be a (D, H, W) array")
+    if grid.dtype.kind not in "fiu":
+        raise TypeError(
+            f"scene.clouds[{index}].light must be a real numeric array, got dtype {grid.dtype}"
+        )
     if not np.isfinite(grid).all():
         raise ValueError(f"scene.clouds[{index}].light contains NaN or infinite values")
-    if cloud.light_box is None:
+    box = cloud.light_box
+    if box is None:
         raise ValueError(f"scene.clouds[{index}].light_box is missing (the light grid's box)")
-    lo = np.asarray(cloud.light_box[0], dtype=np.float64)
-    hi = np.asarray(cloud.light_box[1], dtype=np.float64)
-    if lo.shape != (3,) or hi.shape != (3,) or not (hi > lo).all():
-        raise ValueError(f"scene.clouds[{index}].light_box must be (lo, hi) with hi > lo")
+    bad_box = f"scene.clouds[{index}].light_box must be (lo, hi), two finite 3-vectors with hi > lo"
+    try:
+        lo = np.asarray(box[0], dtype=np.float64)
+        hi = np.asarray(box[1], dtype=np.float64)
+    except (TypeError, ValueError, IndexError, KeyError):
+        raise ValueError(f"{bad_box}, got {box!r}") from None
+    if len(box) != 2 or lo.shape != (3,) or hi.shape != (3,) or not (hi > lo).all():
+        raise ValueError(bad_box)
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        raise ValueError(bad_box)
 
 
 def prepare_light(scene: Scene) -> None:
@@ -212,11 +223,20 @@ class Renderer:
     """
 
     def __init__(self, context: GLContext | None = None, tile: int = TILE) -> None:
-        self._owns_context = context is None
-        self.gl = GLContext() if context is None else context
-        self.tile = check.integer(tile, "tile", 16, 4096)
         self.closed = False
         self._objects: list[Any] = []
+        self._owns_context = False
+        # Arguments first: a bad one must not leave a context behind.
+        self.tile = check.integer(tile, "tile", 16, 4096)
+        if context is not None:
+            if not isinstance(context, GLContext):
+                raise TypeError(
+                    f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
+                )
+            if context.closed:
+                raise ValueError("context is closed")
+        self._owns_context = context is None
+        self.gl = GLContext() if context is None else context
         ctx = self.gl.ctx
         try:
             self.program = self.gl.program("fullscreen.vert.glsl", "march.frag.glsl")
