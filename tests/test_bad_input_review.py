@@ -178,3 +178,20 @@ def test_renderer_checks_arguments_before_making_a_context(monkeypatch: pytest.M
         cu.Renderer(context="egl")
     assert made == []
 
+
+# --- The core's containment filter refuses what eq. (17) cannot compare ------------------------
+@pytest.mark.parametrize(
+    ("centres", "radii", "name"),
+    [
+        (np.full((2, 3), np.nan), np.ones(2), "centres"),
+        (np.zeros((2, 3)), np.array([1.0, np.nan]), "radii"),
+        (np.zeros((2, 3)), np.array([1.0, -1.0]), "radii"),
+        (np.zeros((2, 3)), np.array([1.0, 0.0]), "radii"),
+    ],
+)
+def test_remove_contained_spheres_refuses_non_finite_or_non_positive(
+    centres: np.ndarray, radii: np.ndarray, name: str
+) -> None:
+    with pytest.raises(ValueError, match=name):
+        _core.remove_contained_spheres(centres.astype(np.float32), radii.astype(np.float32))
+
