@@ -195,3 +195,39 @@ def test_remove_contained_spheres_refuses_non_finite_or_non_positive(
     with pytest.raises(ValueError, match=name):
         _core.remove_contained_spheres(centres.astype(np.float32), radii.astype(np.float32))
 
+
+# --- Primitives whose float32 bounds overflow are refused --------------------------------------
+@pytest.mark.parametrize(
+    ("centres", "radii"),
+    [([[3e38, 0.0, 0.0]], [1e38]), ([[0.0, 0.0, 0.0]], [3e38]), ([[-2e38, 0.0, 0.0]], [2e38])],
+)
+def test_cloud_whose_bounds_overflow_float32_is_refused(centres: list, radii: list) -> None:
+    # Before: accepted with bbox = NaN, failing later with "cloud box is not finite".
+    with pytest.raises(ValueError, match="float32 range"):
+        cu.Cloud(centres, radii)
+
+
+# --- Property: any float array reaching Cloud either builds a usable cloud or is refused ------
+_floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(
+    centres=hnp.arrays(
+        np.float64, st.tuples(st.integers(0, 3), st.integers(2, 4)), elements=_floats
+    ),
+    radii=hnp.arrays(np.float64, st.integers(0, 4), elements=_floats),
+)
+def test_cloud_from_arbitrary_floats_builds_or_raises(
+    centres: np.ndarray, radii: np.ndarray
+) -> None:
+    try:
+        with np.errstate(all="ignore"):
+            cloud = cu.Cloud(centres, radii)
+    except (ValueError, TypeError):
+        return
+    # A cloud that was accepted works in the core: finite bounds and a density at its centres.
+    lo, hi = cloud.bbox
+    assert np.isfinite(lo).all() and np.isfinite(hi).all()
+    rho, gamma = cloud.density(cloud.centres, constant=0.25, threads=1)
+    assert rho.shape == gamma.shape == (cloud.n,)

@@ -89,6 +89,13 @@ class Cloud:
         self.rotations = np.ascontiguousarray(rot, dtype=np.float32)
         if not np.isfinite(self.rotations).all():
             raise ValueError("rotations contain NaN or infinite values")
+        # Every primitive's world bounds must be float32-representable: the core and the shaders
+        # compute boxes in float32, and an overflowing one (3e38 ± 1e38) turns into inf/NaN.
+        rot64 = self.rotations.astype(np.float64)
+        half = np.sqrt(np.einsum("nkj,nj->nk", rot64**2, self.radii.astype(np.float64) ** 2))
+        reach = np.abs(self.centres.astype(np.float64)) + half
+        if not (reach < float(np.finfo(np.float32).max) / 4).all():
+            raise ValueError("centres ± radii must stay well inside the float32 range (< 8.5e37)")
         if self.model not in DENSITY_MODELS:
             raise ValueError(f"model must be one of {DENSITY_MODELS}, got {self.model!r}")
         self.kappa = check.real(self.kappa, "kappa", 0.0, 1.0)
