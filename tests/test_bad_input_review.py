@@ -207,6 +207,31 @@ def test_cloud_whose_bounds_overflow_float32_is_refused(centres: list, radii: li
         cu.Cloud(centres, radii)
 
 
+# --- Rotations: columns are unit, orthogonal axes ---------------------------------------------
+@pytest.mark.parametrize(
+    "rotation",
+    [np.zeros((3, 3)), np.diag([2.0, 1.0, 1.0]), [[1, 0.1, 0], [0, 1, 0], [0, 0, 1]]],
+)
+def test_non_orthonormal_rotations_are_refused(rotation: object) -> None:
+    # Before: accepted; the core's bounds (from R's columns) and unit frame (Rᵀ as inverse)
+    # disagreed, so a zero matrix gave a point-sized box and a scaled one a clipped primitive.
+    rot = np.asarray(rotation, dtype=np.float32)[None]
+    with pytest.raises(ValueError, match=r"rotations\[0\] is not orthonormal"):
+        cu.Cloud(np.zeros((1, 3)), np.ones(1), rot)
+    with pytest.raises(ValueError, match="orthonormal"):
+        _core.light_grid(
+            np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32), rot, "spheroid", 0.5,
+            0.6, None, (0, 1, 0), (4, 4, 4), "ndt", 0.1, 0.3, 1e-4, 5, 0.5, 2.0, 1.0, 0.5, 1,
+        )  # fmt: skip
+
+
+def test_proper_rotations_and_reflections_are_accepted() -> None:
+    c, s = np.cos(0.7), np.sin(0.7)
+    rot = np.array([[[c, -s, 0], [s, c, 0], [0, 0, 1]], np.diag([1.0, -1.0, 1.0])], np.float32)
+    cloud = cu.Cloud(np.zeros((2, 3)), np.ones((2, 3)), rot)
+    np.testing.assert_array_equal(cloud.rotations, rot)
+
+
 # --- Property: any float array reaching Cloud either builds a usable cloud or is refused ------
 _floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
 

@@ -30,6 +30,8 @@ from cumuli._atomic import atomic_target
 DENSITY_MODELS = ("spheroid", "metaball")
 #: Most primitives a cloud may hold.
 MAX_PRIMITIVES = 1 << 20
+#: Largest |RᵀR − I| accepted for a primitive's rotation (float32 rounding is ~1e-7).
+ROTATION_TOLERANCE = 1e-3
 #: Tag and version written into saved clouds.
 FILE_FORMAT = "cumuli.cloud"
 FILE_VERSION = 1
@@ -89,6 +91,17 @@ class Cloud:
         self.rotations = np.ascontiguousarray(rot, dtype=np.float32)
         if not np.isfinite(self.rotations).all():
             raise ValueError("rotations contain NaN or infinite values")
+        # Columns are the ellipsoid's axes: they must be orthonormal, or the unit-sphere frame
+        # q = Rᵀ(p − c)/r and the world bounds (from R's columns) describe different shapes and
+        # boxes clip the primitive. Float32 rounding of a true rotation is far inside 1e-3.
+        rtr = np.einsum("nji,njk->nik", self.rotations.astype(np.float64), self.rotations)
+        err = np.abs(rtr - np.eye(3)).max(axis=(1, 2)) if n else np.zeros(0)
+        if (err > ROTATION_TOLERANCE).any():
+            i = int(np.argmax(err))
+            raise ValueError(
+                f"rotations[{i}] is not orthonormal (|RᵀR − I| = {err[i]:.3g}): its columns must "
+                "be the ellipsoid's unit axes; put scale in radii"
+            )
         # Every primitive's world bounds must be float32-representable: the core and the shaders
         # compute boxes in float32, and an overflowing one (3e38 ± 1e38) turns into inf/NaN.
         rot64 = self.rotations.astype(np.float64)
