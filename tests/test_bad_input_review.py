@@ -232,6 +232,17 @@ def test_proper_rotations_and_reflections_are_accepted() -> None:
     np.testing.assert_array_equal(cloud.rotations, rot)
 
 
+# --- render_frames --------------------------------------------------------------------------
+def test_render_frames_pattern_must_be_a_str(tmp_path: Path) -> None:
+    from cumuli import frames
+
+    scene = cu.Scene([small_cloud()], noise=cu.Noise(0, 4))
+    cams = frames.orbit((0, 0, 0), 10.0, 2)
+    with pytest.raises(TypeError, match="pattern must be a str"):  # was AttributeError
+        frames.render_frames(scene, cams, tmp_path / "out", 4, 3, backend="cpu", pattern=5)
+    assert not (tmp_path / "out").exists()
+
+
 # --- Property: any float array reaching Cloud either builds a usable cloud or is refused ------
 _floats = st.floats(allow_nan=True, allow_infinity=True, width=64)
 
