@@ -7,6 +7,9 @@ import io
 import json
 import os
 import stat
+import subprocess
+import sys
+import textwrap
 import zipfile
 from pathlib import Path
 
@@ -241,6 +244,32 @@ def test_render_frames_pattern_must_be_a_str(tmp_path: Path) -> None:
     with pytest.raises(TypeError, match="pattern must be a str"):  # was AttributeError
         frames.render_frames(scene, cams, tmp_path / "out", 4, 3, backend="cpu", pattern=5)
     assert not (tmp_path / "out").exists()
+
+
+# --- Threads the system refuses --------------------------------------------------------------
+def test_threads_the_system_refuses_do_not_abort_the_interpreter() -> None:
+    # 1024 threads under an address-space limit: thread creation fails part way. Before, the
+    # std::system_error escaped while other threads ran and std::terminate aborted Python.
+    code = textwrap.dedent(
+        """
+        import os, resource
+        import numpy as np
+        import cumuli as cu
+        noise = cu.Noise(1, 8)
+        pts = np.random.default_rng(0).random((4096, 3)).astype(np.float32)
+        ref = noise.fbm(pts, threads=1)
+        vm = int(open("/proc/self/statm").read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+        soft, hard = resource.getrlimit(resource.RLIMIT_AS)
+        resource.setrlimit(resource.RLIMIT_AS, (vm + (300 << 20), hard))
+        print(np.array_equal(noise.fbm(pts, threads=1024), ref))
+        """
+    )
+    env = {**os.environ, "PYTHONPATH": str(Path(cu.__file__).parents[1])}
+    run = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, env=env, timeout=120
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert run.stdout.strip() == "True"
 
 
 # --- Property: any float array reaching Cloud either builds a usable cloud or is refused ------
