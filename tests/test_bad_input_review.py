@@ -182,6 +182,23 @@ def test_renderer_checks_arguments_before_making_a_context(monkeypatch: pytest.M
     assert made == []
 
 
+@pytest.mark.gl
+def test_renderer_refuses_primitives_beyond_the_storage_block_limit() -> None:
+    # Before: a buffer beyond GL_MAX_SHADER_STORAGE_BLOCK_SIZE (128 MiB on llvmpipe, ~1.6 M
+    # primitives) was bound anyway and the primitives past the limit silently read as nothing.
+    c = small_cloud()
+    c.light = np.ones((2, 2, 2), np.float32)
+    c.light_box = ((-2.0, -2.0, -2.0), (3.0, 2.0, 2.0))
+    scene = cu.Scene([c], noise=cu.Noise(0, 4))
+    cam = cu.Camera((0, 0, -10), (0, 0, 0))
+    with cu.Renderer() as r:
+        r.max_storage_block_size = 80  # one primitive's 80 bytes; the cloud has two
+        with pytest.raises(ValueError, match="GL_MAX_SHADER_STORAGE_BLOCK_SIZE"):
+            r.render(scene, cam, 4, 3)
+        r.max_storage_block_size = 160
+        assert r.render(scene, cam, 4, 3).shape == (3, 4, 4)
+
+
 # --- The core's containment filter refuses what eq. (17) cannot compare ------------------------
 @pytest.mark.parametrize(
     ("centres", "radii", "name"),

@@ -250,6 +250,8 @@ class Renderer:
             raise
         self.max_texture_size = int(ctx.info["GL_MAX_TEXTURE_SIZE"])
         self.max_3d_texture_size = int(ctx.info["GL_MAX_3D_TEXTURE_SIZE"])
+        #: Largest storage buffer the shader may index (the primitives of all clouds share one).
+        self.max_storage_block_size = int(ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 27))
         self._fbo: Any = None
         self._fbo_tex: Any = None
         self._fbo_size: tuple[int, int] = (0, 0)
@@ -314,6 +316,14 @@ class Renderer:
             raise ValueError(f"the GL renderer draws at most {MAX_CLOUDS} clouds")
         prepare_light(scene)
         prim_bytes, cloud_bytes, atlas = pack_scene(scene)
+        if len(prim_bytes) > self.max_storage_block_size:
+            # Beyond it the driver clamps or drops the reads: primitives would silently vanish.
+            raise ValueError(
+                f"the scene's {sum(c.n for c in scene.clouds)} primitives need "
+                f"{len(prim_bytes)} bytes of storage buffer, more than this GL's "
+                f"GL_MAX_SHADER_STORAGE_BLOCK_SIZE={self.max_storage_block_size}; use fewer "
+                "primitives or backend='cpu'"
+            )
         if max(atlas.shape) > self.max_3d_texture_size:
             raise ValueError(
                 f"the light grids need a {atlas.shape[::-1]} atlas, larger than "
