@@ -84,14 +84,48 @@ def test_npz_fortran_order_arrays_are_read_in_their_order(tmp_path: Path) -> Non
     np.testing.assert_array_equal(loaded.centres, good.centres)
 
 
-@pytest.mark.parametrize("suffix", [".json", ".npz"])
-def test_inverted_light_box_in_a_file_is_refused(tmp_path: Path, suffix: str) -> None:
+def test_inverted_light_box_in_a_file_is_refused(tmp_path: Path) -> None:
     c = small_cloud()
     c.light = np.ones((2, 2, 2), np.float32)
-    c.light_box = ((1.0, 1.0, 1.0), (0.0, 0.0, 0.0))
-    path = c.save(tmp_path / f"c{suffix}")
+    c.light_box = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    doc = json.loads(c.save(tmp_path / "c.json").read_text())
+    doc["light_box"] = [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]]
+    (tmp_path / "c.json").write_text(json.dumps(doc))
     with pytest.raises(ValueError, match="light_box"):
-        cu.load_cloud(path)
+        cu.load_cloud(tmp_path / "c.json")
+    meta = dict(c._meta(), light_box=doc["light_box"])
+    np.savez(
+        tmp_path / "c.npz",
+        centres=c.centres,
+        radii=c.radii,
+        rotations=c.rotations,
+        light=c.light,
+        meta=np.frombuffer(json.dumps(meta).encode(), np.uint8),
+    )
+    with pytest.raises(ValueError, match="light_box"):
+        cu.load_cloud(tmp_path / "c.npz")
+
+
+@pytest.mark.parametrize("suffix", [".json", ".npz"])
+@pytest.mark.parametrize(
+    ("light", "box", "exc", "match"),
+    [
+        (np.ones((2, 2)), ((0, 0, 0), (1, 1, 1)), ValueError, "light must be a finite"),
+        (np.full((2, 2, 2), np.nan), ((0, 0, 0), (1, 1, 1)), ValueError, "light must be a finite"),
+        (np.ones((2, 2, 2), object), ((0, 0, 0), (1, 1, 1)), TypeError, "light must be a real"),
+        (np.ones((2, 2, 2)), None, ValueError, "light_box"),
+        (np.ones((2, 2, 2)), ((1, 1, 1), (0, 0, 0)), ValueError, "light_box"),
+    ],
+)
+def test_save_refuses_a_light_grid_that_load_would_refuse(
+    tmp_path: Path, suffix: str, light: np.ndarray, box: object, exc: type, match: str
+) -> None:
+    # Before: saved without complaint, and load_cloud then refused its own file.
+    c = small_cloud()
+    c.light, c.light_box = light, box  # type: ignore[assignment]
+    with pytest.raises(exc, match=match):
+        c.save(tmp_path / f"c{suffix}")
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_deeply_nested_json_is_a_value_error(tmp_path: Path) -> None:

@@ -262,6 +262,7 @@ class Cloud:
         suffix = path.suffix.lower()
         if suffix not in (".npz", ".json"):
             raise ValueError(f"path must end in .npz or .json, got {path.name!r}")
+        light = self._checked_light()
         meta = self._meta()
         try:
             meta_text = json.dumps(meta, default=_json_default, allow_nan=False)
@@ -277,21 +278,41 @@ class Cloud:
                     "rotations": self.rotations,
                     "meta": np.frombuffer(meta_text.encode("utf-8"), dtype=np.uint8),
                 }
-                if self.light is not None:
-                    arrays["light"] = np.asarray(self.light, dtype=np.float32)
+                if light is not None:
+                    arrays["light"] = light
                 np.savez_compressed(fh, **arrays)
             else:
                 doc = dict(meta)
                 doc["centres"] = self.centres.tolist()
                 doc["radii"] = self.radii.tolist()
                 doc["rotations"] = self.rotations.tolist()
-                if self.light is not None:
-                    light = np.asarray(self.light, dtype=np.float32)
+                if light is not None:
                     doc["light_shape"] = list(light.shape)
                     doc["light"] = light.ravel().tolist()
                 text = json.dumps(doc, default=_json_default, allow_nan=False)
                 fh.write(text.encode("utf-8"))
         return path
+
+    def _checked_light(self) -> np.ndarray | None:
+        """The light grid as float32, checked as `load_cloud` will check it (None if absent)."""
+        if self.light is None:
+            return None
+        light = np.asarray(self.light)
+        if light.dtype.kind not in "fiu":
+            raise TypeError(f"light must be a real numeric array, got dtype {light.dtype}")
+        light = np.ascontiguousarray(light, dtype=np.float32)
+        if light.ndim != 3 or light.size == 0 or not np.isfinite(light).all():
+            raise ValueError(f"light must be a finite, non-empty 3D grid, got shape {light.shape}")
+        box = self.light_box
+        try:
+            lo, hi = (check.vec3(v, "light_box") for v in box)  # type: ignore[union-attr]
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"light_box must be (lo, hi), two finite 3-vectors, got {box!r}"
+            ) from None
+        if not all(h > low for low, h in zip(lo, hi, strict=True)):
+            raise ValueError(f"light_box must have hi > lo on every axis, got {box!r}")
+        return light
 
     def _meta(self) -> dict[str, Any]:
         return {
