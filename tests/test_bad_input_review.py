@@ -195,6 +195,19 @@ def test_hand_set_light_box_that_is_not_two_vectors_names_the_box(box: object) -
         cu.render(_cpu_scene(c), cam, 4, 3, backend="cpu")
 
 
+def test_cpu_backend_checks_the_image_size_before_the_light_pass() -> None:
+    # Before: render_cpu ran the light pass, then the core refused 16384² pixels; render(...,
+    # backend="cpu") blamed GL_MAX_TEXTURE_SIZE for a CPU render.
+    scene = _cpu_scene(small_cloud())
+    cam = cu.Camera((0, 0, -10), (0, 0, 0))
+    with pytest.raises(ValueError, match="larger than the limit"):
+        cu.render_cpu(scene, cam, 1 << 14, 1 << 14)
+    assert scene.clouds[0].light is None
+    with pytest.raises(ValueError, match=r"width must be <= 16384, got 20000$"):
+        cu.render(scene, cam, 20000, 2, backend="cpu")
+    assert scene.clouds[0].light is None
+
+
 # --- Renderer arguments are checked before a GL context is made -------------------------------
 def test_renderer_checks_arguments_before_making_a_context(monkeypatch: pytest.MonkeyPatch) -> None:
     made: list[object] = []

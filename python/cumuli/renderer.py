@@ -102,14 +102,8 @@ def _stale(cloud: Cloud, scene: Scene) -> bool:
 
 
 def _compute_light(cloud: Cloud, scene: Scene) -> None:
-    import cumuli
+    from cumuli.light import light_grid
 
-    light_grid = getattr(cumuli, "light_grid", None)
-    if light_grid is None:
-        raise RuntimeError(
-            "a cloud has no light grid and cumuli.light_grid is not available in this build; "
-            "set cloud.light and cloud.light_box yourself"
-        )
     s = scene.settings
     target = cloud
     if s.kappa is not None and s.kappa != cloud.kappa:
@@ -498,14 +492,6 @@ def render(
         camera = scene.default_camera()
     if backend == "gl":
         return shared_renderer().render(scene, camera, width, height)
-    # The C++ reference marcher (issue 5, CPU half) lives in cumuli.cpu_render.
-    _check_size(width, height, 1 << 14)
-    prepare_light(scene)
-    try:
-        from cumuli import cpu_render
-    except ImportError as exc:
-        raise RuntimeError(
-            "backend='cpu' needs cumuli.cpu_render (the C++ reference marcher), which this "
-            "build does not have"
-        ) from exc
-    return cpu_render.render_cpu(scene, camera, width, height)
+    from cumuli.cpu_render import render_cpu
+
+    return render_cpu(scene, camera, width, height)
