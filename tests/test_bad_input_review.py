@@ -146,6 +146,32 @@ def test_oversized_scene_file_is_refused_before_reading(
         cu.load_scene(path)
 
 
+# --- Images: declared sizes are checked before decoding ---------------------------------------
+def _png(path: Path, width: int, height: int, rows: bytes) -> Path:
+    import struct
+    import zlib
+
+    def chunk(tag: bytes, data: bytes) -> bytes:
+        crc = zlib.crc32(tag + data) & 0xFFFFFFFF
+        return struct.pack(">I", len(data)) + tag + data + struct.pack(">I", crc)
+
+    ihdr = struct.pack(">IIBBBBB", width, height, 8, 6, 0, 0, 0)
+    body = chunk(b"IHDR", ihdr) + chunk(b"IDAT", zlib.compress(rows, 9)) + chunk(b"IEND", b"")
+    path.write_bytes(b"\x89PNG\r\n\x1a\n" + body)
+    return path
+
+
+def test_read_image_refuses_declared_sizes_beyond_the_limit(tmp_path: Path) -> None:
+    # A few hundred bytes declaring a 70000-pixel-wide image: decoded before, refused now.
+    width = 70_000
+    path = _png(tmp_path / "wide.png", width, 1, b"\0" + bytes(4 * width))
+    assert path.stat().st_size < 2000
+    with pytest.raises(ValueError, match="each side must be 1 to 65536"):
+        cu.read_image(path)
+    ok = _png(tmp_path / "ok.png", 3, 1, b"\0" + bytes(range(12)))
+    assert cu.read_image(ok).shape == (1, 3, 4)
+
+
 # --- Atomic writes share one helper: same permissions, nothing left on failure ----------------
 def test_scene_cloud_and_image_files_get_the_same_permissions(tmp_path: Path) -> None:
     scene_path = cu.Scene([small_cloud()], noise=cu.Noise(0, 4)).save(tmp_path / "s.json")

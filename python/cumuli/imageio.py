@@ -31,6 +31,8 @@ FORMATS = {".exr": "float32 linear RGBA (OpenEXR, ZIP)", ".png": "8-bit sRGB RGB
 
 #: Largest edge accepted (OpenEXR and PNG allow more, but nothing cumuli makes is near it).
 MAX_EDGE = 1 << 16
+#: Largest image read_image decodes (2²⁸ RGBA float32 pixels = 4 GiB).
+MAX_READ_PIXELS = 1 << 28
 
 
 def _extension(path: str | os.PathLike[str]) -> str:
@@ -181,6 +183,18 @@ def read_image(path: str | os.PathLike[str]) -> np.ndarray:
         raise _oiio_error("opening", source)
     try:
         spec = inp.spec()
+        # The declared size is checked before the pixels are decoded: a small, highly
+        # compressed file can declare gigabytes.
+        if not (1 <= spec.width <= MAX_EDGE and 1 <= spec.height <= MAX_EDGE):
+            raise ValueError(
+                f"image {str(source)!r} is {spec.width}×{spec.height}: each side must be 1 to "
+                f"{MAX_EDGE} pixels"
+            )
+        if spec.width * spec.height > MAX_READ_PIXELS or not 1 <= spec.nchannels <= 4:
+            raise ValueError(
+                f"image {str(source)!r} ({spec.width}×{spec.height}×{spec.nchannels}) is larger "
+                f"than {MAX_READ_PIXELS} pixels or has more than 4 channels"
+            )
         integer = spec.format.basetype in (oiio.UINT8, oiio.UINT16)
         pixels = inp.read_image(0, 0, 0, spec.nchannels, "float" if not integer else spec.format)
         if pixels is None:
