@@ -1,6 +1,7 @@
 // Algorithm 3 (lighting and shading): the light grid lookup and one sample's contribution.
 #include "phase.glsl"
 #include "scene_data.glsl"
+#include "trilinear.glsl"
 
 // Trilinear lookup of a cloud's light grid at world p: GL texel-centre convention over the grid's
 // box, clamp to edge. In the atlas, clamping the texel coordinate to [0.5, R − 0.5] keeps the
@@ -29,11 +30,5 @@ float light_lookup(CloudData c, vec3 p, bool exact) {
     float c101 = texelFetch(u_light_atlas, ivec3(i1.x, i0.y, i1.z + z0), 0).r;
     float c011 = texelFetch(u_light_atlas, ivec3(i0.x, i1.y, i1.z + z0), 0).r;
     float c111 = texelFetch(u_light_atlas, ivec3(i1.x, i1.y, i1.z + z0), 0).r;
-    float c00 = c000 + w.x * (c100 - c000);
-    float c10 = c010 + w.x * (c110 - c010);
-    float c01 = c001 + w.x * (c101 - c001);
-    float c11 = c011 + w.x * (c111 - c011);
-    float c0 = c00 + w.y * (c10 - c00);
-    float c1 = c01 + w.y * (c11 - c01);
-    return c0 + w.z * (c1 - c0);
+    return trilinear_blend(c000, c100, c010, c110, c001, c101, c011, c111, w);
 }

@@ -5,6 +5,8 @@
 // fbm_exact() does the same blend by hand with texelFetch and float weights, matching the C++ to
 // rounding; GPUs filter with low-precision (often 8-bit) weights, so texture() differs slightly.
 
+#include "trilinear.glsl"
+
 uniform sampler3D u_lattice;
 uniform int u_octaves;        // n
 uniform float u_gain;         // w
@@ -32,14 +34,7 @@ float lattice_exact(vec3 u) {
     float c101 = texelFetch(u_lattice, ivec3(i1.x, i0.y, i1.z), 0).r;
     float c011 = texelFetch(u_lattice, ivec3(i0.x, i1.y, i1.z), 0).r;
     float c111 = texelFetch(u_lattice, ivec3(i1.x, i1.y, i1.z), 0).r;
-    // Same order as the C++: x, then y, then z.
-    float c00 = c000 + w.x * (c100 - c000);
-    float c10 = c010 + w.x * (c110 - c010);
-    float c01 = c001 + w.x * (c101 - c001);
-    float c11 = c011 + w.x * (c111 - c011);
-    float c0 = c00 + w.y * (c10 - c00);
-    float c1 = c01 + w.y * (c11 - c01);
-    return c0 + w.z * (c1 - c0);
+    return trilinear_blend(c000, c100, c010, c110, c001, c101, c011, c111, w);
 }
 
 // eq. (1): sum over i = 1..n of w^i * lattice(s^i * f * p). `exact` picks the lookup.

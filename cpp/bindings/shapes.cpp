@@ -1,5 +1,6 @@
 // Bindings for the cloud-shape generators: gaussian.hpp (and the L-system and mesh generators).
 #include <algorithm>
+#include <cmath>
 #include <array>
 #include <map>
 #include <cstdint>
@@ -57,6 +58,7 @@ glm::dvec3 to_dvec3(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[
 }  // namespace
 
 void bind_shapes(py::module_& m) {
+  m.attr("LSYSTEM_MAX_LENGTH") = kMaxLSystemLength;
   m.def(
       "gaussian_cumulus",
       [](std::array<float, 3> centre, int n, std::array<float, 3> mu, std::array<float, 3> sigma,
@@ -118,6 +120,14 @@ void bind_shapes(py::module_& m) {
         std::vector<float> r(radii.data(), radii.data() + n);
         for (std::size_t i = 0; i < n; ++i)
           c[i] = glm::vec3(centres.data()[3 * i], centres.data()[3 * i + 1], centres.data()[3 * i + 2]);
+        // Eq. (17) compares radii and distances: NaN or non-positive radii would make the
+        // kept set meaningless rather than fail, so refuse them here.
+        for (std::size_t i = 0; i < n; ++i) {
+          if (!std::isfinite(c[i].x) || !std::isfinite(c[i].y) || !std::isfinite(c[i].z))
+            throw py::value_error("centres must be finite");
+          if (!std::isfinite(r[i]) || !(r[i] > 0.0f))
+            throw py::value_error("radii must be finite and positive");
+        }
         std::vector<int> keep;
         {
           py::gil_scoped_release release;

@@ -3,11 +3,26 @@
 #include <algorithm>
 #include <cmath>
 
+#include <glm/common.hpp>
+
 namespace cumuli {
 
 float candidate_scale(const CloudShape& cloud) {
   if (cloud.density.model != DensityModel::Metaball) return 1.0f;
   return std::sqrt(static_cast<float>(std::max<std::size_t>(cloud.primitives.size(), 1)));
+}
+
+Box candidate_bounds(const CloudShape& cloud) {
+  const float scale = candidate_scale(cloud);
+  Box b{glm::vec3(INFINITY), glm::vec3(-INFINITY)};
+  for (Ellipsoid e : cloud.primitives) {
+    e.radii *= scale;
+    glm::vec3 lo, hi;
+    e.bounds(lo, hi);
+    b.lo = glm::min(b.lo, lo);
+    b.hi = glm::max(b.hi, hi);
+  }
+  return b;
 }
 
 int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir, float t_min,
@@ -37,6 +52,31 @@ int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir,
     out[pos] = Candidate{t0, t1, static_cast<int>(j)};
   }
   return count;
+}
+
+int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,
+                int fallback) {
+  // |q| is computed only once a second candidate covers s: the common case of one covering
+  // primitive costs nothing.
+  auto q_of = [&](int m) {
+    return cloud.primitives[static_cast<std::size_t>(cand[m].primitive)].normalised_distance(p);
+  };
+  int best = -1;
+  float best_q = INFINITY;
+  for (int m = 0; m < n && cand[m].t_in <= s; ++m) {
+    if (s > cand[m].t_out) continue;
+    if (best < 0) {
+      best = m;
+      continue;
+    }
+    if (best_q == INFINITY) best_q = q_of(best);
+    const float q = q_of(m);
+    if (q < best_q) {
+      best_q = q;
+      best = m;
+    }
+  }
+  return best < 0 ? fallback : cand[best].primitive;
 }
 
 }  // namespace cumuli

@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include <glm/geometric.hpp>
+#include <glm/matrix.hpp>
 
 namespace cumuli {
 
@@ -41,6 +42,15 @@ void CloudShape::validate() const {
         if (!std::isfinite(e.rotation[j][k]))
           throw std::invalid_argument("cloud rotations must be finite");
     }
+  }
+  // Rotation columns are the axes: they must be orthonormal, or to_local (which uses Rᵀ as the
+  // inverse) and bounds() (which uses the columns) describe different shapes.
+  for (const auto& e : primitives) {
+    const glm::mat3 rtr = glm::transpose(e.rotation) * e.rotation;
+    for (int a = 0; a < 3; ++a)
+      for (int b = 0; b < 3; ++b)
+        if (!(std::fabs(rtr[a][b] - (a == b ? 1.0f : 0.0f)) <= 1e-3f))
+          throw std::invalid_argument("cloud rotations must be orthonormal (columns = unit axes)");
   }
   if (!(density.kappa >= 0.0f && density.kappa <= 1.0f))
     throw std::invalid_argument("kappa must be in [0, 1]");

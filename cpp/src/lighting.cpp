@@ -288,8 +288,8 @@ struct ActiveBuffers {
   explicit ActiveBuffers(std::size_t n) : primitive(n), oo(n), b2(n), a(n), t_out(n), q2(n) {}
 };
 
-// Attribution of union samples (RENDER_CONTRACT march="union"): the covering candidate whose
-// primitive gives the smallest |q|, ties to the earlier candidate. Samples come in increasing s,
+// Attribution of union samples: union_owner's rule (candidates.hpp; RENDER_CONTRACT
+// march="union"), evaluated incrementally for speed. Samples come in increasing s,
 // so the covering set is kept as a list of "active" candidates (entered: t_in ≤ s; dropped for
 // good once t_out < s), and |q_j(s)|² is the quadratic oo + 2bs + as² from the candidate test,
 // three multiply-adds instead of a transform. A near-tie decided differently by rounding picks a
@@ -420,15 +420,7 @@ void LightSettings::validate(const Box& box) const {
 }
 
 Box light_grid_box(const CloudShape& cloud, const int resolution[3]) {
-  const float scale = candidate_scale(cloud);
-  Box b{glm::vec3(INFINITY), glm::vec3(-INFINITY)};
-  for (Ellipsoid e : cloud.primitives) {
-    e.radii *= scale;
-    glm::vec3 lo, hi;
-    e.bounds(lo, hi);
-    b.lo = glm::min(b.lo, lo);
-    b.hi = glm::max(b.hi, hi);
-  }
+  Box b = candidate_bounds(cloud);
   // Centres of voxels 0 and R−1 on the faces: lo + 0.5·h = b.lo with h = (b.hi − b.lo)/(R − 1).
   for (int a = 0; a < 3; ++a) {
     const float h = (b.hi[a] - b.lo[a]) / static_cast<float>(std::max(resolution[a] - 1, 1));

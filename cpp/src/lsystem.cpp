@@ -91,6 +91,11 @@ LSystemLength lsystem_length(const std::string& axiom, const LSystemRules& rules
 
 std::string lsystem_expand(const std::string& axiom, const LSystemRules& rules, int iterations,
                            std::uint64_t max_length) {
+  // A user cap beyond this would let `reserve` ask for terabytes (or be overcommitted and filled
+  // until the OOM killer strikes): refuse it rather than trust it.
+  if (max_length > kMaxLSystemLength)
+    throw std::invalid_argument("max_length must be at most " + std::to_string(kMaxLSystemLength) +
+                                ", got " + std::to_string(max_length));
   const LSystemLength n = lsystem_length(axiom, rules, iterations, max_length);
   if (n.peak_length > max_length) {
     // Count again without the cap (saturating only at 2⁶⁴) to say how long it would be.

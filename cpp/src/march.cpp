@@ -145,19 +145,6 @@ void MarchScene::validate(const MarchSettings& settings) const {
           "sun_disc_intensity must be finite and >= 0");
 }
 
-Box march_box(const CloudShape& cloud) {
-  const float scale = candidate_scale(cloud);
-  Box b{glm::vec3(INFINITY), glm::vec3(-INFINITY)};
-  for (Ellipsoid e : cloud.primitives) {
-    e.radii *= scale;
-    glm::vec3 lo, hi;
-    e.bounds(lo, hi);
-    b.lo = glm::min(b.lo, lo);
-    b.hi = glm::max(b.hi, hi);
-  }
-  return b;
-}
-
 // ---------------------------------------------------------------------------------------------
 // The marcher
 
@@ -273,38 +260,12 @@ class RayMarcher {
       t = std::max(t, cand[k].t_in);
       for (; t < cand[k].t_out; t += step) {
         const float s = t + half;
-        const int j = attribute ? owner(shape, cand, n, k, s, origin, dir) : cand[k].primitive;
+        const int j = attribute ? union_owner(shape, cand, n, s, origin + s * dir, cand[k].primitive)
+                                : cand[k].primitive;
         if (!sample(pc, j, s, origin, dir, st)) return false;
       }
     }
     return true;
-  }
-
-  // The covering candidate (t_in ≤ s ≤ t_out) whose primitive gives the smallest |q| at s; the
-  // first in candidate order wins ties; candidate k when none covers s. |q| is computed only once
-  // a second candidate covers s (the common case of one covering primitive costs nothing).
-  static int owner(const CloudShape& shape, const Candidate* cand, int n, int k, float s,
-                   glm::vec3 origin, glm::vec3 dir) {
-    const glm::vec3 p = origin + s * dir;
-    auto q_of = [&](int m) {
-      return shape.primitives[static_cast<std::size_t>(cand[m].primitive)].normalised_distance(p);
-    };
-    int best = -1;
-    float best_q = INFINITY;
-    for (int m = 0; m < n && cand[m].t_in <= s; ++m) {
-      if (s > cand[m].t_out) continue;
-      if (best < 0) {
-        best = m;
-        continue;
-      }
-      if (best_q == INFINITY) best_q = q_of(best);
-      const float q = q_of(m);
-      if (q < best_q) {
-        best_q = q;
-        best = m;
-      }
-    }
-    return cand[best < 0 ? k : best].primitive;
   }
 
   const MarchScene& scene_;
@@ -325,7 +286,7 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
   std::vector<PreparedCloud> prepared;
   prepared.reserve(scene.clouds.size());
   for (const auto& c : scene.clouds)
-    prepared.push_back({&c, march_box(c.shape), settings.step_for(camera.position, c.shape.centre())});
+    prepared.push_back({&c, candidate_bounds(c.shape), settings.step_for(camera.position, c.shape.centre())});
 
   const CameraRays rays(camera, width, height);
   const RayMarcher marcher(scene, settings, prepared);

@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import json
 import os
-import tempfile
 import zipfile
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
@@ -26,10 +25,13 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli._atomic import atomic_target
 
 DENSITY_MODELS = ("spheroid", "metaball")
 #: Most primitives a cloud may hold.
 MAX_PRIMITIVES = 1 << 20
+#: Largest |RᵀR − I| accepted for a primitive's rotation (float32 rounding is ~1e-7).
+ROTATION_TOLERANCE = 1e-3
 #: Tag and version written into saved clouds.
 FILE_FORMAT = "cumuli.cloud"
 FILE_VERSION = 1
@@ -37,6 +39,14 @@ FILE_VERSION = 1
 MAX_FILE_BYTES = 1 << 31
 #: Largest light grid accepted from a file (voxels).
 MAX_LIGHT_VOXELS = 512**3
+#: Largest element count of each array in a saved ``.npz`` (checked before it is inflated).
+_NPZ_LIMITS = {
+    "centres": 3 * MAX_PRIMITIVES,
+    "radii": 3 * MAX_PRIMITIVES,
+    "rotations": 9 * MAX_PRIMITIVES,
+    "meta": 1 << 28,
+    "light": MAX_LIGHT_VOXELS,
+}
 
 
 @dataclass(eq=False)
@@ -81,6 +91,24 @@ class Cloud:
         self.rotations = np.ascontiguousarray(rot, dtype=np.float32)
         if not np.isfinite(self.rotations).all():
             raise ValueError("rotations contain NaN or infinite values")
+        # Columns are the ellipsoid's axes: they must be orthonormal, or the unit-sphere frame
+        # q = Rᵀ(p − c)/r and the world bounds (from R's columns) describe different shapes and
+        # boxes clip the primitive. Float32 rounding of a true rotation is far inside 1e-3.
+        rtr = np.einsum("nji,njk->nik", self.rotations.astype(np.float64), self.rotations)
+        err = np.abs(rtr - np.eye(3)).max(axis=(1, 2)) if n else np.zeros(0)
+        if (err > ROTATION_TOLERANCE).any():
+            i = int(np.argmax(err))
+            raise ValueError(
+                f"rotations[{i}] is not orthonormal (|RᵀR − I| = {err[i]:.3g}): its columns must "
+                "be the ellipsoid's unit axes; put scale in radii"
+            )
+        # Every primitive's world bounds must be float32-representable: the core and the shaders
+        # compute boxes in float32, and an overflowing one (3e38 ± 1e38) turns into inf/NaN.
+        rot64 = self.rotations.astype(np.float64)
+        half = np.sqrt(np.einsum("nkj,nj->nk", rot64**2, self.radii.astype(np.float64) ** 2))
+        reach = np.abs(self.centres.astype(np.float64)) + half
+        if not (reach < float(np.finfo(np.float32).max) / 4).all():
+            raise ValueError("centres ± radii must stay well inside the float32 range (< 8.5e37)")
         if self.model not in DENSITY_MODELS:
             raise ValueError(f"model must be one of {DENSITY_MODELS}, got {self.model!r}")
         self.kappa = check.real(self.kappa, "kappa", 0.0, 1.0)
@@ -234,6 +262,7 @@ class Cloud:
         suffix = path.suffix.lower()
         if suffix not in (".npz", ".json"):
             raise ValueError(f"path must end in .npz or .json, got {path.name!r}")
+        light = self._checked_light()
         meta = self._meta()
         try:
             meta_text = json.dumps(meta, default=_json_default, allow_nan=False)
@@ -241,42 +270,49 @@ class Cloud:
             raise TypeError(f"params/stats must be JSON-serialisable: {exc}") from None
         if not path.parent.is_dir():
             raise FileNotFoundError(f"folder of path does not exist: {str(path.parent)!r}")
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-        try:
-            with os.fdopen(fd, "wb") as fh:
-                if suffix == ".npz":
-                    arrays: dict[str, np.ndarray] = {
-                        "centres": self.centres,
-                        "radii": self.radii,
-                        "rotations": self.rotations,
-                        "meta": np.frombuffer(meta_text.encode("utf-8"), dtype=np.uint8),
-                    }
-                    if self.light is not None:
-                        arrays["light"] = np.asarray(self.light, dtype=np.float32)
-                    np.savez_compressed(fh, **arrays)
-                else:
-                    doc = dict(meta)
-                    doc["centres"] = self.centres.tolist()
-                    doc["radii"] = self.radii.tolist()
-                    doc["rotations"] = self.rotations.tolist()
-                    if self.light is not None:
-                        light = np.asarray(self.light, dtype=np.float32)
-                        doc["light_shape"] = list(light.shape)
-                        doc["light"] = light.ravel().tolist()
-                    text = json.dumps(doc, default=_json_default, allow_nan=False)
-                    fh.write(text.encode("utf-8"))
-            # mkstemp makes the file private (0600); give it the permissions a plain open() would.
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(tmp, 0o666 & ~umask)
-            os.replace(tmp, path)
-        except BaseException:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-            raise
+        with atomic_target(path) as tmp, open(tmp, "wb") as fh:
+            if suffix == ".npz":
+                arrays: dict[str, np.ndarray] = {
+                    "centres": self.centres,
+                    "radii": self.radii,
+                    "rotations": self.rotations,
+                    "meta": np.frombuffer(meta_text.encode("utf-8"), dtype=np.uint8),
+                }
+                if light is not None:
+                    arrays["light"] = light
+                np.savez_compressed(fh, **arrays)
+            else:
+                doc = dict(meta)
+                doc["centres"] = self.centres.tolist()
+                doc["radii"] = self.radii.tolist()
+                doc["rotations"] = self.rotations.tolist()
+                if light is not None:
+                    doc["light_shape"] = list(light.shape)
+                    doc["light"] = light.ravel().tolist()
+                text = json.dumps(doc, default=_json_default, allow_nan=False)
+                fh.write(text.encode("utf-8"))
         return path
+
+    def _checked_light(self) -> np.ndarray | None:
+        """The light grid as float32, checked as `load_cloud` will check it (None if absent)."""
+        if self.light is None:
+            return None
+        light = np.asarray(self.light)
+        if light.dtype.kind not in "fiu":
+            raise TypeError(f"light must be a real numeric array, got dtype {light.dtype}")
+        light = np.ascontiguousarray(light, dtype=np.float32)
+        if light.ndim != 3 or light.size == 0 or not np.isfinite(light).all():
+            raise ValueError(f"light must be a finite, non-empty 3D grid, got shape {light.shape}")
+        box = self.light_box
+        try:
+            lo, hi = (check.vec3(v, "light_box") for v in box)  # type: ignore[union-attr]
+        except (TypeError, ValueError):
+            raise ValueError(
+                f"light_box must be (lo, hi), two finite 3-vectors, got {box!r}"
+            ) from None
+        if not all(h > low for low, h in zip(lo, hi, strict=True)):
+            raise ValueError(f"light_box must have hi > lo on every axis, got {box!r}")
+        return light
 
     def _meta(self) -> dict[str, Any]:
         return {
@@ -363,7 +399,13 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             meta, arrays = _read_npz(path)
         else:
             meta, arrays = _read_json(path)
-    except (zipfile.BadZipFile, json.JSONDecodeError, UnicodeDecodeError, EOFError) as exc:
+    except (
+        zipfile.BadZipFile,
+        json.JSONDecodeError,
+        UnicodeDecodeError,
+        EOFError,
+        RecursionError,  # absurdly nested JSON
+    ) as exc:
         raise ValueError(f"{path.name}: not a readable cumuli cloud file ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != FILE_FORMAT:
         raise ValueError(f"{path.name}: not a cumuli cloud file (format tag missing)")
@@ -384,10 +426,14 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             raise ValueError(f"{path.name}: light grid without light_box")
     try:
         if light_box is not None:
+            if not isinstance(light_box, (list, tuple)) or len(light_box) != 2:
+                raise ValueError(f"light_box must be [lo, hi], got {light_box!r}")
             light_box = (
                 check.vec3(light_box[0], "light_box"),
                 check.vec3(light_box[1], "light_box"),
             )
+            if not all(h > lo for lo, h in zip(*light_box, strict=True)):
+                raise ValueError(f"light_box must have hi > lo on every axis, got {light_box}")
         light_sun = meta.get("light_sun")
         if light_sun is not None:
             light_sun = check.direction(light_sun, "light_sun")
@@ -424,17 +470,19 @@ def _read_npz(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
                 # Check the declared shape before numpy allocates it.
                 version = np.lib.format.read_magic(fh)
                 if version == (1, 0):
-                    shape, _, dtype = np.lib.format.read_array_header_1_0(fh)
+                    shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
                 else:
-                    shape, _, dtype = np.lib.format.read_array_header_2_0(fh)
+                    shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
                 count = int(np.prod(shape, dtype=np.int64)) if shape else 1
-                limit = MAX_LIGHT_VOXELS if key == "light" else MAX_FILE_BYTES
-                if dtype.hasobject or count > limit:
+                # Per-array limits: a compressed member can declare (and inflate to) far more
+                # than the file's size, so the file-size limit alone does not bound memory.
+                if dtype.hasobject or count > _NPZ_LIMITS[key]:
                     raise ValueError(f"{path.name}: array {key!r} has unacceptable shape/dtype")
                 data = fh.read(count * dtype.itemsize)
                 if len(data) != count * dtype.itemsize:
                     raise ValueError(f"{path.name}: array {key!r} is truncated")
-                arrays[key] = np.frombuffer(data, dtype=dtype).reshape(shape).copy()
+                order = "F" if fortran else "C"
+                arrays[key] = np.frombuffer(data, dtype=dtype).reshape(shape, order=order).copy()
     meta = json.loads(arrays.pop("meta").tobytes().decode("utf-8"))
     return meta, arrays
 

@@ -17,6 +17,8 @@ from cumuli import _validate as check
 
 #: Largest image edge the CPU marcher accepts.
 MAX_EDGE = 1 << 14
+#: Largest image in pixels (the core's own limit, checked here before any light grid is made).
+MAX_PIXELS = 1 << 26
 
 
 def cloud_core_dict(cloud: Any, kappa: float | None = None) -> dict[str, Any]:
@@ -108,6 +110,10 @@ def render_cpu(scene: Any, camera: Any, width: int, height: int, threads: int = 
     # Arguments are checked before the (possibly long) light pass runs.
     width = check.integer(width, "width", 1, MAX_EDGE)
     height = check.integer(height, "height", 1, MAX_EDGE)
+    if width * height > MAX_PIXELS:
+        raise ValueError(
+            f"image of {width}x{height} pixels is larger than the limit of {MAX_PIXELS} pixels"
+        )
     threads = check.threads(threads)
     prepare_light(scene)
     return _core.render_cpu(**render_cpu_args(scene, camera, width, height, threads))

@@ -113,6 +113,8 @@ def render_frames(
     for k, cam in enumerate(cams):
         if not isinstance(cam, Camera):
             raise TypeError(f"cameras[{k}] must be a cumuli.Camera, got {type(cam).__name__}")
+    if not isinstance(pattern, str):
+        raise TypeError(f"pattern must be a str, got {type(pattern).__name__}")
     try:
         names = [pattern.format(k) for k in range(len(cams))]
     except (IndexError, KeyError, ValueError) as exc:

@@ -18,18 +18,21 @@ temporary behind. Errors: unsupported extension → ``ValueError``; bad array �
 from __future__ import annotations
 
 import os
-import tempfile
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 import OpenImageIO as oiio
 
+from cumuli._atomic import atomic_target
+
 #: Extensions write_image and read_image handle, and what they store.
 FORMATS = {".exr": "float32 linear RGBA (OpenEXR, ZIP)", ".png": "8-bit sRGB RGBA"}
 
 #: Largest edge accepted (OpenEXR and PNG allow more, but nothing cumuli makes is near it).
 MAX_EDGE = 1 << 16
+#: Largest image read_image decodes (2²⁸ RGBA float32 pixels = 4 GiB).
+MAX_READ_PIXELS = 1 << 28
 
 
 def _extension(path: str | os.PathLike[str]) -> str:
@@ -155,19 +158,9 @@ def write_image(path: str | os.PathLike[str], img: np.ndarray) -> Path:
         raise FileNotFoundError(f"path's folder {str(folder)!r} does not exist")
     if target.is_dir():
         raise IsADirectoryError(f"path {str(target)!r} is a directory")
-    fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=f".tmp{ext}", dir=folder)
-    os.close(fd)
-    tmp = Path(tmp_name)
-    try:
+    # The temporary keeps the extension: OpenImageIO picks the format from it.
+    with atomic_target(target, suffix=f".tmp{ext}") as tmp:
         _write_with_oiio(tmp, ext, rgba)
-        # mkstemp makes the file private (0600); give it the permissions a plain open() would.
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(tmp, 0o666 & ~umask)
-        os.replace(tmp, target)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
     return target
 
 
@@ -190,6 +183,18 @@ def read_image(path: str | os.PathLike[str]) -> np.ndarray:
         raise _oiio_error("opening", source)
     try:
         spec = inp.spec()
+        # The declared size is checked before the pixels are decoded: a small, highly
+        # compressed file can declare gigabytes.
+        if not (1 <= spec.width <= MAX_EDGE and 1 <= spec.height <= MAX_EDGE):
+            raise ValueError(
+                f"image {str(source)!r} is {spec.width}×{spec.height}: each side must be 1 to "
+                f"{MAX_EDGE} pixels"
+            )
+        if spec.width * spec.height > MAX_READ_PIXELS or not 1 <= spec.nchannels <= 4:
+            raise ValueError(
+                f"image {str(source)!r} ({spec.width}×{spec.height}×{spec.nchannels}) is larger "
+                f"than {MAX_READ_PIXELS} pixels or has more than 4 channels"
+            )
         integer = spec.format.basetype in (oiio.UINT8, oiio.UINT16)
         pixels = inp.read_image(0, 0, 0, spec.nchannels, "float" if not integer else spec.format)
         if pixels is None:

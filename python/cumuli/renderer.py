@@ -58,14 +58,25 @@ def _check_light(cloud: Cloud, index: int) -> None:
     grid = cloud.light
     if not isinstance(grid, np.ndarray) or grid.ndim != 3 or min(grid.shape) < 1:
         raise ValueError(f"scene.clouds[{index}].light must be a (D, H, W) array")
+    if grid.dtype.kind not in "fiu":
+        raise TypeError(
+            f"scene.clouds[{index}].light must be a real numeric array, got dtype {grid.dtype}"
+        )
     if not np.isfinite(grid).all():
         raise ValueError(f"scene.clouds[{index}].light contains NaN or infinite values")
-    if cloud.light_box is None:
+    box = cloud.light_box
+    if box is None:
         raise ValueError(f"scene.clouds[{index}].light_box is missing (the light grid's box)")
-    lo = np.asarray(cloud.light_box[0], dtype=np.float64)
-    hi = np.asarray(cloud.light_box[1], dtype=np.float64)
-    if lo.shape != (3,) or hi.shape != (3,) or not (hi > lo).all():
-        raise ValueError(f"scene.clouds[{index}].light_box must be (lo, hi) with hi > lo")
+    bad_box = f"scene.clouds[{index}].light_box must be (lo, hi), two finite 3-vectors with hi > lo"
+    try:
+        lo = np.asarray(box[0], dtype=np.float64)
+        hi = np.asarray(box[1], dtype=np.float64)
+    except (TypeError, ValueError, IndexError, KeyError):
+        raise ValueError(f"{bad_box}, got {box!r}") from None
+    if len(box) != 2 or lo.shape != (3,) or hi.shape != (3,) or not (hi > lo).all():
+        raise ValueError(bad_box)
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        raise ValueError(bad_box)
 
 
 def prepare_light(scene: Scene) -> None:
@@ -91,14 +102,8 @@ def _stale(cloud: Cloud, scene: Scene) -> bool:
 
 
 def _compute_light(cloud: Cloud, scene: Scene) -> None:
-    import cumuli
+    from cumuli.light import light_grid
 
-    light_grid = getattr(cumuli, "light_grid", None)
-    if light_grid is None:
-        raise RuntimeError(
-            "a cloud has no light grid and cumuli.light_grid is not available in this build; "
-            "set cloud.light and cloud.light_box yourself"
-        )
     s = scene.settings
     target = cloud
     if s.kappa is not None and s.kappa != cloud.kappa:
@@ -212,11 +217,20 @@ class Renderer:
     """
 
     def __init__(self, context: GLContext | None = None, tile: int = TILE) -> None:
-        self._owns_context = context is None
-        self.gl = GLContext() if context is None else context
-        self.tile = check.integer(tile, "tile", 16, 4096)
         self.closed = False
         self._objects: list[Any] = []
+        self._owns_context = False
+        # Arguments first: a bad one must not leave a context behind.
+        self.tile = check.integer(tile, "tile", 16, 4096)
+        if context is not None:
+            if not isinstance(context, GLContext):
+                raise TypeError(
+                    f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
+                )
+            if context.closed:
+                raise ValueError("context is closed")
+        self._owns_context = context is None
+        self.gl = GLContext() if context is None else context
         ctx = self.gl.ctx
         try:
             self.program = self.gl.program("fullscreen.vert.glsl", "march.frag.glsl")
@@ -230,6 +244,8 @@ class Renderer:
             raise
         self.max_texture_size = int(ctx.info["GL_MAX_TEXTURE_SIZE"])
         self.max_3d_texture_size = int(ctx.info["GL_MAX_3D_TEXTURE_SIZE"])
+        #: Largest storage buffer the shader may index (the primitives of all clouds share one).
+        self.max_storage_block_size = int(ctx.info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 27))
         self._fbo: Any = None
         self._fbo_tex: Any = None
         self._fbo_size: tuple[int, int] = (0, 0)
@@ -294,6 +310,14 @@ class Renderer:
             raise ValueError(f"the GL renderer draws at most {MAX_CLOUDS} clouds")
         prepare_light(scene)
         prim_bytes, cloud_bytes, atlas = pack_scene(scene)
+        if len(prim_bytes) > self.max_storage_block_size:
+            # Beyond it the driver clamps or drops the reads: primitives would silently vanish.
+            raise ValueError(
+                f"the scene's {sum(c.n for c in scene.clouds)} primitives need "
+                f"{len(prim_bytes)} bytes of storage buffer, more than this GL's "
+                f"GL_MAX_SHADER_STORAGE_BLOCK_SIZE={self.max_storage_block_size}; use fewer "
+                "primitives or backend='cpu'"
+            )
         if max(atlas.shape) > self.max_3d_texture_size:
             raise ValueError(
                 f"the light grids need a {atlas.shape[::-1]} atlas, larger than "
@@ -468,14 +492,6 @@ def render(
         camera = scene.default_camera()
     if backend == "gl":
         return shared_renderer().render(scene, camera, width, height)
-    # The C++ reference marcher (issue 5, CPU half) lives in cumuli.cpu_render.
-    _check_size(width, height, 1 << 14)
-    prepare_light(scene)
-    try:
-        from cumuli import cpu_render
-    except ImportError as exc:
-        raise RuntimeError(
-            "backend='cpu' needs cumuli.cpu_render (the C++ reference marcher), which this "
-            "build does not have"
-        ) from exc
-    return cpu_render.render_cpu(scene, camera, width, height)
+    from cumuli.cpu_render import render_cpu
+
+    return render_cpu(scene, camera, width, height)

@@ -13,7 +13,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from collections.abc import Mapping, Sequence
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
@@ -22,6 +21,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli._atomic import atomic_target
 from cumuli.cloud import Cloud
 from cumuli.noise import Noise
 from cumuli.sun import Sun
@@ -34,6 +34,8 @@ MAX_CANDIDATES = 128
 MAX_STEPS = 1 << 16
 MAX_CLOUDS = 64
 MARCH_MODES = ("paper", "union")
+#: Largest scene file `load_scene` reads (clouds are stored inline as JSON arrays).
+MAX_SCENE_BYTES = 1 << 30
 LIGHT_METHODS = ("ndt", "naive")
 
 
@@ -492,14 +494,8 @@ class Scene:
         folder = path.parent if str(path.parent) else Path(".")
         if not folder.is_dir():
             raise OSError(f"cannot save the scene: folder {str(folder)!r} does not exist")
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-        try:
-            with os.fdopen(fd, "w", encoding="utf-8") as fh:
-                fh.write(text)
-            os.replace(tmp, path)
-        except BaseException:
-            Path(tmp).unlink(missing_ok=True)
-            raise
+        with atomic_target(folder / path.name) as tmp:
+            tmp.write_text(text, encoding="utf-8")
         return path
 
 
@@ -511,6 +507,12 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     """
     path = Path(path)
     try:
+        size = path.stat().st_size if path.is_file() else 0
+    except OSError:
+        size = 0  # read_text below reports the problem
+    if size > MAX_SCENE_BYTES:
+        raise ValueError(f"scene file {str(path)!r} has {size} bytes, more than {MAX_SCENE_BYTES}")
+    try:
         text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise OSError(f"cannot read scene file {str(path)!r}: {exc.strerror or exc}") from exc
@@ -518,7 +520,7 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
         raise ValueError(f"scene file {str(path)!r} is not UTF-8 JSON: {exc}") from None
     try:
         data = json.loads(text)
-    except json.JSONDecodeError as exc:
+    except (json.JSONDecodeError, RecursionError) as exc:  # RecursionError: absurd nesting
         raise ValueError(f"scene file {str(path)!r} is not valid JSON: {exc}") from None
     try:
         return Scene.from_dict(data)

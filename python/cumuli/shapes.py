@@ -233,6 +233,8 @@ def metaball_cumulus(
 PAPER_RULES = {"X": "X+Y", "Y": "X&Y"}
 #: Default cap on the expanded string's length (symbols).
 DEFAULT_MAX_LENGTH = 1_000_000
+#: Largest ``max_length`` accepted (the core keeps two strings of that many symbols).
+MAX_LENGTH_LIMIT: int = int(_core.LSYSTEM_MAX_LENGTH)
 #: Most rewrites accepted.
 MAX_ITERATIONS = 100_000
 
@@ -275,7 +277,7 @@ def lsystem_expand(
     'X+Y+X&Y'
     """
     axiom, rules, iterations = _lsystem_grammar(axiom, rules, iterations)
-    max_length = check.integer(max_length, "max_length", 1, 2**63 - 1)
+    max_length = check.integer(max_length, "max_length", 1, MAX_LENGTH_LIMIT)
     return _core.lsystem_expand(axiom, rules, iterations, max_length)
 
 
@@ -344,7 +346,7 @@ def lsystem_cloud(
         "start": list(check.vec3(start, "start")),
         "heading": list(check.direction(heading, "heading")),
         "up": list(check.direction(up, "up")),
-        "max_length": check.integer(max_length, "max_length", 1, 2**63 - 1),
+        "max_length": check.integer(max_length, "max_length", 1, MAX_LENGTH_LIMIT),
         "model": model,
         "kappa": kappa,
         "phi": phi,

@@ -19,11 +19,24 @@ struct Candidate {
 // sum is < 1, so primitives grown by √N bound it exactly.
 float candidate_scale(const CloudShape& cloud);
 
+// World bounds of the primitives grown by candidate_scale: every candidate interval lies inside.
+// The render pass tests rays against it; the light pass pads it into the light grid's box.
+Box candidate_bounds(const CloudShape& cloud);
+
 // The intervals where the ray o + t·d (d need not be unit) meets the cloud's primitives (grown by
 // candidate_scale), clipped to [t_min, t_max] and sorted by t_in with an insertion sort, as the
 // paper does. At most `capacity` are kept: when full, the one that starts farthest is dropped.
 // Returns the number written to `out`.
 int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir, float t_min,
                        float t_max, Candidate* out, int capacity);
+
+// The union-march attribution rule (RENDER_CONTRACT march="union", Algorithm 2's NDT): a sample
+// at ray parameter s, world point p, belongs to the covering candidate (t_in ≤ s ≤ t_out) whose
+// primitive gives the smallest |q| at p, the first in candidate order on ties; `fallback` when
+// none covers s (rounding can leave s just past an interval). Returns the primitive index.
+// The CPU marcher calls this per sample; the light pass evaluates the same rule incrementally
+// (UnionAttribution in lighting.cpp: |q|² from the candidate test's quadratic, active list).
+int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,
+                int fallback);
 
 }  // namespace cumuli

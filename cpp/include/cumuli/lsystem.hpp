@@ -47,8 +47,13 @@ struct LSystemLength {
 LSystemLength lsystem_length(const std::string& axiom, const LSystemRules& rules, int iterations,
                              std::uint64_t cap);
 
+// Largest max_length lsystem_expand accepts: expansion keeps two strings of the peak length, so
+// 2³⁰ symbols is already 2 GiB; a cloud holds far fewer spheres than that anyway.
+constexpr std::uint64_t kMaxLSystemLength = std::uint64_t{1} << 30;
+
 // The expanded string. Throws std::invalid_argument (before allocating anything large) when the
-// final or any intermediate string would exceed max_length symbols.
+// final or any intermediate string would exceed max_length symbols, or max_length exceeds
+// kMaxLSystemLength.
 std::string lsystem_expand(const std::string& axiom, const LSystemRules& rules, int iterations,
                            std::uint64_t max_length);
 

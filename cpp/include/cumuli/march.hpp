@@ -94,10 +94,6 @@ struct MarchScene {
   void validate(const MarchSettings& settings) const;
 };
 
-// The box a ray must hit for a cloud to be marched: bounds of its primitives grown by
-// candidate_scale (so that it contains every candidate interval).
-Box march_box(const CloudShape& cloud);
-
 // The (height, width, 4) float32 RGBA image, row 0 at the top, on `threads` threads (0 = all).
 // The result does not depend on the thread count. `out` holds height·width·4 floats.
 void render_image(const MarchScene& scene, const MarchSettings& settings,

@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <exception>
 #include <mutex>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -52,7 +53,16 @@ void parallel_chunks(std::size_t count, int threads, Fn&& fn) {
   };
   std::vector<std::thread> pool;
   pool.reserve(n - 1);
-  for (unsigned i = 1; i < n; ++i) pool.emplace_back(worker);
+  for (unsigned i = 1; i < n; ++i) {
+    // A thread the system refuses (process/memory limits) must not escape as an exception while
+    // others run: their std::thread destructors would call std::terminate. The threads already
+    // started share the chunks instead; the chunking, hence the result, is unchanged.
+    try {
+      pool.emplace_back(worker);
+    } catch (const std::system_error&) {
+      break;
+    }
+  }
   worker();
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
