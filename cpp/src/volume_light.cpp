@@ -259,8 +259,8 @@ void ShExpTable::apply(const float* g, float* out) const {
     int k = 0;
     while (norm / std::ldexp(1.0, k) > 0.25 && k < 40) ++k;
     const double s = std::ldexp(1.0, -k);
-    double h[kMaxShOrder * kMaxShOrder], e[kMaxShOrder * kMaxShOrder],
-        tmp[kMaxShOrder * kMaxShOrder];
+    double h[kMaxShOrder * kMaxShOrder]{}, e[kMaxShOrder * kMaxShOrder]{},
+        tmp[kMaxShOrder * kMaxShOrder]{};
     h[0] = 0.0;
     for (int c = 1; c < nc; ++c) h[c] = s * g[c];
     sh_product(nc, triple.data(), h, h, tmp);  // exp*(ĥ) ≈ 1 + ĥ + ½ ĥ*ĥ
