@@ -13,6 +13,18 @@
 #define MAX_CANDIDATES 128
 #define MAX_CLOUDS 64
 
+// Candidate sort, chosen when the program is compiled (cumuli/renderer.py defines it from
+// settings.candidate_sort): the paper's insertion sort, iterative quicksort, Batcher's odd-even
+// mergesort (same order, other costs), or none (unsorted: a cost reference, wrong where
+// candidates overlap).
+#define SORT_INSERTION 0
+#define SORT_QUICK 1
+#define SORT_ODDEVEN 2
+#define SORT_NONE 3
+#ifndef CANDIDATE_SORT
+#define CANDIDATE_SORT SORT_INSERTION
+#endif
+
 // Camera (RENDER_CONTRACT): f, r, u unit vectors, th = tan(fov/2), aspect = W/H.
 uniform vec3 u_cam_pos;
 uniform vec3 u_cam_f;
@@ -47,8 +59,64 @@ float cand_in[MAX_CANDIDATES];
 float cand_out[MAX_CANDIDATES];
 int cand_prim[MAX_CANDIDATES];
 
+// Candidate order: by t_in, ties by primitive index (the order a stable insertion sort of the
+// primitives gives). Every sort below produces exactly this order, so they differ only in speed.
+bool cand_less(int a, int b) {
+    return cand_in[a] < cand_in[b] || (cand_in[a] == cand_in[b] && cand_prim[a] < cand_prim[b]);
+}
+
+void cand_swap(int a, int b) {
+    float ti = cand_in[a], to = cand_out[a];
+    int tp = cand_prim[a];
+    cand_in[a] = cand_in[b]; cand_out[a] = cand_out[b]; cand_prim[a] = cand_prim[b];
+    cand_in[b] = ti; cand_out[b] = to; cand_prim[b] = tp;
+}
+
+#if CANDIDATE_SORT == SORT_QUICK
+// Iterative quicksort (the alternative the paper tried, §4.1): explicit stack, the smaller part
+// on top so the stack never holds more than log2(n) + 1 ranges.
+void sort_candidates(int n) {
+    int lo_stack[16];
+    int hi_stack[16];
+    int top = 0;
+    if (n > 1) { lo_stack[0] = 0; hi_stack[0] = n - 1; top = 1; }
+    for (int iter = 0; iter < 2 * MAX_CANDIDATES && top > 0; ++iter) {
+        --top;
+        int lo = lo_stack[top], hi = hi_stack[top];
+        cand_swap((lo + hi) / 2, hi);  // middle element as pivot, parked at hi
+        int store = lo;
+        for (int m = lo; m < hi; ++m) {
+            if (cand_less(m, hi)) { cand_swap(m, store); ++store; }
+        }
+        cand_swap(store, hi);
+        int left = store - 1 - lo, right = hi - store - 1;  // sizes minus one
+        bool left_first = left > right;                      // larger part pushed first
+        if (left_first && left > 0) { lo_stack[top] = lo; hi_stack[top] = store - 1; ++top; }
+        if (right > 0 && top < 16) { lo_stack[top] = store + 1; hi_stack[top] = hi; ++top; }
+        if (!left_first && left > 0 && top < 16) {
+            lo_stack[top] = lo; hi_stack[top] = store - 1; ++top;
+        }
+    }
+}
+#elif CANDIDATE_SORT == SORT_ODDEVEN
+// Batcher's odd-even mergesort for any n (the network the paper suggests, §4.1).
+void sort_candidates(int n) {
+    for (int p = 1; p < n; p += p) {
+        for (int k = p; k > 0; k /= 2) {
+            for (int j = k % p; j + k < n; j += k + k) {
+                for (int i = 0; i < k && i + j + k < n; ++i) {
+                    if ((i + j) / (p + p) == (i + j + k) / (p + p) && cand_less(i + j + k, i + j))
+                        cand_swap(i + j, i + j + k);
+                }
+            }
+        }
+    }
+}
+#endif
+
 // Collect the primitives of cloud c hit by the ray (grown by the candidate scale), clipped to
-// [t_min, t_max], insertion-sorted by t_in; when full, keep the nearest `cap`.
+// [t_min, t_max], and order them (Algorithm 1, GETCANDIDATES + SORTCANDIDATES). At most `cap`
+// are kept: the nearest ones, except with SORT_NONE, which keeps the first found.
 int collect_candidates(CloudData c, vec3 o, vec3 d, float t_min, float t_max, int cap) {
     float scale = c.box_lo.w;
     int count = 0;
@@ -64,6 +132,8 @@ int collect_candidates(CloudData c, vec3 o, vec3 d, float t_min, float t_max, in
         float t1 = min(iv.y, t_max);
         if (!(t1 > t0)) continue;
         int pos = count;
+#if CANDIDATE_SORT == SORT_INSERTION
+        // The paper's insertion sort, done as the candidates arrive.
         if (count == cap) {
             if (t0 >= cand_in[cap - 1]) continue;
             pos = cap - 1;
@@ -76,10 +146,27 @@ int collect_candidates(CloudData c, vec3 o, vec3 d, float t_min, float t_max, in
             cand_prim[pos] = cand_prim[pos - 1];
             --pos;
         }
+#elif CANDIDATE_SORT == SORT_NONE
+        if (count == cap) continue;
+        ++count;
+#else
+        if (count == cap) {  // full: replace the farthest if this one starts nearer
+            pos = 0;
+            for (int m = 1; m < cap; ++m) {
+                if (cand_less(pos, m)) pos = m;
+            }
+            if (!(t0 < cand_in[pos])) continue;
+        } else {
+            ++count;
+        }
+#endif
         cand_in[pos] = t0;
         cand_out[pos] = t1;
         cand_prim[pos] = j;
     }
+#if CANDIDATE_SORT == SORT_QUICK || CANDIDATE_SORT == SORT_ODDEVEN
+    sort_candidates(count);
+#endif
     return count;
 }
 

@@ -98,7 +98,7 @@ void bind_march(py::module_& m) {
          float lod_a, float lod_delta, float ref_step, float step_min, float step_max,
          float fixed_step, float hg_g, int max_steps, int max_candidates, const std::string& march,
          int octaves, float gain, float lacunarity, float frequency, const Noise* noise,
-         int threads, float density_constant) {
+         int threads, float density_constant, bool sort_candidates) {
         if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
           throw py::value_error("width and height must be in [1, " + std::to_string(kMaxEdge) +
                                 "], got " + std::to_string(width) + "x" + std::to_string(height));
@@ -124,6 +124,7 @@ void bind_march(py::module_& m) {
         s.max_steps = max_steps;
         s.max_candidates = max_candidates;
         s.march = march_mode(march);
+        s.sort_candidates = sort_candidates;
         s.fbm = FbmParams{octaves, gain, lacunarity, frequency};
         s.density_constant = density_constant;
 
@@ -168,10 +169,11 @@ void bind_march(py::module_& m) {
       py::arg("fixed_step"), py::arg("hg_g"), py::arg("max_steps"), py::arg("max_candidates"),
       py::arg("march"), py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"),
       py::arg("frequency"), py::arg("noise").none(true), py::arg("threads") = 0,
-      py::arg("density_constant") = -1.0f,
+      py::arg("density_constant") = -1.0f, py::arg("sort_candidates") = true,
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image, row 0 at "
       "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
-      "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests).");
+      "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); sort_candidates=False leaves candidates "
+      "unsorted (candidate_sort='none').");
 }
 
 }  // namespace cumuli::bind

@@ -26,7 +26,7 @@ Box candidate_bounds(const CloudShape& cloud) {
 }
 
 int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir, float t_min,
-                       float t_max, Candidate* out, int capacity) {
+                       float t_max, Candidate* out, int capacity, bool sorted) {
   const float scale = candidate_scale(cloud);
   int count = 0;
   for (std::size_t j = 0; j < cloud.primitives.size(); ++j) {
@@ -37,6 +37,10 @@ int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir,
     const float t0 = std::max(iv.t_in, t_min);
     const float t1 = std::min(iv.t_out, t_max);
     if (!(t1 > t0)) continue;
+    if (!sorted) {
+      if (count < capacity) out[count++] = Candidate{t0, t1, static_cast<int>(j)};
+      continue;
+    }
     // Insertion sort by t_in; when full, keep the nearest `capacity`.
     int pos = count;
     if (count == capacity) {

@@ -240,7 +240,7 @@ class RayMarcher {
     const CloudShape& shape = pc.cloud->shape;
     Candidate* cand = scratch.candidates.data();
     const int n = collect_candidates(shape, origin, dir, h.t_in, h.t_out, cand,
-                                     settings_.max_candidates);
+                                     settings_.max_candidates, settings_.sort_candidates);
     const float step = pc.step;
     const float half = step / 2.0f;
     if (settings_.march == MarchMode::Paper) {

@@ -84,6 +84,8 @@ def render_cpu_args(
         "max_steps": int(s.max_steps),
         "max_candidates": int(s.max_candidates),
         "march": s.march,
+        # The GL sorts all give the (t_in, primitive) order the core's insertion sort gives.
+        "sort_candidates": s.candidate_sort != "none",
         "octaves": int(s.octaves),
         "gain": float(s.gain),
         "lacunarity": float(s.lacunarity),

@@ -66,6 +66,21 @@ def load_shader(name: str) -> str:
     return expand(name, ())
 
 
+def with_defines(source: str, defines: dict[str, int]) -> str:
+    """``source`` with ``#define NAME value`` lines inserted after its ``#version`` line."""
+    lines = []
+    for name, value in defines.items():
+        if not re.fullmatch(r"[A-Z_][A-Z0-9_]*", name):
+            raise ValueError(f"shader define name must be an upper-case identifier, got {name!r}")
+        if isinstance(value, bool) or not isinstance(value, int):
+            raise TypeError(f"shader define {name} must be an int, got {value!r}")
+        lines.append(f"#define {name} {value}")
+    head, sep, rest = source.partition("\n")
+    if not head.lstrip().startswith("#version"):
+        raise ValueError("shader source must start with a #version line")
+    return head + sep + "\n".join(lines) + "\n" + rest
+
+
 class GLContext:
     """A moderngl standalone (EGL) context; use as a context manager or call :meth:`close`.
 
@@ -93,11 +108,18 @@ class GLContext:
     def info(self) -> dict[str, Any]:
         return dict(self.ctx.info)
 
-    def program(self, vertex: str, fragment: str) -> moderngl.Program:
-        """Compile a program from two shader file names under ``shaders/``."""
-        return self.ctx.program(
-            vertex_shader=load_shader(vertex), fragment_shader=load_shader(fragment)
-        )
+    def program(
+        self, vertex: str, fragment: str, defines: dict[str, int] | None = None
+    ) -> moderngl.Program:
+        """Compile a program from two shader file names under ``shaders/``.
+
+        ``defines`` become ``#define NAME value`` lines right after the fragment shader's
+        ``#version`` line (compile-time variants, e.g. the marcher's candidate sort).
+        """
+        fragment_source = load_shader(fragment)
+        if defines:
+            fragment_source = with_defines(fragment_source, defines)
+        return self.ctx.program(vertex_shader=load_shader(vertex), fragment_shader=fragment_source)
 
     def compute(self, name: str) -> moderngl.ComputeShader:
         """Compile a compute shader from a file name under ``shaders/``."""

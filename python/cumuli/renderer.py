@@ -23,7 +23,7 @@ import numpy as np
 from cumuli import _validate as check
 from cumuli.cloud import Cloud
 from cumuli.gl import GLContext
-from cumuli.scene import MAX_CANDIDATES, MAX_CLOUDS, Camera, Scene
+from cumuli.scene import CANDIDATE_SORTS, MAX_CANDIDATES, MAX_CLOUDS, Camera, Scene
 
 #: Largest tile drawn in one call (keeps each draw short on software GL and under driver timeouts).
 TILE = 1024
@@ -232,11 +232,10 @@ class Renderer:
         self._owns_context = context is None
         self.gl = GLContext() if context is None else context
         ctx = self.gl.ctx
+        #: Compiled marcher variants by candidate sort: (program, vertex array).
+        self._variants: dict[str, tuple[Any, Any]] = {}
         try:
-            self.program = self.gl.program("fullscreen.vert.glsl", "march.frag.glsl")
-            self._objects.append(self.program)
-            self.vao = ctx.vertex_array(self.program, [])
-            self._objects.append(self.vao)
+            self._use_variant("insertion")
             # moderngl cannot release a query on its own: share the context's one.
             self._query = self.gl.timer_query()
         except Exception:
@@ -286,6 +285,20 @@ class Renderer:
             tex.repeat_x = tex.repeat_y = tex.repeat_z = True
             self._noise_tex, self._noise_key = tex, key
         return self._noise_tex
+
+    def _use_variant(self, candidate_sort: str) -> None:
+        """Make the marcher compiled for ``candidate_sort`` current (compiled on first use)."""
+        if candidate_sort not in self._variants:
+            program = self.gl.program(
+                "fullscreen.vert.glsl",
+                "march.frag.glsl",
+                defines={"CANDIDATE_SORT": CANDIDATE_SORTS.index(candidate_sort)},
+            )
+            self._objects.append(program)
+            vao = self.gl.ctx.vertex_array(program, [])
+            self._objects.append(vao)
+            self._variants[candidate_sort] = (program, vao)
+        self.program, self.vao = self._variants[candidate_sort]
 
     def _set(self, name: str, value: Any) -> None:
         # Uniforms the compiler optimised away are simply absent.
@@ -340,6 +353,7 @@ class Renderer:
             light_tex.repeat_x = light_tex.repeat_y = light_tex.repeat_z = False
             prim_buf.bind_to_storage_buffer(0)
             cloud_buf.bind_to_storage_buffer(1)
+            self._use_variant(scene.settings.candidate_sort)
             self._noise_texture(scene).use(location=0)
             light_tex.use(location=1)
             self._set_uniforms(scene, camera, width, height)

@@ -34,6 +34,8 @@ MAX_CANDIDATES = 128
 MAX_STEPS = 1 << 16
 MAX_CLOUDS = 64
 MARCH_MODES = ("paper", "union")
+#: Candidate sorts of the GL marcher (compile-time variants of shaders/march.frag.glsl).
+CANDIDATE_SORTS = ("insertion", "quicksort", "oddeven", "none")
 #: Largest scene file `load_scene` reads (clouds are stored inline as JSON arrays).
 MAX_SCENE_BYTES = 1 << 30
 LIGHT_METHODS = ("ndt", "naive")
@@ -206,6 +208,13 @@ class RenderSettings:
     march:
         ``"paper"`` marches each candidate interval on its own (overlaps twice, as the paper);
         ``"union"`` marches the union of the intervals once.
+    candidate_sort:
+        How the GL marcher orders a ray's candidates: ``"insertion"`` (the paper's insertion
+        sort, as candidates arrive), ``"quicksort"`` (iterative, the alternative the paper
+        tried) or ``"oddeven"`` (Batcher's odd-even mergesort, the one it suggests) give the
+        same order — by ``t_in``, ties by primitive index — at different costs; ``"none"``
+        leaves them unsorted (a cost reference: wrong where intervals overlap). The CPU marcher
+        orders by the same key for the first three and leaves ``"none"`` unsorted too.
     exact_noise:
         Use exact float trilinear lookups (texelFetch) for the noise and the light grid instead
         of the hardware filter; the parity tests use it.
@@ -230,6 +239,7 @@ class RenderSettings:
     max_steps: int = 4096
     max_candidates: int = 64
     march: str = "paper"
+    candidate_sort: str = "insertion"
     exact_noise: bool = False
     octaves: int = 5
     gain: float = 0.5
@@ -269,6 +279,11 @@ class RenderSettings:
         )
         if self.march not in MARCH_MODES:
             raise ValueError(f"settings.march must be one of {MARCH_MODES}, got {self.march!r}")
+        if self.candidate_sort not in CANDIDATE_SORTS:
+            raise ValueError(
+                f"settings.candidate_sort must be one of {CANDIDATE_SORTS}, "
+                f"got {self.candidate_sort!r}"
+            )
         if not isinstance(self.exact_noise, (bool, np.bool_)):
             raise TypeError(f"settings.exact_noise must be a bool, got {self.exact_noise!r}")
         s(self, "exact_noise", bool(self.exact_noise))

@@ -25,10 +25,12 @@ Box candidate_bounds(const CloudShape& cloud);
 
 // The intervals where the ray o + t·d (d need not be unit) meets the cloud's primitives (grown by
 // candidate_scale), clipped to [t_min, t_max] and sorted by t_in with an insertion sort, as the
-// paper does. At most `capacity` are kept: when full, the one that starts farthest is dropped.
+// paper does (ties keep the primitive order). At most `capacity` are kept: when full, the one
+// that starts farthest is dropped. With `sorted` false they stay in primitive order and the first
+// `capacity` found are kept (the marchers' candidate_sort="none", a cost reference).
 // Returns the number written to `out`.
 int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir, float t_min,
-                       float t_max, Candidate* out, int capacity);
+                       float t_max, Candidate* out, int capacity, bool sorted = true);
 
 // The union-march attribution rule (RENDER_CONTRACT march="union", Algorithm 2's NDT): a sample
 // at ray parameter s, world point p, belongs to the covering candidate (t_in ≤ s ≤ t_out) whose

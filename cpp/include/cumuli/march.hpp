@@ -73,6 +73,9 @@ struct MarchSettings {
   int max_steps = 4096;      // samples per pixel, all clouds together
   int max_candidates = 64;   // candidates kept per cloud and ray
   MarchMode march = MarchMode::Paper;
+  // Order candidates by t_in (ties: primitive index), as every GL candidate_sort but "none" does;
+  // false leaves them unsorted like the GL "none" variant.
+  bool sort_candidates = true;
   FbmParams fbm;
   float density_constant = -1.0f;  // ≥ 0: constant density instead of fBm (analytic tests)
 
