@@ -2,7 +2,7 @@
 #
 #   make demo    set up (if needed) and render the default scene to out.png / out.exr
 #   make test    set up (if needed) and run the whole test suite (pytest + notebooks)
-#   make bench   run the benchmarks (JSON + plots under benchmarks/out/)
+#   make bench   run the benchmarks (JSON + plots under benchmarks/out/), write RESULTS.md
 #   make lint    ruff on python/, tests/, benchmarks/
 #   make inplace build the extension into python/cumuli for PYTHONPATH=python development
 
@@ -46,8 +46,11 @@ test: setup
 test-fast: install
 	$(PY) -m pytest -q tests -x
 
+# Every benchmark (JSON + plots in benchmarks/out/), then archive the JSON under
+# benchmarks/results/<machine>/ and rewrite benchmarks/RESULTS.md from it.
 bench: setup
-	$(PY) benchmarks/run_all.py
+	$(PY) benchmarks/run_all.py --out benchmarks/out
+	$(PY) benchmarks/report.py --archive benchmarks/out
 
 bench-quick: install
 	$(PY) benchmarks/run_all.py --quick

@@ -178,3 +178,82 @@ def pyplot():
 
 def log(message: str) -> None:
     print(message, flush=True, file=sys.stdout)
+
+
+# --- frame timing shared by the render-pass benchmarks ------------------------------------------
+def gl_timer_reliable(renderer_string: str | None) -> bool:
+    """Whether GL_TIME_ELAPSED measures the draw here.
+
+    Mesa's software rasterisers run the fragment work on their own threads after the query has
+    ended (llvmpipe reported 12 ms for a 3 s draw), so there frame times are wall times of the
+    render call (draw + ``finish`` + read-back).
+    """
+    text = str(renderer_string).lower()
+    return not any(name in text for name in ("llvmpipe", "softpipe", "swrast"))
+
+
+def time_frames(
+    renderer: Any,
+    cases: dict[str, tuple[Any, Any]],
+    width: int,
+    height: int,
+    repeats: int,
+    warmup: int = 1,
+) -> dict[str, dict[str, Any]]:
+    """Frame times of several ``(scene, camera)`` cases, interleaved round by round.
+
+    Each case is rendered ``warmup`` times (shader variant compile, uploads), then ``repeats``
+    rounds render every case once, so slow drifts of the machine touch all cases alike. An entry
+    has ``wall_s`` and, when the driver times draws, ``gl_time_s`` (spreads), ``frame_s`` (the
+    one of them that measures this GL: see :func:`gl_timer_reliable`), ``frame_source``,
+    ``fps`` (at the median) and ``coverage`` (mean alpha of the image).
+    """
+    reliable = gl_timer_reliable(renderer.renderer_string)
+    wall: dict[str, list[float]] = {k: [] for k in cases}
+    gpu: dict[str, list[float]] = {k: [] for k in cases}
+    coverage: dict[str, float] = {}
+    for name, (scene, camera) in cases.items():
+        for _ in range(warmup):
+            img = renderer.render(scene, camera, width, height)
+        coverage[name] = float(img[..., 3].mean()) if warmup else float("nan")
+    for _ in range(repeats):
+        for name, (scene, camera) in cases.items():
+            t0 = time.perf_counter()
+            renderer.render(scene, camera, width, height)
+            wall[name].append(time.perf_counter() - t0)
+            if renderer.last_gpu_ns is not None:
+                gpu[name].append(renderer.last_gpu_ns * 1e-9)
+    out: dict[str, dict[str, Any]] = {}
+    for name in cases:
+        entry: dict[str, Any] = {"wall_s": spread(wall[name])}
+        if len(gpu[name]) == repeats:
+            entry["gl_time_s"] = spread(gpu[name])
+        use_gl = reliable and "gl_time_s" in entry
+        entry["frame_s"] = entry["gl_time_s"] if use_gl else entry["wall_s"]
+        entry["frame_source"] = "gl_timer" if use_gl else "wall"
+        entry["fps"] = 1.0 / entry["frame_s"]["median"]
+        entry["coverage"] = coverage[name]
+        out[name] = entry
+    return out
+
+
+def frame_median(entry: dict[str, Any]) -> float:
+    """Median frame seconds of a :func:`time_frames` entry."""
+    return float(entry["frame_s"]["median"])
+
+
+def render_sizes(renderer_string: str | None, quick: bool) -> tuple[list[tuple[int, int]], str]:
+    """The paper's resolutions on a GPU; each edge divided by 4 on a software rasteriser.
+
+    Returns the sizes and a note saying which were used.
+    """
+    paper = [(640, 480), (800, 600), (1920, 1080)]
+    if quick:
+        return [(64, 48), (80, 60)], "quick: tiny sizes (smoke test only)"
+    if gl_timer_reliable(renderer_string):
+        return paper, "the paper's resolutions"
+    return (
+        [(w // 4, h // 4) for w, h in paper],
+        "software GL: the paper's resolutions with each edge divided by 4 (1/16 of the pixels); "
+        "fps are for these sizes, not the paper's",
+    )

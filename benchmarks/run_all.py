@@ -1,4 +1,7 @@
-"""Run every ``benchmarks/bench_*.py`` in turn (``--quick`` and ``--out`` are passed through)."""
+"""Run every ``benchmarks/bench_*.py`` in turn (``--quick`` and ``--out`` are passed through).
+
+Each script runs in a subprocess with a time limit (``--timeout``), so the whole run is bounded.
+"""
 
 from __future__ import annotations
 
@@ -15,6 +18,9 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--quick", action="store_true", help="small sizes and few repeats")
     parser.add_argument("--out", type=Path, default=None, help="output folder for all scripts")
+    parser.add_argument(
+        "--timeout", type=float, default=3600.0, help="seconds allowed per script (default 3600)"
+    )
     parser.add_argument("only", nargs="*", help="run only these bench_*.py names (e.g. noise)")
     args = parser.parse_args(argv)
     scripts = sorted(HERE.glob("bench_*.py"))
@@ -33,7 +39,11 @@ def main(argv: list[str] | None = None) -> int:
             cmd += ["--out", str(args.out)]
         print(f"== {script.name}", flush=True)
         start = time.perf_counter()
-        code = subprocess.call(cmd)
+        try:
+            code = subprocess.call(cmd, timeout=args.timeout)
+        except subprocess.TimeoutExpired:
+            print(f"== {script.name}: killed after {args.timeout:.0f} s", flush=True)
+            code = -1
         print(f"== {script.name}: exit {code} in {time.perf_counter() - start:.1f} s", flush=True)
         if code != 0:
             failed.append(script.name)
