@@ -34,7 +34,8 @@ _PLY_SIZES = {
 
 def _mesh_arrays(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
     """Validate ``(V, 3)`` vertices and ``(F, 3)`` integer faces; return float32 / int64 arrays."""
-    verts = check.points3(vertices, "vertices", allow_empty=False)
+    # Bounded so that barycentres, scaled vertices and squared distances stay finite in float32.
+    verts = check.points3(vertices, "vertices", allow_empty=False, bound=check.MAX_COORD)
     if verts.shape[0] > MAX_MESH_ELEMENTS:
         raise ValueError(f"vertices: {verts.shape[0]} rows, more than {MAX_MESH_ELEMENTS}")
     f = np.asarray(faces)
