@@ -70,3 +70,86 @@ def test_default_slab_bounds_the_point_buffer() -> None:
     # One slab's float32 points are at most 48 MiB, and a whole plane always fits (2048²).
     assert cnoise.GRID_SLAB_VOXELS * 3 * 4 <= 48 << 20
     assert cnoise.GRID_SLAB_VOXELS >= cnoise.MAX_GRID_EDGE**2
+
+
+# --- bad input ------------------------------------------------------------------------------------
+
+BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+
+
+@pytest.mark.parametrize(
+    ("shape", "exc"),
+    [
+        (0, ValueError),
+        (-4, ValueError),
+        ((4, 0, 4), ValueError),
+        ((4, 4, -1), ValueError),
+        ((4, 4), TypeError),
+        ((4, 4, 4, 4), TypeError),
+        ((4.0, 4, 4), TypeError),
+        (4.5, TypeError),
+        (True, TypeError),
+        ((4, True, 4), TypeError),
+        ("abc", TypeError),
+        (None, TypeError),
+        (cnoise.MAX_GRID_EDGE + 1, ValueError),
+        ((1, 1, 10**9), ValueError),
+    ],
+)
+def test_bad_shapes_are_rejected(shape: object, exc: type) -> None:
+    with pytest.raises(exc, match="shape"):
+        cu.Noise(seed=1, size=8).fbm_grid(shape, *BOX)
+
+
+@pytest.mark.parametrize("shape", [2048, (2048, 2048, 65), (1024, 1024, 257)])
+def test_absurd_sizes_are_refused_before_allocating(
+    shape: object, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    # Each edge is allowed, the voxel count is not (8 Gi voxels would be 32 GiB out). Nothing
+    # may be allocated first: np.empty / the core failing here means the check came too late.
+    def no_alloc(*args: object, **kwargs: object) -> None:
+        raise AssertionError("allocated before checking the size")
+
+    monkeypatch.setattr(cnoise.np, "empty", no_alloc)
+    noise = cu.Noise(seed=1, size=8)
+    monkeypatch.setattr(noise, "_core", None)  # any use of the core would raise AttributeError
+    with pytest.raises(ValueError, match="voxels"):
+        noise.fbm_grid(shape, *BOX)
+
+
+@pytest.mark.parametrize(
+    ("box_min", "box_max", "name"),
+    [
+        ((0, 0, 0), (1, 1, 0), "box_max must be greater"),
+        ((0, 0, 0), (1, -1, 1), "box_max must be greater"),
+        ((2, 0, 0), (1, 1, 1), "box_max must be greater"),
+        ((1, 1, 1), (1, 1, 1), "box_max must be greater"),
+        ((float("nan"), 0, 0), (1, 1, 1), "box_min"),
+        ((0, 0, 0), (1, float("nan"), 1), "box_max"),
+        ((float("-inf"), 0, 0), (1, 1, 1), "box_min"),
+        ((0, 0, 0), (1, 1, float("inf")), "box_max"),
+        ((-1e300, 0, 0), (1e300, 1, 1), "float32 range"),
+        ((0, 0, 0), (1e39, 1, 1), "float32 range"),
+        ((0, 0), (1, 1, 1), "box_min"),
+        ((0, 0, 0), "abc", "box_max"),
+    ],
+)
+def test_bad_boxes_are_rejected(box_min: object, box_max: object, name: str) -> None:
+    with pytest.raises((ValueError, TypeError), match=name):
+        cu.Noise(seed=1, size=8).fbm_grid(4, box_min, box_max)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"octaves": 0}, "octaves"),
+        ({"octaves": 17}, "octaves"),
+        ({"gain": -1.0}, "gain"),
+        ({"lacunarity": float("nan")}, "lacunarity"),
+        ({"frequency": 0.0}, "frequency"),
+        ({"threads": -1}, "threads"),
+    ],
+)
+def test_bad_fbm_parameters_are_rejected(kwargs: dict, name: str) -> None:
+    with pytest.raises(ValueError, match=name):
+        cu.Noise(seed=1, size=8).fbm_grid(4, *BOX, **kwargs)

@@ -96,7 +96,7 @@ class GLContext:
             raise GLUnavailableError(
                 f"could not create a headless OpenGL {require // 100}.{require % 100 // 10} "
                 f"context through EGL ({exc}). Install EGL and Mesa "
-                "(Debian: apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri) or run on a "
+                "(Debian: apt-get install libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri) or run on a "
                 "machine with a GPU driver."
             ) from exc
         self.renderer: str = self.ctx.info.get("GL_RENDERER", "unknown")
