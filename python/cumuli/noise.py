@@ -7,6 +7,7 @@ convention so that the GLSL twin in ``shaders/noise.glsl`` agrees.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -22,6 +23,9 @@ MAX_GRID_EDGE = 2048
 #: Voxels `Noise.fbm_grid` evaluates per call of the core (whole z planes, at least one): bounds
 #: its float32 point buffer to ~48 MiB, however large the volume.
 GRID_SLAB_VOXELS = 1 << 22
+#: Largest magnitude allowed for the lattice coordinates ``p · f · sⁱ`` and for the fBm sum: the
+#: core works in float32, where they overflow to inf (and the lookup gives NaN) at 3.4e38.
+MAX_FBM_MAGNITUDE = 1e37
 
 
 class Noise:
@@ -78,6 +82,7 @@ class Noise:
         """
         pts = check.points3(points, "points")
         params = _fbm_params(octaves, gain, lacunarity, frequency)
+        check_fbm_reach(pts, params, "points")
         return self._core.fbm(pts, *params, check.threads(threads))
 
     def fbm_grid(
@@ -123,6 +128,8 @@ class Noise:
             )
         if not all(np.isfinite(a).all() for a in (xs, ys, zs)):
             raise ValueError("box_min and box_max must lie within the float32 range")
+        corners = np.array([[xs[0], ys[0], zs[0]], [xs[-1], ys[-1], zs[-1]]], dtype=np.float32)
+        check_fbm_reach(corners, params, "box_min/box_max")
         out = np.empty((d, h, w), dtype=np.float32)
         planes = max(1, min(d, GRID_SLAB_VOXELS // (h * w)))
         pts = np.empty((planes, h, w, 3), dtype=np.float32)
@@ -136,12 +143,48 @@ class Noise:
         return out
 
 
+def _log10_max_scale(octaves: int, factor: float) -> float:
+    """log10 of the largest ``factorⁱ`` for i = 1..octaves (the first or the last one)."""
+    return max(math.log10(factor), octaves * math.log10(factor))
+
+
 def _fbm_params(
     octaves: int, gain: float, lacunarity: float, frequency: float
 ) -> tuple[int, float, float, float]:
-    return (
-        check.integer(octaves, "octaves", 1, 16),
-        check.real(gain, "gain", 0.0, lo_open=True),
-        check.real(lacunarity, "lacunarity", 0.0, lo_open=True),
-        check.real(frequency, "frequency", 0.0, lo_open=True),
-    )
+    """Checked ``(octaves, gain, lacunarity, frequency)``; refuses combinations whose octave
+    weights or scales (``gainⁱ``, ``frequency · lacunarityⁱ``) overflow float32."""
+    octaves = check.integer(octaves, "octaves", 1, 16)
+    gain = check.real(gain, "gain", 0.0, lo_open=True)
+    lacunarity = check.real(lacunarity, "lacunarity", 0.0, lo_open=True)
+    frequency = check.real(frequency, "frequency", 0.0, lo_open=True)
+    limit = math.log10(MAX_FBM_MAGNITUDE)
+    # The sum of the weights is at most octaves times the largest.
+    if math.log10(octaves) + _log10_max_scale(octaves, gain) > limit:
+        raise ValueError(
+            f"gain {gain} over {octaves} octaves weights the sum beyond {MAX_FBM_MAGNITUDE:g} "
+            "(float32 overflow)"
+        )
+    if math.log10(frequency) + _log10_max_scale(octaves, lacunarity) > limit:
+        raise ValueError(
+            f"frequency {frequency} * lacunarity {lacunarity}**{octaves} exceeds "
+            f"{MAX_FBM_MAGNITUDE:g} (float32 overflow)"
+        )
+    return octaves, gain, lacunarity, frequency
+
+
+def check_fbm_reach(points: np.ndarray, params: tuple[int, float, float, float], name: str) -> None:
+    """Refuse points whose lattice coordinates ``p · frequency · lacunarityⁱ`` would overflow
+    float32: the fBm would come out NaN for finite input."""
+    if points.size == 0:
+        return
+    biggest = float(np.abs(points).max())
+    if biggest == 0.0:
+        return
+    octaves, _, lacunarity, frequency = params
+    reach = math.log10(biggest) + math.log10(frequency) + _log10_max_scale(octaves, lacunarity)
+    if reach > math.log10(MAX_FBM_MAGNITUDE):
+        raise ValueError(
+            f"{name}: a coordinate of magnitude {biggest:.3g} times frequency * "
+            f"lacunarity**{octaves} reaches 1e{reach:.1f}, beyond {MAX_FBM_MAGNITUDE:g} "
+            "(float32 overflow)"
+        )
