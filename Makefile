@@ -8,14 +8,18 @@
 
 VENV ?= .venv
 PY := $(VENV)/bin/python
-SYSTEM_PACKAGES := g++ make libglm-dev libegl1 libegl-mesa0 libgl1-mesa-dri libgles2
+# python3-venv: Debian's python3 has no venv/ensurepip without it; python3-dev: Python.h for the
+# extension build; libgl1: glcontext's EGL backend dlopens libGL.so.1 (libegl1 does not pull it).
+SYSTEM_PACKAGES := g++ make python3 python3-venv python3-dev libglm-dev \
+  libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2
 STAMP := $(VENV)/.cumuli-installed
 
 .PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace clean
 
 setup: system install
 
-# Debian packages: GLM headers for the C++ core, EGL + Mesa (llvmpipe) for headless GL.
+# Debian packages: a compiler and Python headers for the C++ core, GLM, EGL + Mesa (llvmpipe) for
+# headless GL. `env` passes DEBIAN_FRONTEND through sudo, which would otherwise drop it.
 system:
 	@missing=""; for p in $(SYSTEM_PACKAGES); do \
 	  dpkg-query -W -f='$${Status}' $$p 2>/dev/null | grep -q "install ok installed" || missing="$$missing $$p"; \
@@ -23,7 +27,7 @@ system:
 	if [ -n "$$missing" ]; then \
 	  echo "installing Debian packages:$$missing"; \
 	  SUDO=$$( [ "$$(id -u)" = 0 ] || echo sudo ); \
-	  $$SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $$SUDO apt-get install -y -qq $$missing; \
+	  $$SUDO apt-get update -qq && $$SUDO env DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$missing; \
 	fi
 
 $(PY):

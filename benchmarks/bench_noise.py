@@ -6,6 +6,9 @@ time of the repeats, samples per second, and the process CPU time (for single-th
 gives per-thread speed that is robust to other load on a shared machine). GLSL is timed twice:
 the dispatch alone with a GL timer query (GL_TIME_ELAPSED) and the wall time of the whole call
 (upload, dispatch, read-back; the program and lattice texture are made once, outside the timing).
+On llvmpipe, GLSL is also timed with the driver limited to 1 and 2 threads (Mesa's
+``LP_NUM_THREADS``, read when the driver is loaded, so each runs in a child process of this script
+started with the variable set): ``glsl_*_1_thread`` / ``glsl_*_2_threads`` and their 2-vs-1 ratios.
 
 pyfastnoiselite (FastNoiseLite, NoiseType_Value, FractalType_FBm, 5 octaves, gen_from_coords) is
 the reference point: a hashed value noise, single-threaded (its CPU time equals its wall time;
@@ -15,7 +18,12 @@ from 1 to 2 threads (only meaningful when two cores are free; the load average i
 
 from __future__ import annotations
 
+import argparse
+import json
+import os
+import subprocess
 import sys
+import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -30,6 +38,19 @@ import cumuli as cu  # noqa: E402
 OCTAVES = 5
 TARGET_VS_FASTNOISE = 1.0
 TARGET_2_THREADS = 1.8
+#: llvmpipe thread counts GLSL is timed at (each in a child process with LP_NUM_THREADS set).
+LLVMPIPE_THREADS = (1, 2)
+#: Command-line flag that makes this script a GLSL timing child (see `glsl_worker`).
+WORKER_FLAG = "--glsl-worker"
+
+
+def random_points(count: int) -> np.ndarray:
+    """The benchmark's points: uniform in [-50, 50]³, the same in the parent and its children."""
+    return np.random.default_rng(0).uniform(-50.0, 50.0, (count, 3)).astype(np.float32)
+
+
+def _thread_suffix(n: int) -> str:
+    return "1_thread" if n == 1 else f"{n}_threads"
 
 
 def _method(count: int, wall: list[float], cpu: list[float], **extra: Any) -> dict[str, Any]:
@@ -91,6 +112,73 @@ def bench_glsl(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, Any]
     return out
 
 
+def llvmpipe_threads_running() -> int | None:
+    """How many llvmpipe rasteriser threads ("llvmpipe-N") this process runs; None without /proc.
+
+    Mesa starts LP_NUM_THREADS of them when the driver loads, so this confirms that the variable
+    took effect (its compute-shader pool has the same size but no telling name).
+    """
+    tasks = Path("/proc/self/task")
+    if not tasks.is_dir():
+        return None
+    count = 0
+    for task in tasks.iterdir():
+        try:
+            count += (task / "comm").read_text().startswith("llvmpipe-")
+        except OSError:
+            pass
+    return count
+
+
+def glsl_worker(argv: list[str]) -> int:
+    """Child-process mode: time GLSL fBm (`bench_glsl`) and write its methods as JSON.
+
+    Run by `bench_glsl_llvmpipe_threads` with LP_NUM_THREADS in the environment; the points are
+    rebuilt from their count with `random_points`, so the child times the parent's points.
+    """
+    parser = argparse.ArgumentParser(prog=f"bench_noise.py {WORKER_FLAG}")
+    parser.add_argument("--points", type=int, required=True)
+    parser.add_argument("--repeats", type=int, required=True)
+    parser.add_argument("--json", type=Path, required=True)
+    args = parser.parse_args(argv)
+    methods = bench_glsl(cu.Noise(seed=7), random_points(args.points), args.repeats)
+    common.write_json(
+        args.json,
+        {
+            "methods": methods,
+            "lp_num_threads": os.environ.get("LP_NUM_THREADS"),
+            "llvmpipe_threads_running": llvmpipe_threads_running(),
+        },
+    )
+    return 0
+
+
+def bench_glsl_llvmpipe_threads(
+    count: int, repeats: int, threads: int, timeout: float
+) -> dict[str, Any]:
+    """GLSL timings (`bench_glsl`) in a child process whose llvmpipe runs on ``threads`` threads.
+
+    Returns the child's methods, each with ``llvmpipe_threads`` (requested) and
+    ``llvmpipe_threads_running`` (counted in the child) added. Raises ``RuntimeError`` when the
+    child fails.
+    """
+    env = dict(os.environ, LP_NUM_THREADS=str(threads))
+    with tempfile.TemporaryDirectory(prefix="bench_noise_glsl_") as tmp:
+        out = Path(tmp) / "glsl.json"
+        cmd = [sys.executable, str(Path(__file__).resolve()), WORKER_FLAG]
+        cmd += ["--points", str(count), "--repeats", str(repeats), "--json", str(out)]
+        res = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=timeout)
+        if res.returncode != 0 or not out.is_file():
+            tail = (res.stderr or res.stdout).strip().splitlines()[-5:]
+            raise RuntimeError(f"GLSL child with LP_NUM_THREADS={threads} failed: {tail}")
+        child = json.loads(out.read_text())
+    methods: dict[str, Any] = child["methods"]
+    for m in methods.values():
+        m["llvmpipe_threads"] = threads
+        m["llvmpipe_threads_running"] = child["llvmpipe_threads_running"]
+    return methods
+
+
 def bench_fastnoise(pts: np.ndarray, repeats: int) -> dict[str, Any]:
     from pyfastnoiselite.pyfastnoiselite import FastNoiseLite, FractalType, NoiseType
 
@@ -129,17 +217,21 @@ def plot(result: dict[str, Any], path: Path) -> None:
         fontsize=9,
     )
     ax.legend(fontsize=8)
-    ax.tick_params(axis="x", labelsize=8)
+    ax.tick_params(axis="x", labelsize=7)
+    plt.setp(ax.get_xticklabels(), rotation=30, ha="right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == [WORKER_FLAG]:
+        return glsl_worker(argv[1:])
     args = common.parse_args(__doc__.splitlines()[0], argv)
     count = 100_000 if args.quick else 1_000_000
     repeats = 3 if args.quick else 7
-    pts = np.random.default_rng(0).uniform(-50.0, 50.0, (count, 3)).astype(np.float32)
+    pts = random_points(count)
     noise = cu.Noise(seed=7)
     machine = common.machine_info()
     common.log(f"machine: {machine['cpu_model']} ×{machine['cores']}, GL: {machine['gl_renderer']}")
@@ -154,8 +246,25 @@ def main(argv: list[str] | None = None) -> int:
         methods["pyfastnoiselite"] = bench_fastnoise(pts, repeats)
     except ImportError as exc:
         skipped["pyfastnoiselite"] = f"not installed ({exc})"
+    glsl_threads: list[int] = []
     if machine["gl_renderer"]:
         methods.update(bench_glsl(noise, pts, repeats))
+        if "llvmpipe" in machine["gl_renderer"].lower():
+            for n in LLVMPIPE_THREADS:
+                try:
+                    child = bench_glsl_llvmpipe_threads(
+                        count, repeats, n, timeout=300 if args.quick else 1800
+                    )
+                except (RuntimeError, subprocess.TimeoutExpired) as exc:
+                    skipped[f"glsl_llvmpipe_{_thread_suffix(n)}"] = str(exc)
+                    continue
+                for key, m in child.items():
+                    methods[f"{key}_{_thread_suffix(n)}"] = m
+                glsl_threads.append(n)
+        else:
+            skipped["glsl_llvmpipe_threads"] = (
+                f"LP_NUM_THREADS only applies to llvmpipe, the renderer is {machine['gl_renderer']}"
+            )
     else:
         skipped["glsl"] = machine.get("gl_unavailable_reason", "no GL")
 
@@ -196,6 +305,15 @@ def main(argv: list[str] | None = None) -> int:
     for key in ("glsl_texture", "glsl_exact"):
         if key in methods:
             ratios[f"{key}_over_cpp_1_thread"] = med(key) / med("cpp_1_thread")
+        one, two = f"{key}_1_thread", f"{key}_2_threads"
+        if one in methods and two in methods:
+            # The dispatch is what llvmpipe spreads over its threads; the whole call adds the
+            # single-threaded upload and read-back, so its ratio is the end-to-end one.
+            ratios[f"{key}_2_threads_over_1"] = (
+                methods[two]["gpu_samples_per_s"]["median"]
+                / methods[one]["gpu_samples_per_s"]["median"]
+            )
+            ratios[f"{key}_2_threads_over_1_wall"] = med(two) / med(one)
 
     result = {
         "benchmark": "noise",
@@ -204,6 +322,7 @@ def main(argv: list[str] | None = None) -> int:
         "points": count,
         "repeats": repeats,
         "octaves": OCTAVES,
+        "llvmpipe_threads": glsl_threads,
         "machine": machine,
         "methods": methods,
         "skipped": skipped,
@@ -223,11 +342,11 @@ def main(argv: list[str] | None = None) -> int:
                 f"{'' if m['gpu_query_valid'] else ' - did not see the compute work'})"
             )
         common.log(
-            f"{name:<16} {m['samples_per_s']['median'] / 1e6:7.2f} M samples/s "
+            f"{name:<22} {m['samples_per_s']['median'] / 1e6:7.2f} M samples/s "
             f"(CPU time: {m['samples_per_cpu_s'] / 1e6:6.2f} M/cpu-s){extra}"
         )
     for name, value in ratios.items():
-        common.log(f"{name:<40} {value:6.2f}")
+        common.log(f"{name:<44} {value:6.2f}")
     for name, t in targets.items():
         verdict = "met" if t["met"] else "NOT met"
         common.log(f"target {name}: {t['target']}, got {t['value']:.2f} -> {verdict}")

@@ -8,6 +8,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -56,6 +58,24 @@ def test_bench_noise_quick_writes_json_and_plot(tmp_path: Path) -> None:
             assert key in methods
             assert "gpu_query_s" in methods[key] and "dispatch_wall_s" in methods[key]
             assert methods[key]["renderer"] == machine["gl_renderer"]
+        if "llvmpipe" in machine["gl_renderer"].lower():
+            # Timed again in child processes with LP_NUM_THREADS=1 and 2.
+            assert data["llvmpipe_threads"] == [1, 2], data["skipped"]
+            for key in ("glsl_texture", "glsl_exact"):
+                for n, suffix in ((1, "1_thread"), (2, "2_threads")):
+                    m = methods[f"{key}_{suffix}"]
+                    assert m["llvmpipe_threads"] == n
+                    assert m["renderer"] == machine["gl_renderer"]
+                    assert m["gpu_samples_per_s"]["median"] > 0
+                    # The child counted the driver's threads: the variable took effect.
+                    assert m["llvmpipe_threads_running"] in (n, None)
+                ratio = data["ratios"][f"{key}_2_threads_over_1"]
+                one = methods[f"{key}_1_thread"]["gpu_samples_per_s"]["median"]
+                two = methods[f"{key}_2_threads"]["gpu_samples_per_s"]["median"]
+                assert ratio == pytest.approx(two / one)
+                assert data["ratios"][f"{key}_2_threads_over_1_wall"] > 0
+        else:
+            assert "glsl_llvmpipe_threads" in data["skipped"]
     else:
         assert "glsl" in data["skipped"]
     if "pyfastnoiselite" in methods:

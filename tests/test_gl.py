@@ -178,10 +178,3 @@ def test_context_create_close_does_not_leak_file_descriptors() -> None:
         cgl.fbm(cu.Noise(seed=2, size=4), np.zeros((3, 3)), context=ctx)
         ctx.close()
     assert open_fds() == before
-
-
-def test_shader_includes_are_expanded() -> None:
-    src = cgl.load_shader("fbm_points.comp.glsl")
-    assert "#include" not in src
-    assert "float fbm(vec3 p, bool exact)" in src
-    assert src.lstrip().startswith("#version 430")

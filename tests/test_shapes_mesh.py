@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import struct
 from pathlib import Path
 
@@ -184,9 +185,26 @@ def test_bad_sources(tmp_path: Path) -> None:
             cumuli.mesh_cloud(path)
 
 
+def _parallel_face_threshold() -> int:
+    """Faces below which the core runs on one thread whatever ``threads`` says."""
+    src = (Path(__file__).resolve().parents[1] / "cpp/src/mesh_ellipsoids.cpp").read_text()
+    per_thread = int(re.search(r"kFacesPerThread = (\d+);", src).group(1))
+    assert re.search(r"face_count < 2 \* kFacesPerThread \? 1 : threads", src)
+    return 2 * per_thread
+
+
 def test_thread_count_does_not_change_the_result() -> None:
-    v, f = meshes.bunny_like(subdivisions=2)
+    # Large enough that the core really splits the faces (1, 2, 3 threads chunk them
+    # differently): a smaller mesh would run on one thread every time.
+    v, f = meshes.icosphere(5)
+    assert len(f) == 20480 and len(f) >= _parallel_face_threshold()
+    # Jittered, so that the faces differ from one another.
+    v = v + np.random.default_rng(5).normal(0.0, 0.01, v.shape).astype(np.float32)
     one = cumuli.ellipsoids_from_mesh(v, f, scale=1.3, threads=1)
-    many = cumuli.ellipsoids_from_mesh(v, f, scale=1.3, threads=4)
-    for a, b in zip(one, many, strict=True):
-        assert np.array_equal(a, b)
+    for threads in (2, 3, 0):
+        many = cumuli.ellipsoids_from_mesh(v, f, scale=1.3, threads=threads)
+        for a, b in zip(one, many, strict=True):
+            assert a.tobytes() == b.tobytes(), threads
+    cloud = cumuli.mesh_cloud((v, f), scale=1.3, threads=2)
+    assert cloud.centres.tobytes() == one[0].tobytes()
+    assert cloud.rotations.tobytes() == one[2].tobytes()

@@ -10,10 +10,20 @@ import numpy as np
 
 #: Largest number of points / samples a single call accepts (keeps allocations sane).
 MAX_POINTS = 1 << 28
+#: Largest magnitude accepted for a coordinate or length passed to a generator (world units).
+#: Far beyond any scene (float32 spacing there is ~1e8), and small enough that the sums,
+#: differences and squared distances the core forms from a few such values (≲ 1e32) stay far
+#: inside float32 (max 3.4e38): finite input then cannot come out as inf or NaN.
+MAX_COORD = 1e15
 
 
-def points3(value: Any, name: str = "points", *, allow_empty: bool = True) -> np.ndarray:
-    """Return ``value`` as a C-contiguous float32 ``(N, 3)`` array of finite numbers."""
+def points3(
+    value: Any, name: str = "points", *, allow_empty: bool = True, bound: float | None = None
+) -> np.ndarray:
+    """Return ``value`` as a C-contiguous float32 ``(N, 3)`` array of finite numbers.
+
+    With ``bound``, every component must also have a magnitude of at most ``bound``.
+    """
     if isinstance(value, np.ndarray):
         arr = value
     else:
@@ -32,11 +42,16 @@ def points3(value: Any, name: str = "points", *, allow_empty: bool = True) -> np
     arr = np.ascontiguousarray(arr, dtype=np.float32)
     if not np.isfinite(arr).all():
         raise ValueError(f"{name} contains NaN or infinite values")
+    if bound is not None and arr.size and float(np.abs(arr).max()) > bound:
+        raise ValueError(
+            f"{name} has a component of magnitude {float(np.abs(arr).max()):.3g}, "
+            f"beyond the limit ±{bound:g}"
+        )
     return arr
 
 
-def vec3(value: Any, name: str) -> tuple[float, float, float]:
-    """Return ``value`` as a tuple of three finite floats."""
+def vec3(value: Any, name: str, *, bound: float | None = None) -> tuple[float, float, float]:
+    """Return ``value`` as a tuple of three finite floats (each within ``±bound`` if given)."""
     try:
         seq = [float(v) for v in value]
     except (TypeError, ValueError):
@@ -45,15 +60,21 @@ def vec3(value: Any, name: str) -> tuple[float, float, float]:
         raise ValueError(f"{name} must have three components, got {len(seq)}")
     if not all(math.isfinite(v) for v in seq):
         raise ValueError(f"{name} must be finite, got {tuple(seq)}")
+    if bound is not None and max(abs(v) for v in seq) > bound:
+        raise ValueError(f"{name} must have components within ±{bound:g}, got {tuple(seq)}")
     return (seq[0], seq[1], seq[2])
 
 
 def direction(value: Any, name: str) -> tuple[float, float, float]:
     """Return ``value`` normalised; zero-length or non-finite vectors are rejected."""
     v = vec3(value, name)
-    n = math.sqrt(v[0] ** 2 + v[1] ** 2 + v[2] ** 2)
+    n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     if n < 1e-12:
         raise ValueError(f"{name} must not be the zero vector")
+    if math.isinf(n):  # components beyond ~1e154 overflow when squared: scale them down first
+        m = max(abs(c) for c in v)
+        v = (v[0] / m, v[1] / m, v[2] / m)
+        n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
     return (v[0] / n, v[1] / n, v[2] / n)
 
 

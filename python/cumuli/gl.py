@@ -96,7 +96,7 @@ class GLContext:
             raise GLUnavailableError(
                 f"could not create a headless OpenGL {require // 100}.{require % 100 // 10} "
                 f"context through EGL ({exc}). Install EGL and Mesa "
-                "(Debian: apt-get install libegl1 libegl-mesa0 libgl1-mesa-dri) or run on a "
+                "(Debian: apt-get install libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri) or run on a "
                 "machine with a GPU driver."
             ) from exc
         self.renderer: str = self.ctx.info.get("GL_RENDERER", "unknown")
@@ -266,12 +266,13 @@ class FbmProgram:
         exact: bool = False,
     ) -> np.ndarray:
         """fBm at ``(N, 3)`` points on the GPU; returns ``(N,)`` float32."""
-        from cumuli.noise import _fbm_params
+        from cumuli.noise import _fbm_params, check_fbm_reach
 
         if self.program is None or self.context.closed:
             raise ValueError("this FbmProgram has been released")
         pts = check.points3(points, "points")
         octaves, gain, lacunarity, frequency = _fbm_params(octaves, gain, lacunarity, frequency)
+        check_fbm_reach(pts, (octaves, gain, lacunarity, frequency), "points")
         if not isinstance(exact, (bool, np.bool_)):
             raise TypeError(f"exact must be a bool, got {type(exact).__name__}")
         n = pts.shape[0]

@@ -2,14 +2,17 @@
 
 `load_mesh` reads OBJ, PLY, STL, OFF, GLB/GLTF through trimesh after checks of its own (missing,
 empty or oversized files; PLY headers that declare more data than the file holds are refused
-before trimesh allocates). The procedural shapes (`icosphere`, `torus`, `bunny_like`) are made by
-code, so the tests and notebooks need no downloaded models.
+before trimesh allocates; OBJ face indices that are 0 or point past the vertices are refused
+with the line, where trimesh would build a wrong triangle or fail without saying where). The
+procedural shapes (`icosphere`, `torus`, `bunny_like`) are made by code, so the tests and
+notebooks need no downloaded models.
 """
 
 from __future__ import annotations
 
 import os
 import re
+from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +37,8 @@ _PLY_SIZES = {
 
 def _mesh_arrays(vertices: Any, faces: Any) -> tuple[np.ndarray, np.ndarray]:
     """Validate ``(V, 3)`` vertices and ``(F, 3)`` integer faces; return float32 / int64 arrays."""
-    verts = check.points3(vertices, "vertices", allow_empty=False)
+    # Bounded so that barycentres, scaled vertices and squared distances stay finite in float32.
+    verts = check.points3(vertices, "vertices", allow_empty=False, bound=check.MAX_COORD)
     if verts.shape[0] > MAX_MESH_ELEMENTS:
         raise ValueError(f"vertices: {verts.shape[0]} rows, more than {MAX_MESH_ELEMENTS}")
     f = np.asarray(faces)
@@ -111,12 +115,132 @@ def _check_ply_header(path: Path, size: int) -> None:
         )
 
 
+def _obj_face_fault(where: str, parts: list[bytes], vertices: int) -> str | None:
+    """What is wrong with one OBJ face line split into ``parts`` (None: nothing)."""
+    if len(parts) < 4:
+        return f"{where}: a face needs at least 3 vertices"
+    forms = set()
+    for token in parts[1:]:
+        fields = token.split(b"/")
+        bad = f"{where}: bad face vertex {token.decode(errors='replace')!r}"
+        if len(fields) > 3:
+            return bad
+        # a, a/b, a//c or a/b/c: trimesh turns a face mixing them into garbage.
+        forms.add((len(fields), len(fields) > 1 and fields[1] != b""))
+        if len(forms) > 1:
+            return f"{where}: a face mixes the forms a, a/b, a//c, a/b/c"
+        try:
+            index = int(fields[0])
+            for extra in fields[1:]:
+                if extra:
+                    int(extra)
+        except ValueError:
+            return bad
+        if index == 0:
+            return f"{where}: face index 0 (OBJ indices start at 1)"
+        if index < 0 and -index > vertices:
+            return (
+                f"{where}: relative face index {index} but only {vertices} vertices are "
+                "defined before it"
+            )
+    return None
+
+
+def _obj_statements(lines: Iterable[bytes]) -> Iterator[tuple[int, bytes, list[bytes]]]:
+    """``(line, text, tokens)`` of each ``v`` and ``f`` statement of an OBJ file, comments removed
+    and continued lines (ending in a backslash) joined; ``line`` is where the statement starts."""
+    pending = b""
+    start = 0
+    for lineno, raw in enumerate(lines, 1):
+        head = raw[:2]
+        # Plain vertex and face lines (nearly all of a file) take no further work.
+        if (head == b"v " or head == b"f ") and not pending and b"#" not in raw:
+            if not raw.rstrip().endswith(b"\\"):
+                yield lineno, raw, raw.split()
+                continue
+        if not pending:
+            start = lineno
+        if b"#" in raw:
+            raw = raw.split(b"#", 1)[0]
+        line = pending + raw.rstrip()
+        if line.endswith(b"\\"):
+            pending = line[:-1] + b" "
+            continue
+        pending = b""
+        parts = line.split()
+        if parts and parts[0] in (b"v", b"f"):
+            yield start, line, parts
+
+
+def _obj_faces_plainly_valid(lines: Iterable[bytes]) -> bool:
+    """True when no face of the file is at fault (False: `_scan_obj_faces` finds where).
+
+    Faces ``f a b c`` (what exporters write) are checked in bulk, all their indices converted at
+    once: a Python loop over tokens would cost several times trimesh's own parse.
+    """
+    vertices = 0
+    tokens: list[bytes] = []
+    for _, text, parts in _obj_statements(lines):
+        if parts[0] == b"v":
+            vertices += 1
+        elif len(parts) >= 4 and b"/" not in text and b"-" not in text:
+            tokens.extend(parts[1:])
+        elif _obj_face_fault("", parts, vertices) is not None:
+            return False
+        else:
+            tokens.extend(t.split(b"/", 1)[0] for t in parts[1:] if t[:1] != b"-")
+    try:
+        indices = list(map(int, tokens))
+    except ValueError:
+        return False
+    return not indices or (min(indices) > 0 and max(indices) <= vertices)
+
+
+def _scan_obj_faces(name: str, lines: Iterable[bytes]) -> None:
+    """Check every face line by line; ``ValueError`` naming the file and line of the first fault."""
+    vertices = 0
+    farthest = (0, 0)  # (largest index, its line): forward references are allowed
+    for line, _, parts in _obj_statements(lines):
+        if parts[0] == b"v":
+            vertices += 1
+            continue
+        fault = _obj_face_fault(f"{name}, line {line}", parts, vertices)
+        if fault is not None:
+            raise ValueError(fault)
+        for token in parts[1:]:
+            index = int(token.split(b"/", 1)[0])
+            if index > farthest[0]:
+                farthest = (index, line)
+    if farthest[0] > vertices:
+        raise ValueError(
+            f"{name}, line {farthest[1]}: face index {farthest[0]} is out of range: the file "
+            f"has {vertices} vertices"
+        )
+
+
+def _check_obj_faces(path: Path) -> None:
+    """Refuse OBJ faces whose vertex indices trimesh would misread, naming the file and line.
+
+    OBJ indices are 1-based (``f a``, ``f a/b``, ``f a//c``, ``f a/b/c``; negative ones count back
+    from the last vertex defined so far). trimesh takes an index 0 as a valid vertex (a wrong
+    triangle, silently), fails on indices past the end without saying where, and scrambles a
+    face that mixes the forms. Only the vertex index ``a`` decides the geometry, so texture and
+    normal indices are only checked to be integers.
+    """
+    with open(path, "rb") as fh:
+        if _obj_faces_plainly_valid(fh):
+            return
+    with open(path, "rb") as fh:  # something is wrong: find the line
+        _scan_obj_faces(path.name, fh)
+
+
 def load_mesh(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle mesh file; returns ``(vertices (V, 3) float32, faces (F, 3) int64)``.
 
     Scenes (GLB/GLTF, multi-object OBJ) are flattened into one mesh. Raises
     ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file for an empty,
-    oversized, truncated or unreadable one, or one without triangles.
+    oversized, truncated or unreadable one, or one without triangles; for an OBJ face index
+    that is 0 or out of range, the message names the line too.
     """
     import trimesh
 
@@ -135,6 +259,8 @@ def load_mesh(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{p.name}: {size} bytes, more than the limit {MAX_MESH_BYTES}")
     if ext == ".ply":
         _check_ply_header(p, size)
+    elif ext == ".obj":
+        _check_obj_faces(p)
     try:
         mesh = trimesh.load(str(p), force="mesh", process=False)
     except Exception as exc:  # trimesh raises many types for corrupt files

@@ -7,6 +7,7 @@ convention so that the GLSL twin in ``shaders/noise.glsl`` agrees.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -14,8 +15,17 @@ import numpy as np
 from cumuli import _core
 from cumuli import _validate as check
 
-#: Largest lattice edge accepted (512³ float32 = 512 MiB).
+#: Largest lattice edge accepted: 512³ float32 is 512 MiB, and the core keeps a second,
+#: padded (size + 1)³ copy for its lookups, so about 1 GiB in all.
 MAX_SIZE = 512
+#: Largest edge of a `Noise.fbm_grid` volume.
+MAX_GRID_EDGE = 2048
+#: Voxels `Noise.fbm_grid` evaluates per call of the core (whole z planes, at least one): bounds
+#: its float32 point buffer to ~48 MiB, however large the volume.
+GRID_SLAB_VOXELS = 1 << 22
+#: Largest magnitude allowed for the lattice coordinates ``p · f · sⁱ`` and for the fBm sum: the
+#: core works in float32, where they overflow to inf (and the lookup gives NaN) at 3.4e38.
+MAX_FBM_MAGNITUDE = 1e37
 
 
 class Noise:
@@ -72,6 +82,7 @@ class Noise:
         """
         pts = check.points3(points, "points")
         params = _fbm_params(octaves, gain, lacunarity, frequency)
+        check_fbm_reach(pts, params, "points")
         return self._core.fbm(pts, *params, check.threads(threads))
 
     def fbm_grid(
@@ -87,35 +98,93 @@ class Noise:
     ) -> np.ndarray:
         """fBm at the voxel centres of a box: a ``(D, H, W)`` float32 volume indexed ``[z, y, x]``.
 
-        ``shape`` is one int (a cube) or ``(D, H, W)``.
+        ``shape`` is one int (a cube) or ``(D, H, W)``, each edge at most `MAX_GRID_EDGE` and at
+        most ``MAX_POINTS`` voxels in all (checked before anything is allocated); the box's voxel
+        centres must be finite in float32. Memory is the
+        output plus a fixed-size buffer: the volume is filled in slabs of whole z planes
+        (`GRID_SLAB_VOXELS` voxels a slab), each one call of the core.
         """
         if isinstance(shape, (int, np.integer)) and not isinstance(shape, bool):
-            d = h = w = check.integer(shape, "shape", 1, 2048)
+            d = h = w = check.integer(shape, "shape", 1, MAX_GRID_EDGE)
         else:
             if not isinstance(shape, Sequence) or len(shape) != 3:
                 raise TypeError(f"shape must be an int or (D, H, W), got {shape!r}")
-            d, h, w = (check.integer(v, "shape", 1, 2048) for v in shape)
+            d, h, w = (check.integer(v, "shape", 1, MAX_GRID_EDGE) for v in shape)
         if d * h * w > check.MAX_POINTS:
             raise ValueError(f"shape {(d, h, w)} has more than {check.MAX_POINTS} voxels")
         lo = np.array(check.vec3(box_min, "box_min"), dtype=np.float64)
         hi = np.array(check.vec3(box_max, "box_max"), dtype=np.float64)
         if not (hi > lo).all():
             raise ValueError("box_max must be greater than box_min on every axis")
+        params = _fbm_params(octaves, gain, lacunarity, frequency)
+        threads = check.threads(threads)
+        # Voxel centres per axis, in float64 then rounded once to float32: the same values as
+        # rounding a float64 meshgrid of them, without its (D, H, W, 3) float64 arrays.
         step = (hi - lo) / np.array([w, h, d])
-        xs = lo[0] + (np.arange(w) + 0.5) * step[0]
-        ys = lo[1] + (np.arange(h) + 0.5) * step[1]
-        zs = lo[2] + (np.arange(d) + 0.5) * step[2]
-        z, y, x = np.meshgrid(zs, ys, xs, indexing="ij")
-        pts = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
-        return self.fbm(pts, octaves, gain, lacunarity, frequency, threads).reshape(d, h, w)
+        with np.errstate(over="ignore", invalid="ignore"):
+            xs, ys, zs = (
+                (lo[k] + (np.arange(n) + 0.5) * step[k]).astype(np.float32)
+                for k, n in enumerate((w, h, d))
+            )
+        if not all(np.isfinite(a).all() for a in (xs, ys, zs)):
+            raise ValueError("box_min and box_max must lie within the float32 range")
+        corners = np.array([[xs[0], ys[0], zs[0]], [xs[-1], ys[-1], zs[-1]]], dtype=np.float32)
+        check_fbm_reach(corners, params, "box_min/box_max")
+        out = np.empty((d, h, w), dtype=np.float32)
+        planes = max(1, min(d, GRID_SLAB_VOXELS // (h * w)))
+        pts = np.empty((planes, h, w, 3), dtype=np.float32)
+        pts[..., 0] = xs
+        pts[..., 1] = ys[:, None]
+        for z0 in range(0, d, planes):
+            n = min(planes, d - z0)
+            pts[:n, ..., 2] = zs[z0 : z0 + n, None, None]
+            slab = self._core.fbm(pts[:n].reshape(-1, 3), *params, threads)
+            out[z0 : z0 + n] = slab.reshape(n, h, w)
+        return out
+
+
+def _log10_max_scale(octaves: int, factor: float) -> float:
+    """log10 of the largest ``factorⁱ`` for i = 1..octaves (the first or the last one)."""
+    return max(math.log10(factor), octaves * math.log10(factor))
 
 
 def _fbm_params(
     octaves: int, gain: float, lacunarity: float, frequency: float
 ) -> tuple[int, float, float, float]:
-    return (
-        check.integer(octaves, "octaves", 1, 16),
-        check.real(gain, "gain", 0.0, lo_open=True),
-        check.real(lacunarity, "lacunarity", 0.0, lo_open=True),
-        check.real(frequency, "frequency", 0.0, lo_open=True),
-    )
+    """Checked ``(octaves, gain, lacunarity, frequency)``; refuses combinations whose octave
+    weights or scales (``gainⁱ``, ``frequency · lacunarityⁱ``) overflow float32."""
+    octaves = check.integer(octaves, "octaves", 1, 16)
+    gain = check.real(gain, "gain", 0.0, lo_open=True)
+    lacunarity = check.real(lacunarity, "lacunarity", 0.0, lo_open=True)
+    frequency = check.real(frequency, "frequency", 0.0, lo_open=True)
+    limit = math.log10(MAX_FBM_MAGNITUDE)
+    # The sum of the weights is at most octaves times the largest.
+    if math.log10(octaves) + _log10_max_scale(octaves, gain) > limit:
+        raise ValueError(
+            f"gain {gain} over {octaves} octaves weights the sum beyond {MAX_FBM_MAGNITUDE:g} "
+            "(float32 overflow)"
+        )
+    if math.log10(frequency) + _log10_max_scale(octaves, lacunarity) > limit:
+        raise ValueError(
+            f"frequency {frequency} * lacunarity {lacunarity}**{octaves} exceeds "
+            f"{MAX_FBM_MAGNITUDE:g} (float32 overflow)"
+        )
+    return octaves, gain, lacunarity, frequency
+
+
+def check_fbm_reach(points: np.ndarray, params: tuple[int, float, float, float], name: str) -> None:
+    """Refuse points whose lattice coordinates ``p · frequency · lacunarityⁱ`` would overflow
+    float32: the fBm would come out NaN for finite input."""
+    if points.size == 0:
+        return
+    biggest = float(np.abs(points).max())
+    if biggest == 0.0:
+        return
+    octaves, _, lacunarity, frequency = params
+    reach = math.log10(biggest) + math.log10(frequency) + _log10_max_scale(octaves, lacunarity)
+    if reach > math.log10(MAX_FBM_MAGNITUDE):
+        raise ValueError(
+            f"{name}: a coordinate of magnitude {biggest:.3g} times frequency * "
+            f"lacunarity**{octaves} reaches 1e{reach:.1f}, beyond {MAX_FBM_MAGNITUDE:g} "
+            "(float32 overflow)"
+        )

@@ -21,6 +21,7 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli._validate import MAX_COORD
 from cumuli.cloud import MAX_PRIMITIVES, Cloud
 
 #: Most primitives the Gaussian generator draws (its containment filter is O(n²)).
@@ -43,12 +44,15 @@ def _choice(value: Any, name: str, options: Sequence[str]) -> str:
     return value
 
 
-def _range(value: Any, name: str, *, positive: bool = True) -> tuple[float, float]:
-    """A (lo, hi) pair of finite floats with lo <= hi (and lo > 0 when ``positive``)."""
+def _range(
+    value: Any, name: str, *, positive: bool = True, bound: float | None = MAX_COORD
+) -> tuple[float, float]:
+    """A (lo, hi) pair of finite floats with lo <= hi, lo > 0 when ``positive``, |·| <= bound."""
     if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
         raise TypeError(f"{name} must be a (lo, hi) pair, got {value!r}")
-    lo = check.real(value[0], name, 0.0 if positive else None, lo_open=positive)
-    hi = check.real(value[1], name, 0.0 if positive else None, lo_open=positive)
+    floor = 0.0 if positive else (None if bound is None else -bound)
+    lo = check.real(value[0], name, floor, bound, lo_open=positive)
+    hi = check.real(value[1], name, floor, bound, lo_open=positive)
     if lo > hi:
         raise ValueError(f"{name} must have lo <= hi, got ({lo}, {hi})")
     return (lo, hi)
@@ -67,7 +71,34 @@ def _epsilon(value: Any, radius_model: str) -> float:
         if len(value) != 2:
             raise ValueError(f"epsilon must be a number or (eps15, eps16), got {value!r}")
         value = value[0] if radius_model == "eq15" else value[1]
-    return check.real(value, "epsilon", 0.0, lo_open=True)
+    return check.real(value, "epsilon", 0.0, MAX_COORD, lo_open=True)
+
+
+def _check_gaussian_reach(args: dict[str, Any]) -> None:
+    """Refuse parameters whose products would carry centres or radii beyond ±MAX_COORD.
+
+    Each is bounded on its own, but a centre lands anywhere in ``centre + mu + clamps · sigma``
+    and a radius reaches ``epsilon · radius_scale`` (or ``radius_range · radius_scale``).
+    """
+    for k, axis in enumerate("xyz"):
+        lo, hi = args["clamps"][k]
+        reach = (
+            abs(args["centre"][k]) + abs(args["mu"][k]) + max(abs(lo), abs(hi)) * args["sigma"][k]
+        )
+        if reach > MAX_COORD:
+            raise ValueError(
+                f"centre + mu + clamps * sigma reaches {reach:.3g} on {axis}, beyond the limit "
+                f"±{MAX_COORD:g}: shrink sigma or clamps"
+            )
+    if args["radius_model"] == "uniform":
+        biggest, what = args["radius_range"][1], "radius_range"
+    else:
+        biggest, what = args["epsilon"], "epsilon"
+    if biggest * args["radius_scale"] > MAX_COORD:
+        raise ValueError(
+            f"{what} * radius_scale = {biggest * args['radius_scale']:.3g} exceeds the radius "
+            f"limit {MAX_COORD:g}"
+        )
 
 
 def gaussian_cumulus(
@@ -118,13 +149,17 @@ def gaussian_cumulus(
     ``r_i − r_j ≥ |c_i − c_j|``). ``cloud.stats`` has ``drawn``, ``clamped``,
     ``removed_by_hollow``, ``removed_by_containment`` and ``kept``.
 
+    Lengths and coordinates (``centre``, ``mu``, ``sigma``, ``epsilon``, ``radius_range``, and
+    what they combine into: the clamp window ``centre + mu + clamps · sigma`` and the largest
+    radius) must stay within ``±MAX_COORD`` (1e15), so that the float32 core cannot overflow.
+
     Raises ``ValueError`` when the filters leave no sphere (e.g. a tiny ``n``).
     """
     args: dict[str, Any] = {
-        "centre": list(check.vec3(centre, "centre")),
+        "centre": list(check.vec3(centre, "centre", bound=MAX_COORD)),
         "n": check.integer(n, "n", 1, MAX_GAUSSIAN_PRIMITIVES),
-        "mu": list(check.vec3(mu, "mu")),
-        "sigma": list(check.vec3(sigma, "sigma")),
+        "mu": list(check.vec3(mu, "mu", bound=MAX_COORD)),
+        "sigma": list(check.vec3(sigma, "sigma", bound=MAX_COORD)),
         "clamps": [list(c) for c in _clamps(clamps)],
         "radius_model": _choice(radius_model, "radius_model", RADIUS_MODELS),
         "radius_scale": None,
@@ -133,7 +168,7 @@ def gaussian_cumulus(
         "clamp_mode": _choice(clamp_mode, "clamp_mode", ("saturate", "resample")),
         "radius_range": list(_range(radius_range, "radius_range")),
         "hollow": bool(hollow),
-        "hollow_box": list(check.vec3(hollow_box, "hollow_box")),
+        "hollow_box": list(check.vec3(hollow_box, "hollow_box", bound=MAX_COORD)),
         "remove_contained": bool(remove_contained),
         "seed": _seed(seed),
         "model": model,
@@ -143,12 +178,13 @@ def gaussian_cumulus(
     args["epsilon"] = _epsilon(epsilon, args["radius_model"])
     if radius_scale is None:
         radius_scale = DEFAULT_RADIUS_SCALE[args["radius_model"]]
-    args["radius_scale"] = check.real(radius_scale, "radius_scale", 0.0, lo_open=True)
+    args["radius_scale"] = check.real(radius_scale, "radius_scale", 0.0, MAX_COORD, lo_open=True)
     if min(args["sigma"]) <= 0:
         raise ValueError(f"sigma must be positive on every axis, got {tuple(args['sigma'])}")
     if min(args["hollow_box"]) < 0:
         raise ValueError(f"hollow_box must be non-negative, got {tuple(args['hollow_box'])}")
     cl = args["clamps"]
+    _check_gaussian_reach(args)
     centres, radii, stats = _core.gaussian_cumulus(
         args["centre"],
         args["n"],
@@ -324,6 +360,10 @@ def lsystem_cloud(
     are ignored by the turtle.
 
     ``stats`` holds ``symbols``, ``spheres``, ``turns``, ``moves``, ``max_depth``.
+
+    ``start``, ``radius`` and ``step`` must stay within ``±MAX_COORD`` (1e15), and so must the
+    farthest the turtle could walk (``|start| + moves · radius_hi · step_hi``), so that the
+    float32 core cannot overflow.
     """
     if rules is None:
         rules = dict(PAPER_RULES)
@@ -343,7 +383,7 @@ def lsystem_cloud(
         "step": list(_range(step, "step", positive=False)),
         "draw_symbols": draw_symbols,
         "move_symbols": move_symbols,
-        "start": list(check.vec3(start, "start")),
+        "start": list(check.vec3(start, "start", bound=MAX_COORD)),
         "heading": list(check.direction(heading, "heading")),
         "up": list(check.direction(up, "up")),
         "max_length": check.integer(max_length, "max_length", 1, MAX_LENGTH_LIMIT),
@@ -355,6 +395,13 @@ def lsystem_cloud(
         raise ValueError(f"step must be non-negative, got {tuple(args['step'])}")
     a_lo, a_hi = _angle(angle)
     symbols = lsystem_expand(axiom, rules, iterations, args["max_length"])
+    moves = sum(symbols.count(c) for c in set(draw_symbols + move_symbols))
+    reach = max(map(abs, args["start"])) + moves * args["radius"][1] * args["step"][1]
+    if reach > MAX_COORD:
+        raise ValueError(
+            f"radius * step over {moves} moves lets the turtle reach {reach:.3g} from the origin, "
+            f"beyond the limit ±{MAX_COORD:g}: shrink radius or step"
+        )
     centres, radii, stats = _core.lsystem_interpret(
         symbols,
         a_lo,
@@ -416,7 +463,8 @@ def ellipsoids_from_mesh(
     rotations are the identity. Radii are floored at ``min_radius`` (default 1e-4 of the mesh's
     bounding-box diagonal) so degenerate triangles give small valid ellipsoids, never NaN.
 
-    ``vertices`` is ``(V, 3)`` real, ``faces`` ``(F, 3)`` integer indices into it. Arrays are
+    ``vertices`` is ``(V, 3)`` real with components within ``±MAX_COORD`` (1e15), ``faces``
+    ``(F, 3)`` integer indices into it. Arrays are
     float32 ``(F, 3)``, ``(F, 3)`` and ``(F, 3, 3)`` (rotation columns are the ellipsoid axes).
     """
     from cumuli.meshes import _mesh_arrays
@@ -427,7 +475,7 @@ def ellipsoids_from_mesh(
     scale = check.real(scale, "scale", 0.0, 2.0, lo_open=True)
     if min_radius is None:
         min_radius = _default_min_radius(verts)
-    min_radius = check.real(min_radius, "min_radius", 0.0, lo_open=True)
+    min_radius = check.real(min_radius, "min_radius", 0.0, MAX_COORD, lo_open=True)
     centres, radii, rotations, _ = _core.ellipsoids_from_mesh(
         verts, f, scale, bool(rotate), min_radius, check.threads(threads)
     )
@@ -482,7 +530,7 @@ def mesh_cloud(
     if min_radius is None:
         min_radius = _default_min_radius(verts)
     scale = check.real(scale, "scale", 0.0, 2.0, lo_open=True)
-    min_radius = check.real(min_radius, "min_radius", 0.0, lo_open=True)
+    min_radius = check.real(min_radius, "min_radius", 0.0, MAX_COORD, lo_open=True)
     centres, radii, rotations, core_stats = _core.ellipsoids_from_mesh(
         verts, f, scale, bool(rotate), min_radius, check.threads(threads)
     )
