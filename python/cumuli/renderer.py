@@ -8,7 +8,7 @@ the top. The maths is RENDER_CONTRACT.md; the C++ reference marcher (``backend="
 the same contract.
 
 Light grids are computed on demand with :func:`cumuli.light_grid` for clouds that have none, or
-whose grid this module computed for another sun / noise / resolution (see :func:`prepare_light`).
+whose recorded sun or parameters differ from the scene's (see :func:`prepare_light`).
 """
 
 from __future__ import annotations
@@ -30,27 +30,20 @@ TILE = 1024
 #: Largest image accepted, in pixels (2²⁶ RGBA32F pixels = 1 GiB of output).
 MAX_PIXELS = 1 << 26
 BACKENDS = ("gl", "cpu")
-_LIGHT_KEY = "_cumuli_light_key"
 
 
 # --------------------------------------------------------------------------------------------
 # Light grids on demand
-def _light_key(cloud: Cloud, scene: Scene) -> tuple[Any, ...]:
-    s = scene.settings
-    kappa = cloud.kappa if s.kappa is None else s.kappa
-    return (
-        tuple(round(v, 9) for v in scene.sun.direction),
-        scene.noise.seed,
-        scene.noise.size,
-        s.light_resolution,
-        s.light_method,
-        s.light_step,
-        s.light_extinction,
-        s.octaves,
-        s.gain,
-        s.lacunarity,
-        s.frequency,
-        kappa,
+def expected_light_params(cloud: Cloud, scene: Scene) -> dict[str, Any]:
+    """The ``light_params`` record of the grid ``scene``'s settings make for ``cloud``."""
+    from cumuli.light import DEFAULT_SOLID_ANGLE, light_params
+
+    return light_params(
+        cloud,
+        scene.noise,
+        solid_angle=DEFAULT_SOLID_ANGLE,
+        kappa=scene.settings.kappa,
+        **scene.settings.light_grid_kwargs(),
     )
 
 
@@ -83,9 +76,12 @@ def prepare_light(scene: Scene) -> None:
     """Make sure every cloud of ``scene`` has a current light grid for the scene's sun and noise.
 
     A cloud gets a grid from :func:`cumuli.light_grid` (``settings.light_*``, the settings' fBm
-    and κ) when it has none; when its grid was made for another sun direction
-    (``cloud.light_sun``, recorded by ``light_grid``); or when this function made it for other
-    noise / fBm / κ / light settings. A grid set by hand without ``light_sun`` is trusted as it is.
+    and κ, the default solid angle) when it has none; when its grid was made for another sun
+    direction (``cloud.light_sun``); or when the parameters ``light_grid`` recorded with it
+    (``cloud.light_params``: noise, fBm, extinction, step, method, resolution, solid angle,
+    density model and κ, density override, primitives) differ from those the settings give
+    (:func:`expected_light_params`). A grid set by hand has no record and is trusted as it is
+    (stale only if its ``light_sun`` is set and differs from the sun).
     """
     for k, cloud in enumerate(scene.clouds):
         if cloud.light is None or _stale(cloud, scene):
@@ -94,15 +90,15 @@ def prepare_light(scene: Scene) -> None:
 
 
 def _stale(cloud: Cloud, scene: Scene) -> bool:
-    sun = getattr(cloud, "light_sun", None)
+    sun = cloud.light_sun
     if sun is not None and not np.allclose(sun, scene.sun.direction, rtol=0, atol=1e-6):
         return True
-    stored = getattr(cloud, _LIGHT_KEY, None)
-    return stored is not None and stored[1] is cloud.light and stored[0] != _light_key(cloud, scene)
+    params = cloud.light_params
+    return params is not None and params != expected_light_params(cloud, scene)
 
 
 def _compute_light(cloud: Cloud, scene: Scene) -> None:
-    from cumuli.light import light_grid
+    from cumuli.light import DEFAULT_SOLID_ANGLE, light_grid
 
     s = scene.settings
     target = cloud
@@ -113,19 +109,13 @@ def _compute_light(cloud: Cloud, scene: Scene) -> None:
         target,
         scene.sun,
         scene.noise,
-        resolution=s.light_resolution,
-        method=s.light_method,
-        step=s.light_step,
-        extinction=s.light_extinction,
-        octaves=s.octaves,
-        gain=s.gain,
-        lacunarity=s.lacunarity,
-        frequency=s.frequency,
+        solid_angle=DEFAULT_SOLID_ANGLE,
+        **s.light_grid_kwargs(),
     )
     if target is not cloud:
         cloud.light, cloud.light_box = target.light, target.light_box
-        cloud.light_sun = target.light_sun  # type: ignore[attr-defined]
-    setattr(cloud, _LIGHT_KEY, (_light_key(cloud, scene), cloud.light))
+        cloud.light_sun = target.light_sun
+        cloud.light_params = target.light_params  # after light / light_box, which clear it
 
 
 # --------------------------------------------------------------------------------------------

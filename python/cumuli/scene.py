@@ -323,6 +323,21 @@ class RenderSettings:
             "frequency": self.frequency,
         }
 
+    def light_grid_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`cumuli.light_grid` for the grid these settings render with.
+
+        ``light_grid(cloud, sun, noise, **settings.light_grid_kwargs())`` records the parameters
+        the renderer expects, so it keeps that grid (κ: the cloud's own, unless ``kappa`` is set;
+        then the renderer makes the grid itself, for the overridden κ).
+        """
+        return {
+            "resolution": self.light_resolution,
+            "method": self.light_method,
+            "step": self.light_step,
+            "extinction": self.light_extinction,
+            **self.fbm_params(),
+        }
+
     def replace(self, **changes: Any) -> RenderSettings:
         """A copy with some fields changed (validated again)."""
         return RenderSettings(**{**asdict(self), **changes})
