@@ -327,6 +327,34 @@ def test_bad_sizes(renderer: Renderer, size, exc, message) -> None:
     assert 16384 * 16384 > MAX_PIXELS
 
 
+@pytest.mark.parametrize(("model", "limit"), [("metaball", 1024), ("spheroid", 65536)])
+def test_primitive_limits_per_cloud(renderer: Renderer, model: str, limit: int) -> None:
+    from cumuli.renderer import MAX_GL_PRIMITIVES
+
+    assert MAX_GL_PRIMITIVES[model] == limit
+    rng = np.random.default_rng(0)
+
+    def cloud(n: int) -> cu.Cloud:
+        # Hand-set grids (trusted as they are): no light pass for these big clouds.
+        return sphere_cloud(rng.uniform(-3, 3, (n, 3)), np.full(n, 0.05), model=model)
+
+    # Few samples per pixel: the test is about the limit, not the image.
+    settings = cu.RenderSettings(max_steps=16)
+    img = renderer.render(cu.Scene(clouds=[cloud(limit)], settings=settings), front_camera(), 8, 6)
+    assert np.isfinite(img).all()
+    big = cloud(limit + 1)
+    big.light = None  # the refusal must come before any light pass
+    scene = cu.Scene(clouds=[sphere_cloud([[9, 0, 0]], [1.0]), big], settings=settings)
+    with pytest.raises(ValueError, match=r"clouds\[1\] has .* backend='cpu' or fewer primitives"):
+        renderer.render(scene, front_camera(), 8, 6)
+    with pytest.raises(ValueError, match=f"at most {limit} per {model} cloud"):
+        cu.render(scene, front_camera(), 8, 6)
+    assert big.light is None
+    # What the message suggests works: the CPU marcher has no such limit.
+    cpu = cu.render(scene.replace(clouds=[cloud(limit + 1)]), front_camera(), 4, 3, backend="cpu")
+    assert np.isfinite(cpu).all()
+
+
 def test_bad_arguments(renderer: Renderer, gl_context) -> None:
     with pytest.raises(TypeError, match="scene"):
         renderer.render("scene.json", front_camera(), 8, 8)

@@ -30,6 +30,15 @@ TILE = 1024
 #: Largest image accepted, in pixels (2²⁶ RGBA32F pixels = 1 GiB of output).
 MAX_PIXELS = 1 << 26
 BACKENDS = ("gl", "cpu")
+#: Most primitives per cloud the GL marcher accepts, by density model. Every loop of the shader
+#: is bounded, but not by a constant: per pixel, candidate collection tests all N primitives of
+#: each cloud the ray's box test hits, and a metaball sample sums the field over all N
+#: primitives (up to max_steps samples), so one fragment costs O(N) resp. O(N·max_steps). A
+#: draw that runs for seconds trips GPU watchdogs (Windows TDR ≈ 2 s, Linux drivers' hang
+#: checks) and loses the context. Up to these sizes a tile stays far below that on a desktop GPU
+#: (512-primitive clouds are benchmarked); larger clouds go to backend="cpu", which has no
+#: watchdog, or must be split.
+MAX_GL_PRIMITIVES = {"spheroid": 65536, "metaball": 1024}
 
 
 # --------------------------------------------------------------------------------------------
@@ -132,6 +141,19 @@ def _check_size(width: Any, height: Any, max_texture: int) -> tuple[int, int]:
             f"image of {width}x{height} pixels is larger than the limit of {MAX_PIXELS} pixels"
         )
     return int(width), int(height)
+
+
+def check_gl_limits(scene: Scene) -> None:
+    """Refuse clouds too large for one GL draw (:data:`MAX_GL_PRIMITIVES`) with a clear error."""
+    for k, cloud in enumerate(scene.clouds):
+        limit = MAX_GL_PRIMITIVES[cloud.model]
+        if cloud.n > limit:
+            raise ValueError(
+                f"scene.clouds[{k}] has {cloud.n} primitives; the GL renderer takes at most "
+                f"{limit} per {cloud.model} cloud (per-pixel work grows with the primitive count "
+                "and a long draw can trip the GPU watchdog): use backend='cpu' or fewer "
+                "primitives (split the cloud)"
+            )
 
 
 def _candidate_scale(cloud: Cloud) -> float:
@@ -311,6 +333,7 @@ class Renderer:
         width, height = _check_size(width, height, self.max_texture_size)
         if len(scene.clouds) > MAX_CLOUDS:
             raise ValueError(f"the GL renderer draws at most {MAX_CLOUDS} clouds")
+        check_gl_limits(scene)  # before the light pass, which such a cloud would make long
         prepare_light(scene)
         prim_bytes, cloud_bytes, atlas = pack_scene(scene)
         if len(prim_bytes) > self.max_storage_block_size:
