@@ -46,8 +46,11 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _normalise(v: np.ndarray) -> np.ndarray:
+    # glm::normalize's float32 operations (v · 1/√(v·v), dot summed x, y, z), so that the GL
+    # marcher's camera basis is the C++ marcher's bit for bit.
     v = np.asarray(v, dtype=np.float32)
-    return (v / np.float32(np.sqrt(np.sum(v * v, dtype=np.float32)))).astype(np.float32)
+    d = (v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]
+    return (v * (np.float32(1) / np.sqrt(d))).astype(np.float32)
 
 
 # --------------------------------------------------------------------------------------------
