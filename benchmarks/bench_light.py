@@ -8,9 +8,18 @@ hollow and containment filters keep ~31) and a ~300-face mesh cloud (the procedu
 Per (cloud, resolution, method): median / min / max wall time of the repeats (the C++ march as
 timed inside the core, and the whole Python call), samples marched per voxel, and the naive/NDT
 ratios of time and samples. Single-thread CPU time of NDT at the smallest grids is recorded too:
-it is robust to other load on a shared machine (the load average is in the JSON). The issue's
-targets (20³ NDT ≤ 1 ms, naive/NDT ≥ 1.8 on the cumulus, 64³ NDT ≤ 30 ms) are printed with what
-this machine reaches; nothing passes or fails on time.
+it is robust to other load on a shared machine (the load average is in the JSON).
+
+The issue's targets (20³ NDT ≤ 1 ms, naive/NDT ≥ 1.8 on the cumulus, 64³ NDT ≤ 30 ms) are
+written as ``targets[name] = {limit, comparison, reached, met}`` (``met`` is null where the run
+did not measure the target, as in --quick); nothing passes or fails on time.
+
+Why the time targets are missed: ``fbm_floor`` times ``Noise.fbm`` alone (same threads: all
+cores) on as many points as the NDT march sampled for the cumulus at the smallest and largest
+grids (points uniform in the cloud's light box: the same lattice and cache behaviour). Every
+sample needs one fBm value, and at step 0.1 a sun ray crosses ~4 units of this ~28-unit-wide
+cloud (~40 samples per voxel, ~3·10⁵ samples at 20³), so fBm alone is a lower bound on the NDT
+time: when it exceeds the target, no march around it can meet the target at this step.
 """
 
 from __future__ import annotations
@@ -73,6 +82,39 @@ def run_one(
     }
 
 
+def fbm_floor(
+    cloud: cu.Cloud, noise: cu.Noise, points: int, repeats: int, ndt_s: float
+) -> dict[str, Any]:
+    """Time of ``noise.fbm`` alone on ``points`` points in the cloud's light box (all cores)."""
+    cu.light_grid(cloud, SUN, noise, resolution=4, step=STEP)  # records cloud.light_box
+    lo, hi = (np.asarray(v, dtype=np.float64) for v in cloud.light_box)  # type: ignore[misc]
+    rng = np.random.default_rng(0)
+    pts = (lo + rng.random((points, 3)) * (hi - lo)).astype(np.float32)
+    noise.fbm(pts[:1000])  # warm up
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        noise.fbm(pts, threads=0)
+        times.append(time.perf_counter() - t0)
+    fbm_s = common.spread(times)
+    return {
+        "points": points,
+        "threads": 0,
+        "fbm_s": fbm_s,
+        "ns_per_point": 1e9 * fbm_s["median"] / max(points, 1),
+        "ndt_march_s": ndt_s,
+        "fbm_share_of_ndt": fbm_s["median"] / ndt_s,
+    }
+
+
+def target(limit: float, reached: float | None, comparison: str) -> dict[str, Any]:
+    """One issue target: its limit, what this run reached (None: not measured) and whether met."""
+    met = None
+    if reached is not None:
+        met = bool(reached <= limit) if comparison == "<=" else bool(reached >= limit)
+    return {"limit": limit, "comparison": comparison, "reached": reached, "met": met}
+
+
 def main(argv: list[str] | None = None) -> int:
     args = common.parse_args(__doc__.splitlines()[0], argv)
     resolutions = [8, 12] if args.quick else [20, 40, 64]
@@ -110,20 +152,52 @@ def main(argv: list[str] | None = None) -> int:
         }
 
     cum = results["cumulus"]["resolutions"]
-    small, big = str(resolutions[0] if args.quick else 20), str(resolutions[-1])
-    reached = {
-        "ndt_20_ms": 1e3 * cum[small]["ndt"]["march_s"]["median"] if small == "20" else None,
-        "naive_over_ndt_cumulus": min(r["naive_over_ndt_time"] for r in cum.values()),
-        "ndt_64_ms": 1e3 * cum[big]["ndt"]["march_s"]["median"] if big == "64" else None,
+    small, big = str(resolutions[0]), str(resolutions[-1])
+    ndt_20 = 1e3 * cum["20"]["ndt"]["march_s"]["median"] if "20" in cum else None
+    ndt_64 = 1e3 * cum["64"]["ndt"]["march_s"]["median"] if "64" in cum else None
+    targets = {
+        "ndt_20_ms": target(TARGET_20_MS, ndt_20, "<="),
+        "naive_over_ndt_cumulus": target(
+            TARGET_RATIO, min(r["naive_over_ndt_time"] for r in cum.values()), ">="
+        ),
+        "ndt_64_ms": target(TARGET_64_MS, ndt_64, "<="),
     }
-    targets = {"ndt_20_ms": TARGET_20_MS, "naive_over_ndt_cumulus": TARGET_RATIO,
-               "ndt_64_ms": TARGET_64_MS}  # fmt: skip
+    # The fBm floor at the grids of the time targets (the quick run's grids stand in for them).
+    cumulus = clouds()["cumulus"]
+    floor = {
+        res: fbm_floor(
+            cumulus,
+            noise,
+            cum[res]["ndt"]["samples_total"],
+            repeats[int(res)],
+            cum[res]["ndt"]["march_s"]["median"],
+        )
+        for res in dict.fromkeys((small, big))
+    }
+    for name, limit_res in (("ndt_20_ms", "20"), ("ndt_64_ms", "64")):
+        if limit_res in floor:
+            ms = 1e3 * floor[limit_res]["fbm_s"]["median"]
+            targets[name]["fbm_floor_ms"] = ms
+            targets[name]["fbm_floor_over_limit"] = ms / targets[name]["limit"]
+
+    def show(v: float | None, unit: str) -> str:
+        return "not measured (--quick)" if v is None else f"{v:.2f}{unit}"
+
     common.log("targets (this machine, cumulus, all cores):")
-    common.log(f"  20³ NDT ≤ {TARGET_20_MS} ms: reached {reached['ndt_20_ms']}")
-    common.log(
-        f"  naive/NDT ≥ {TARGET_RATIO} (worst resolution): {reached['naive_over_ndt_cumulus']:.2f}"
-    )
-    common.log(f"  64³ NDT ≤ {TARGET_64_MS} ms: reached {reached['ndt_64_ms']}")
+    for name, label, unit in (
+        ("ndt_20_ms", f"20³ NDT ≤ {TARGET_20_MS} ms", " ms"),
+        ("naive_over_ndt_cumulus", f"naive/NDT ≥ {TARGET_RATIO} (worst resolution)", ""),
+        ("ndt_64_ms", f"64³ NDT ≤ {TARGET_64_MS} ms", " ms"),
+    ):
+        t = targets[name]
+        verdict = {True: "met", False: "MISSED", None: "-"}[t["met"]]
+        common.log(f"  {label}: reached {show(t['reached'], unit)} [{verdict}]")
+    for res, f in floor.items():
+        common.log(
+            f"  fBm floor {res}³: Noise.fbm alone on the {f['points']} NDT sample points takes "
+            f"{1e3 * f['fbm_s']['median']:.2f} ms ({f['ns_per_point']:.1f} ns/point), "
+            f"{100 * f['fbm_share_of_ndt']:.0f} % of the NDT march"
+        )
 
     data = {
         "benchmark": "light",
@@ -138,7 +212,7 @@ def main(argv: list[str] | None = None) -> int:
             "repeats": repeats,
         },  # fmt: skip
         "targets": targets,
-        "reached": reached,
+        "fbm_floor": floor,
         "clouds": results,
     }
     path = common.write_json(args.out / "light.json", data)

@@ -37,7 +37,7 @@ vec2 metaball_density(CloudData c, vec3 p) {
         if (field >= 1.0) break;
     }
     if (field < 1.0) return vec2(0.0);
-    return vec2(fbm(p, u_exact) * c.params.y, 1.0);
+    return vec2(fbm(p, u_exact) * c.params.y * c.params.z, 1.0);  // (fbm·r̄²)·φ, as the C++
 }
 
 vec2 cloud_density(CloudData c, int j, vec3 p) {

@@ -51,6 +51,45 @@ def test_orbit_circles_the_centre() -> None:
         orbit((0, 0, 0), radius=0, frames=3)
 
 
+def test_sequences_are_exported_from_the_package(tmp_path: Path) -> None:
+    # A fresh interpreter: inside pytest another test may already have imported cumuli.frames,
+    # which would make the attribute appear without `import cumuli` providing it.
+    import subprocess
+    import sys
+
+    code = (
+        "import cumuli as cu, cumuli.frames as fr\n"
+        "assert cu.render_frames is fr.render_frames and cu.orbit is fr.orbit\n"
+        "assert cu.fly_towards is fr.fly_towards\n"
+        "assert {'render_frames', 'orbit', 'fly_towards', 'frames'} <= set(cu.__all__)\n"
+    )
+    res = subprocess.run(
+        [sys.executable, "-c", "import cumuli as cu; cu.frames.render_frames; cu.frames.orbit"],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert res.returncode == 0, res.stderr
+    res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert res.returncode == 0, res.stderr
+    # The README's sequence example, at a tiny size on the CPU marcher.
+    scene = small_scene()
+    lo, hi = scene.bounds()
+    centre = (lo + hi) / 2
+    paths = cu.render_frames(
+        scene,
+        cu.orbit(centre, 40, frames=2),
+        tmp_path / "out",
+        width=8,
+        height=6,
+        backend="cpu",
+        progress=False,
+    )
+    assert [p.name for p in paths] == ["frame_0000.png", "frame_0001.png"]
+    cams = cu.fly_towards(tuple(centre + [0, 0, -60]), tuple(centre), 3, stop=-5)
+    assert len(cams) == 3
+
+
 # --- render_frames --------------------------------------------------------------------------------
 @pytest.mark.gl
 def test_render_frames_writes_numbered_images(tmp_path: Path) -> None:

@@ -206,3 +206,29 @@ def test_scene_validation() -> None:
     # The default camera looks at the clouds' centre.
     np.testing.assert_allclose(cam.target, (lo + hi) / 2, rtol=1e-6)
     assert scene.replace(sky=cu.Sky.sunset()).sky == cu.Sky.sunset()
+
+
+def test_render_contract_is_where_the_code_cites_it() -> None:
+    # Sources, shaders and docs cite RENDER_CONTRACT.md for the exact formulas: it must exist at
+    # the repository root and hold the sections they refer to.
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    text = (root / "RENDER_CONTRACT.md").read_text(encoding="utf-8")
+    for part in (
+        "## Camera",
+        "## Candidates",
+        "## Marching",
+        "## Density",
+        "Sky",
+        "## Light grids",
+    ):
+        assert part in text
+    for formula in ("t + Δ/2", "max(t_u, t_in,k)", "exp(−φ · ρ · Δ / Δ_ref)", "alpha = 1 − T"):
+        assert formula in text
+    cited = [
+        p
+        for p in (*root.glob("shaders/*.glsl"), *root.glob("cpp/**/*.[ch]pp"))
+        if "RENDER_CONTRACT" in p.read_text(encoding="utf-8")
+    ]
+    assert len(cited) >= 3

@@ -284,8 +284,8 @@ class SunCandidates {
 // Per-thread storage for UnionAttribution's active candidates, structure of arrays.
 struct ActiveBuffers {
   std::vector<int> primitive;
-  std::vector<float> oo, b2, a, t_out, q2;
-  explicit ActiveBuffers(std::size_t n) : primitive(n), oo(n), b2(n), a(n), t_out(n), q2(n) {}
+  std::vector<float> oo, b2, a, t_out;
+  explicit ActiveBuffers(std::size_t n) : primitive(n), oo(n), b2(n), a(n), t_out(n) {}
 };
 
 // Attribution of union samples: union_owner's rule (candidates.hpp; RENDER_CONTRACT
@@ -305,16 +305,21 @@ class UnionAttribution {
     while (next_ < last_ && cand_[next_].t_in <= s) enter(next_++);
     if (s > min_t_out_) drop_ended(s);  // only when some candidate has ended
     if (count_ <= 1) return count_ == 1 ? buf_.primitive[0] : fallback_;
-    // |q|² of every active candidate (a vectorisable loop), then the first smallest.
+    // The first smallest |q|² of the active candidates. Branch-free selects: which candidate
+    // is nearest changes unpredictably from sample to sample, and mispredicted branches cost
+    // more than the arithmetic.
     const float* __restrict oo = buf_.oo.data();
     const float* __restrict b2 = buf_.b2.data();
     const float* __restrict a = buf_.a.data();
-    float* __restrict q2 = buf_.q2.data();
-    for (int i = 0; i < count_; ++i) q2[i] = oo[i] + s * (b2[i] + s * a[i]);
+    float best_q2 = oo[0] + s * (b2[0] + s * a[0]);
     int best = 0;
-    for (int i = 1; i < count_; ++i)
-      if (q2[i] < q2[best]) best = i;
-    return buf_.primitive[best];
+    for (int i = 1; i < count_; ++i) {
+      const float q2 = oo[i] + s * (b2[i] + s * a[i]);
+      const bool nearer = q2 < best_q2;
+      best_q2 = nearer ? q2 : best_q2;
+      best = nearer ? i : best;
+    }
+    return buf_.primitive[static_cast<std::size_t>(best)];
   }
 
  private:

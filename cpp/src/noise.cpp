@@ -16,16 +16,28 @@
 //   * floor() is a truncation plus a correction, exact while |x| < 2²² (larger coordinates, and
 //     non-finite ones, take the general path with std::floor and fmod);
 //   * fbm_many works on blocks of points octave by octave, so the index and weight arithmetic is a
-//     plain loop over arrays that the compiler vectorises; only the 8 texel loads stay scalar.
+//     plain loop over arrays that the compiler vectorises; the 8 texel loads of a block go into
+//     arrays first, so that the blend is a vector loop too;
+//   * fbm_block is also compiled for AVX2 (GCC function multi-versioning through glibc's ifunc,
+//     chosen at load time by the CPU), where the loads become hardware gathers and the loops run
+//     8 wide. The clone does not enable FMA and vector lanes round like scalars, so it gives the
+//     same bits (measured: fBm of the light pass's points about −30 %).
 // Every path performs the same float operations in the same order as eq. (1) written naively, so
 // results are bit-identical between fbm(), fbm_many() and any thread count (the build uses
 // -ffp-contract=off so no multiply-add is fused behind our back).
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__GLIBC__)
+#define CUMULI_SIMD_CLONES __attribute__((target_clones("avx2", "default")))
+#else
+#define CUMULI_SIMD_CLONES
+#endif
 
 namespace cumuli {
 
 namespace {
 
 constexpr std::size_t kBlock = 64;
+
 // Below this magnitude int32 truncation is exact and cannot overflow.
 constexpr float kFastLimit = 4194304.0f;  // 2^22
 
@@ -131,6 +143,7 @@ float Noise::fbm(glm::vec3 p, const FbmParams& params) const {
   return sum;
 }
 
+CUMULI_SIMD_CLONES
 void Noise::fbm_block(const float* points, std::size_t count, float* out,
                       const FbmParams& params) const {
   // Octave amplitudes and scales, accumulated exactly as fbm() does.
@@ -148,6 +161,8 @@ void Noise::fbm_block(const float* points, std::size_t count, float* out,
   alignas(32) float px[kBlock], py[kBlock], pz[kBlock], sum[kBlock];
   alignas(32) float wx[kBlock], wy[kBlock], wz[kBlock];
   alignas(32) int base[kBlock];
+  alignas(32) float k000[kBlock], k100[kBlock], k010[kBlock], k110[kBlock];
+  alignas(32) float k001[kBlock], k101[kBlock], k011[kBlock], k111[kBlock];
   // Rounded multiplication is monotonic, so |p|·max_scale bounds |p|·scale of every octave; the
   // test is written so that NaN fails it.
   int slow = mask_ < 0;
@@ -184,15 +199,20 @@ void Noise::fbm_block(const float* points, std::size_t count, float* out,
       const int iz = static_cast<int>(fz) & mask;
       base[i] = (iz * p + iy) * p + ix;
     }
-    // Scalar loads, then the blend.
+    // Scalar loads of the 8 corners into arrays (a gather SSE2 lacks), then the blend as a
+    // vector loop over the block: the same operations per point, so the same bits.
     const std::size_t pu = static_cast<std::size_t>(p), pp = pu * pu;
-    const float amp = amplitude[o];
     for (std::size_t i = 0; i < count; ++i) {
       const float* c = padded_.data() + base[i];
-      const float c00 = c[0] + wx[i] * (c[1] - c[0]);
-      const float c10 = c[pu] + wx[i] * (c[pu + 1] - c[pu]);
-      const float c01 = c[pp] + wx[i] * (c[pp + 1] - c[pp]);
-      const float c11 = c[pp + pu] + wx[i] * (c[pp + pu + 1] - c[pp + pu]);
+      k000[i] = c[0], k100[i] = c[1], k010[i] = c[pu], k110[i] = c[pu + 1];
+      k001[i] = c[pp], k101[i] = c[pp + 1], k011[i] = c[pp + pu], k111[i] = c[pp + pu + 1];
+    }
+    const float amp = amplitude[o];
+    for (std::size_t i = 0; i < count; ++i) {
+      const float c00 = k000[i] + wx[i] * (k100[i] - k000[i]);
+      const float c10 = k010[i] + wx[i] * (k110[i] - k010[i]);
+      const float c01 = k001[i] + wx[i] * (k101[i] - k001[i]);
+      const float c11 = k011[i] + wx[i] * (k111[i] - k011[i]);
       const float c0 = c00 + wy[i] * (c10 - c00);
       const float c1 = c01 + wy[i] * (c11 - c01);
       sum[i] += amp * (c0 + wz[i] * (c1 - c0));

@@ -7,7 +7,7 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 
 from __future__ import annotations
 
-from cumuli import meshes
+from cumuli import frames, meshes
 from cumuli._version import __version__
 from cumuli.animation import (
     AnimationFrame,
@@ -22,6 +22,7 @@ from cumuli.animation import (
 )
 from cumuli.cloud import Cloud, load_cloud, merge
 from cumuli.cpu_render import render_cpu
+from cumuli.frames import fly_towards, orbit, render_frames
 from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light import LightStats, light_grid
 from cumuli.noise import Noise
@@ -54,6 +55,8 @@ __all__ = [
     "Camera",
     "Cloud",
     "ellipsoids_from_mesh",
+    "fly_towards",
+    "frames",
     "from_srgb8",
     "gaussian_cumulus",
     "light_grid",
@@ -68,10 +71,12 @@ __all__ = [
     "meshes",
     "metaball_cumulus",
     "Noise",
+    "orbit",
     "prepare_light",
     "read_image",
     "render",
     "render_cpu",
+    "render_frames",
     "Renderer",
     "RenderSettings",
     "Scene",

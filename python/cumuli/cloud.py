@@ -65,6 +65,17 @@ class Cloud:
     light_box: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
     #: Normalised sun direction the light grid was computed for (a different sun: stale grid).
     light_sun: tuple[float, float, float] | None = None
+    #: What else the light grid was computed with (noise, fBm, extinction, step, method,
+    #: resolution, solid angle, density model, primitives): `cumuli.light.light_params`.
+    #: Written by `cumuli.light_grid`; None for a grid set by hand. Assigning ``light`` or
+    #: ``light_box`` clears it, since the record no longer describes the new grid.
+    light_params: dict[str, Any] | None = None
+
+    def __setattr__(self, name: str, value: Any) -> None:
+        # During __init__ light_params does not exist yet; it is assigned after light/light_box.
+        if name in ("light", "light_box") and "light_params" in self.__dict__:
+            object.__setattr__(self, "light_params", None)
+        object.__setattr__(self, name, value)
 
     def __post_init__(self) -> None:
         self.centres = check.points3(self.centres, "centres", allow_empty=False)
@@ -327,6 +338,7 @@ class Cloud:
             if self.light_box is None
             else [list(map(float, self.light_box[0])), list(map(float, self.light_box[1]))],
             "light_sun": None if self.light_sun is None else list(map(float, self.light_sun)),
+            "light_params": None if self.light is None else self.light_params,
         }
 
     def __repr__(self) -> str:
@@ -437,8 +449,11 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
         light_sun = meta.get("light_sun")
         if light_sun is not None:
             light_sun = check.direction(light_sun, "light_sun")
+        light_params = meta.get("light_params")
+        if light_params is not None:
+            light_params = _check_light_params(light_params)
         if light is None:
-            light_sun = None
+            light_sun = light_params = None
         return Cloud(
             arrays["centres"],
             arrays["radii"],
@@ -451,9 +466,24 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             light=light,
             light_box=light_box,
             light_sun=light_sun,
+            light_params=light_params,
         )
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise ValueError(f"{path.name}: invalid cloud data: {exc}") from None
+
+
+def _check_light_params(value: Any) -> dict[str, Any]:
+    """A light_params record read from a file: a flat object of JSON scalars / number lists."""
+    if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
+        raise ValueError(f"light_params must be an object, got {type(value).__name__}")
+    for key, v in value.items():
+        scalar = v is None or isinstance(v, (bool, int, float, str))
+        numbers = isinstance(v, list) and all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v
+        )
+        if not (scalar or numbers):
+            raise ValueError(f"light_params[{key!r}] must be a number, string or list of numbers")
+    return dict(value)
 
 
 def _read_npz(path: Path) -> tuple[Any, dict[str, np.ndarray]]:

@@ -16,6 +16,7 @@ See ``cpp/include/cumuli/lighting.hpp`` for the exact definition.
 
 from __future__ import annotations
 
+import hashlib
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any, Literal, overload
@@ -38,6 +39,8 @@ MAX_STEPS_PER_RAY: int = int(_core.LIGHT_MAX_STEPS_PER_RAY)
 #: optical depths thick along a sun ray, and its grid spans bright sunlit tops (L ≈ 1) to dim
 #: cores (L ≈ 0.1) instead of saturating black (A = 1 leaves most of the interior below 0.01).
 DEFAULT_EXTINCTION: float = 0.3
+#: Default γ of eq. (6) in steradians (the paper's ≈ 1e-4); the renderer's grids use it too.
+DEFAULT_SOLID_ANGLE: float = 1e-4
 METHODS = ("ndt", "naive")
 
 
@@ -75,6 +78,65 @@ def _sun_direction(sun: Any) -> tuple[float, float, float]:
     if isinstance(sun, (Sequence, np.ndarray)) and not isinstance(sun, str):
         return check.direction(sun, "sun")
     raise TypeError(f"sun must be a cumuli.Sun or a direction (x, y, z), got {type(sun).__name__}")
+
+
+def _f32(value: float) -> float:
+    # The core takes float32: record what it was given, so that 0.1 and np.float32(0.1) agree.
+    return float(np.float32(value))
+
+
+def primitives_digest(cloud: Cloud) -> str:
+    """A short hash of the cloud's primitive arrays (a grid belongs to these primitives)."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in (cloud.centres, cloud.radii, cloud.rotations):
+        h.update(np.ascontiguousarray(a, dtype=np.float32).tobytes())
+    return h.hexdigest()
+
+
+def light_params(
+    cloud: Cloud,
+    noise: Noise | None,
+    resolution: int | Sequence[int] = 20,
+    method: str = "ndt",
+    step: float = 0.1,
+    extinction: float = DEFAULT_EXTINCTION,
+    solid_angle: float = DEFAULT_SOLID_ANGLE,
+    octaves: int = 5,
+    gain: float = 0.5,
+    lacunarity: float = 2.0,
+    frequency: float = 1.0,
+    density_override: float | None = None,
+    kappa: float | None = None,
+) -> dict[str, Any]:
+    """The record :func:`light_grid` stores as ``cloud.light_params``: what the grid depends on.
+
+    Everything that changes ``L(v)`` except the sun (``cloud.light_sun``): the noise lattice
+    (seed, size), fBm ``n, w, s, f``, extinction ``A``, step, method, resolution ``(x, y, z)``,
+    solid angle, the density model with its parameter (κ for spheroids, taken from ``kappa`` when
+    given, else the cloud's; φ for metaballs), ``density_override`` and a digest of the
+    primitives. Only JSON types, so the record survives :meth:`Cloud.save` / :func:`load_cloud`
+    unchanged; float parameters are rounded to float32, as the core sees them. The renderer
+    compares it with the record its settings would produce (:func:`cumuli.prepare_light`).
+    """
+    spheroid = cloud.model == "spheroid"
+    return {
+        "noise_seed": None if noise is None else int(noise.seed),
+        "noise_size": None if noise is None else int(noise.size),
+        "octaves": int(octaves),
+        "gain": _f32(gain),
+        "lacunarity": _f32(lacunarity),
+        "frequency": _f32(frequency),
+        "extinction": _f32(extinction),
+        "step": _f32(step),
+        "method": str(method),
+        "resolution": list(_resolution(resolution)),
+        "solid_angle": _f32(solid_angle),
+        "model": cloud.model,
+        "kappa": _f32(cloud.kappa if kappa is None else kappa) if spheroid else None,
+        "phi": None if spheroid else _f32(cloud.phi),
+        "density_override": None if density_override is None else _f32(density_override),
+        "primitives": primitives_digest(cloud),
+    }
 
 
 @overload
@@ -128,7 +190,7 @@ def light_grid(
     method: str = "ndt",
     step: float = 0.1,
     extinction: float = DEFAULT_EXTINCTION,
-    solid_angle: float = 1e-4,
+    solid_angle: float = DEFAULT_SOLID_ANGLE,
     octaves: int = 5,
     gain: float = 0.5,
     lacunarity: float = 2.0,
@@ -163,7 +225,14 @@ def light_grid(
         ``γ`` of eq. (6) in steradians (the paper's ≈ 1e-4); the scattering constant is
         ``C = ½·γ/4π``.
     octaves, gain, lacunarity, frequency:
-        fBm parameters ``n, w, s, f`` of eq. (1); use the renderer's values.
+        fBm parameters ``n, w, s, f`` of eq. (1). The defaults (and ``extinction``'s) are those
+        of :meth:`cumuli.Noise.fbm` and :meth:`cumuli.Cloud.density` (``f = 1`` texel per
+        unit), not :class:`cumuli.RenderSettings`' (``f = 0.3``, ``A = 1``): this is the
+        low-level light pass, and the same arguments here and there sample the same density.
+        A grid meant for rendering should use the scene's values,
+        ``light_grid(cloud, sun, noise, **settings.light_grid_kwargs())`` (or let the renderer
+        make it): a grid whose recorded parameters differ from the settings' is recomputed by
+        the renderer, never used as it is.
     density_override:
         Test/analysis hook: a constant density ``≥ 0`` replacing fBm everywhere (eq. 2's gating
         still applies to spheroids). Not for rendering.
@@ -173,8 +242,10 @@ def light_grid(
         Threads for the march (0 = all cores). The grid does not depend on it.
     store:
         Record the result on the cloud: ``cloud.light`` (the grid), ``cloud.light_box``
-        (``(lo, hi)``; voxel ``(i, j, k)``'s centre is ``lo + ((i, j, k) + 0.5)·(hi − lo)/R``) and
-        ``cloud.light_sun`` (the normalised sun direction used, to detect a stale grid).
+        (``(lo, hi)``; voxel ``(i, j, k)``'s centre is ``lo + ((i, j, k) + 0.5)·(hi − lo)/R``),
+        ``cloud.light_sun`` (the normalised sun direction used) and ``cloud.light_params``
+        (everything else the grid depends on, see :func:`light_params`); the renderer
+        recomputes a grid whose sun or parameters differ from the scene's.
 
     Returns
     -------
@@ -221,6 +292,18 @@ def light_grid(
         cloud.light = grid
         cloud.light_box = (tuple(lo), tuple(hi))
         cloud.light_sun = sun_dir
+        # Last: assigning light / light_box clears the record (a hand-set grid has none).
+        cloud.light_params = light_params(
+            cloud,
+            noise,
+            res,
+            method,
+            step,
+            extinction,
+            solid_angle,
+            *fbm,
+            None if density_override is None else constant,
+        )
     if return_stats:
         return grid, LightStats(method, int(total), samples, float(seconds))
     return grid

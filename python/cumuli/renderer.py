@@ -8,7 +8,7 @@ the top. The maths is RENDER_CONTRACT.md; the C++ reference marcher (``backend="
 the same contract.
 
 Light grids are computed on demand with :func:`cumuli.light_grid` for clouds that have none, or
-whose grid this module computed for another sun / noise / resolution (see :func:`prepare_light`).
+whose recorded sun or parameters differ from the scene's (see :func:`prepare_light`).
 """
 
 from __future__ import annotations
@@ -30,27 +30,29 @@ TILE = 1024
 #: Largest image accepted, in pixels (2²⁶ RGBA32F pixels = 1 GiB of output).
 MAX_PIXELS = 1 << 26
 BACKENDS = ("gl", "cpu")
-_LIGHT_KEY = "_cumuli_light_key"
+#: Most primitives per cloud the GL marcher accepts, by density model. Every loop of the shader
+#: is bounded, but not by a constant: per pixel, candidate collection tests all N primitives of
+#: each cloud the ray's box test hits, and a metaball sample sums the field over all N
+#: primitives (up to max_steps samples), so one fragment costs O(N) resp. O(N·max_steps). A
+#: draw that runs for seconds trips GPU watchdogs (Windows TDR ≈ 2 s, Linux drivers' hang
+#: checks) and loses the context. Up to these sizes a tile stays far below that on a desktop GPU
+#: (512-primitive clouds are benchmarked); larger clouds go to backend="cpu", which has no
+#: watchdog, or must be split.
+MAX_GL_PRIMITIVES = {"spheroid": 65536, "metaball": 1024}
 
 
 # --------------------------------------------------------------------------------------------
 # Light grids on demand
-def _light_key(cloud: Cloud, scene: Scene) -> tuple[Any, ...]:
-    s = scene.settings
-    kappa = cloud.kappa if s.kappa is None else s.kappa
-    return (
-        tuple(round(v, 9) for v in scene.sun.direction),
-        scene.noise.seed,
-        scene.noise.size,
-        s.light_resolution,
-        s.light_method,
-        s.light_step,
-        s.light_extinction,
-        s.octaves,
-        s.gain,
-        s.lacunarity,
-        s.frequency,
-        kappa,
+def expected_light_params(cloud: Cloud, scene: Scene) -> dict[str, Any]:
+    """The ``light_params`` record of the grid ``scene``'s settings make for ``cloud``."""
+    from cumuli.light import DEFAULT_SOLID_ANGLE, light_params
+
+    return light_params(
+        cloud,
+        scene.noise,
+        solid_angle=DEFAULT_SOLID_ANGLE,
+        kappa=scene.settings.kappa,
+        **scene.settings.light_grid_kwargs(),
     )
 
 
@@ -83,9 +85,12 @@ def prepare_light(scene: Scene) -> None:
     """Make sure every cloud of ``scene`` has a current light grid for the scene's sun and noise.
 
     A cloud gets a grid from :func:`cumuli.light_grid` (``settings.light_*``, the settings' fBm
-    and κ) when it has none; when its grid was made for another sun direction
-    (``cloud.light_sun``, recorded by ``light_grid``); or when this function made it for other
-    noise / fBm / κ / light settings. A grid set by hand without ``light_sun`` is trusted as it is.
+    and κ, the default solid angle) when it has none; when its grid was made for another sun
+    direction (``cloud.light_sun``); or when the parameters ``light_grid`` recorded with it
+    (``cloud.light_params``: noise, fBm, extinction, step, method, resolution, solid angle,
+    density model and κ, density override, primitives) differ from those the settings give
+    (:func:`expected_light_params`). A grid set by hand has no record and is trusted as it is
+    (stale only if its ``light_sun`` is set and differs from the sun).
     """
     for k, cloud in enumerate(scene.clouds):
         if cloud.light is None or _stale(cloud, scene):
@@ -94,15 +99,15 @@ def prepare_light(scene: Scene) -> None:
 
 
 def _stale(cloud: Cloud, scene: Scene) -> bool:
-    sun = getattr(cloud, "light_sun", None)
+    sun = cloud.light_sun
     if sun is not None and not np.allclose(sun, scene.sun.direction, rtol=0, atol=1e-6):
         return True
-    stored = getattr(cloud, _LIGHT_KEY, None)
-    return stored is not None and stored[1] is cloud.light and stored[0] != _light_key(cloud, scene)
+    params = cloud.light_params
+    return params is not None and params != expected_light_params(cloud, scene)
 
 
 def _compute_light(cloud: Cloud, scene: Scene) -> None:
-    from cumuli.light import light_grid
+    from cumuli.light import DEFAULT_SOLID_ANGLE, light_grid
 
     s = scene.settings
     target = cloud
@@ -113,19 +118,13 @@ def _compute_light(cloud: Cloud, scene: Scene) -> None:
         target,
         scene.sun,
         scene.noise,
-        resolution=s.light_resolution,
-        method=s.light_method,
-        step=s.light_step,
-        extinction=s.light_extinction,
-        octaves=s.octaves,
-        gain=s.gain,
-        lacunarity=s.lacunarity,
-        frequency=s.frequency,
+        solid_angle=DEFAULT_SOLID_ANGLE,
+        **s.light_grid_kwargs(),
     )
     if target is not cloud:
         cloud.light, cloud.light_box = target.light, target.light_box
-        cloud.light_sun = target.light_sun  # type: ignore[attr-defined]
-    setattr(cloud, _LIGHT_KEY, (_light_key(cloud, scene), cloud.light))
+        cloud.light_sun = target.light_sun
+        cloud.light_params = target.light_params  # after light / light_box, which clear it
 
 
 # --------------------------------------------------------------------------------------------
@@ -144,15 +143,47 @@ def _check_size(width: Any, height: Any, max_texture: int) -> tuple[int, int]:
     return int(width), int(height)
 
 
+def check_gl_limits(scene: Scene) -> None:
+    """Refuse clouds too large for one GL draw (:data:`MAX_GL_PRIMITIVES`) with a clear error."""
+    for k, cloud in enumerate(scene.clouds):
+        limit = MAX_GL_PRIMITIVES[cloud.model]
+        if cloud.n > limit:
+            raise ValueError(
+                f"scene.clouds[{k}] has {cloud.n} primitives; the GL renderer takes at most "
+                f"{limit} per {cloud.model} cloud (per-pixel work grows with the primitive count "
+                "and a long draw can trip the GPU watchdog): use backend='cpu' or fewer "
+                "primitives (split the cloud)"
+            )
+
+
 def _candidate_scale(cloud: Cloud) -> float:
     # Metaball iso-surfaces reach beyond the primitives: grown by √N they bound it (candidates.hpp).
     return math.sqrt(max(cloud.n, 1)) if cloud.model == "metaball" else 1.0
 
 
 def _grown_bbox(cloud: Cloud, scale: float) -> tuple[np.ndarray, np.ndarray]:
+    """candidate_bounds (cpp/src/candidates.cpp) in the same float32 operations: radii·scale,
+    half extent ``sqrt(Σ_j (R_kj·r_j)²)`` summed over j in order, min / max of ``c ∓ half``."""
     radii = cloud.radii * np.float32(scale)
-    half = np.sqrt(np.einsum("nkj,nj->nk", cloud.rotations**2, radii**2))
+    v = cloud.rotations * radii[:, None, :]  # v[n, k, j] = R_kj · r_j
+    v = v * v
+    half = np.sqrt((v[..., 0] + v[..., 1]) + v[..., 2])
     return (cloud.centres - half).min(axis=0), (cloud.centres + half).max(axis=0)
+
+
+def _lod_centre(cloud: Cloud) -> np.ndarray:
+    """CloudShape::centre(): ``½·(lo + hi)`` of the primitives' (ungrown) bounds, float32."""
+    lo, hi = _grown_bbox(cloud, 1.0)
+    return np.float32(0.5) * (lo + hi)
+
+
+def _mean_r2(cloud: Cloud) -> np.float32:
+    """CloudShape::mean_squared_radius(): float32 ``r·r`` per primitive, / 3 and summed in order
+    in double, / N, rounded to float32 (so the metaball density scale is the C++ one)."""
+    r = cloud.radii
+    rr = (r[:, 0] * r[:, 0] + r[:, 1] * r[:, 1]) + r[:, 2] * r[:, 2]
+    total = np.cumsum(rr.astype(np.float64) / 3.0)[-1]  # cumsum: sequential, like the C++ loop
+    return np.float32(total / cloud.n)
 
 
 def pack_scene(scene: Scene) -> tuple[bytes, bytes, np.ndarray]:
@@ -182,18 +213,19 @@ def pack_scene(scene: Scene) -> tuple[bytes, bytes, np.ndarray]:
         prims.append(p)
         scale = _candidate_scale(cloud)
         lo, hi = _grown_bbox(cloud, scale)
-        blo, bhi = cloud.bbox
         grid = np.ascontiguousarray(cloud.light, dtype=np.float32)
         d, h, w = grid.shape
         llo, lhi = cloud.light_box  # type: ignore[misc]
         floats[k, 0:3], floats[k, 3] = lo, scale
         floats[k, 4:7] = hi
-        floats[k, 8:11] = (blo + bhi) / 2
+        floats[k, 8:11] = _lod_centre(cloud)
         floats[k, 12:15] = llo
         floats[k, 16:19] = lhi
         kappa = cloud.kappa if kappa_override is None else kappa_override
         floats[k, 20] = kappa
-        floats[k, 21] = np.float32(cloud.mean_r2) * np.float32(cloud.phi)
+        # Kept apart, so the shader computes (fbm·r̄²)·φ in the C++ order.
+        floats[k, 21] = _mean_r2(cloud)
+        floats[k, 22] = cloud.phi
         ints[k, 0:4] = (first, n, 1 if cloud.model == "metaball" else 0, 0)
         ints[k, 4:8] = (w, h, d, z0)
         atlas[z0 : z0 + d, :h, :w] = grid
@@ -321,6 +353,7 @@ class Renderer:
         width, height = _check_size(width, height, self.max_texture_size)
         if len(scene.clouds) > MAX_CLOUDS:
             raise ValueError(f"the GL renderer draws at most {MAX_CLOUDS} clouds")
+        check_gl_limits(scene)  # before the light pass, which such a cloud would make long
         prepare_light(scene)
         prim_bytes, cloud_bytes, atlas = pack_scene(scene)
         if len(prim_bytes) > self.max_storage_block_size:

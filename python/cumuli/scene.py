@@ -46,8 +46,11 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def _normalise(v: np.ndarray) -> np.ndarray:
+    # glm::normalize's float32 operations (v · 1/√(v·v), dot summed x, y, z), so that the GL
+    # marcher's camera basis is the C++ marcher's bit for bit.
     v = np.asarray(v, dtype=np.float32)
-    return (v / np.float32(np.sqrt(np.sum(v * v, dtype=np.float32)))).astype(np.float32)
+    d = (v[0] * v[0] + v[1] * v[1]) + v[2] * v[2]
+    return (v * (np.float32(1) / np.sqrt(d))).astype(np.float32)
 
 
 # --------------------------------------------------------------------------------------------
@@ -321,6 +324,21 @@ class RenderSettings:
             "gain": self.gain,
             "lacunarity": self.lacunarity,
             "frequency": self.frequency,
+        }
+
+    def light_grid_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`cumuli.light_grid` for the grid these settings render with.
+
+        ``light_grid(cloud, sun, noise, **settings.light_grid_kwargs())`` records the parameters
+        the renderer expects, so it keeps that grid (κ: the cloud's own, unless ``kappa`` is set;
+        then the renderer makes the grid itself, for the overridden κ).
+        """
+        return {
+            "resolution": self.light_resolution,
+            "method": self.light_method,
+            "step": self.light_step,
+            "extinction": self.light_extinction,
+            **self.fbm_params(),
         }
 
     def replace(self, **changes: Any) -> RenderSettings:
