@@ -23,6 +23,9 @@ RESULTS = HERE / "results"
 REPORT = HERE / "RESULTS.md"
 #: The JSON files a machine's section is written from (any may be missing).
 FILES = ("distance", "speedups", "scaling", "light", "noise", "render")
+#: Plots archived beside the JSON and shown in RESULTS.md (the others stay in benchmarks/out/:
+#: the repository keeps few binaries).
+PLOTS = ("distance", "speedups", "scaling")
 
 
 def machine_slug(renderer: str | None) -> str:
@@ -47,7 +50,8 @@ def archive(run_dir: Path, results: Path = RESULTS) -> Path:
             break
     target = results / machine_slug(renderer)
     target.mkdir(parents=True, exist_ok=True)
-    for path in [*jsons, *sorted(run_dir.glob("*.png"))]:
+    plots = [run_dir / f"{name}.png" for name in PLOTS if (run_dir / f"{name}.png").is_file()]
+    for path in [*jsons, *plots]:
         shutil.copy2(path, target / path.name)
     return target
 
@@ -228,14 +232,21 @@ def scaling_lines(s: dict[str, Any]) -> list[str]:
 def other_lines(data: dict[str, dict[str, Any]]) -> list[str]:
     lines: list[str] = []
     light = data.get("light")
-    if light and "reached" in light:
-        lines.append("### Light precompute (bench_light)")
+    if light and "targets" in light:
+        lines.append("### Light precompute (bench_light, issue targets, all cores)")
         lines.append("")
         rows = []
-        for key, limit in light["targets"].items():
-            got = light["reached"].get(key)
-            rows.append([key, limit, "—" if got is None else f"{got:.3g}"])
-        lines += table(["target", "limit", "reached"], rows)
+        for key, t in light["targets"].items():
+            got = "—" if t["reached"] is None else f"{t['reached']:.3g}"
+            floor = t.get("fbm_floor_ms")
+            rows.append([key, f"{t['comparison']} {t['limit']}", got, verdict(t["met"]),
+                         "—" if floor is None else f"{floor:.3g} ms"])  # fmt: skip
+        lines += table(["target", "limit", "reached", "met", "fBm alone (floor)"], rows)
+        lines.append(
+            "The floor is `Noise.fbm` alone on as many points as the NDT march sampled: at step "
+            "0.1 through the ~28-unit cumulus no march around it can be faster."
+        )
+        lines.append("")
     render = data.get("render")
     if render:
         lines.append("### Render pass (bench_render)")
@@ -248,8 +259,11 @@ def other_lines(data: dict[str, dict[str, Any]]) -> list[str]:
     return lines
 
 
-def section(name: str, data: dict[str, dict[str, Any]]) -> list[str]:
+def section(name: str, data: dict[str, dict[str, Any]], folder: Path | None = None) -> list[str]:
     lines = [f"## {name}", ""] + machine_lines(data)
+    if folder is not None:
+        shown = [p for p in PLOTS if (folder / f"{p}.png").is_file()]
+        lines += [f"![{p}](results/{folder.name}/{p}.png)" for p in shown] + ([""] if shown else [])
     if "distance" in data:
         lines += distance_lines(data["distance"])
     if "speedups" in data:
@@ -274,10 +288,23 @@ def write_report(results: Path = RESULTS, output: Path = REPORT) -> Path:
     ]
     if not folders:
         lines.append("No results yet: run `make bench`.")
+    elif all(f.name == "llvmpipe" for f in folders):
+        lines += [
+            "**No GPU results yet.** The paper's resolutions, its Table 3 distances and the "
+            "H100/H200 goals (1920×1080 cumulus at distance 32 in ≤ 1 ms, from inside in ≤ 4 ms) "
+            "need a GPU: `make bench` on a machine with one writes `benchmarks/results/<gpu>/` "
+            "beside `llvmpipe/` and a section for it here.",
+            "",
+            "Reading llvmpipe numbers: Mesa runs the fragment shader on the CPU cores, 8 pixels "
+            "per SIMD lane group, so its costs are not a GPU's (memory latency hurts a GPU's "
+            "quicksort more; a GPU's many cores hide per-primitive work that llvmpipe pays in "
+            "full). A claim marked **no** is reported with its numbers, not tuned until it agrees.",
+            "",
+        ]
     for folder in folders:
         data = load(folder)
         if data:
-            lines += section(folder.name, data)
+            lines += section(folder.name, data, folder)
     text = "\n".join(lines).rstrip() + "\n"
     output.parent.mkdir(parents=True, exist_ok=True)
     tmp = output.with_name(f".{output.name}.tmp")
