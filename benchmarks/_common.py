@@ -126,6 +126,24 @@ def time_repeats(
     return wall, cpu
 
 
+def interleaved_repeats(
+    fns: dict[str, Callable[[], Any]], repeats: int, warmup: int = 1
+) -> dict[str, tuple[list[float], list[float]]]:
+    """Like :func:`time_repeats` for several functions, run round-robin (A, B, A, B, ...) so that
+    a slow drift of a shared machine touches them alike; ``{name: (wall, cpu)}``."""
+    for fn in fns.values():
+        for _ in range(warmup):
+            fn()
+    out: dict[str, tuple[list[float], list[float]]] = {name: ([], []) for name in fns}
+    for _ in range(repeats):
+        for name, fn in fns.items():
+            c0, w0 = time.process_time(), time.perf_counter()
+            fn()
+            out[name][0].append(time.perf_counter() - w0)
+            out[name][1].append(time.process_time() - c0)
+    return out
+
+
 def spread(samples: Sequence[float]) -> dict[str, float]:
     """Median and spread of repeated measurements."""
     values = sorted(float(v) for v in samples)

@@ -66,11 +66,15 @@ def _method(count: int, wall: list[float], cpu: list[float], **extra: Any) -> di
     }
 
 
-def bench_cpp(noise: cu.Noise, pts: np.ndarray, repeats: int, threads: int) -> dict[str, Any]:
-    wall, cpu = common.time_repeats(
-        lambda: noise.fbm(pts, octaves=OCTAVES, threads=threads), repeats
+def bench_cpp(
+    noise: cu.Noise, pts: np.ndarray, repeats: int, thread_counts: list[int]
+) -> dict[int, dict[str, Any]]:
+    """The C++ fBm on each thread count, repeats interleaved across the counts."""
+    timed = common.interleaved_repeats(
+        {n: (lambda n=n: noise.fbm(pts, octaves=OCTAVES, threads=n)) for n in thread_counts},
+        repeats,
     )
-    return _method(len(pts), wall, cpu, threads=threads)
+    return {n: _method(len(pts), wall, cpu, threads=n) for n, (wall, cpu) in timed.items()}
 
 
 def bench_glsl(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, Any]:
@@ -238,10 +242,10 @@ def main(argv: list[str] | None = None) -> int:
 
     methods: dict[str, Any] = {}
     skipped: dict[str, str] = {}
-    methods["cpp_1_thread"] = bench_cpp(noise, pts, repeats, 1)
-    methods["cpp_2_threads"] = bench_cpp(noise, pts, repeats, 2)
-    if machine["cores"] > 2:
-        methods["cpp_all_threads"] = bench_cpp(noise, pts, repeats, 0)
+    cpp = bench_cpp(noise, pts, 3 * repeats, [1, 2] + ([0] if machine["cores"] > 2 else []))
+    methods["cpp_1_thread"], methods["cpp_2_threads"] = cpp[1], cpp[2]
+    if 0 in cpp:
+        methods["cpp_all_threads"] = cpp[0]
     try:
         methods["pyfastnoiselite"] = bench_fastnoise(pts, repeats)
     except ImportError as exc:
@@ -273,6 +277,9 @@ def main(argv: list[str] | None = None) -> int:
 
     ratios: dict[str, float] = {
         "cpp_2_threads_over_1": med("cpp_2_threads") / med("cpp_1_thread"),
+        # Best of the interleaved repeats: what the two cores give when nothing else runs.
+        "cpp_2_threads_over_1_best": methods["cpp_2_threads"]["samples_per_s"]["best"]
+        / methods["cpp_1_thread"]["samples_per_s"]["best"],
         # Work per CPU-second with 2 threads relative to 1: near 1 means the threads do not slow
         # each other down, so the wall-time speed-up is limited only by free cores.
         "cpp_2_threads_cpu_efficiency": methods["cpp_2_threads"]["samples_per_cpu_s"]
@@ -299,7 +306,8 @@ def main(argv: list[str] | None = None) -> int:
         "target": f">= {TARGET_2_THREADS}",
         "value": ratios["cpp_2_threads_over_1"],
         "met": ratios["cpp_2_threads_over_1"] >= TARGET_2_THREADS,
-        "measure": "wall-time throughput, median of repeats",
+        "measure": "wall-time throughput, median of repeats (1 and 2 threads interleaved)",
+        "value_best": ratios["cpp_2_threads_over_1_best"],
         "note": "needs two idle cores; see machine.load_average and cpp_2_threads_cpu_efficiency",
     }
     for key in ("glsl_texture", "glsl_exact"):
