@@ -234,7 +234,7 @@ def main(argv: list[str] | None = None) -> int:
         return glsl_worker(argv[1:])
     args = common.parse_args(__doc__.splitlines()[0], argv)
     count = 100_000 if args.quick else 1_000_000
-    repeats = 3 if args.quick else 7
+    repeats = 3 if args.quick else 11
     pts = random_points(count)
     noise = cu.Noise(seed=7)
     machine = common.machine_info()
@@ -242,7 +242,7 @@ def main(argv: list[str] | None = None) -> int:
 
     methods: dict[str, Any] = {}
     skipped: dict[str, str] = {}
-    cpp = bench_cpp(noise, pts, 3 * repeats, [1, 2] + ([0] if machine["cores"] > 2 else []))
+    cpp = bench_cpp(noise, pts, repeats, [1, 2] + ([0] if machine["cores"] > 2 else []))
     methods["cpp_1_thread"], methods["cpp_2_threads"] = cpp[1], cpp[2]
     if 0 in cpp:
         methods["cpp_all_threads"] = cpp[0]
