@@ -247,6 +247,18 @@ def other_lines(data: dict[str, dict[str, Any]]) -> list[str]:
             "0.1 through the ~28-unit cumulus no march around it can be faster."
         )
         lines.append("")
+    noise = data.get("noise")
+    if noise and "targets" in noise:
+        lines.append(f"### fBm noise (bench_noise, {noise['points']:,} random points)")
+        lines.append("")
+        rows = [[name, f"{1e-6 * m['samples_per_s']['median']:.1f}",
+                 f"{1e-6 * m['samples_per_s']['best']:.1f}"]
+                for name, m in noise["methods"].items()]  # fmt: skip
+        lines += table(["method", "M samples/s (median)", "M samples/s (best)"], rows)
+        rows = [[name, t["target"], f"{t['value']:.2f}", verdict(t["met"]),
+                 "—" if "value_best" not in t else f"{t['value_best']:.2f}", t["measure"]]
+                for name, t in noise["targets"].items()]  # fmt: skip
+        lines += table(["target", "limit", "value", "met", "best-of value", "measure"], rows)
     render = data.get("render")
     if render:
         lines.append("### Render pass (bench_render)")
