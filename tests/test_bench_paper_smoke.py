@@ -109,3 +109,24 @@ def test_report_without_results(tmp_path: Path) -> None:
     assert "No results yet" in text
     with pytest.raises(FileNotFoundError, match="no benchmark JSON"):
         report.archive(tmp_path / "empty")
+
+
+def test_gpu_goals_are_judged_on_an_h200_only() -> None:
+    import _common as common
+
+    def point(distance: float, ms: float) -> dict:
+        s = ms / 1e3
+        return {"distance": distance, "frame_s": {"median": s, "min": s, "max": s}}
+
+    curves = {"1920x1080": {"cumulus": [point(0, 3.5), point(32, 1.2)]}}
+    goals = bench_distance.gpu_targets(curves, "NVIDIA H200/PCIe/SSE2", [(1920, 1080)])
+    assert [(g["measured_ms"], g["met"]) for g in goals] == [(1.2, False), (3.5, True)]
+    other = bench_distance.gpu_targets(curves, "NVIDIA GeForce GTX 1050", [(1920, 1080)])
+    assert [g["met"] for g in other] == [None, None]  # measured, but not on the goal's GPU
+    soft = bench_distance.gpu_targets({}, "llvmpipe (LLVM 15)", [(480, 270)])
+    assert all(g["measured_ms"] is None and g["met"] is None for g in soft)
+    sizes, _ = common.render_sizes("NVIDIA H200/PCIe/SSE2", quick=False)
+    assert sizes == [(640, 480), (800, 600), (1920, 1080)]
+    sizes, note = common.render_sizes("llvmpipe (LLVM 15.0.6, 256 bits)", quick=False)
+    assert sizes == [(160, 120), (200, 150), (480, 270)] and "divided by 4" in note
+    assert common.gl_timer_reliable("NVIDIA H200") and not common.gl_timer_reliable("llvmpipe")
