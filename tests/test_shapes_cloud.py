@@ -152,3 +152,23 @@ def test_load_rejects_truncated_and_inconsistent(tmp_path: Path) -> None:
             dst.writestr(name, body)
     with pytest.raises(ValueError, match="centres"):
         cumuli.load_cloud(huge)
+
+
+def test_bbox_of_rotated_ellipsoids_is_tight() -> None:
+    # Surface points x = c + R·(r ⊙ u), u on the unit sphere: the box must hold every one of them
+    # and be touched by them (the analytic half extent is reached at some u).
+    rng = np.random.default_rng(8)
+    n = 5
+    q, _ = np.linalg.qr(rng.normal(size=(n, 3, 3)))
+    rotations = (q * np.sign(np.linalg.det(q))[:, None, None]).astype(np.float32)
+    radii = rng.uniform(0.5, 4.0, (n, 3)).astype(np.float32)
+    centres = rng.uniform(-10, 10, (n, 3)).astype(np.float32)
+    cloud = Cloud(centres, radii, rotations=rotations)
+    u = rng.normal(size=(200_000, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    pts = centres[:, None] + np.einsum("nkj,nmj->nmk", rotations, radii[:, None] * u[None])
+    lo, hi = cloud.bbox
+    flat = pts.reshape(-1, 3)
+    assert (flat >= lo - 1e-4).all() and (flat <= hi + 1e-4).all()
+    np.testing.assert_allclose(flat.min(axis=0), lo, atol=2e-2)
+    np.testing.assert_allclose(flat.max(axis=0), hi, atol=2e-2)
