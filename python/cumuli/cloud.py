@@ -134,26 +134,40 @@ class Cloud:
     def __len__(self) -> int:
         return self.n
 
+    def bounds(self, scale: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+        """Bounds ``(min, max)`` of the primitives with radii multiplied by ``scale``, float32.
+
+        The same float32 operations as the core's ``Ellipsoid::bounds`` (so the GL marcher,
+        packed from these, and the C++ one see the same boxes): radii·scale, half extent along
+        world axis k ``sqrt(Σ_j (R_kj·r_j)²)`` summed over j in order, min / max of ``c ∓ half``.
+        """
+        radii = self.radii * np.float32(scale)
+        v = self.rotations * radii[:, None, :]  # v[n, k, j] = R_kj · r_j
+        v = v * v
+        half = np.sqrt((v[..., 0] + v[..., 1]) + v[..., 2])
+        return (self.centres - half).min(axis=0), (self.centres + half).max(axis=0)
+
     @property
     def bbox(self) -> tuple[np.ndarray, np.ndarray]:
         """World axis-aligned bounds ``(min, max)`` of the primitives, float32 (3,) each."""
-        # Half extent along world axis k of an ellipsoid: sqrt(Σ_j (R_kj r_j)²).
-        half = np.sqrt(np.einsum("nkj,nj->nk", self.rotations**2, self.radii**2))
-        return (
-            (self.centres - half).min(axis=0).astype(np.float32),
-            (self.centres + half).max(axis=0).astype(np.float32),
-        )
+        return self.bounds()
 
     @property
     def centre(self) -> np.ndarray:
         """Centre of the bounding box (the LOD step measures the camera distance to it)."""
         lo, hi = self.bbox
-        return ((lo + hi) / 2).astype(np.float32)
+        return np.float32(0.5) * (lo + hi)
 
     @property
     def mean_r2(self) -> float:
-        """r̄² of eq. (20): the mean squared radius (an ellipsoid counts the mean of its radii²)."""
-        return float(np.mean(np.sum(self.radii.astype(np.float64) ** 2, axis=1) / 3.0))
+        """r̄² of eq. (20): the mean squared radius (an ellipsoid counts the mean of its radii²).
+
+        Computed as the core's ``CloudShape::mean_squared_radius`` does: float32 ``r·r`` per
+        primitive, ``/ 3`` and summed in order in double, ``/ N``.
+        """
+        r = self.radii
+        rr = (r[:, 0] * r[:, 0] + r[:, 1] * r[:, 1]) + r[:, 2] * r[:, 2]
+        return float(np.cumsum(rr.astype(np.float64) / 3.0)[-1] / self.n)  # cumsum: in order
 
     def core_args(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, str, float, float]:
         """The arguments the C++ core takes for a cloud."""

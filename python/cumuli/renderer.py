@@ -161,31 +161,6 @@ def _candidate_scale(cloud: Cloud) -> float:
     return math.sqrt(max(cloud.n, 1)) if cloud.model == "metaball" else 1.0
 
 
-def _grown_bbox(cloud: Cloud, scale: float) -> tuple[np.ndarray, np.ndarray]:
-    """candidate_bounds (cpp/src/candidates.cpp) in the same float32 operations: radii·scale,
-    half extent ``sqrt(Σ_j (R_kj·r_j)²)`` summed over j in order, min / max of ``c ∓ half``."""
-    radii = cloud.radii * np.float32(scale)
-    v = cloud.rotations * radii[:, None, :]  # v[n, k, j] = R_kj · r_j
-    v = v * v
-    half = np.sqrt((v[..., 0] + v[..., 1]) + v[..., 2])
-    return (cloud.centres - half).min(axis=0), (cloud.centres + half).max(axis=0)
-
-
-def _lod_centre(cloud: Cloud) -> np.ndarray:
-    """CloudShape::centre(): ``½·(lo + hi)`` of the primitives' (ungrown) bounds, float32."""
-    lo, hi = _grown_bbox(cloud, 1.0)
-    return np.float32(0.5) * (lo + hi)
-
-
-def _mean_r2(cloud: Cloud) -> np.float32:
-    """CloudShape::mean_squared_radius(): float32 ``r·r`` per primitive, / 3 and summed in order
-    in double, / N, rounded to float32 (so the metaball density scale is the C++ one)."""
-    r = cloud.radii
-    rr = (r[:, 0] * r[:, 0] + r[:, 1] * r[:, 1]) + r[:, 2] * r[:, 2]
-    total = np.cumsum(rr.astype(np.float64) / 3.0)[-1]  # cumsum: sequential, like the C++ loop
-    return np.float32(total / cloud.n)
-
-
 def pack_scene(scene: Scene) -> tuple[bytes, bytes, np.ndarray]:
     """Storage-buffer bytes for primitives and clouds and the light atlas ``[z, y, x]``.
 
@@ -212,19 +187,19 @@ def pack_scene(scene: Scene) -> tuple[bytes, bytes, np.ndarray]:
             p[:, 8 + 4 * a : 11 + 4 * a] = cloud.rotations[:, :, a]
         prims.append(p)
         scale = _candidate_scale(cloud)
-        lo, hi = _grown_bbox(cloud, scale)
+        lo, hi = cloud.bounds(scale)
         grid = np.ascontiguousarray(cloud.light, dtype=np.float32)
         d, h, w = grid.shape
         llo, lhi = cloud.light_box  # type: ignore[misc]
         floats[k, 0:3], floats[k, 3] = lo, scale
         floats[k, 4:7] = hi
-        floats[k, 8:11] = _lod_centre(cloud)
+        floats[k, 8:11] = cloud.centre  # the LOD distance
         floats[k, 12:15] = llo
         floats[k, 16:19] = lhi
         kappa = cloud.kappa if kappa_override is None else kappa_override
         floats[k, 20] = kappa
         # Kept apart, so the shader computes (fbm·r̄²)·φ in the C++ order.
-        floats[k, 21] = _mean_r2(cloud)
+        floats[k, 21] = cloud.mean_r2
         floats[k, 22] = cloud.phi
         ints[k, 0:4] = (first, n, 1 if cloud.model == "metaball" else 0, 0)
         ints[k, 4:8] = (w, h, d, z0)
