@@ -27,6 +27,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _common as common  # noqa: E402
+import bench_light  # noqa: E402
 import numpy as np  # noqa: E402
 
 import cumuli as cu  # noqa: E402
@@ -98,36 +99,31 @@ def hollow(renderer, size, quick: bool) -> dict[str, Any]:
 
 
 def light(quick: bool) -> dict[str, Any]:
+    """NDT against naive at 20³ on several cumulus seeds, 1 thread and all: bench_light's timing
+    (the core's march time, ``bench_light.run_one``) on the claim's grid."""
     seeds = [1] if quick else [1, 2, 3, 4, 5, 6]
     repeats = 3 if quick else 15
-    sun = cu.Sun(direction=(0.45, 0.75, 0.5))
     noise = cu.Noise(seed=7)
     by_threads: dict[str, Any] = {}
     for threads in (1, 0):
         rows = []
         for seed in seeds:
             cloud = cu.gaussian_cumulus(centre=(0, 0, 0), seed=seed)
-            times = {}
-            samples = {}
-            for method in ("ndt", "naive"):
-
-                def run(method=method, cloud=cloud, threads=threads):
-                    return cu.light_grid(
-                        cloud, sun, noise, resolution=20, method=method, step=0.1,
-                        return_stats=True, store=False, threads=threads,
-                    )  # fmt: skip
-
-                wall, _ = common.time_repeats(run, repeats)
-                times[method] = common.spread(wall)
-                samples[method] = run()[1].samples_per_voxel
+            runs = {
+                m: bench_light.run_one(cloud, noise, 20, m, repeats, threads)
+                for m in ("ndt", "naive")
+            }
+            for run in runs.values():
+                run.pop("_grid")
             rows.append(
                 {
                     "seed": seed,
                     "primitives": cloud.n,
-                    "ndt_s": times["ndt"],
-                    "naive_s": times["naive"],
-                    "samples_per_voxel": samples,
-                    "naive_over_ndt": times["naive"]["median"] / times["ndt"]["median"],
+                    "ndt_s": runs["ndt"]["march_s"],
+                    "naive_s": runs["naive"]["march_s"],
+                    "samples_per_voxel": {m: r["samples_per_voxel"] for m, r in runs.items()},
+                    "naive_over_ndt": runs["naive"]["march_s"]["median"]
+                    / runs["ndt"]["march_s"]["median"],
                 }
             )
         label = "1 thread" if threads == 1 else f"all {common.usable_cores()} threads"
@@ -143,7 +139,13 @@ def light(quick: bool) -> dict[str, Any]:
             f"light {label}: NDT {statistics.median(ndt_ms):.2f} ms at 20^3, "
             f"naive/NDT {statistics.median(ratios):.2f}"
         )
-    return {"resolution": 20, "step": 0.1, "threads": by_threads, "claim": CLAIMS["light"]}
+    return {
+        "resolution": 20,
+        "step": bench_light.STEP,
+        "sun": bench_light.SUN,
+        "threads": by_threads,
+        "claim": CLAIMS["light"],
+    }
 
 
 def sort(renderer, size, quick: bool) -> dict[str, Any]:
