@@ -25,7 +25,7 @@ def shader_folder(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> Iterator[P
 
 def test_shader_includes_are_expanded() -> None:
     cgl.load_shader.cache_clear()
-    src = cgl.load_shader("fbm_points.comp.glsl")
+    src = cgl.load_shader("noise/fbm_points.comp.glsl")
     assert "#include" not in src
     assert "float fbm(vec3 p, bool exact)" in src
     assert src.lstrip().startswith("#version 430")

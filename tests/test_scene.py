@@ -228,7 +228,7 @@ def test_render_contract_is_where_the_code_cites_it() -> None:
         assert formula in text
     cited = [
         p
-        for p in (*root.glob("shaders/*.glsl"), *root.glob("cpp/**/*.[ch]pp"))
+        for p in (*root.glob("shaders/**/*.glsl"), *root.glob("cpp/**/*.[ch]pp"))
         if "RENDER_CONTRACT" in p.read_text(encoding="utf-8")
     ]
     assert len(cited) >= 3

@@ -39,4 +39,45 @@ CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
   return cloud;
 }
 
+VolumeGrid grid_of(const FloatArray& vols, int lead, const V3& lo, const V3& hi, const char* name,
+                   int trailing) {
+  if (vols.ndim() != lead + 3 + trailing)
+    throw py::value_error(std::string(name) + " has the wrong number of dimensions");
+  VolumeGrid g;
+  g.d = static_cast<int>(vols.shape(lead));
+  g.h = static_cast<int>(vols.shape(lead + 1));
+  g.w = static_cast<int>(vols.shape(lead + 2));
+  g.box = Box{v3(lo), v3(hi)};
+  try {
+    g.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(std::string(name) + ": " + e.what());
+  }
+  return g;
+}
+
+py::array_t<float> to_array(const std::vector<float>& v, const std::vector<py::ssize_t>& shape) {
+  auto out = new_array(shape);
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+py::array_t<double> to_array_d(const std::vector<double>& v, py::ssize_t n) {
+  py::array_t<double> out({n, n});
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+SkyParams sky_of(const py::tuple& t) {
+  if (t.size() != 6) throw py::value_error("sky must be (zenith, horizon, ground, exponent, disc radius, disc intensity)");
+  SkyParams s;
+  s.zenith = v3(t[0].cast<V3>());
+  s.horizon = v3(t[1].cast<V3>());
+  s.ground = v3(t[2].cast<V3>());
+  s.exponent = t[3].cast<float>();
+  s.sun_disc_radius = t[4].cast<float>();
+  s.sun_disc_intensity = t[5].cast<float>();
+  return s;
+}
+
 }  // namespace cumuli::bind

@@ -3,11 +3,15 @@
 
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
 
+#include <array>
 #include <string>
 #include <vector>
 
-#include "cumuli/cloud.hpp"
+#include "cumuli/light/volume_light.hpp"
+#include "cumuli/model/cloud.hpp"
+#include "cumuli/render/volume_march.hpp"
 
 namespace cumuli::bind {
 
@@ -31,5 +35,27 @@ inline py::array_t<float> new_array(const std::vector<py::ssize_t>& shape) {
 CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
                              const FloatArray& rotations, const std::string& model, float kappa,
                              float phi);
+
+// --- volumes (endless animation, volume light, volume marcher) ---------------------------------
+
+using DoubleArray = py::array_t<double, py::array::c_style | py::array::forcecast>;
+using V3 = std::array<float, 3>;
+
+inline glm::vec3 v3(const V3& a) { return glm::vec3(a[0], a[1], a[2]); }
+
+inline std::vector<py::ssize_t> shape_of(const py::array& a) {
+  return std::vector<py::ssize_t>(a.shape(), a.shape() + a.ndim());
+}
+
+// (N, D, H, W) volumes (`lead` leading axes, `trailing` trailing ones) → their grid.
+VolumeGrid grid_of(const FloatArray& vols, int lead, const V3& lo, const V3& hi, const char* name,
+                   int trailing = 0);
+
+// A float32 / float64 array holding a copy of `v`.
+py::array_t<float> to_array(const std::vector<float>& v, const std::vector<py::ssize_t>& shape);
+py::array_t<double> to_array_d(const std::vector<double>& v, py::ssize_t n);
+
+// The sky as Python passes it: (zenith, horizon, ground, exponent, disc radius, disc intensity).
+SkyParams sky_of(const py::tuple& t);
 
 }  // namespace cumuli::bind

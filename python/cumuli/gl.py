@@ -242,7 +242,7 @@ class FbmProgram:
         if size > int(self.context.info.get("GL_MAX_3D_TEXTURE_SIZE", 2048)):
             raise ValueError(f"noise size {size} exceeds this GL's largest 3D texture")
         try:
-            self.program = self.context.compute("fbm_points.comp.glsl")
+            self.program = self.context.compute("noise/fbm_points.comp.glsl")
             self._objects.append(self.program)
             lattice = np.ascontiguousarray(noise.lattice, dtype=np.float32)
             self.texture = ctx.texture3d((size, size, size), 1, data=lattice.tobytes(), dtype="f4")

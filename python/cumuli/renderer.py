@@ -297,8 +297,8 @@ class Renderer:
         """Make the marcher compiled for ``candidate_sort`` current (compiled on first use)."""
         if candidate_sort not in self._variants:
             program = self.gl.program(
-                "fullscreen.vert.glsl",
-                "march.frag.glsl",
+                "common/fullscreen.vert.glsl",
+                "march/march.frag.glsl",
                 defines={"CANDIDATE_SORT": CANDIDATE_SORTS.index(candidate_sort)},
             )
             self._objects.append(program)

@@ -159,7 +159,7 @@ class VolumeRenderer:
         self.context = _resolve_context(context)
         ctx = self.context.ctx
         self.program: moderngl.Program | None = self.context.program(
-            "volume_quad.vert.glsl", "volume_march.frag.glsl"
+            "volume/quad.vert.glsl", "volume/march.frag.glsl"
         )
         self.vao = ctx.vertex_array(self.program, [])
         self.gpu_time_ns: int | None = None

@@ -4,7 +4,7 @@
 // order as the GLSL marcher. The caller owns the buffer: no allocation per ray.
 #pragma once
 
-#include "cumuli/cloud.hpp"
+#include "cumuli/model/cloud.hpp"
 
 namespace cumuli {
 

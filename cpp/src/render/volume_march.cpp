@@ -1,4 +1,4 @@
-#include "cumuli/volume_march.hpp"
+#include "cumuli/render/volume_march.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,8 +1,8 @@
 // Cloud density (twin of cpp/src/cloud.cpp): the pseudo-spheroid model of eq. (2) and the
 // metaball model of eqs. (19–21). Returns vec2(ρ, γ); ρ = 0 outside the cloud.
-#include "noise.glsl"
-#include "intersect.glsl"
-#include "scene_data.glsl"
+#include "common/noise.glsl"
+#include "common/intersect.glsl"
+#include "march/scene_data.glsl"
 
 uniform bool u_exact;  // exact float trilinear lookups (parity) instead of the hardware filter
 

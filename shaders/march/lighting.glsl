@@ -1,7 +1,7 @@
 // Algorithm 3 (lighting and shading): the light grid lookup and one sample's contribution.
-#include "phase.glsl"
-#include "scene_data.glsl"
-#include "trilinear.glsl"
+#include "common/phase.glsl"
+#include "march/scene_data.glsl"
+#include "common/trilinear.glsl"
 
 // Trilinear lookup of a cloud's light grid at world p: GL texel-centre convention over the grid's
 // box, clamp to edge. In the atlas, clamping the texel coordinate to [0.5, R − 0.5] keeps the

@@ -1,4 +1,4 @@
-#include "cumuli/animation.hpp"
+#include "cumuli/anim/endless.hpp"
 
 #include <algorithm>
 #include <cmath>

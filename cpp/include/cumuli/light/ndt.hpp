@@ -35,7 +35,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "cumuli/cloud.hpp"
+#include "cumuli/model/cloud.hpp"
 #include "cumuli/primitives.hpp"
 
 namespace cumuli {

@@ -1,11 +1,13 @@
-// Bindings for cumuli/march.hpp: the CPU reference marcher (`render_cpu`).
-#include "cumuli/march.hpp"
+// Bindings of the render stage's CPU twins (python/cumuli/render): the reference marcher of the
+// 2018 paper (render/march.hpp, `render_cpu`) and the volume marcher (render/volume_march.hpp).
+#include "cumuli/render/march.hpp"
 
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "common.hpp"
+#include "cumuli/render/volume_march.hpp"
 
 namespace cumuli::bind {
 
@@ -174,6 +176,38 @@ void bind_march(py::module_& m) {
       "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
       "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); sort_candidates=False leaves candidates "
       "unsorted (candidate_sort='none').");
+}
+
+void bind_volume_march(py::module_& m) {
+  m.def(
+      "render_volume_cpu",
+      [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi, V3 position, V3 forward,
+         V3 right, V3 up, float tan_half_fov, int width, int height, V3 sun_dir, V3 sun_radiance,
+         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads) {
+        const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
+        const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
+        if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
+          throw py::value_error("light must have shape (D, H, W, 4) matching the volume");
+        VolumeCameraRays cam{v3(position), v3(forward), v3(right), v3(up), tan_half_fov};
+        VolumeRenderParams p;
+        p.width = width;
+        p.height = height;
+        p.sun.direction = v3(sun_dir);
+        p.sun.radiance = v3(sun_radiance);
+        p.sky = sky_of(sky);
+        p.sigma_t = sigma_t;
+        p.albedo = albedo;
+        p.g = g;
+        p.step = step;
+        const float *pd = density.data(), *pl = light.data();
+        std::vector<float> img;
+        {
+          py::gil_scoped_release release;
+          img = render_volume_cpu(pd, pl, grid, cam, p, threads);
+        }
+        return to_array(img, {height, width, 4});
+      },
+      "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top.");
 }
 
 }  // namespace cumuli::bind

@@ -1,4 +1,6 @@
-// Bindings for the cloud-shape generators: gaussian.hpp (and the L-system and mesh generators).
+// Bindings of the model stage (python/cumuli/model): the cloud-shape generators (Gaussian
+// cumulus, L-system, metaballs, mesh → ellipsoids), cloud density, and the voxelised evolving
+// clouds of the endless-animation database (anim/endless.hpp).
 #include <algorithm>
 #include <cmath>
 #include <array>
@@ -10,10 +12,11 @@
 #include <pybind11/stl.h>
 
 #include "common.hpp"
-#include "cumuli/cloud.hpp"
-#include "cumuli/gaussian.hpp"
-#include "cumuli/lsystem.hpp"
-#include "cumuli/mesh_ellipsoids.hpp"
+#include "cumuli/anim/endless.hpp"
+#include "cumuli/model/cloud.hpp"
+#include "cumuli/model/gaussian.hpp"
+#include "cumuli/model/lsystem.hpp"
+#include "cumuli/model/mesh_ellipsoids.hpp"
 #include "cumuli/noise.hpp"
 #include "cumuli/parallel.hpp"
 
@@ -307,6 +310,70 @@ void bind_shapes(py::module_& m) {
       py::arg("min_radius"), py::arg("threads") = 0,
       "Mesh → ellipsoids (§3.6.4, eqs. 22–30): returns (centres (F,3), radii (F,3), "
       "rotations (F,3,3), stats).");
+}
+
+namespace {
+
+EvolutionParams evolution(int frames, std::array<int, 3> res, float growth, V3 drift, float jitter,
+                          V3 wind, float density_scale, float padding, std::uint64_t seed) {
+  EvolutionParams p;
+  p.frames = frames;
+  p.res_x = res[0];
+  p.res_y = res[1];
+  p.res_z = res[2];
+  p.growth = growth;
+  p.drift = v3(drift);
+  p.jitter = jitter;
+  p.wind = v3(wind);
+  p.density_scale = density_scale;
+  p.padding = padding;
+  p.seed = seed;
+  return p;
+}
+
+}  // namespace
+
+void bind_volumes(py::module_& m) {
+  m.def(
+      "evolving_cloud_box",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+         const std::string& model, float kappa, float phi, int frames, std::array<int, 3> res,
+         float growth, V3 drift, float jitter, V3 wind, float density_scale, float padding,
+         std::uint64_t seed) {
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+        const Box b = evolving_cloud_box(
+            cloud, evolution(frames, res, growth, drift, jitter, wind, density_scale, padding, seed));
+        return py::make_tuple(V3{b.lo.x, b.lo.y, b.lo.z}, V3{b.hi.x, b.hi.y, b.hi.z});
+      },
+      "World box holding the evolving cloud at every frame (padded): ((x,y,z) lo, (x,y,z) hi).");
+
+  m.def(
+      "evolving_cloud_volumes",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+         const std::string& model, float kappa, float phi, const Noise* noise, float constant,
+         int octaves, float gain, float lacunarity, float frequency, int frames,
+         std::array<int, 3> res, float growth, V3 drift, float jitter, V3 wind,
+         float density_scale, float padding, std::uint64_t seed, V3 box_lo, V3 box_hi,
+         int threads) {
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+        DensitySource src;
+        src.noise = noise;
+        src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+        src.fbm.validate();
+        src.constant = constant;
+        if (constant < 0.0f && noise == nullptr)
+          throw py::value_error("give a noise or a constant density >= 0");
+        const EvolutionParams p =
+            evolution(frames, res, growth, drift, jitter, wind, density_scale, padding, seed);
+        std::vector<float> v;
+        {
+          py::gil_scoped_release release;
+          v = evolving_cloud_volumes(cloud, src, p, Box{v3(box_lo), v3(box_hi)}, threads);
+        }
+        return to_array(v, {frames, res[2], res[1], res[0]});
+      },
+      "Voxelise an evolving cloud: (frames, D, H, W) float32 densities.");
+
 }
 
 }  // namespace cumuli::bind

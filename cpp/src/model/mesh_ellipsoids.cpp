@@ -1,4 +1,4 @@
-#include "cumuli/mesh_ellipsoids.hpp"
+#include "cumuli/model/mesh_ellipsoids.hpp"
 
 #include <atomic>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "cumuli/lsystem.hpp"
+#include "cumuli/model/lsystem.hpp"
 
 #include <algorithm>
 #include <cmath>

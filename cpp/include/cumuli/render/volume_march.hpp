@@ -16,7 +16,7 @@
 #include <glm/vec3.hpp>
 
 #include "cumuli/phase.hpp"
-#include "cumuli/volume_light.hpp"
+#include "cumuli/light/volume_light.hpp"
 
 namespace cumuli {
 

@@ -1,4 +1,4 @@
-#include "cumuli/gaussian.hpp"
+#include "cumuli/model/gaussian.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -5,9 +5,9 @@
 // sorted candidate primitives, "paper" or "union" marching with the LOD step, eq. (2) gating,
 // light-grid lighting with HG scattering, early exit, sky blend.
 
-#include "density.glsl"
-#include "lighting.glsl"
-#include "sky.glsl"
+#include "march/density.glsl"
+#include "march/lighting.glsl"
+#include "common/sky.glsl"
 
 // Compile-time caps: the settings are validated against them on the CPU (cumuli/scene.py).
 #define MAX_CANDIDATES 128

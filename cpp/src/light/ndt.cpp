@@ -1,4 +1,4 @@
-#include "cumuli/lighting.hpp"
+#include "cumuli/light/ndt.hpp"
 
 #include <algorithm>
 #include <chrono>

@@ -1,4 +1,4 @@
-#include "cumuli/cloud.hpp"
+#include "cumuli/model/cloud.hpp"
 
 #include <cmath>
 #include <stdexcept>

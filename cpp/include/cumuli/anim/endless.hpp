@@ -12,7 +12,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "cumuli/cloud.hpp"
+#include "cumuli/model/cloud.hpp"
 #include "cumuli/primitives.hpp"
 #include "cumuli/rng.hpp"
 

@@ -5,7 +5,7 @@
 // fbm_exact() does the same blend by hand with texelFetch and float weights, matching the C++ to
 // rounding; GPUs filter with low-precision (often 8-bit) weights, so texture() differs slightly.
 
-#include "trilinear.glsl"
+#include "common/trilinear.glsl"
 
 uniform sampler3D u_lattice;
 uniform int u_octaves;        // n

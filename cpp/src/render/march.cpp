@@ -1,4 +1,4 @@
-#include "cumuli/march.hpp"
+#include "cumuli/render/march.hpp"
 
 #include <algorithm>
 #include <cmath>

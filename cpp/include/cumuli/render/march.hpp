@@ -14,7 +14,7 @@
 #include <glm/vec4.hpp>
 
 #include "cumuli/candidates.hpp"
-#include "cumuli/cloud.hpp"
+#include "cumuli/model/cloud.hpp"
 #include "cumuli/noise.hpp"
 #include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"

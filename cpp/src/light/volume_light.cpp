@@ -1,4 +1,4 @@
-#include "cumuli/volume_light.hpp"
+#include "cumuli/light/volume_light.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -6,8 +6,8 @@
 // u_density: R32F [z][y][x]; u_light: RGBA32F (τ_sun, E_sky RGB). The sky (background) and the
 // phase function are the render pass's shared pieces.
 
-#include "sky.glsl"
-#include "phase.glsl"
+#include "common/sky.glsl"
+#include "common/phase.glsl"
 
 uniform sampler3D u_density;
 uniform sampler3D u_light;

@@ -13,7 +13,7 @@ layout(std430, binding = 1) writeonly buffer Values { float values[]; };
 uniform uint u_count;   // number of points in this batch
 uniform bool u_exact;   // true: texelFetch + float weights (matches the C++); false: texture()
 
-#include "noise.glsl"
+#include "common/noise.glsl"
 
 void main() {
     uint i = gl_GlobalInvocationID.x + gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 64u;
