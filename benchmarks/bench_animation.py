@@ -29,7 +29,7 @@ import _common as common  # noqa: E402
 import numpy as np  # noqa: E402
 
 import cumuli as cu  # noqa: E402
-from cumuli.animation import (  # noqa: E402
+from cumuli.light.volume import (  # noqa: E402
     sh_optical_depth,
     sphere_quadrature,
     sun_optical_depth,

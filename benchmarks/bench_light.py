@@ -2,7 +2,7 @@
 
 Clouds: the default Gaussian cumulus (`cumuli.gaussian_cumulus(seed=0)`: 35 primitives drawn, the
 hollow and containment filters keep ~31) and a ~300-face mesh cloud (the procedural rabbit of
-`cumuli.meshes.bunny_like`, decimated to 300 faces by `cumuli.mesh_cloud`). Noise seed 7, sun
+`cumuli.io.meshes.bunny_like`, decimated to 300 faces by `cumuli.mesh_cloud`). Noise seed 7, sun
 (0.3, 0.8, 0.2), step 0.1, fBm 5 octaves, grids 20³, 40³, 64³ (--quick: 8³, 12³), all cores.
 
 Per (cloud, resolution, method): median / min / max wall time of the repeats (the C++ march as

@@ -32,7 +32,7 @@ import numpy as np  # noqa: E402
 
 import cumuli as cu  # noqa: E402
 from cumuli.demo import benchmark_scenes, distance_camera  # noqa: E402
-from cumuli.scene import CANDIDATE_SORTS  # noqa: E402
+from cumuli.settings import CANDIDATE_SORTS  # noqa: E402
 
 #: What the paper claims, as "variant time / baseline time" or fps ratios (for RESULTS.md).
 CLAIMS = {

@@ -21,8 +21,8 @@ from hypothesis.extra import numpy as hnp
 
 import cumuli as cu
 from cumuli import _core
-from cumuli import renderer as renderer_mod
-from cumuli.cloud import MAX_PRIMITIVES
+from cumuli.model.cloud import MAX_PRIMITIVES
+from cumuli.rendering import renderer as renderer_mod
 
 
 def small_cloud() -> cu.Cloud:
@@ -327,7 +327,7 @@ def test_proper_rotations_and_reflections_are_accepted() -> None:
 
 # --- render_frames --------------------------------------------------------------------------
 def test_render_frames_pattern_must_be_a_str(tmp_path: Path) -> None:
-    from cumuli import frames
+    from cumuli.anim import frames
 
     scene = cu.Scene([small_cloud()], noise=cu.Noise(0, 4))
     cams = frames.orbit((0, 0, 0), 10.0, 2)

@@ -15,8 +15,8 @@ import pytest
 
 import cumuli as cu
 from cumuli.gl import with_defines
-from cumuli.renderer import Renderer
-from cumuli.scene import CANDIDATE_SORTS
+from cumuli.rendering.renderer import Renderer
+from cumuli.settings import CANDIDATE_SORTS
 
 W, H = 64, 48
 SORTED = ("insertion", "quicksort", "oddeven")

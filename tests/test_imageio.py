@@ -9,7 +9,7 @@ import OpenImageIO as oiio
 import pytest
 
 import cumuli as cu
-import cumuli.imageio as cio
+import cumuli.io.images as cio
 
 
 def _image(h: int = 24, w: int = 32, seed: int = 0) -> np.ndarray:

@@ -8,15 +8,14 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.animation import (
-    as_sky,
+from cumuli.light.volume import (
     point_optical_depth,
     sh_basis,
     sh_optical_depth,
-    sky_args,
     sphere_quadrature,
     sun_optical_depth,
 )
+from cumuli.sky import as_sky, sky_args
 
 LO, HI = (0.0, 0.0, 0.0), (2.0, 1.0, 3.0)
 
@@ -60,7 +59,7 @@ def test_sphere_quadrature_and_sh_basis_are_orthonormal() -> None:
 def test_sh_projection_of_a_constant_is_exact() -> None:
     # A uniform sky L(ω) = c projects onto (c·√4π, 0, ...).
     c = (0.3, 0.5, 0.9)
-    coeffs = cu.animation._core.sky_sh(sky_args(as_sky(c)), 3, 4)
+    coeffs = cu._core.sky_sh(sky_args(as_sky(c)), 3, 4)
     expect = np.zeros((3, 9))
     expect[:, 0] = np.array(c) * math.sqrt(4 * math.pi)
     np.testing.assert_allclose(coeffs, expect, atol=1e-6)
@@ -182,7 +181,7 @@ def test_shexp_against_direct_transmittance(lighting: cu.VolumeLighting, method:
     sigma_t = 0.3  # moderate optical depths, where the linear form of eq. 7 is meant to work
     ref = (np.exp(-sigma_t * f @ y.T) * w) @ y
     g = (-sigma_t * f).astype(np.float32)
-    core = cu.animation._core
+    core = cu._core
     if method == "fit":
         a, b, norm = core.fit_shexp(f.astype(np.float32), order, sigma_t, 16, 4)
     else:

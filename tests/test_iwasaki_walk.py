@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.animation import default_sigma
+from cumuli.anim.endless import default_sigma
 
 
 def _database(n: int = 10, seed: int = 0) -> cu.VolumeDatabase:

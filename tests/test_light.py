@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.light import DEFAULT_EXTINCTION, MAX_RESOLUTION
+from cumuli.light.ndt import DEFAULT_EXTINCTION, MAX_RESOLUTION
 
 C_DEFAULT = 0.5 * 1e-4 / (4 * math.pi)
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.renderer import expected_light_params
+from cumuli.rendering.renderer import expected_light_params
 
 SUN = cu.Sun(direction=(0.3, 0.8, 0.2))
 # Small grids keep each light pass to a few milliseconds.

@@ -1,4 +1,4 @@
-"""OBJ face indices are checked before trimesh reads the file (`cumuli.meshes.load_mesh`).
+"""OBJ face indices are checked before trimesh reads the file (`cumuli.io.meshes.load_mesh`).
 
 trimesh accepts ``f 0 1 2`` (0 is not a valid 1-based index) and silently builds a wrong
 triangle from it; it fails on indices past the vertices without saying where. `load_mesh`
@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import cumuli
-from cumuli import meshes
+from cumuli.io import meshes
 
 TRIANGLE = "v 0 0 0\nv 1 0 0\nv 0 1 0\n"
 

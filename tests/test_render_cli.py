@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 import cumuli as cu
+from cumuli.anim.frames import fly_towards, orbit, render_frames
 from cumuli.cli import main
 from cumuli.demo import cumulus_scene
-from cumuli.frames import fly_towards, orbit, render_frames
 
 
 def small_scene() -> cu.Scene:
@@ -58,7 +58,7 @@ def test_sequences_are_exported_from_the_package(tmp_path: Path) -> None:
     import sys
 
     code = (
-        "import cumuli as cu, cumuli.frames as fr\n"
+        "import cumuli as cu, cumuli.anim.frames as fr\n"
         "assert cu.render_frames is fr.render_frames and cu.orbit is fr.orbit\n"
         "assert cu.fly_towards is fr.fly_towards\n"
         "assert {'render_frames', 'orbit', 'fly_towards', 'frames'} <= set(cu.__all__)\n"

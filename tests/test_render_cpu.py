@@ -12,6 +12,7 @@ import math
 import numpy as np
 import pytest
 
+import cumuli.rendering.cpu
 from cumuli import _core
 
 F = np.float32
@@ -603,7 +604,7 @@ def test_render_cpu_on_scene_objects_follows_the_contract():
     scene = cu.Scene(clouds=[cloud], noise=cu.Noise(seed=4, size=16), settings=settings)
     camera = cu.Camera(position=(0.3, 0.4, -6.0), target=(0.2, 0.1, 0.0), fov=40)
     img = cu.render_cpu(scene, camera, 8, 6)
-    args = cu.cpu_render.render_cpu_args(scene, camera, 8, 6)
+    args = cumuli.rendering.cpu.render_cpu_args(scene, camera, 8, 6)
     assert args["clouds"][0]["kappa"] == pytest.approx(0.7)  # settings.kappa overrides the cloud's
     assert args["ref_step"] == settings.step_ref and args["march"] == "union"
     assert (img[..., 3] > 0.05).sum() >= 4

@@ -16,7 +16,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.demo import cumulus_scene, default_scene
-from cumuli.renderer import MAX_PIXELS, Renderer
+from cumuli.rendering.renderer import MAX_PIXELS, Renderer
 
 pytestmark = pytest.mark.gl
 
@@ -414,7 +414,7 @@ def test_bad_sizes(renderer: Renderer, size, exc, message) -> None:
 
 @pytest.mark.parametrize(("model", "limit"), [("metaball", 1024), ("spheroid", 65536)])
 def test_primitive_limits_per_cloud(renderer: Renderer, model: str, limit: int) -> None:
-    from cumuli.renderer import MAX_GL_PRIMITIVES
+    from cumuli.rendering.renderer import MAX_GL_PRIMITIVES
 
     assert MAX_GL_PRIMITIVES[model] == limit
     rng = np.random.default_rng(0)

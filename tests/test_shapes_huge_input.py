@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli import meshes
 from cumuli._validate import MAX_COORD, direction, points3, vec3
+from cumuli.io import meshes
 
 HUGE = 3e38  # finite in float32 (max 3.4e38)
 

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import cumuli
-from cumuli.shapes import PAPER_RULES
+from cumuli.model.lsystem import PAPER_RULES
 
 FIXED = {"radius": (1.0, 1.0), "step": (1.0, 1.0)}
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import cumuli
-from cumuli import meshes
+from cumuli.io import meshes
 
 
 def _reference(v: np.ndarray, f: np.ndarray, scale: float):

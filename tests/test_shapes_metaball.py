@@ -21,7 +21,7 @@ def _field(cloud: cumuli.Cloud, p: np.ndarray) -> np.ndarray:
         lambda: cumuli.metaball_cumulus(seed=4),
         lambda: cumuli.gaussian_cumulus(seed=1).with_model("metaball"),
         lambda: cumuli.lsystem_cloud(iterations=5, angle=(50, 100), seed=3).with_model("metaball"),
-        lambda: cumuli.mesh_cloud(cumuli.meshes.torus(sections=8)).with_model("metaball"),
+        lambda: cumuli.mesh_cloud(cumuli.io.meshes.torus(sections=8)).with_model("metaball"),
     ],
 )
 def test_metaball_inside_matches_reference(make) -> None:

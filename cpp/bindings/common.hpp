@@ -11,7 +11,7 @@
 
 #include "cumuli/light/volume_light.hpp"
 #include "cumuli/model/cloud.hpp"
-#include "cumuli/render/volume_march.hpp"
+#include "cumuli/rendering/volume_march.hpp"
 
 namespace cumuli::bind {
 

@@ -7,38 +7,33 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 
 from __future__ import annotations
 
-from cumuli import frames, meshes
 from cumuli._version import __version__
-from cumuli.animation import (
-    AnimationFrame,
+from cumuli.anim import frames
+from cumuli.anim.endless import (
     EndlessAnimation,
-    VolumeDatabase,
-    VolumeLighting,
     blend_volumes,
     crossfade_weights,
-    evolving_cloud_volumes,
     similarity_matrix,
     transition_matrix,
 )
-from cumuli.cloud import Cloud, load_cloud, merge
-from cumuli.cpu_render import render_cpu
-from cumuli.frames import fly_towards, orbit, render_frames
-from cumuli.imageio import from_srgb8, read_image, to_srgb8, write_image
-from cumuli.light import LightStats, light_grid
+from cumuli.anim.frames import fly_towards, orbit, render_frames
+from cumuli.camera import Camera
+from cumuli.io import meshes
+from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
+from cumuli.light.ndt import LightStats, light_grid
+from cumuli.light.volume import VolumeLighting
+from cumuli.model.cloud import Cloud, load_cloud, merge
+from cumuli.model.gaussian import gaussian_cumulus, metaball_cumulus
+from cumuli.model.lsystem import lsystem_cloud, lsystem_expand, lsystem_length
+from cumuli.model.mesh import ellipsoids_from_mesh, mesh_cloud
+from cumuli.model.volume import AnimationFrame, VolumeDatabase, evolving_cloud_volumes
 from cumuli.noise import Noise
-from cumuli.renderer import Renderer, prepare_light, render
-from cumuli.scene import Camera, RenderSettings, Scene, Sky, load_scene
-from cumuli.shapes import (
-    ellipsoids_from_mesh,
-    gaussian_cumulus,
-    lsystem_cloud,
-    lsystem_expand,
-    lsystem_length,
-    mesh_cloud,
-    metaball_cumulus,
-)
-from cumuli.sun import Sun
-from cumuli.volume_render import VolumeRenderer, render_volume
+from cumuli.rendering.cpu import render_cpu
+from cumuli.rendering.renderer import Renderer, prepare_light, render
+from cumuli.rendering.volume import VolumeRenderer, render_volume
+from cumuli.scene import Scene, load_scene
+from cumuli.settings import RenderSettings
+from cumuli.sky import Sky, Sun
 
 __all__ = [
     "AnimationFrame",

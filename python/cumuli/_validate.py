@@ -129,3 +129,29 @@ def shape3(value: Any, name: str, hi: int) -> tuple[int, int, int]:
         a, b, c = (integer(v, name, 1, hi) for v in value)
         return (a, b, c)
     raise TypeError(f"{name} must be an int or three ints, got {value!r}")
+
+
+def seed(value: Any) -> int:
+    """An RNG seed: an integer in [0, 2⁶⁴)."""
+    return integer(value, "seed", 0, 2**64 - 1)
+
+
+def choice(value: Any, name: str, options: Sequence[str]) -> str:
+    """One of ``options`` (a string), else ValueError naming ``name``."""
+    if not isinstance(value, str) or value not in options:
+        raise ValueError(f"{name} must be one of {tuple(options)}, got {value!r}")
+    return value
+
+
+def pair(
+    value: Any, name: str, *, positive: bool = True, bound: float | None = MAX_COORD
+) -> tuple[float, float]:
+    """A (lo, hi) pair of finite floats with lo <= hi, lo > 0 when ``positive``, |·| <= bound."""
+    if isinstance(value, (str, bytes)) or not isinstance(value, Sequence) or len(value) != 2:
+        raise TypeError(f"{name} must be a (lo, hi) pair, got {value!r}")
+    floor = 0.0 if positive else (None if bound is None else -bound)
+    lo = real(value[0], name, floor, bound, lo_open=positive)
+    hi = real(value[1], name, floor, bound, lo_open=positive)
+    if lo > hi:
+        raise ValueError(f"{name} must have lo <= hi, got ({lo}, {hi})")
+    return (lo, hi)

@@ -69,7 +69,7 @@ def _demo_noise(width: int, height: int, seed: int) -> np.ndarray:
     """The paper's Figures 2 and 3 side by side: a slice of the uniform lattice (left, nearest
     texels) and the same slice of its 5-octave fBm (right). Returns (H, W, 4) linear RGBA.
     """
-    from cumuli.imageio import srgb_to_linear
+    from cumuli.io.images import srgb_to_linear
     from cumuli.noise import Noise
 
     noise = Noise(seed=seed)
@@ -113,7 +113,7 @@ def _check_output(output: Path) -> None:
 
 def _write_pair(output: Path, img: np.ndarray) -> list[Path]:
     """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR)."""
-    from cumuli.imageio import write_image
+    from cumuli.io.images import write_image
 
     other = output.with_suffix(".exr" if output.suffix.lower() == ".png" else ".png")
     return [write_image(output, img), write_image(other, img)]
@@ -121,14 +121,14 @@ def _write_pair(output: Path, img: np.ndarray) -> list[Path]:
 
 def _cmd_demo(args: argparse.Namespace) -> int:
     if args.noise:
-        from cumuli.imageio import write_image
+        from cumuli.io.images import write_image
 
         img = _demo_noise(args.width, args.height, args.seed)
         path = write_image(args.output, img)
         print(f"wrote {path} ({args.width}×{args.height})")
         return 0
     from cumuli.demo import default_scene
-    from cumuli.renderer import render
+    from cumuli.rendering.renderer import render
 
     _check_output(args.output)
     scene = default_scene()
@@ -149,8 +149,8 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
-    from cumuli.imageio import write_image
-    from cumuli.renderer import render
+    from cumuli.io.images import write_image
+    from cumuli.rendering.renderer import render
     from cumuli.scene import load_scene
 
     scene = load_scene(args.scene)

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+from cumuli.camera import Camera
+from cumuli.model.gaussian import gaussian_cumulus
 from cumuli.noise import Noise
-from cumuli.scene import Camera, RenderSettings, Scene, Sky
-from cumuli.shapes import gaussian_cumulus
-from cumuli.sun import Sun
+from cumuli.scene import Scene
+from cumuli.settings import RenderSettings
+from cumuli.sky import Sky, Sun
 
 
 def cumulus_scene(seed: int = 1, settings: RenderSettings | None = None) -> Scene:
@@ -62,8 +64,10 @@ def benchmark_scenes(names: tuple[str, ...] = BENCHMARK_SCENES) -> dict[str, Sce
     Every scene has the same sun, sky and noise; light grids are 20³ (computed on first render).
     Decimating the mesh needs the ``fast-simplification`` package (``pip install cumuli[mesh]``).
     """
-    from cumuli.meshes import bunny_like
-    from cumuli.shapes import lsystem_cloud, mesh_cloud, metaball_cumulus
+    from cumuli.io.meshes import bunny_like
+    from cumuli.model.gaussian import metaball_cumulus
+    from cumuli.model.lsystem import lsystem_cloud
+    from cumuli.model.mesh import mesh_cloud
 
     unknown = [n for n in names if n not in BENCHMARK_SCENES]
     if unknown:

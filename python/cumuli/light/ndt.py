@@ -25,9 +25,9 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
-from cumuli.cloud import Cloud
+from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise, _fbm_params
-from cumuli.sun import Sun
+from cumuli.sky import Sun
 
 #: Largest grid edge along any axis.
 MAX_RESOLUTION: int = int(_core.LIGHT_MAX_RESOLUTION)

@@ -10,7 +10,8 @@ from pathlib import Path
 import numpy as np
 
 from cumuli import _validate as check
-from cumuli.scene import Camera, Scene
+from cumuli.camera import Camera
+from cumuli.scene import Scene
 
 #: Most frames one call renders (keeps a typo from filling a disk).
 MAX_FRAMES = 100_000
@@ -100,8 +101,8 @@ def render_frames(
     composited over the sky) unless ``alpha=True`` keeps the clouds' coverage ``1 − T`` as alpha.
     Returns the paths written, in order.
     """
-    from cumuli.imageio import write_image
-    from cumuli.renderer import render
+    from cumuli.io.images import write_image
+    from cumuli.rendering.renderer import render
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")

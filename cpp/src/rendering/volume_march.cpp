@@ -1,4 +1,4 @@
-#include "cumuli/render/volume_march.hpp"
+#include "cumuli/rendering/volume_march.hpp"
 
 #include <algorithm>
 #include <cmath>

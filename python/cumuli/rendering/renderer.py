@@ -21,9 +21,11 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
-from cumuli.cloud import Cloud
+from cumuli.camera import Camera
 from cumuli.gl import GLContext
-from cumuli.scene import CANDIDATE_SORTS, MAX_CANDIDATES, MAX_CLOUDS, Camera, Scene
+from cumuli.model.cloud import Cloud
+from cumuli.scene import Scene
+from cumuli.settings import CANDIDATE_SORTS, MAX_CANDIDATES, MAX_CLOUDS
 
 #: Largest tile drawn in one call (keeps each draw short on software GL and under driver timeouts).
 TILE = 1024
@@ -45,7 +47,7 @@ MAX_GL_PRIMITIVES = {"spheroid": 65536, "metaball": 1024}
 # Light grids on demand
 def expected_light_params(cloud: Cloud, scene: Scene) -> dict[str, Any]:
     """The ``light_params`` record of the grid ``scene``'s settings make for ``cloud``."""
-    from cumuli.light import DEFAULT_SOLID_ANGLE, light_params
+    from cumuli.light.ndt import DEFAULT_SOLID_ANGLE, light_params
 
     return light_params(
         cloud,
@@ -107,7 +109,7 @@ def _stale(cloud: Cloud, scene: Scene) -> bool:
 
 
 def _compute_light(cloud: Cloud, scene: Scene) -> None:
-    from cumuli.light import DEFAULT_SOLID_ANGLE, light_grid
+    from cumuli.light.ndt import DEFAULT_SOLID_ANGLE, light_grid
 
     s = scene.settings
     target = cloud
@@ -514,6 +516,6 @@ def render(
         camera = scene.default_camera()
     if backend == "gl":
         return shared_renderer().render(scene, camera, width, height)
-    from cumuli.cpu_render import render_cpu
+    from cumuli.rendering.cpu import render_cpu
 
     return render_cpu(scene, camera, width, height)

@@ -10,7 +10,7 @@
 
 The camera is a :class:`cumuli.Camera` (or any object with ``position``, ``target``, ``fov`` —
 vertical, degrees — and optionally ``up``); the sky a :class:`cumuli.Sky` (or what
-:func:`cumuli.animation.as_sky` accepts), whose radiance without the sun disc also lights the
+:func:`cumuli.sky.as_sky` accepts), whose radiance without the sun disc also lights the
 volume through :class:`cumuli.VolumeLighting`. Background, sky model and phase function are the
 render pass's own (``shaders/sky.glsl``, ``shaders/phase.glsl`` and their C++ twins).
 """
@@ -26,10 +26,10 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
-from cumuli.animation import _box, _float_volumes, as_sky, sky_args
+from cumuli.camera import Camera
 from cumuli.gl import GLContext, _resolve_context
-from cumuli.scene import Camera
-from cumuli.sun import Sun
+from cumuli.model.volume import _box, _float_volumes
+from cumuli.sky import Sun, as_sky, sky_args
 
 BACKENDS = ("cpu", "gl")
 #: Most steps a ray may take (the shader's loop bound).

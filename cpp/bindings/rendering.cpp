@@ -1,13 +1,13 @@
-// Bindings of the render stage's CPU twins (python/cumuli/render): the reference marcher of the
+// Bindings of the render stage's CPU twins (python/cumuli/rendering): the reference marcher of the
 // 2018 paper (render/march.hpp, `render_cpu`) and the volume marcher (render/volume_march.hpp).
-#include "cumuli/render/march.hpp"
+#include "cumuli/rendering/march.hpp"
 
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "common.hpp"
-#include "cumuli/render/volume_march.hpp"
+#include "cumuli/rendering/volume_march.hpp"
 
 namespace cumuli::bind {
 

@@ -1,4 +1,4 @@
-#include "cumuli/render/march.hpp"
+#include "cumuli/rendering/march.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -102,8 +102,9 @@ def render_cpu(scene: Any, camera: Any, width: int, height: int, threads: int = 
     one first, by the same helper the GL renderer uses (:func:`cumuli.prepare_light`).
     ``threads=0`` uses every core; the image does not depend on the thread count.
     """
-    from cumuli.renderer import prepare_light
-    from cumuli.scene import Camera, Scene
+    from cumuli.camera import Camera
+    from cumuli.rendering.renderer import prepare_light
+    from cumuli.scene import Scene
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")

@@ -1,0 +1,6 @@
+"""Model stage: what a cloud is, before any light.
+
+`cloud` (the 2018 paper's primitive clouds), its generators `gaussian`, `lsystem`, `mesh`
+(Jiménez de Parga & Gómez Palomo 2018, §3.6) and `volume` (density volumes and the endless
+animation's database, Iwasaki et al. 2011). Nothing here depends on light or rendering.
+"""

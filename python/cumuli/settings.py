@@ -1,0 +1,186 @@
+"""Render settings: the knobs of the render pass, shared by the GL and CPU marchers."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from cumuli import _validate as check
+
+#: Upper bounds of the settings that size shader loops and arrays (shaders/march/march.frag.glsl).
+MAX_CANDIDATES = 128
+MAX_STEPS = 1 << 16
+MAX_CLOUDS = 64
+MARCH_MODES = ("paper", "union")
+#: Candidate sorts of the GL marcher (compile-time variants of shaders/march/march.frag.glsl).
+CANDIDATE_SORTS = ("insertion", "quicksort", "oddeven", "none")
+#: Light-grid methods the renderer may use (`cumuli.light_grid`).
+LIGHT_METHODS = ("ndt", "naive")
+
+
+@dataclass(frozen=True)
+class RenderSettings:
+    """Knobs of the render pass (RENDER_CONTRACT), shared by the GL and CPU marchers.
+
+    Attributes
+    ----------
+    kappa:
+        When not None, overrides every spheroid cloud's κ of eq. (2).
+    absorption:
+        φ of ``Δτ = exp(−φ·ρ·Δ/Δ_ref)`` (Algorithm 3, made step-size independent).
+    lod_a, lod_delta:
+        A and δ of the LOD step ``Δ = A·exp(−δ·|camera − cloud centre|)`` (Algorithm 1 line 50).
+    step_ref:
+        Δ_ref, the step at which ``Δτ`` is exactly the paper's ``exp(−φρ)``.
+    step_min, step_max:
+        Clamp of the LOD step.
+    fixed_step:
+        When > 0, replaces the LOD step (the paper uses 0.1 for its mesh tests).
+    hg_g:
+        Henyey-Greenstein asymmetry g of eq. (14), in (−1, 1).
+    max_steps:
+        Most samples marched per pixel, over all clouds (keeps every loop bounded).
+    max_candidates:
+        Most candidate primitives kept per ray and cloud (the nearest ones).
+    march:
+        ``"paper"`` marches each candidate interval on its own (overlaps twice, as the paper);
+        ``"union"`` marches the union of the intervals once.
+    candidate_sort:
+        How the GL marcher orders a ray's candidates: ``"insertion"`` (the paper's insertion
+        sort, as candidates arrive), ``"quicksort"`` (iterative, the alternative the paper
+        tried) or ``"oddeven"`` (Batcher's odd-even mergesort, the one it suggests) give the
+        same order — by ``t_in``, ties by primitive index — at different costs; ``"none"``
+        leaves them unsorted (a cost reference: wrong where intervals overlap). The CPU marcher
+        orders by the same key for the first three and leaves ``"none"`` unsorted too.
+    exact_noise:
+        Use exact float trilinear lookups (texelFetch) for the noise and the light grid instead
+        of the hardware filter; the parity tests use it.
+    octaves, gain, lacunarity, frequency:
+        fBm of eq. (1): n, w, s and f (lattice texels per world unit).
+    light_resolution:
+        Edge of the light grid computed on demand for clouds without one.
+    light_method, light_step, light_extinction:
+        How that grid is computed (:func:`cumuli.light_grid`): ``"ndt"`` (Algorithm 2) or
+        ``"naive"``, its march step and the extinction ``A`` of eq. (3) per world unit.
+    """
+
+    kappa: float | None = None
+    absorption: float = 1.2
+    lod_a: float = 0.25
+    lod_delta: float = 0.004
+    step_ref: float = 0.1
+    step_min: float = 0.02
+    step_max: float = 1.0
+    fixed_step: float = 0.0
+    hg_g: float = 0.6
+    max_steps: int = 4096
+    max_candidates: int = 64
+    march: str = "paper"
+    candidate_sort: str = "insertion"
+    exact_noise: bool = False
+    octaves: int = 5
+    gain: float = 0.5
+    lacunarity: float = 2.0
+    frequency: float = 0.3
+    light_resolution: int = 20
+    light_method: str = "ndt"
+    light_step: float = 0.1
+    light_extinction: float = 1.0
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        if self.kappa is not None:
+            s(self, "kappa", check.real(self.kappa, "settings.kappa", 0.0, 1.0))
+        s(self, "absorption", check.real(self.absorption, "settings.absorption", 0.0))
+        s(self, "lod_a", check.real(self.lod_a, "settings.lod_a", 0.0, lo_open=True))
+        s(self, "lod_delta", check.real(self.lod_delta, "settings.lod_delta", 0.0))
+        s(self, "step_ref", check.real(self.step_ref, "settings.step_ref", 0.0, lo_open=True))
+        s(self, "step_min", check.real(self.step_min, "settings.step_min", 1e-5))
+        s(self, "step_max", check.real(self.step_max, "settings.step_max", 1e-5))
+        if self.step_max < self.step_min:
+            raise ValueError(
+                f"settings.step_max ({self.step_max}) must be >= "
+                f"settings.step_min ({self.step_min})"
+            )
+        fixed = check.real(self.fixed_step, "settings.fixed_step", 0.0)
+        if 0 < fixed < 1e-5:
+            raise ValueError(f"settings.fixed_step must be 0 (off) or >= 1e-5, got {fixed}")
+        s(self, "fixed_step", fixed)
+        g = check.real(self.hg_g, "settings.hg_g", -1.0, 1.0, lo_open=True, hi_open=True)
+        s(self, "hg_g", g)
+        s(self, "max_steps", check.integer(self.max_steps, "settings.max_steps", 1, MAX_STEPS))
+        s(
+            self,
+            "max_candidates",
+            check.integer(self.max_candidates, "settings.max_candidates", 1, MAX_CANDIDATES),
+        )
+        if self.march not in MARCH_MODES:
+            raise ValueError(f"settings.march must be one of {MARCH_MODES}, got {self.march!r}")
+        if self.candidate_sort not in CANDIDATE_SORTS:
+            raise ValueError(
+                f"settings.candidate_sort must be one of {CANDIDATE_SORTS}, "
+                f"got {self.candidate_sort!r}"
+            )
+        if not isinstance(self.exact_noise, (bool, np.bool_)):
+            raise TypeError(f"settings.exact_noise must be a bool, got {self.exact_noise!r}")
+        s(self, "exact_noise", bool(self.exact_noise))
+        s(self, "octaves", check.integer(self.octaves, "settings.octaves", 1, 16))
+        s(self, "gain", check.real(self.gain, "settings.gain", 0.0, lo_open=True))
+        s(self, "lacunarity", check.real(self.lacunarity, "settings.lacunarity", 0.0, lo_open=True))
+        s(self, "frequency", check.real(self.frequency, "settings.frequency", 0.0, lo_open=True))
+        s(
+            self,
+            "light_resolution",
+            check.integer(self.light_resolution, "settings.light_resolution", 2, 256),
+        )
+        if self.light_method not in LIGHT_METHODS:
+            raise ValueError(
+                f"settings.light_method must be one of {LIGHT_METHODS}, got {self.light_method!r}"
+            )
+        s(self, "light_step", check.real(self.light_step, "settings.light_step", 1e-4))
+        s(
+            self,
+            "light_extinction",
+            check.real(self.light_extinction, "settings.light_extinction", 0.0),
+        )
+
+    def step_for(self, distance: float) -> float:
+        """The march step Δ for a cloud whose centre is ``distance`` from the camera."""
+        if self.fixed_step > 0:
+            return self.fixed_step
+        step = self.lod_a * math.exp(-self.lod_delta * distance)
+        return min(max(step, self.step_min), self.step_max)
+
+    def fbm_params(self) -> dict[str, float]:
+        """The fBm parameters as keyword arguments of :meth:`cumuli.Noise.fbm`."""
+        return {
+            "octaves": self.octaves,
+            "gain": self.gain,
+            "lacunarity": self.lacunarity,
+            "frequency": self.frequency,
+        }
+
+    def light_grid_kwargs(self) -> dict[str, Any]:
+        """Keyword arguments of :func:`cumuli.light_grid` for the grid these settings render with.
+
+        ``light_grid(cloud, sun, noise, **settings.light_grid_kwargs())`` records the parameters
+        the renderer expects, so it keeps that grid (κ: the cloud's own, unless ``kappa`` is set;
+        then the renderer makes the grid itself, for the overridden κ).
+        """
+        return {
+            "resolution": self.light_resolution,
+            "method": self.light_method,
+            "step": self.light_step,
+            "extinction": self.light_extinction,
+            **self.fbm_params(),
+        }
+
+    def replace(self, **changes: Any) -> RenderSettings:
+        """A copy with some fields changed (validated again)."""
+        return RenderSettings(**{**asdict(self), **changes})
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)

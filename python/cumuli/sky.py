@@ -1,0 +1,141 @@
+"""The light environment: the sun and the gradient sky (DESIGN §3, RENDER_CONTRACT "Sky").
+
+`Sun` is a directional light (``direction`` points towards it); `Sky` is the background gradient
+with a sun disc, whose radiance also lights the clouds where a renderer models sky light.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+import numpy as np
+
+from cumuli import _validate as check
+
+
+@dataclass(frozen=True)
+class Sun:
+    """Directional light. ``direction`` points from the scene towards the sun (normalised here);
+    light travels along ``-direction``."""
+
+    direction: tuple[float, float, float] = (0.3, 0.8, 0.2)
+    colour: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    intensity: float = 1.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "direction", check.direction(self.direction, "sun.direction"))
+        colour = check.vec3(self.colour, "sun.colour")
+        if min(colour) < 0:
+            raise ValueError(f"sun.colour must be non-negative, got {colour}")
+        object.__setattr__(self, "colour", colour)
+        object.__setattr__(self, "intensity", check.real(self.intensity, "sun.intensity", 0.0))
+
+    @property
+    def radiance(self) -> tuple[float, float, float]:
+        """colour × intensity, what the renderer multiplies the light grid by."""
+        return tuple(c * self.intensity for c in self.colour)  # type: ignore[return-value]
+
+
+@dataclass(frozen=True)
+class Sky:
+    """A gradient sky with a sun disc (RENDER_CONTRACT "Sky"); colours are linear RGB.
+
+    For a unit direction d: ``base = horizon + (zenith − horizon)·d.y^exponent`` above the horizon,
+    ``horizon + (ground − horizon)·min(1, −8·d.y)`` below; the disc adds
+    ``smoothstep(cos 1.5r, cos r, d·sun)·sun_disc_intensity·sun_radiance`` (r in degrees).
+    The default is a clear daylight sky; :meth:`sunset` is the warm preset of the paper's Fig. 10.
+    """
+
+    zenith: tuple[float, float, float] = (0.20, 0.40, 0.85)
+    horizon: tuple[float, float, float] = (0.62, 0.75, 0.95)
+    ground: tuple[float, float, float] = (0.30, 0.30, 0.32)
+    exponent: float = 0.45
+    sun_disc_radius: float = 0.6
+    sun_disc_intensity: float = 12.0
+
+    def __post_init__(self) -> None:
+        for name in ("zenith", "horizon", "ground"):
+            colour = check.vec3(getattr(self, name), f"sky.{name}")
+            if min(colour) < 0:
+                raise ValueError(f"sky.{name} must be non-negative, got {colour}")
+            object.__setattr__(self, name, colour)
+        object.__setattr__(
+            self, "exponent", check.real(self.exponent, "sky.exponent", 0.0, 100.0, lo_open=True)
+        )
+        object.__setattr__(
+            self,
+            "sun_disc_radius",
+            check.real(self.sun_disc_radius, "sky.sun_disc_radius", 0.0, 45.0, lo_open=True),
+        )
+        object.__setattr__(
+            self,
+            "sun_disc_intensity",
+            check.real(self.sun_disc_intensity, "sky.sun_disc_intensity", 0.0),
+        )
+
+    @classmethod
+    def sunset(cls) -> Sky:
+        """Warm low-sun sky: deep blue zenith, orange horizon (paper Fig. 10)."""
+        return cls(
+            zenith=(0.10, 0.16, 0.42),
+            horizon=(1.00, 0.52, 0.26),
+            ground=(0.16, 0.10, 0.09),
+            exponent=0.35,
+            sun_disc_radius=1.0,
+            sun_disc_intensity=10.0,
+        )
+
+    def colour(self, directions: np.ndarray, sun: Sun) -> np.ndarray:
+        """Sky radiance for unit directions ``(..., 3)`` (numpy reference of shaders/sky.glsl)."""
+        d = np.asarray(directions, dtype=np.float32)
+        zen, hor, gnd = (
+            np.asarray(c, dtype=np.float32) for c in (self.zenith, self.horizon, self.ground)
+        )
+        dy = d[..., 1:2]
+        up = hor + (zen - hor) * np.power(np.maximum(dy, 0), np.float32(self.exponent))
+        down = hor + (gnd - hor) * np.minimum(np.float32(1), -8 * dy)
+        base = np.where(dy >= 0, up, down)
+        rad = math.radians(self.sun_disc_radius)
+        e0, e1 = np.float32(math.cos(1.5 * rad)), np.float32(math.cos(rad))
+        c = d @ np.asarray(sun.direction, dtype=np.float32)
+        t = np.clip((c - e0) / (e1 - e0), 0, 1)
+        disc = (t * t * (3 - 2 * t))[..., None] * np.float32(self.sun_disc_intensity)
+        return (base + disc * np.asarray(sun.radiance, dtype=np.float32)).astype(np.float32)
+
+    def to_dict(self) -> dict[str, Any]:
+        return asdict(self)
+
+
+def as_sky(sky: Any) -> Sky:
+    """A :class:`cumuli.Sky` from ``None`` (the default sky), a ``Sky``, one colour (a uniform sky:
+    zenith, horizon and ground alike) or a pair ``(zenith, horizon)``."""
+    if sky is None:
+        return Sky()
+    if isinstance(sky, Sky):
+        return sky
+    try:
+        arr = np.asarray(sky, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(
+            f"sky must be a cumuli.Sky, a colour or (zenith, horizon), got {sky!r}"
+        ) from None
+    if arr.shape == (3,):
+        c = check.vec3(arr, "sky")
+        return Sky(zenith=c, horizon=c, ground=c)
+    if arr.shape == (2, 3):
+        return Sky(
+            zenith=check.vec3(arr[0], "sky zenith"), horizon=check.vec3(arr[1], "sky horizon")
+        )
+    raise ValueError(
+        f"sky must be a colour (3,) or (zenith, horizon) (2, 3), got shape {arr.shape}"
+    )
+
+
+def sky_args(sky: Sky) -> tuple:
+    """The core's sky tuple (zenith, horizon, ground, exponent, disc radius, disc intensity)."""
+    return (
+        sky.zenith, sky.horizon, sky.ground, float(sky.exponent), float(sky.sun_disc_radius),
+        float(sky.sun_disc_intensity),
+    )  # fmt: skip
