@@ -53,7 +53,7 @@ def main(argv: list[str] | None = None) -> int:
 
     scenes = benchmark_scenes(names)
     for scene in scenes.values():
-        cu.prepare_light(scene)  # the light pass is not part of a frame
+        cu.prepare_light(scene)  # light is memoised: the frames below do not repeat the pass
     curves: dict[str, dict[str, list[dict[str, Any]]]] = {}
     with cu.Renderer() as renderer:
         for w, h in sizes:

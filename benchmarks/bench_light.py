@@ -56,12 +56,12 @@ def run_one(
     march, call, cpu = [], [], []
     stats = None
     grid = None
-    cu.light_grid(cloud, SUN, noise, resolution=res, method=method, step=STEP, store=False)
+    cu.light_grid(cloud, SUN, noise, resolution=res, method=method, step=STEP)
     for _ in range(repeats):
         c0, w0 = time.process_time(), time.perf_counter()
         grid, stats = cu.light_grid(
             cloud, SUN, noise, resolution=res, method=method, step=STEP, threads=threads,
-            return_stats=True, store=False,
+            return_stats=True,
         )  # fmt: skip
         call.append(time.perf_counter() - w0)
         cpu.append(time.process_time() - c0)
@@ -86,8 +86,8 @@ def fbm_floor(
     cloud: cu.Cloud, noise: cu.Noise, points: int, repeats: int, ndt_s: float
 ) -> dict[str, Any]:
     """Time of ``noise.fbm`` alone on ``points`` points in the cloud's light box (all cores)."""
-    cu.light_grid(cloud, SUN, noise, resolution=4, step=STEP)  # records cloud.light_box
-    lo, hi = (np.asarray(v, dtype=np.float64) for v in cloud.light_box)  # type: ignore[misc]
+    grid = cu.light_grid(cloud, SUN, noise, resolution=4, step=STEP)  # for its box
+    lo, hi = (np.asarray(v, dtype=np.float64) for v in grid.box)
     rng = np.random.default_rng(0)
     pts = (lo + rng.random((points, 3)) * (hi - lo)).astype(np.float32)
     noise.fbm(pts[:1000])  # warm up

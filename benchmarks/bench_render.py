@@ -39,7 +39,7 @@ def main(argv: list[str] | None = None) -> int:
 
     base = cumulus_scene(seed=1)
     camera = base.default_camera()
-    cu.prepare_light(base)  # light grids are not part of the render pass timings
+    cu.prepare_light(base)  # memoised: light grids are not part of the render pass timings
     results: dict[str, dict[str, dict]] = {}
     with cu.Renderer() as renderer:
         for w, h in sizes:

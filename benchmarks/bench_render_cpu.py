@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> int:
     results: dict[str, dict[str, Any]] = {}
     try:
         for name, base in scenes().items():
-            cu.prepare_light(base)  # once; every march mode and backend reuses the grids
+            cu.prepare_light(base)  # once (memoised); every march mode and backend reuses it
             camera = base.default_camera()
             for march in ("paper", "union"):
                 scene = base.replace(settings=base.settings.replace(march=march))

@@ -38,25 +38,22 @@ PRIMITIVE_COUNTS = [6, 12, 24, 48, 96, 192, 384, 512]
 SPACING = 32.0  # grid spacing of the cloud copies (the cumulus is ~28 units wide)
 
 
-def cloud_grid(count: int) -> tuple[cu.Scene, cu.Camera]:
+def cloud_grid(count: int) -> tuple[cu.LitScene, cu.Camera]:
     """``count`` copies of the benchmark cumulus on a √count-wide grid, framed by the camera."""
     base = benchmark_scenes(("cumulus",))["cumulus"]
     cloud = base.clouds[0]
-    cu.prepare_light(base)  # one grid, shared by every copy (same sun, same shape)
+    grid = cu.prepare_light(base).lights[0]  # one grid, shared by every copy (same sun, shape)
     side = math.ceil(math.sqrt(count))
-    clouds = []
+    clouds, grids = [], []
     for k in range(count):
         row, col = divmod(k, side)
         offset = ((col - (side - 1) / 2) * SPACING, (row - (side - 1) / 2) * SPACING, 0.0)
-        copy = cloud.translated(offset)
-        lo, hi = cloud.light_box  # type: ignore[misc]
-        copy.light = cloud.light
-        copy.light_box = (tuple(np.add(lo, offset)), tuple(np.add(hi, offset)))
-        copy.light_sun = cloud.light_sun  # type: ignore[attr-defined]
-        clouds.append(copy)
+        clouds.append(cloud.translated(offset))
+        lo, hi = grid.box
+        grids.append(cu.LightGrid(grid, (np.add(lo, offset), np.add(hi, offset)), grid.sun))
     scene = base.replace(clouds=clouds)
     # Back off so the grid (side·SPACING wide) fills the view as one cloud does from 48 units.
-    return scene, distance_camera(scene, 48.0 * side)
+    return cu.prepare_light(scene, lights=grids), distance_camera(scene, 48.0 * side)
 
 
 def primitive_scenes(n: int) -> dict[str, tuple[cu.Scene, cu.Camera]]:
@@ -79,8 +76,7 @@ def primitive_scenes(n: int) -> dict[str, tuple[cu.Scene, cu.Camera]]:
     out = {}
     for name, cloud in (("search", search), ("generator", generator)):
         scene = base.replace(clouds=[cloud], settings=settings)
-        cu.prepare_light(scene)
-        out[name] = (scene, camera)
+        out[name] = (cu.prepare_light(scene), camera)
     return out
 
 
@@ -110,7 +106,7 @@ def main(argv: list[str] | None = None) -> int:
             scene, camera = cloud_grid(count)
             t = common.time_frames(renderer, {"frame": (scene, camera)}, w, h, repeats)["frame"]
             clouds_rows.append(
-                {"clouds": count, "primitives_total": sum(c.n for c in scene.clouds), **t}
+                {"clouds": count, "primitives_total": sum(c.n for c in scene.scene.clouds), **t}
             )
             ms = 1e3 * common.frame_median(t)
             common.log(f"{count:3d} clouds: {ms:.1f} ms, coverage {t['coverage']:.2f}")

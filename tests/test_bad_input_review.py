@@ -22,7 +22,7 @@ from hypothesis.extra import numpy as hnp
 import cumuli as cu
 from cumuli import _core
 from cumuli.model.cloud import MAX_PRIMITIVES
-from cumuli.rendering import renderer as renderer_mod
+from cumuli.rendering import compositor as renderer_mod
 
 
 def small_cloud() -> cu.Cloud:
@@ -85,46 +85,50 @@ def test_npz_fortran_order_arrays_are_read_in_their_order(tmp_path: Path) -> Non
 
 
 def test_inverted_light_box_in_a_file_is_refused(tmp_path: Path) -> None:
+    # Light grids live in their own files now (cu.LightGrid.save); a cloud file holds no light.
+    grid = cu.LightGrid(np.ones((2, 2, 2), np.float32), ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0)))
+    path = grid.save(tmp_path / "g.npz")
+    with np.load(path) as z:
+        meta = json.loads(z["meta"].tobytes())
+        values = z["values"]
+    meta["box"] = [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]]
+    np.savez(path, values=values, meta=np.frombuffer(json.dumps(meta).encode(), np.uint8))
+    with pytest.raises(ValueError, match="box"):
+        cu.load_light_grid(path)
+    # A version-1 cloud file that still carries a light grid loads (the grid is ignored).
     c = small_cloud()
-    c.light = np.ones((2, 2, 2), np.float32)
-    c.light_box = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
-    doc = json.loads(c.save(tmp_path / "c.json").read_text())
-    doc["light_box"] = [[1.0, 1.0, 1.0], [0.0, 0.0, 0.0]]
-    (tmp_path / "c.json").write_text(json.dumps(doc))
-    with pytest.raises(ValueError, match="light_box"):
-        cu.load_cloud(tmp_path / "c.json")
-    meta = dict(c._meta(), light_box=doc["light_box"])
+    meta = dict(c._meta(), version=1, light_box=[[0.0] * 3, [1.0] * 3])
     np.savez(
         tmp_path / "c.npz",
         centres=c.centres,
         radii=c.radii,
         rotations=c.rotations,
-        light=c.light,
+        light=np.ones((2, 2, 2), np.float32),
         meta=np.frombuffer(json.dumps(meta).encode(), np.uint8),
     )
-    with pytest.raises(ValueError, match="light_box"):
-        cu.load_cloud(tmp_path / "c.npz")
+    back = cu.load_cloud(tmp_path / "c.npz")
+    np.testing.assert_array_equal(back.centres, c.centres)
+    with pytest.raises(AttributeError, match="prepare_light"):
+        c.light = np.ones((2, 2, 2), np.float32)
 
 
-@pytest.mark.parametrize("suffix", [".json", ".npz"])
 @pytest.mark.parametrize(
     ("light", "box", "exc", "match"),
     [
-        (np.ones((2, 2)), ((0, 0, 0), (1, 1, 1)), ValueError, "light must be a finite"),
-        (np.full((2, 2, 2), np.nan), ((0, 0, 0), (1, 1, 1)), ValueError, "light must be a finite"),
-        (np.ones((2, 2, 2), object), ((0, 0, 0), (1, 1, 1)), TypeError, "light must be a real"),
-        (np.ones((2, 2, 2)), None, ValueError, "light_box"),
-        (np.ones((2, 2, 2)), ((1, 1, 1), (0, 0, 0)), ValueError, "light_box"),
+        (np.ones((2, 2)), ((0, 0, 0), (1, 1, 1)), ValueError, r"\(D, H, W\)"),
+        (np.full((2, 2, 2), np.nan), ((0, 0, 0), (1, 1, 1)), ValueError, "NaN"),
+        (np.ones((2, 2, 2), object), ((0, 0, 0), (1, 1, 1)), TypeError, "real numbers"),
+        (np.ones((2, 2, 2)), None, ValueError, "box"),
+        (np.ones((2, 2, 2)), ((1, 1, 1), (0, 0, 0)), ValueError, "box"),
     ],
 )
-def test_save_refuses_a_light_grid_that_load_would_refuse(
-    tmp_path: Path, suffix: str, light: np.ndarray, box: object, exc: type, match: str
+def test_a_light_grid_that_load_would_refuse_cannot_be_made(
+    tmp_path: Path, light: np.ndarray, box: object, exc: type, match: str
 ) -> None:
-    # Before: saved without complaint, and load_cloud then refused its own file.
-    c = small_cloud()
-    c.light, c.light_box = light, box  # type: ignore[assignment]
+    # Before: saved without complaint, and load_cloud then refused its own file. Grids are
+    # values now (cu.LightGrid), checked when made, so no such grid reaches a file.
     with pytest.raises(exc, match=match):
-        c.save(tmp_path / f"c{suffix}")
+        cu.LightGrid(light, box)
     assert list(tmp_path.iterdir()) == []
 
 
@@ -200,25 +204,27 @@ def _cpu_scene(cloud: cu.Cloud) -> cu.Scene:
 
 
 @pytest.mark.parametrize("dtype", [object, complex])
-def test_hand_set_light_grid_of_wrong_dtype_names_the_grid(dtype: type) -> None:
-    c = small_cloud()
-    c.light = np.zeros((2, 2, 2), dtype)
-    c.light_box = ((-2.0, -2.0, -2.0), (3.0, 2.0, 2.0))
+def test_hand_made_light_grid_of_wrong_dtype_names_the_grid(dtype: type) -> None:
+    with pytest.raises(TypeError, match=r"light grid values must be real numbers"):
+        cu.LightGrid(np.zeros((2, 2, 2), dtype), ((-2.0, -2.0, -2.0), (3.0, 2.0, 2.0)))
+    # Anything but a LightGrid given as a cloud's light is refused, naming the cloud.
     cam = cu.Camera((0, 0, -10), (0, 0, 0))
-    with pytest.raises(TypeError, match=r"clouds\[0\]\.light must be a real numeric"):
-        cu.render(_cpu_scene(c), cam, 4, 3, backend="cpu")
+    with pytest.raises(TypeError, match=r"clouds\[0\].*LightGrid"):
+        cu.render(
+            cu.prepare_light(_cpu_scene(small_cloud()), lights=[np.zeros((2, 2, 2), dtype)]),
+            cam,
+            4,
+            3,
+            backend="cpu",
+        )
 
 
 @pytest.mark.parametrize(
     "box", ["ab", ((0, 0, 0),), ((0, 0, 0), (1, 1, np.inf)), (("a", 0, 0), (1, 1, 1)), 5]
 )
-def test_hand_set_light_box_that_is_not_two_vectors_names_the_box(box: object) -> None:
-    c = small_cloud()
-    c.light = np.zeros((2, 2, 2), np.float32)
-    c.light_box = box  # type: ignore[assignment]
-    cam = cu.Camera((0, 0, -10), (0, 0, 0))
-    with pytest.raises(ValueError, match=r"clouds\[0\]\.light_box"):
-        cu.render(_cpu_scene(c), cam, 4, 3, backend="cpu")
+def test_hand_made_light_box_that_is_not_two_vectors_names_the_box(box: object) -> None:
+    with pytest.raises(ValueError, match=r"light grid box must be \(lo, hi\)"):
+        cu.LightGrid(np.zeros((2, 2, 2), np.float32), box)
 
 
 def test_cpu_backend_checks_the_image_size_before_the_light_pass() -> None:
@@ -226,12 +232,13 @@ def test_cpu_backend_checks_the_image_size_before_the_light_pass() -> None:
     # backend="cpu") blamed GL_MAX_TEXTURE_SIZE for a CPU render.
     scene = _cpu_scene(small_cloud())
     cam = cu.Camera((0, 0, -10), (0, 0, 0))
+    cu.light.prepare.clear_memo()
     with pytest.raises(ValueError, match="larger than the limit"):
         cu.render_cpu(scene, cam, 1 << 14, 1 << 14)
-    assert scene.clouds[0].light is None
+    assert not cu.light.prepare._memo  # no light pass ran
     with pytest.raises(ValueError, match=r"width must be <= 16384, got 20000$"):
         cu.render(scene, cam, 20000, 2, backend="cpu")
-    assert scene.clouds[0].light is None
+    assert not cu.light.prepare._memo
 
 
 # --- Renderer arguments are checked before a GL context is made -------------------------------
@@ -260,15 +267,15 @@ def test_renderer_refuses_primitives_beyond_the_storage_block_limit() -> None:
     # Before: a buffer beyond GL_MAX_SHADER_STORAGE_BLOCK_SIZE (128 MiB on llvmpipe, ~1.6 M
     # primitives) was bound anyway and the primitives past the limit silently read as nothing.
     c = small_cloud()
-    c.light = np.ones((2, 2, 2), np.float32)
-    c.light_box = ((-2.0, -2.0, -2.0), (3.0, 2.0, 2.0))
-    scene = cu.Scene([c], noise=cu.Noise(0, 4))
+    grid = cu.LightGrid(np.ones((2, 2, 2), np.float32), ((-2.0, -2.0, -2.0), (3.0, 2.0, 2.0)))
+    scene = cu.prepare_light(cu.Scene([c], noise=cu.Noise(0, 4)), lights=[grid])
     cam = cu.Camera((0, 0, -10), (0, 0, 0))
     with cu.Renderer() as r:
-        r.max_storage_block_size = 80  # one primitive's 80 bytes; the cloud has two
+        marcher = r.drawer("cloud")
+        marcher.max_storage_block_size = 80  # one primitive's 80 bytes; the cloud has two
         with pytest.raises(ValueError, match="GL_MAX_SHADER_STORAGE_BLOCK_SIZE"):
             r.render(scene, cam, 4, 3)
-        r.max_storage_block_size = 160
+        marcher.max_storage_block_size = 160
         assert r.render(scene, cam, 4, 3).shape == (3, 4, 4)
 
 

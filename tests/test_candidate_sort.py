@@ -15,7 +15,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.gl import with_defines
-from cumuli.rendering.renderer import Renderer
+from cumuli.rendering.compositor import Renderer
 from cumuli.settings import CANDIDATE_SORTS
 
 W, H = 64, 48

@@ -157,8 +157,8 @@ def test_matches_numpy_reference_ndt_fbm(noise):
     assert grid.shape == (4, 4, 4) and grid.dtype == np.float32
     np.testing.assert_allclose(grid, ref, atol=1e-5, rtol=0)
     np.testing.assert_array_equal(st.samples, count)
-    np.testing.assert_allclose(cloud.light_box[0], lo, atol=1e-5)
-    np.testing.assert_allclose(cloud.light_box[1], hi, atol=1e-5)
+    np.testing.assert_allclose(grid.box[0], lo, atol=1e-5)
+    np.testing.assert_allclose(grid.box[1], hi, atol=1e-5)
     assert (grid < 0.999).any() and (grid == 1.0).any()  # both lit-through and shadowed voxels
 
 
@@ -195,7 +195,7 @@ def test_constant_density_sphere_is_beer_lambert_plus_scattering():
     grid = cu.light_grid(
         cloud, (0, 1, 0), None, resolution=R, density_override=rho, extinction=A, step=step
     )
-    lo, hi = (np.array(b) for b in cloud.light_box)
+    lo, hi = (np.array(b) for b in grid.box)
     cell = (hi - lo) / R
     checked_inside = 0
     for z in range(R):
@@ -254,7 +254,7 @@ def test_ndt_marches_fewer_samples_than_naive_for_overlaps(noise):
     assert sa.samples_per_voxel == pytest.approx(sa.samples_total / 1000)
     assert sa.seconds >= 0
     # With a constant density, naive attenuates overlaps twice: never brighter, darker somewhere.
-    kw = dict(resolution=10, density_override=0.3, store=False)
+    kw = dict(resolution=10, density_override=0.3)
     cloud0 = spheres(**OVERLAP, kappa=0.0)
     a = cu.light_grid(cloud0, sun, None, **kw)
     b = cu.light_grid(cloud0, sun, None, method="naive", **kw)
@@ -290,7 +290,7 @@ def test_rotated_ellipsoids(noise):
     ref, _, (lo, hi) = reference_light(cloud, sun, noise, 5)
     np.testing.assert_allclose(grid, ref, atol=1e-5, rtol=0)
     # The box follows the rotated extents.
-    np.testing.assert_allclose(cloud.light_box[0], lo, atol=1e-5)
+    np.testing.assert_allclose(grid.box[0], lo, atol=1e-5)
     # Constant density, single rotated ellipsoid: T_D = exp(−σ·chord) with the rotated chord.
     one = cu.Cloud(centres=np.zeros((1, 3)), radii=[[2.0, 0.6, 0.8]], rotations=rots[:1], kappa=0.0)
     g = cu.light_grid(
@@ -309,26 +309,26 @@ def test_metaballs(noise):
     np.testing.assert_allclose(grid, ref, atol=1e-5, rtol=0)
     np.testing.assert_array_equal(st.samples, count)
     # The box is the primitives grown by √N (plus half a voxel).
-    np.testing.assert_allclose(cloud.light_box[1], hi, atol=1e-5)
+    np.testing.assert_allclose(grid.box[1], hi, atol=1e-5)
     assert grid.min() < 0.95
-    naive = cu.light_grid(cloud, sun, noise, resolution=4, method="naive", store=False)
+    naive = cu.light_grid(cloud, sun, noise, resolution=4, method="naive", )
     assert (naive <= grid + 1e-6).all()
 
 
-def test_store_records_grid_box_and_sun(noise):
+def test_grid_records_box_and_sun_and_leaves_the_cloud_alone(noise):
     cloud = spheres(**OVERLAP)
     grid = cu.light_grid(cloud, cu.Sun((0, 2, 0)), noise, resolution=(6, 5, 4))
-    assert cloud.light is grid
-    assert cloud.light_sun == (0.0, 1.0, 0.0)
-    lo, hi = (np.array(b) for b in cloud.light_box)
+    assert isinstance(grid, cu.LightGrid) and not hasattr(cloud, "light")
+    assert grid.sun == (0.0, 1.0, 0.0)
+    lo, hi = (np.array(b) for b in grid.box)
     blo, bhi = cloud.bbox
     # Voxel centres 0 and R−1 sit on the cloud's box faces.
     res = np.array([6, 5, 4])
     np.testing.assert_allclose(lo + 0.5 * (hi - lo) / res, blo, atol=1e-5)
     np.testing.assert_allclose(lo + (res - 0.5) * (hi - lo) / res, bhi, atol=1e-5)
-    other = spheres(**OVERLAP)
-    cu.light_grid(other, (0, 1, 0), noise, resolution=4, store=False)
-    assert other.light is None and other.light_box is None and other.light_sun is None
+    assert grid.record.params.resolution == (6, 5, 4)
+    assert not grid.flags.writeable  # a value: read-only
+    assert type(grid * 2) is np.ndarray  # arithmetic gives plain arrays
 
 
 @pytest.mark.parametrize(
@@ -356,7 +356,7 @@ def test_store_records_grid_box_and_sun(noise):
         (dict(noise="noise"), TypeError, "noise"),
         (dict(density_override=-0.5), ValueError, "density_override"),
         (dict(cloud="cloud"), TypeError, "cloud"),
-        (dict(store=1), TypeError, "store"),
+        (dict(params="p"), TypeError, "params"),
     ],
 )
 def test_bad_input(noise, kwargs, exc, match):
@@ -365,7 +365,7 @@ def test_bad_input(noise, kwargs, exc, match):
     args.update(kwargs)
     with pytest.raises(exc, match=match):
         cu.light_grid(**args)
-    assert cloud.light is None and cloud.light_box is None  # a failed call changes nothing
+    assert not hasattr(cloud, "light")  # nothing is stored on a cloud
 
 
 def test_bad_sun_object_and_empty_cloud():
@@ -472,17 +472,17 @@ def test_values_bounded_and_sun_forms_equivalent(noise):
     assert (grid > 0).all()
     assert (grid <= 1.0 + C_DEFAULT * st.samples + 1e-6).all()
     # Forward scattering (eq. 6) only adds light: without it every voxel is darker or equal.
-    dark = cu.light_grid(cloud, (0.3, 0.8, 0.2), noise, resolution=8, solid_angle=0.0, store=False)
+    dark = cu.light_grid(cloud, (0.3, 0.8, 0.2), noise, resolution=8, solid_angle=0.0, )
     assert (dark <= grid).all() and (dark < grid).any()
-    same = cu.light_grid(cloud, np.array([0.6, 1.6, 0.4]), noise, resolution=8, store=False)
+    same = cu.light_grid(cloud, np.array([0.6, 1.6, 0.4]), noise, resolution=8, )
     np.testing.assert_array_equal(grid, same)  # directions are normalised
 
 
 def test_light_sun_survives_save_and_load(noise, tmp_path):
     cloud = spheres(**OVERLAP)
-    cu.light_grid(cloud, (0.0, 3.0, 4.0), noise, resolution=4)
-    assert cloud.light_sun == pytest.approx((0.0, 0.6, 0.8))
-    back = cu.load_cloud(cloud.save(tmp_path / "c.npz"))
-    np.testing.assert_array_equal(back.light, cloud.light)
-    assert back.light_sun == pytest.approx(cloud.light_sun)
-    np.testing.assert_allclose(np.array(back.light_box), np.array(cloud.light_box))
+    grid = cu.light_grid(cloud, (0.0, 3.0, 4.0), noise, resolution=4)
+    assert grid.sun == pytest.approx((0.0, 0.6, 0.8))
+    back = cu.load_light_grid(grid.save(tmp_path / "g.npz"))
+    np.testing.assert_array_equal(back, grid)
+    assert back.sun == pytest.approx(grid.sun)
+    np.testing.assert_allclose(np.array(back.box), np.array(grid.box))

@@ -1,10 +1,10 @@
-"""Stale light grids: ``light_grid`` records its parameters and the renderer honours the record.
+"""The light step (`cumuli.prepare_light`): explicit, recorded, never stored on a cloud.
 
-A grid the user made with other noise / fBm / extinction / step / method / resolution / solid
-angle / κ / density override, or for other primitives, must be recomputed before rendering
-(`cumuli.prepare_light`, shared by both backends); a grid made with the scene's parameters is
-kept as it is (the same array object), and a grid set by hand (no record) is trusted.
-No GL needed: `prepare_light` is what both marchers call first.
+A grid `light_grid` made with other noise / fBm / extinction / step / method / resolution /
+solid angle / κ / density override, or for other primitives or another sun, is recomputed when
+given to `prepare_light`; a grid made with the scene's parameters is kept as it is (the same
+object), and a grid made by hand (`LightGrid(values, box)`, no record) is trusted. Clouds are
+never changed. No GL needed: `prepare_light` is what both backends call first.
 """
 
 from __future__ import annotations
@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.rendering.renderer import expected_light_params
+from cumuli.light.prepare import clear_memo
 
 SUN = cu.Sun(direction=(0.3, 0.8, 0.2))
 # Small grids keep each light pass to a few milliseconds.
@@ -32,7 +32,11 @@ def scene_for(cloud: cu.Cloud, **settings: Any) -> cu.Scene:
     )
 
 
-def matching_grid(scene: cu.Scene, cloud: cu.Cloud, **over: Any) -> np.ndarray:
+def expected_record(cloud: cu.Cloud, scene: cu.Scene) -> cu.light.grid.LightRecord:
+    return cu.light.grid.LightRecord.of(cloud, scene.noise, scene.settings.light_params())
+
+
+def matching_grid(scene: cu.Scene, cloud: cu.Cloud, **over: Any) -> cu.LightGrid:
     """A user's grid made with the scene's parameters, except ``over``."""
     kwargs = {**scene.settings.light_grid_kwargs(), **over}
     noise = kwargs.pop("noise", scene.noise)
@@ -44,29 +48,26 @@ def test_grid_made_with_the_light_grid_defaults_is_recomputed() -> None:
     cloud = cu.gaussian_cumulus(seed=1)
     scene = scene_for(cloud)
     user = cu.light_grid(cloud, SUN, scene.noise, resolution=6)
-    assert cloud.light_params["frequency"] == 1.0
-    cu.prepare_light(scene)
-    assert cloud.light is not user
-    assert cloud.light_params == expected_light_params(cloud, scene)
-    assert cloud.light_params["frequency"] == pytest.approx(0.3)
-    fresh = cu.light_grid(
-        cloud, SUN, scene.noise, store=False, **scene.settings.light_grid_kwargs()
-    )
-    np.testing.assert_array_equal(cloud.light, fresh)
-    assert not np.array_equal(cloud.light, user)
+    assert user.record.params.frequency == 1.0
+    lit = cu.prepare_light(scene, lights=[user])
+    grid = lit.lights[0]
+    assert grid is not user
+    assert grid.record == expected_record(cloud, scene)
+    assert grid.record.params.frequency == pytest.approx(0.3)
+    fresh = cu.light_grid(cloud, SUN, scene.noise, **scene.settings.light_grid_kwargs())
+    np.testing.assert_array_equal(grid, fresh)
+    assert not np.array_equal(grid, user)
 
 
 def test_grid_made_with_matching_parameters_is_kept() -> None:
     cloud = cu.gaussian_cumulus(seed=1)
     scene = scene_for(cloud)
     grid = matching_grid(scene, cloud)
-    cu.prepare_light(scene)
-    assert cloud.light is grid
+    assert cu.prepare_light(scene, lights={0: grid}).lights[0] is grid
     # float32 rounding of the parameters is what the core sees: an equal float32 step matches.
     cloud2 = cu.gaussian_cumulus(seed=1)
     grid2 = matching_grid(scene, cloud2, step=np.float32(scene.settings.light_step))
-    cu.prepare_light(scene.replace(clouds=[cloud2]))
-    assert cloud2.light is grid2
+    assert cu.prepare_light(scene.replace(clouds=[cloud2]), lights=[grid2]).lights[0] is grid2
 
 
 @pytest.mark.parametrize(
@@ -92,26 +93,32 @@ def test_any_differing_parameter_recomputes_the_grid(over: dict[str, Any]) -> No
     cloud = cu.gaussian_cumulus(seed=1)
     scene = scene_for(cloud)
     stale = matching_grid(scene, cloud, **over)
-    cu.prepare_light(scene)
-    assert cloud.light is not stale
-    assert cloud.light_params == expected_light_params(cloud, scene)
+    grid = cu.prepare_light(scene, lights=[stale]).lights[0]
+    assert grid is not stale
+    assert grid.record == expected_record(cloud, scene)
+
+
+def test_a_grid_for_another_sun_is_recomputed() -> None:
+    cloud = cu.gaussian_cumulus(seed=1)
+    scene = scene_for(cloud)
+    other = matching_grid(scene.replace(sun=cu.Sun(direction=(0, 1, 0))), cloud)
+    grid = cu.prepare_light(scene, lights=[other]).lights[0]
+    assert grid is not other and grid.sun == pytest.approx(SUN.direction)
 
 
 def test_kappa_override_and_model() -> None:
     cloud = cu.gaussian_cumulus(seed=1)
     scene = scene_for(cloud, kappa=0.8)
     grid = matching_grid(scene, cloud)  # made for the cloud's own κ, the settings override it
-    cu.prepare_light(scene)
-    assert cloud.light is not grid and cloud.light_params["kappa"] == pytest.approx(0.8)
-    kept = cloud.light
-    cu.prepare_light(scene)
-    assert cloud.light is kept  # the renderer's own grid is current
+    made = cu.prepare_light(scene, lights=[grid]).lights[0]
+    assert made is not grid and made.record.kappa == pytest.approx(0.8)
+    assert cu.prepare_light(scene, lights=[made]).lights[0] is made  # the renderer's own grid
     # κ does not enter the metaball density: overriding it keeps a metaball grid.
     balls = cu.metaball_cumulus(seed=3)
     mscene = scene_for(balls)
     mgrid = matching_grid(mscene, balls)
-    cu.prepare_light(mscene.replace(settings=mscene.settings.replace(kappa=0.9)))
-    assert balls.light is mgrid
+    kscene = mscene.replace(settings=mscene.settings.replace(kappa=0.9))
+    assert cu.prepare_light(kscene, lights=[mgrid]).lights[0] is mgrid
 
 
 def test_moved_primitives_recompute_the_grid() -> None:
@@ -119,55 +126,73 @@ def test_moved_primitives_recompute_the_grid() -> None:
     scene = scene_for(cloud)
     grid = matching_grid(scene, cloud)
     cloud.centres[0] += 1.0  # the arrays are numpy views: edited in place
-    cu.prepare_light(scene)
-    assert cloud.light is not grid
+    assert cu.prepare_light(scene, lights=[grid]).lights[0] is not grid
 
 
-def test_hand_set_grid_is_trusted() -> None:
+def test_hand_made_grid_is_trusted() -> None:
     cloud = cu.gaussian_cumulus(seed=1)
     scene = scene_for(cloud)
     lo, hi = cloud.bbox
-    hand = np.full((3, 3, 3), 0.5, np.float32)
-    cloud.light, cloud.light_box = hand, (tuple(map(float, lo)), tuple(map(float, hi)))
-    assert cloud.light_params is None
-    cu.prepare_light(scene)
-    assert cloud.light is hand
-    # A grid set by hand over a recorded one drops the record: it is trusted too.
-    cu.light_grid(cloud, SUN, scene.noise, resolution=6)  # light_grid's defaults: stale
-    assert cloud.light_params is not None
-    cloud.light = hand
-    assert cloud.light_params is None
-    cu.prepare_light(scene)
-    assert cloud.light is hand
+    hand = cu.LightGrid(np.full((3, 3, 3), 0.5, np.float32), (lo, hi))
+    assert hand.record is None and hand.sun is None
+    assert cu.prepare_light(scene, lights=[hand]).lights[0] is hand
+    # A hand-made grid that says it was made for another sun is recomputed.
+    sunny = cu.LightGrid(hand, (lo, hi), sun=(0, 1, 0))
+    assert cu.prepare_light(scene, lights=[sunny]).lights[0] is not sunny
 
 
-@pytest.mark.parametrize("suffix", [".npz", ".json"])
-def test_record_survives_save_and_load(tmp_path: Path, suffix: str) -> None:
+def test_prepare_light_changes_no_cloud_and_memoises() -> None:
+    clear_memo()
+    cloud = cu.gaussian_cumulus(seed=1)
+    before = {k: v for k, v in vars(cloud).items()}
+    scene = scene_for(cloud)
+    first = cu.prepare_light(scene)
+    assert vars(cloud).keys() == before.keys()  # nothing attached to the cloud
+    second = cu.prepare_light(scene)
+    assert second.lights[0] is first.lights[0]  # the same content gives the memoised grid
+    assert isinstance(first, cu.LitScene) and first.scene is scene
+    lit_again = cu.prepare_light(first)  # a LitScene passes through, its lights kept
+    assert lit_again.lights[0] is first.lights[0]
+
+
+def test_a_failed_light_step_changes_nothing() -> None:
     cloud = cu.gaussian_cumulus(seed=1)
     scene = scene_for(cloud)
-    matching_grid(scene, cloud)
-    back = cu.load_cloud(cloud.save(tmp_path / f"c{suffix}"))
-    assert back.light_params == cloud.light_params
-    loaded = back.light
-    cu.prepare_light(scene.replace(clouds=[back]))
-    assert back.light is loaded  # still current after the round trip
-    # A saved grid made with other parameters is recomputed after loading.
-    other = cu.gaussian_cumulus(seed=1)
-    matching_grid(scene, other, extinction=0.3)
-    back = cu.load_cloud(other.save(tmp_path / f"d{suffix}"))
-    loaded = back.light
-    cu.prepare_light(scene.replace(clouds=[back]))
-    assert back.light is not loaded
+    with pytest.raises(TypeError, match="LightGrid"):
+        cu.prepare_light(scene, lights=[np.ones((2, 2, 2))])
+    with pytest.raises(ValueError, match="index"):
+        cu.prepare_light(scene, lights={3: None})
+    with pytest.raises(ValueError, match="one entry per cloud"):
+        cu.prepare_light(scene, lights=[None, None])
+    assert not hasattr(cloud, "light")
 
 
-def test_bad_record_in_a_file_is_refused(tmp_path: Path) -> None:
-    import json
-
+def test_record_and_grid_survive_save_and_load(tmp_path: Path) -> None:
     cloud = cu.gaussian_cumulus(seed=1)
-    cu.light_grid(cloud, SUN, cu.Noise(seed=7, size=16), resolution=4)
-    path = cloud.save(tmp_path / "c.json")
-    doc = json.loads(path.read_text())
-    doc["light_params"] = {"frequency": {"nested": 1}}
-    path.write_text(json.dumps(doc))
-    with pytest.raises(ValueError, match="light_params"):
-        cu.load_cloud(path)
+    scene = scene_for(cloud)
+    grid = matching_grid(scene, cloud)
+    back = cu.load_light_grid(grid.save(tmp_path / "g.npz"))
+    np.testing.assert_array_equal(back, grid)
+    assert back.record == grid.record and back.sun == grid.sun and back.box == grid.box
+    kept = cu.prepare_light(scene, lights=[back]).lights[0]
+    assert kept is back  # still current after the round trip
+    # A saved grid made with other parameters is recomputed after loading.
+    other = matching_grid(scene, cloud, extinction=0.3)
+    loaded = cu.load_light_grid(other.save(tmp_path / "h.npz"))
+    assert cu.prepare_light(scene, lights=[loaded]).lights[0] is not loaded
+
+
+def test_bad_light_grid_files_are_refused(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError):
+        cu.load_light_grid(tmp_path / "absent.npz")
+    junk = tmp_path / "junk.npz"
+    junk.write_bytes(b"not a zip")
+    with pytest.raises(ValueError, match="junk.npz"):
+        cu.load_light_grid(junk)
+    grid = cu.LightGrid(np.ones((2, 2, 2)), ((0, 0, 0), (1, 1, 1)))
+    with pytest.raises(ValueError, match="npz"):
+        grid.save(tmp_path / "g.json")
+    with pytest.raises(ValueError, match="box"):
+        cu.LightGrid(np.ones((2, 2, 2)), ((1, 1, 1), (0, 0, 0)))
+    with pytest.raises(ValueError, match="NaN"):
+        cu.LightGrid(np.full((2, 2, 2), np.nan), ((0, 0, 0), (1, 1, 1)))

@@ -46,7 +46,7 @@ OUTLIER_FRACTION = 1e-3
 
 @pytest.fixture(scope="module")
 def renderer(gl_context):
-    from cumuli.rendering.renderer import Renderer
+    from cumuli.rendering.compositor import Renderer
 
     r = Renderer(context=gl_context)
     yield r

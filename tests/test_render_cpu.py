@@ -591,24 +591,24 @@ def scene_cloud(centres, radii, **kw):
 
     d = cloud_dict(centres, radii, **kw)
     cloud = cu.Cloud(centres=d["centres"], radii=d["radii"], kappa=d["kappa"])
-    cloud.light = d["light"]
-    cloud.light_box = (d["light_lo"], d["light_hi"])
-    return cloud
+    return cloud, cu.LightGrid(d["light"], (d["light_lo"], d["light_hi"]))
 
 
 def test_render_cpu_on_scene_objects_follows_the_contract():
     import cumuli as cu
 
-    cloud = scene_cloud([[0.0, 0.0, 0.0], [1.1, 0.3, 0.2]], [1.0, 0.8], kappa=0.3)
+    cloud, grid = scene_cloud([[0.0, 0.0, 0.0], [1.1, 0.3, 0.2]], [1.0, 0.8], kappa=0.3)
     settings = cu.RenderSettings(kappa=0.7, frequency=1.5, march="union", lod_a=0.1)
     scene = cu.Scene(clouds=[cloud], noise=cu.Noise(seed=4, size=16), settings=settings)
+    scene = cu.prepare_light(scene, lights=[grid])  # the hand-made grid, used as it is
     camera = cu.Camera(position=(0.3, 0.4, -6.0), target=(0.2, 0.1, 0.0), fov=40)
     img = cu.render_cpu(scene, camera, 8, 6)
     args = cumuli.rendering.cpu.render_cpu_args(scene, camera, 8, 6)
     assert args["clouds"][0]["kappa"] == pytest.approx(0.7)  # settings.kappa overrides the cloud's
     assert args["ref_step"] == settings.step_ref and args["march"] == "union"
     assert (img[..., 3] > 0.05).sum() >= 4
-    np.testing.assert_allclose(img, ref_render(args, np.asarray(scene.noise.lattice)), atol=1e-5)
+    lattice = np.asarray(scene.scene.noise.lattice)
+    np.testing.assert_allclose(img, ref_render(args, lattice), atol=1e-5)
 
 
 def test_render_cpu_sky_agrees_with_the_scene_sky_reference():
@@ -627,7 +627,7 @@ def test_render_cpu_sky_agrees_with_the_scene_sky_reference():
 def test_render_cpu_bad_arguments():
     import cumuli as cu
 
-    scene = cu.Scene(clouds=[scene_cloud([[0.0, 0.0, 0.0]], [1.0])])
+    scene = cu.Scene(clouds=[scene_cloud([[0.0, 0.0, 0.0]], [1.0])[0]])
     camera = cu.Camera(position=(0.0, 0.0, -5.0), target=(0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="width"):
         cu.render_cpu(scene, camera, 0, 4)
@@ -647,9 +647,9 @@ def test_render_cpu_computes_missing_light_grids_and_dispatches():
         settings=cu.RenderSettings(light_resolution=6, lod_a=0.1),
     )
     camera = cu.Camera(position=(0.5, 0.5, -6.0), target=(0.5, 0.0, 0.0))
-    assert cloud.light is None
     img = cu.render_cpu(scene, camera, 12, 9)
-    assert cloud.light is not None and cloud.light.shape == (6, 6, 6)
+    assert cu.prepare_light(scene).lights[0].shape == (6, 6, 6)  # made on demand
+    assert not hasattr(cloud, "light")  # and not stored on the cloud
     assert (img[..., 3] > 0.05).sum() >= 4
     # cumuli.render(backend="cpu") is this marcher.
     assert np.array_equal(cu.render(scene, camera, 12, 9, backend="cpu"), img)

@@ -8,6 +8,7 @@ from __future__ import annotations
 import gc
 import math
 import os
+import weakref
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -16,7 +17,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.demo import cumulus_scene, default_scene
-from cumuli.rendering.renderer import MAX_PIXELS, Renderer
+from cumuli.rendering.compositor import MAX_PIXELS, Renderer
 
 pytestmark = pytest.mark.gl
 
@@ -26,10 +27,31 @@ W, H = 96, 72
 BLACK_SKY = cu.Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0)
 
 
+#: Hand-made light grids of the clouds `sphere_cloud` makes (light is not stored on clouds).
+HAND_GRIDS: weakref.WeakKeyDictionary[cu.Cloud, cu.LightGrid] = weakref.WeakKeyDictionary()
+
+
+def lit(scene: cu.Scene) -> cu.LitScene:
+    """``scene`` with the hand-made grids of its `sphere_cloud`s (the others computed)."""
+    return cu.prepare_light(scene, lights=[HAND_GRIDS.get(c) for c in scene.clouds])
+
+
+class HandLitRenderer:
+    """A renderer that draws scenes with their clouds' hand-made grids (see `lit`)."""
+
+    def __init__(self, renderer: Renderer) -> None:
+        self.renderer = renderer
+
+    def render(self, scene, camera, width, height):
+        if isinstance(scene, cu.Scene):
+            scene = lit(scene)
+        return self.renderer.render(scene, camera, width, height)
+
+
 @pytest.fixture(scope="module")
-def renderer(gl_context) -> Iterator[Renderer]:
+def renderer(gl_context) -> Iterator[HandLitRenderer]:
     with Renderer(context=gl_context) as r:
-        yield r
+        yield HandLitRenderer(r)
 
 
 def sphere_cloud(
@@ -40,8 +62,8 @@ def sphere_cloud(
         np.asarray(centres, np.float32), np.asarray(radii, np.float32), model=model, **kw
     )
     lo, hi = cloud.bbox
-    cloud.light = np.full((4, 4, 4), light, np.float32) if np.isscalar(light) else np.asarray(light)
-    cloud.light_box = (tuple(map(float, lo)), tuple(map(float, hi)))
+    values = np.full((4, 4, 4), light, np.float32) if np.isscalar(light) else np.asarray(light)
+    HAND_GRIDS[cloud] = cu.LightGrid(values, (lo, hi))
     return cloud
 
 
@@ -160,7 +182,7 @@ def test_golden_images(name: str, renderer: Renderer, regen_references: bool) ->
     assert ((ref[..., 3] > 0) & (ref[..., 3] <= CLOUD_ALPHA)).mean() < 0.01
 
 
-def test_golden_metrics_catch_small_changes(renderer: Renderer) -> None:
+def test_golden_metrics_catch_small_changes(renderer: HandLitRenderer) -> None:
     """The tolerances are tight enough to see a slightly different phase or absorption."""
     scene, camera = golden_scenes()["cumulus"]
     ref = renderer.render(scene, camera, W, H)
@@ -190,7 +212,7 @@ def test_golden_tolerances_admit_another_float_implementation(name: str) -> None
 
 
 # --- invariants ---------------------------------------------------------------------------------
-def test_no_cloud_gives_exactly_the_sky(renderer: Renderer) -> None:
+def test_no_cloud_gives_exactly_the_sky(renderer: HandLitRenderer) -> None:
     sun = cu.Sun(direction=(0.1, 0.05, 1))
     scene = cu.Scene(sun=sun, sky=cu.Sky.sunset())
     cam = cu.Camera(position=(0, 1, 0), target=(0, 1.2, 10), fov=60)
@@ -210,7 +232,7 @@ def test_no_cloud_gives_exactly_the_sky(renderer: Renderer) -> None:
     assert img[..., :3].max() > 5  # the sun disc is in view
 
 
-def test_cloud_in_front_covers_only_its_pixels(renderer: Renderer) -> None:
+def test_cloud_in_front_covers_only_its_pixels(renderer: HandLitRenderer) -> None:
     cloud = sphere_cloud([[0, 0, 0]], [3.0])
     scene = cu.Scene(clouds=[cloud], settings=cu.RenderSettings(absorption=5.0))
     cam = front_camera()
@@ -226,7 +248,7 @@ def test_cloud_in_front_covers_only_its_pixels(renderer: Renderer) -> None:
     assert (img[..., 3] > 0).sum() > 50
 
 
-def test_forward_scattering_is_brighter_towards_the_sun(renderer: Renderer) -> None:
+def test_forward_scattering_is_brighter_towards_the_sun(renderer: HandLitRenderer) -> None:
     cloud = sphere_cloud([[0, 0, 0]], [3.0])
     settings = cu.RenderSettings(absorption=0.05, hg_g=0.7)  # thin: single scattering dominates
     cam = front_camera()
@@ -244,36 +266,33 @@ def test_forward_scattering_is_brighter_towards_the_sun(renderer: Renderer) -> N
     assert math.isclose(c, d, rel_tol=1e-4)  # g = 0: no preferred direction
 
 
-def test_moving_the_sun_recomputes_the_light_grid(renderer: Renderer) -> None:
+def test_moving_the_sun_recomputes_the_light_grid(renderer: HandLitRenderer) -> None:
     scene = cumulus_scene(seed=2)
-    cloud = scene.clouds[0]
-    assert cloud.light is None
     cam = scene.default_camera()
     a = renderer.render(scene, cam, 48, 36)
-    grid_a = cloud.light.copy()
+    grid_a = cu.prepare_light(scene).lights[0]
     moved = scene.replace(sun=cu.Sun(direction=(-0.6, 0.5, -0.4)))
     b = renderer.render(moved, cam, 48, 36)
-    assert not np.array_equal(cloud.light, grid_a)
+    assert not np.array_equal(cu.prepare_light(moved).lights[0], grid_a)
     assert np.abs(a - b).mean() > 1e-3
     # Changing how the grid is made (here its resolution) also recomputes it.
     finer = scene.replace(settings=scene.settings.replace(light_resolution=12))
     renderer.render(finer, cam, 48, 36)
-    assert cloud.light.shape == (12, 12, 12)
-    # Rendering the first scene again restores the first grid and image.
+    assert cu.prepare_light(finer).lights[0].shape == (12, 12, 12)
+    # Rendering the first scene again gives the first grid and image.
     again = renderer.render(scene, cam, 48, 36)
-    np.testing.assert_array_equal(cloud.light, grid_a)
+    np.testing.assert_array_equal(cu.prepare_light(scene).lights[0], grid_a)
     np.testing.assert_array_equal(again, a)
 
 
-def test_cloud_without_light_grid_gets_one_on_demand(renderer: Renderer) -> None:
+def test_cloud_without_light_grid_gets_one_on_demand(renderer: HandLitRenderer) -> None:
     cloud = cu.Cloud(np.array([[0, 0, 0]], np.float32), np.array([3.0], np.float32))
-    assert cloud.light is None
     img = renderer.render(cu.Scene(clouds=[cloud]), front_camera(), 32, 24)
-    assert cloud.light is not None and cloud.light.ndim == 3 and cloud.light_box is not None
+    assert not hasattr(cloud, "light")  # the grid was made for the render, not stored
     assert img[12, 16, 3] > 0
 
 
-def test_camera_inside_a_cloud_gives_finite_values(renderer: Renderer) -> None:
+def test_camera_inside_a_cloud_gives_finite_values(renderer: HandLitRenderer) -> None:
     scene = cumulus_scene(seed=1)
     lo, hi = scene.bounds()
     centre = (lo + hi) / 2
@@ -286,7 +305,7 @@ def test_camera_inside_a_cloud_gives_finite_values(renderer: Renderer) -> None:
         assert (img[..., 3] >= 0).all() and (img[..., 3] <= 1).all()
 
 
-def test_halving_the_step_barely_changes_the_image(renderer: Renderer) -> None:
+def test_halving_the_step_barely_changes_the_image(renderer: HandLitRenderer) -> None:
     # Δτ = exp(−φρΔ/Δ_ref) makes the result step-size independent up to discretisation. Measured
     # on the cloud pixels (alpha > 0.05 in either image; ~10 % of the frame), halving a 0.2 step:
     # - the mean signed change (bias) of alpha is 1.9e-4 and of RGB −2.2e-3 (0.1 → 0.05: 4.3e-4
@@ -315,7 +334,9 @@ def test_halving_the_step_barely_changes_the_image(renderer: Renderer) -> None:
     np.testing.assert_array_equal(coarse[sky], fine[sky])
 
 
-def test_paper_and_union_agree_without_overlaps_and_differ_with_them(renderer: Renderer) -> None:
+def test_paper_and_union_agree_without_overlaps_and_differ_with_them(
+    renderer: HandLitRenderer,
+) -> None:
     apart = sphere_cloud([[-4, 0, 0], [4, 0, 0]], [2.5, 2.5])
     cam = front_camera()
     paper = cu.Scene(clouds=[apart], settings=cu.RenderSettings(march="paper", absorption=0.05))
@@ -330,7 +351,7 @@ def test_paper_and_union_agree_without_overlaps_and_differ_with_them(renderer: R
     assert p[H // 2, W // 2, 3] > u[H // 2, W // 2, 3]
 
 
-def test_each_cloud_uses_its_own_light_grid(renderer: Renderer) -> None:
+def test_each_cloud_uses_its_own_light_grid(renderer: HandLitRenderer) -> None:
     dim = sphere_cloud([[-5, 0, 0]], [2.5], light=0.2)
     bright = sphere_cloud([[5, 0, 0]], [2.5], light=1.0)
     ramp = sphere_cloud(
@@ -349,7 +370,7 @@ def test_each_cloud_uses_its_own_light_grid(renderer: Renderer) -> None:
     assert row[W // 2 - 8] > row[W // 2 + 8]
 
 
-def test_metaballs_and_rotated_ellipsoids(renderer: Renderer) -> None:
+def test_metaballs_and_rotated_ellipsoids(renderer: HandLitRenderer) -> None:
     # An ellipsoid long along its own x axis, turned 90° about z, stands upright on screen.
     rot = np.array([[[0, -1, 0], [1, 0, 0], [0, 0, 1]]], np.float32)
     tall = sphere_cloud([[0, 0, 0]], [[5, 1, 1]], rotations=rot)
@@ -373,7 +394,7 @@ def test_tiles_give_the_same_image(gl_context) -> None:
     np.testing.assert_array_equal(a, b)
 
 
-def test_max_steps_bounds_the_march(renderer: Renderer) -> None:
+def test_max_steps_bounds_the_march(renderer: HandLitRenderer) -> None:
     scene = cumulus_scene(seed=1)
     cam = scene.default_camera()
     full = renderer.render(scene, cam, 48, 36)
@@ -385,7 +406,7 @@ def test_max_steps_bounds_the_march(renderer: Renderer) -> None:
 
 
 def test_render_convenience_and_backends() -> None:
-    scene = cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [3.0])])
+    scene = lit(cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [3.0])]))
     img = cu.render(scene, front_camera(), width=32, height=24)
     assert img.shape == (24, 32, 4) and img.dtype == np.float32
     cpu = cu.render(scene, front_camera(), width=32, height=24, backend="cpu")
@@ -414,7 +435,7 @@ def test_bad_sizes(renderer: Renderer, size, exc, message) -> None:
 
 @pytest.mark.parametrize(("model", "limit"), [("metaball", 1024), ("spheroid", 65536)])
 def test_primitive_limits_per_cloud(renderer: Renderer, model: str, limit: int) -> None:
-    from cumuli.rendering.renderer import MAX_GL_PRIMITIVES
+    from cumuli.rendering.marcher import MAX_GL_PRIMITIVES
 
     assert MAX_GL_PRIMITIVES[model] == limit
     rng = np.random.default_rng(0)
@@ -428,15 +449,18 @@ def test_primitive_limits_per_cloud(renderer: Renderer, model: str, limit: int) 
     img = renderer.render(cu.Scene(clouds=[cloud(limit)], settings=settings), front_camera(), 8, 6)
     assert np.isfinite(img).all()
     big = cloud(limit + 1)
-    big.light = None  # the refusal must come before any light pass
+    del HAND_GRIDS[big]  # the refusal must come before any light pass
     scene = cu.Scene(clouds=[sphere_cloud([[9, 0, 0]], [1.0]), big], settings=settings)
+    before = cu.light.prepare._memo.copy()
     with pytest.raises(ValueError, match=r"clouds\[1\] has .* backend='cpu' or fewer primitives"):
-        renderer.render(scene, front_camera(), 8, 6)
+        renderer.renderer.render(scene, front_camera(), 8, 6)
     with pytest.raises(ValueError, match=f"at most {limit} per {model} cloud"):
         cu.render(scene, front_camera(), 8, 6)
-    assert big.light is None
+    assert cu.light.prepare._memo.keys() == before.keys()  # no light pass ran
     # What the message suggests works: the CPU marcher has no such limit.
-    cpu = cu.render(scene.replace(clouds=[cloud(limit + 1)]), front_camera(), 4, 3, backend="cpu")
+    cpu = cu.render(
+        lit(scene.replace(clouds=[cloud(limit + 1)])), front_camera(), 4, 3, backend="cpu"
+    )
     assert np.isfinite(cpu).all()
 
 
@@ -445,10 +469,13 @@ def test_bad_arguments(renderer: Renderer, gl_context) -> None:
         renderer.render("scene.json", front_camera(), 8, 8)
     with pytest.raises(TypeError, match="camera"):
         renderer.render(cu.Scene(), (0, 0, -5), 8, 8)
-    bad = sphere_cloud([[0, 0, 0]], [1.0])
-    bad.light = np.full((2, 2, 2), np.nan, np.float32)
-    with pytest.raises(ValueError, match="light"):
-        renderer.render(cu.Scene(clouds=[bad]), front_camera(), 8, 8)
+    with pytest.raises(ValueError, match="NaN"):
+        cu.LightGrid(np.full((2, 2, 2), np.nan, np.float32), ((0, 0, 0), (1, 1, 1)))
+    with pytest.raises(TypeError, match="LightGrid"):
+        renderer.render(
+            cu.prepare_light(cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [1.0])]), lights=["x"]),
+            front_camera(), 8, 8,
+        )  # fmt: skip
     closed = Renderer(context=gl_context)
     closed.close()
     with pytest.raises(RuntimeError, match="closed"):
@@ -470,7 +497,7 @@ def _rss_kib() -> int:
 
 @pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs /proc")
 def test_creating_and_closing_renderers_does_not_leak() -> None:
-    scene = cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [3.0])])
+    scene = lit(cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [3.0])]))
     cam = front_camera()
 
     def cycle(n: int) -> None:

@@ -14,20 +14,17 @@ import cumuli
 from cumuli import Cloud
 
 
-def _with_light(c: Cloud) -> Cloud:
-    lo, hi = c.bbox
-    c.light = np.linspace(0, 1, 4 * 5 * 6, dtype=np.float32).reshape(4, 5, 6)
-    c.light_box = (tuple(map(float, lo)), tuple(map(float, hi)))
-    return c
+def _fields(c: Cloud) -> dict:
+    return {k: v.copy() if isinstance(v, np.ndarray) else v for k, v in vars(c).items()}
 
 
-def test_translated_moves_centres_only_and_drops_light() -> None:
-    c = _with_light(cumuli.gaussian_cumulus(seed=1))
+def test_translated_moves_centres_only_and_leaves_the_original() -> None:
+    c = cumuli.gaussian_cumulus(seed=1)
+    before = _fields(c)
     t = c.translated((1.0, -2.0, 3.5))
     np.testing.assert_allclose(t.centres, c.centres + [1.0, -2.0, 3.5], atol=1e-5)
     assert np.array_equal(t.radii, c.radii) and np.array_equal(t.rotations, c.rotations)
-    assert t.light is None and t.light_box is None
-    assert c.light is not None  # the original is unchanged
+    assert all(np.array_equal(before[k], v) for k, v in vars(c).items())  # the original unchanged
     assert t.params["transforms"] == [{"translate": [1.0, -2.0, 3.5]}]
     assert "transforms" not in c.params
 
@@ -65,24 +62,22 @@ def test_merge_concatenates_and_checks_models() -> None:
 
 
 def test_with_model_any_cloud() -> None:
-    c = _with_light(cumuli.gaussian_cumulus(seed=0))
+    c = cumuli.gaussian_cumulus(seed=0)
     m = c.with_model("metaball", phi=0.4)
-    assert m.model == "metaball" and m.phi == 0.4 and m.light is None
+    assert m.model == "metaball" and m.phi == 0.4 and c.model == "spheroid"
     with pytest.raises(ValueError, match="model"):
         c.with_model("voxels")
 
 
 @pytest.mark.parametrize("ext", [".npz", ".json"])
 def test_save_load_round_trip(tmp_path: Path, ext: str) -> None:
-    c = _with_light(cumuli.gaussian_cumulus(seed=5, centre=(1, 2, 3)).translated((0, 1, 0)))
+    c = cumuli.gaussian_cumulus(seed=5, centre=(1, 2, 3)).translated((0, 1, 0))
     path = c.save(tmp_path / f"cloud{ext}")
     assert path.exists() and not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
     d = cumuli.load_cloud(path)
     assert np.array_equal(d.centres, c.centres)
     assert np.array_equal(d.radii, c.radii)
     assert np.array_equal(d.rotations, c.rotations)
-    assert np.array_equal(d.light, c.light)
-    np.testing.assert_allclose(d.light_box, c.light_box)
     assert (d.model, d.kappa, d.phi) == (c.model, c.kappa, c.phi)
     assert d.stats == c.stats and d.params == c.params
     # The params rebuild the same cloud.

@@ -12,6 +12,7 @@ void bind_light(py::module_& m);
 void bind_volume_light(py::module_& m);
 void bind_march(py::module_& m);
 void bind_volume_march(py::module_& m);
+void bind_composite(py::module_& m);
 void bind_anim(py::module_& m);
 }  // namespace cumuli::bind
 
@@ -24,5 +25,6 @@ PYBIND11_MODULE(_core, m) {
   cumuli::bind::bind_volume_light(m);
   cumuli::bind::bind_march(m);
   cumuli::bind::bind_volume_march(m);
+  cumuli::bind::bind_composite(m);
   cumuli::bind::bind_anim(m);
 }

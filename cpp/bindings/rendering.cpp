@@ -7,6 +7,7 @@
 #include <string>
 
 #include "common.hpp"
+#include "cumuli/rendering/composite.hpp"
 #include "cumuli/rendering/volume_march.hpp"
 
 namespace cumuli::bind {
@@ -100,7 +101,7 @@ void bind_march(py::module_& m) {
          float lod_a, float lod_delta, float ref_step, float step_min, float step_max,
          float fixed_step, float hg_g, int max_steps, int max_candidates, const std::string& march,
          int octaves, float gain, float lacunarity, float frequency, const Noise* noise,
-         int threads, float density_constant, bool sort_candidates) {
+         int threads, float density_constant, bool sort_candidates, bool with_sky) {
         if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
           throw py::value_error("width and height must be in [1, " + std::to_string(kMaxEdge) +
                                 "], got " + std::to_string(width) + "x" + std::to_string(height));
@@ -142,6 +143,7 @@ void bind_march(py::module_& m) {
         scene.sky.sun_disc_radius = sun_disc_radius;
         scene.sky.sun_disc_intensity = sun_disc_intensity;
         scene.noise = noise;
+        scene.with_sky = with_sky;
         scene.clouds.reserve(clouds.size());
         for (std::size_t i = 0; i < clouds.size(); ++i)
           scene.clouds.push_back(cloud_from_dict(clouds[i], i));
@@ -171,11 +173,11 @@ void bind_march(py::module_& m) {
       py::arg("fixed_step"), py::arg("hg_g"), py::arg("max_steps"), py::arg("max_candidates"),
       py::arg("march"), py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"),
       py::arg("frequency"), py::arg("noise").none(true), py::arg("threads") = 0,
-      py::arg("density_constant") = -1.0f, py::arg("sort_candidates") = true,
+      py::arg("density_constant") = -1.0f, py::arg("sort_candidates") = true, py::arg("with_sky") = true,
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image, row 0 at "
       "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
       "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); sort_candidates=False leaves candidates "
-      "unsorted (candidate_sort='none').");
+      "unsorted (candidate_sort='none'); with_sky=False gives the premultiplied layer (colour, 1 − T).");
 }
 
 void bind_volume_march(py::module_& m) {
@@ -183,7 +185,7 @@ void bind_volume_march(py::module_& m) {
       "render_volume_cpu",
       [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi, V3 position, V3 forward,
          V3 right, V3 up, float tan_half_fov, int width, int height, V3 sun_dir, V3 sun_radiance,
-         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads) {
+         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads, bool with_sky) {
         const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
         const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
         if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
@@ -199,6 +201,7 @@ void bind_volume_march(py::module_& m) {
         p.albedo = albedo;
         p.g = g;
         p.step = step;
+        p.with_sky = with_sky;
         const float *pd = density.data(), *pl = light.data();
         std::vector<float> img;
         {
@@ -208,6 +211,61 @@ void bind_volume_march(py::module_& m) {
         return to_array(img, {height, width, 4});
       },
       "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top.");
+}
+
+void bind_composite(py::module_& m) {
+  m.def(
+      "composite_layers",
+      [](const FloatArray& layers, const FloatArray& boxes, const py::handle& camera_position,
+         const py::handle& camera_target, const py::handle& camera_up, float fov,
+         const py::tuple& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
+         int threads) {
+        if (layers.ndim() != 4 || layers.shape(3) != 4)
+          throw py::value_error("layers must have shape (L, H, W, 4)");
+        const py::ssize_t n = layers.shape(0), height = layers.shape(1), width = layers.shape(2);
+        if (height < 1 || width < 1 || height > kMaxEdge || width > kMaxEdge)
+          throw py::value_error("layers: image edges must be in [1, " + std::to_string(kMaxEdge) + "]");
+        if (boxes.ndim() != 3 || boxes.shape(0) != n || boxes.shape(1) != 2 || boxes.shape(2) != 3)
+          throw py::value_error("boxes must have shape (L, 2, 3), one (lo, hi) per layer");
+        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
+        CameraParams cam;
+        cam.position = vec3_arg(camera_position, "camera position");
+        cam.target = vec3_arg(camera_target, "camera target");
+        cam.up = vec3_arg(camera_up, "camera up");
+        cam.fov = finite(fov, "fov");
+        SunParams sun;
+        const glm::vec3 sd = vec3_arg(sun_direction, "sun direction");
+        if (!(glm::dot(sd, sd) > 0.0f)) throw py::value_error("sun direction must not be zero");
+        sun.direction = glm::normalize(sd);
+        sun.radiance = vec3_arg(sun_radiance, "sun radiance");
+        const SkyParams sk = sky_of(sky);
+        std::vector<Layer> list(static_cast<std::size_t>(n));
+        const float* b = boxes.data();
+        for (py::ssize_t k = 0; k < n; ++k) {
+          list[static_cast<std::size_t>(k)].rgba = layers.data() + k * height * width * 4;
+          list[static_cast<std::size_t>(k)].box =
+              Box{glm::vec3(b[6 * k], b[6 * k + 1], b[6 * k + 2]),
+                  glm::vec3(b[6 * k + 3], b[6 * k + 4], b[6 * k + 5])};
+        }
+        try {
+          cam.validate();
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        auto out = new_array({height, width, 4});
+        float* dst = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          composite_layers(list, cam, static_cast<int>(width), static_cast<int>(height), sk, sun,
+                           dst, threads);
+        }
+        return out;
+      },
+      py::arg("layers"), py::arg("boxes"), py::arg("camera_position"), py::arg("camera_target"),
+      py::arg("camera_up"), py::arg("fov"), py::arg("sky"), py::arg("sun_direction"),
+      py::arg("sun_radiance"), py::arg("threads") = 0,
+      "Composite premultiplied layers (L, H, W, 4) over the sky, front to back per pixel by the "
+      "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top.");
 }
 
 }  // namespace cumuli::bind

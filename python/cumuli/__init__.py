@@ -20,17 +20,23 @@ from cumuli.anim.frames import fly_towards, orbit, render_frames
 from cumuli.camera import Camera
 from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
+from cumuli.light.grid import LightGrid, LightParams, load_light_grid
 from cumuli.light.ndt import LightStats, light_grid
+from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.light.volume import VolumeLighting
 from cumuli.model.cloud import Cloud, load_cloud, merge
 from cumuli.model.gaussian import gaussian_cumulus, metaball_cumulus
 from cumuli.model.lsystem import lsystem_cloud, lsystem_expand, lsystem_length
 from cumuli.model.mesh import ellipsoids_from_mesh, mesh_cloud
-from cumuli.model.volume import AnimationFrame, VolumeDatabase, evolving_cloud_volumes
+from cumuli.model.volume import (
+    AnimationFrame,
+    VolumeCloud,
+    VolumeDatabase,
+    evolving_cloud_volumes,
+)
 from cumuli.noise import Noise
-from cumuli.rendering.cpu import render_cpu
-from cumuli.rendering.renderer import Renderer, prepare_light, render
-from cumuli.rendering.volume import VolumeRenderer, render_volume
+from cumuli.rendering.compositor import Renderer, render, render_cpu, render_volume
+from cumuli.rendering.volume import VolumeRenderer
 from cumuli.scene import Scene, load_scene
 from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
@@ -55,6 +61,11 @@ __all__ = [
     "from_srgb8",
     "gaussian_cumulus",
     "light_grid",
+    "LightGrid",
+    "LightParams",
+    "LitScene",
+    "load_light_grid",
+    "VolumeCloud",
     "LightStats",
     "load_cloud",
     "load_scene",

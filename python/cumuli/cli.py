@@ -128,7 +128,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         print(f"wrote {path} ({args.width}×{args.height})")
         return 0
     from cumuli.demo import default_scene
-    from cumuli.rendering.renderer import render
+    from cumuli.rendering.compositor import render
 
     _check_output(args.output)
     scene = default_scene()
@@ -150,7 +150,7 @@ def _size(text: str) -> tuple[int, int]:
 
 def _cmd_render(args: argparse.Namespace) -> int:
     from cumuli.io.images import write_image
-    from cumuli.rendering.renderer import render
+    from cumuli.rendering.compositor import render
     from cumuli.scene import load_scene
 
     scene = load_scene(args.scene)

@@ -1,11 +1,12 @@
-"""Scene description: camera, sky, render settings and the scene (DESIGN §4, RENDER_CONTRACT).
+"""The scene: drawables of every kind under a sun, extra lights and a sky, with the noise that
+fills the 2018 clouds, the render settings and an optional default camera.
 
-Every class here is a frozen, validated dataclass that round-trips through JSON:
-``scene.save(path)`` writes atomically (temporary file in the same folder, then ``os.replace``)
-and :func:`load_scene` reads it back with clear errors for a file that is not JSON or misses
-fields. Clouds are stored with their primitive arrays and parameters; the noise by seed and size
-(the lattice is regenerated bit for bit); light grids are not stored — the renderer recomputes
-them on demand.
+A scene is a frozen, validated value that round-trips through JSON: ``scene.save(path)`` writes
+atomically (temporary file in the same folder, then ``os.replace``) and :func:`load_scene` reads
+it back with clear errors for a file that is not JSON or misses fields. Every drawable is stored
+with its ``kind`` tag (version 2; version-1 files hold only 2018 clouds and still load); the
+noise by seed and size (the lattice is regenerated bit for bit). Light is not stored: it is the
+light stage's output (`cumuli.prepare_light`).
 """
 
 from __future__ import annotations
@@ -23,64 +24,74 @@ import numpy as np
 from cumuli._atomic import atomic_target
 from cumuli.camera import Camera
 from cumuli.model.cloud import Cloud
+from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise
 from cumuli.settings import MAX_CLOUDS, RenderSettings
 from cumuli.sky import Sky, Sun
 
 #: Format tag written in every scene file.
 SCENE_FORMAT = "cumuli.scene"
-SCENE_VERSION = 1
+SCENE_VERSION = 2
+#: Scene-file versions `load_scene` reads (version 1: clouds without a kind are 2018 clouds).
+READABLE_VERSIONS = (1, 2)
+#: Top-level fields of a scene file.
+SCENE_FIELDS = (
+    "format",
+    "version",
+    "clouds",
+    "sun",
+    "sky",
+    "noise",
+    "settings",
+    "camera",
+    "lights",
+)
+#: Most extra lights (`Scene.lights`).
+MAX_LIGHTS = 16
 #: Largest scene file `load_scene` reads (clouds are stored inline as JSON arrays).
 MAX_SCENE_BYTES = 1 << 30
 
 
-# --------------------------------------------------------------------------------------------
-def _jsonable(value: Any, where: str) -> Any:
-    """Convert numpy values and tuples into JSON types; other objects become their repr."""
-    if isinstance(value, np.ndarray):
-        return value.tolist()
-    if isinstance(value, np.generic):
-        return value.item()
-    if isinstance(value, Mapping):
-        return {str(k): _jsonable(v, f"{where}.{k}") for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_jsonable(v, where) for v in value]
-    if value is None or isinstance(value, (bool, int, str)):
-        return value
-    if isinstance(value, float):
-        return value if math.isfinite(value) else repr(value)
-    return repr(value)
+#: Drawable kinds a scene holds, by their scene-file tag (see ARCHITECTURE.md, "a new kind").
+KINDS: dict[str, type] = {Cloud.kind: Cloud, VolumeCloud.kind: VolumeCloud}
 
 
-def cloud_to_dict(cloud: Cloud) -> dict[str, Any]:
-    """A cloud as JSON types: primitives, density model and parameters (no light grid)."""
+def register_kind(cls: type) -> type:
+    """Let scenes hold (and scene files carry) drawables of class ``cls``: it needs a ``kind``
+    tag, ``bounds()``, ``layer_box()``, ``to_dict()`` and a ``from_dict(data, where)``
+    classmethod. Returns ``cls`` (usable as a decorator)."""
+    kind = getattr(cls, "kind", None)
+    if not isinstance(kind, str) or not kind:
+        raise TypeError(f"{cls.__name__} needs a string class attribute 'kind'")
+    for name in ("bounds", "layer_box", "to_dict", "from_dict"):
+        if not callable(getattr(cls, name, None)):
+            raise TypeError(f"{cls.__name__} needs a {name}() method to be a drawable kind")
+    KINDS[kind] = cls
+    return cls
+
+
+def is_drawable(obj: Any) -> bool:
+    """Whether ``obj`` is an instance of a registered drawable kind."""
+    return isinstance(obj, tuple(KINDS.values()))
+
+
+def _sun_dict(sun: Sun) -> dict[str, Any]:
     return {
-        "centres": cloud.centres.tolist(),
-        "radii": cloud.radii.tolist(),
-        "rotations": cloud.rotations.tolist(),
-        "model": cloud.model,
-        "kappa": cloud.kappa,
-        "phi": cloud.phi,
-        "params": _jsonable(cloud.params, "params"),
-        "stats": _jsonable(cloud.stats, "stats"),
+        "direction": list(sun.direction),
+        "colour": list(sun.colour),
+        "intensity": sun.intensity,
     }
 
 
-def cloud_from_dict(data: Mapping[str, Any], where: str = "cloud") -> Cloud:
-    """Inverse of :func:`cloud_to_dict`; missing fields raise ValueError naming them."""
-    _require(data, ("centres", "radii"), where)
-    return Cloud(
-        centres=np.asarray(data["centres"], dtype=np.float32),
-        radii=np.asarray(data["radii"], dtype=np.float32),
-        rotations=None
-        if data.get("rotations") is None
-        else np.asarray(data["rotations"], dtype=np.float32),
-        model=data.get("model", "spheroid"),
-        kappa=data.get("kappa", 0.5),
-        phi=data.get("phi", 0.6),
-        params=dict(data.get("params", {})),
-        stats=dict(data.get("stats", {})),
-    )
+def _drawable_from_dict(data: Any, where: str) -> Any:
+    """A drawable from its scene-file dict; version-1 clouds carry no kind (2018 clouds)."""
+    if not isinstance(data, Mapping):
+        raise ValueError(f"{where} must be a JSON object, got {type(data).__name__}")
+    kind = data.get("kind", Cloud.kind)
+    cls = KINDS.get(kind)
+    if cls is None:
+        raise ValueError(f"{where}.kind {kind!r} is not one of {sorted(KINDS)}")
+    return cls.from_dict(dict(data), where)
 
 
 def _require(data: Any, keys: Sequence[str], where: str) -> None:
@@ -107,24 +118,28 @@ class Scene:
     line gives none (:meth:`default_camera` frames the clouds when it is None).
     """
 
-    clouds: tuple[Cloud, ...] = ()
+    clouds: tuple[Any, ...] = ()
     sun: Sun = field(default_factory=Sun)
     sky: Sky = field(default_factory=Sky)
     noise: Noise = field(default_factory=lambda: Noise(seed=0))
     settings: RenderSettings = field(default_factory=RenderSettings)
     camera: Camera | None = None
+    lights: tuple[Sun, ...] = ()
 
     def __post_init__(self) -> None:
         clouds = self.clouds
-        if isinstance(clouds, Cloud):
+        if is_drawable(clouds):
             clouds = (clouds,)
+        kinds = ", ".join(f"cumuli.{c.__name__}" for c in KINDS.values())
         if not isinstance(clouds, (list, tuple)):
             raise TypeError(
-                f"scene.clouds must be a list of cumuli.Cloud, got {type(clouds).__name__}"
+                f"scene.clouds must be a list of drawables ({kinds}), got {type(clouds).__name__}"
             )
         for k, c in enumerate(clouds):
-            if not isinstance(c, Cloud):
-                raise TypeError(f"scene.clouds[{k}] must be a cumuli.Cloud, got {type(c).__name__}")
+            if not is_drawable(c):
+                raise TypeError(
+                    f"scene.clouds[{k}] must be a drawable ({kinds}), got {type(c).__name__}"
+                )
         if len(clouds) > MAX_CLOUDS:
             raise ValueError(f"scene.clouds holds at most {MAX_CLOUDS} clouds, got {len(clouds)}")
         object.__setattr__(self, "clouds", tuple(clouds))
@@ -134,6 +149,19 @@ class Scene:
                 raise TypeError(f"scene.{name} must be a cumuli.{cls.__name__}")
         if self.camera is not None and not isinstance(self.camera, Camera):
             raise TypeError("scene.camera must be a cumuli.Camera or None")
+        lights = self.lights
+        if isinstance(lights, Sun):
+            lights = (lights,)
+        if not isinstance(lights, (list, tuple)) or not all(isinstance(x, Sun) for x in lights):
+            raise TypeError("scene.lights must be a list of cumuli.Sun (extra directional lights)")
+        if len(lights) > MAX_LIGHTS:
+            raise ValueError(f"scene.lights holds at most {MAX_LIGHTS} lights, got {len(lights)}")
+        object.__setattr__(self, "lights", tuple(lights))
+
+    @property
+    def kinds(self) -> tuple[str, ...]:
+        """The kind of every drawable, in order."""
+        return tuple(c.kind for c in self.clouds)
 
     # --- convenience ----------------------------------------------------------------------
     def replace(self, **changes: Any) -> Scene:
@@ -143,10 +171,11 @@ class Scene:
         return Scene(**data)
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
-        """World bounds of every cloud's primitives; raises ValueError for an empty scene."""
+        """World bounds of every drawable (``bounds()``: a cloud's primitives, a volume's box);
+        raises ValueError for an empty scene."""
         if not self.clouds:
             raise ValueError("the scene has no clouds")
-        los, his = zip(*(c.bbox for c in self.clouds), strict=True)
+        los, his = zip(*(c.bounds() for c in self.clouds), strict=True)
         return np.min(los, axis=0), np.max(his, axis=0)
 
     def default_camera(self) -> Camera:
@@ -169,16 +198,13 @@ class Scene:
         return {
             "format": SCENE_FORMAT,
             "version": SCENE_VERSION,
-            "clouds": [cloud_to_dict(c) for c in self.clouds],
-            "sun": {
-                "direction": list(self.sun.direction),
-                "colour": list(self.sun.colour),
-                "intensity": self.sun.intensity,
-            },
+            "clouds": [c.to_dict() for c in self.clouds],
+            "sun": _sun_dict(self.sun),
             "sky": self.sky.to_dict(),
             "noise": {"seed": self.noise.seed, "size": self.noise.size},
             "settings": self.settings.to_dict(),
             "camera": None if self.camera is None else self.camera.to_dict(),
+            "lights": [_sun_dict(x) for x in self.lights],
         }
 
     @classmethod
@@ -187,11 +213,37 @@ class Scene:
         _require(data, ("clouds", "sun", "sky", "noise", "settings"), "scene")
         if data.get("format", SCENE_FORMAT) != SCENE_FORMAT:
             raise ValueError(f"scene.format must be {SCENE_FORMAT!r}, got {data.get('format')!r}")
+        version = data.get("version", 1)
+        if version not in READABLE_VERSIONS:
+            raise ValueError(f"scene.version {version!r} is not one of {READABLE_VERSIONS}")
+        known = {
+            "format",
+            "version",
+            "clouds",
+            "sun",
+            "sky",
+            "noise",
+            "settings",
+            "camera",
+            "lights",
+        }
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"scene has unknown field(s): {', '.join(unknown)}")
         if not isinstance(data["clouds"], list):
             raise ValueError("scene.clouds must be a JSON list")
-        clouds = [cloud_from_dict(c, f"scene.clouds[{k}]") for k, c in enumerate(data["clouds"])]
+        clouds = [
+            _drawable_from_dict(c, f"scene.clouds[{k}]") for k, c in enumerate(data["clouds"])
+        ]
         _require(data["sun"], ("direction",), "scene.sun")
         sun = Sun(**_known(Sun, data["sun"], "scene.sun"))
+        lights = data.get("lights") or []
+        if not isinstance(lights, list):
+            raise ValueError("scene.lights must be a JSON list")
+        extra = []
+        for k, x in enumerate(lights):
+            _require(x, ("direction",), f"scene.lights[{k}]")
+            extra.append(Sun(**_known(Sun, x, f"scene.lights[{k}]")))
         _require(data["sky"], (), "scene.sky")
         sky = Sky(**_known(Sky, data["sky"], "scene.sky"))
         _require(data["noise"], ("seed",), "scene.noise")
@@ -203,7 +255,10 @@ class Scene:
         if cam is not None:
             _require(cam, ("position", "target"), "scene.camera")
             camera = Camera(**_known(Camera, cam, "scene.camera"))
-        return cls(clouds=clouds, sun=sun, sky=sky, noise=noise, settings=settings, camera=camera)
+        return cls(
+            clouds=clouds, sun=sun, sky=sky, noise=noise, settings=settings, camera=camera,
+            lights=tuple(extra),
+        )  # fmt: skip
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the scene as JSON, atomically (no partial file on failure). Returns the path."""

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli.light.ndt import DEFAULT_SOLID_ANGLE, LightParams
 
 #: Upper bounds of the settings that size shader loops and arrays (shaders/march/march.frag.glsl).
 MAX_CANDIDATES = 128
@@ -166,9 +167,8 @@ class RenderSettings:
     def light_grid_kwargs(self) -> dict[str, Any]:
         """Keyword arguments of :func:`cumuli.light_grid` for the grid these settings render with.
 
-        ``light_grid(cloud, sun, noise, **settings.light_grid_kwargs())`` records the parameters
-        the renderer expects, so it keeps that grid (κ: the cloud's own, unless ``kappa`` is set;
-        then the renderer makes the grid itself, for the overridden κ).
+        ``light_grid(cloud, sun, noise, **settings.light_grid_kwargs())`` makes the grid the
+        renderer would make (κ: the cloud's own; :meth:`light_params` also carries ``kappa``).
         """
         return {
             "resolution": self.light_resolution,
@@ -177,6 +177,19 @@ class RenderSettings:
             "extinction": self.light_extinction,
             **self.fbm_params(),
         }
+
+    def light_params(self) -> LightParams:
+        """The :class:`cumuli.LightParams` of the light grids these settings render with (the
+        settings' light fields and fBm, the default solid angle, ``kappa`` as the override)."""
+        return LightParams(
+            resolution=self.light_resolution,
+            method=self.light_method,
+            step=self.light_step,
+            extinction=self.light_extinction,
+            solid_angle=DEFAULT_SOLID_ANGLE,
+            kappa=self.kappa,
+            **self.fbm_params(),
+        )
 
     def replace(self, **changes: Any) -> RenderSettings:
         """A copy with some fields changed (validated again)."""

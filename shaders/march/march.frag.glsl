@@ -51,6 +51,7 @@ uniform float u_g;            // HG asymmetry
 uniform int u_max_steps;
 uniform int u_max_candidates;
 uniform bool u_union;         // march = "union"
+uniform bool u_with_sky;      // false: the premultiplied layer (colour, 1 − T) for the compositor
 
 out vec4 frag;
 
@@ -267,5 +268,6 @@ void main() {
             t_union = t;
         }
     }
-    frag = vec4(colour + T * sky(dir, u_sun_dir, u_sun_radiance), 1.0 - T);
+    vec3 rgb = u_with_sky ? colour + T * sky(dir, u_sun_dir, u_sun_radiance) : colour;
+    frag = vec4(rgb, 1.0 - T);
 }

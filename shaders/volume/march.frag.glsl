@@ -26,6 +26,7 @@ uniform float u_albedo;
 uniform float u_g;
 uniform float u_step;
 uniform int u_max_steps;
+uniform bool u_with_sky;  // false: the premultiplied layer (colour, 1 − T) for the compositor
 
 out vec4 frag_colour;
 
@@ -90,5 +91,6 @@ void main() {
       T *= dtau;
     }
   }
-  frag_colour = vec4(colour + T * sky(d, u_sun_dir, u_sun_radiance), 1.0 - T);
+  vec3 rgb = u_with_sky ? colour + T * sky(d, u_sun_dir, u_sun_radiance) : colour;
+  frag_colour = vec4(rgb, 1.0 - T);
 }

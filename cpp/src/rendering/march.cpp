@@ -201,7 +201,8 @@ class RayMarcher {
       if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch, st))
         break;
     }
-    const glm::vec3 rgb = st.colour + st.T * sky_radiance(scene_.sky, scene_.sun, dir);
+    const glm::vec3 rgb =
+        scene_.with_sky ? st.colour + st.T * sky_radiance(scene_.sky, scene_.sun, dir) : st.colour;
     return glm::vec4(rgb, 1.0f - st.T);
   }
 

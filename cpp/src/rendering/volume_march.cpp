@@ -50,8 +50,7 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
         T *= dtau;
       }
     }
-    const glm::vec3 sky = sky_radiance(p.sky, p.sun, d);
-    const glm::vec3 rgb = colour + T * sky;
+    const glm::vec3 rgb = p.with_sky ? colour + T * sky_radiance(p.sky, p.sun, d) : colour;
     float* px = &img[i * 4];
     px[0] = rgb.x;
     px[1] = rgb.y;

@@ -102,7 +102,7 @@ def render_frames(
     Returns the paths written, in order.
     """
     from cumuli.io.images import write_image
-    from cumuli.rendering.renderer import render
+    from cumuli.rendering.compositor import render
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")

@@ -3,29 +3,33 @@
 Primitives are numpy arrays: ``centres (N, 3)``, ``radii (N, 3)`` and ``rotations (N, 3, 3)``
 (float32; a rotation's columns are the ellipsoid's axes in world space, spheres have equal radii
 and the identity). The density model is ``"spheroid"`` (eq. 2, parameter κ) or ``"metaball"``
-(eqs. 19–21, parameter φ and the mean squared radius r̄² of eq. 20). Once computed, the light grid
-(``light``, ``[z, y, x]`` float32) and its world box (``light_box``) ride along for the renderer.
+(eqs. 19–21, parameter φ and the mean squared radius r̄² of eq. 20). A cloud describes shape only:
+its light is computed by the light stage (`cumuli.light_grid`, `cumuli.prepare_light`) and never
+stored on it.
 
 Clouds are values: `Cloud.translated`, `Cloud.scaled`, `Cloud.with_model` and `merge` return new
-clouds (without a light grid, which no longer fits) and append what they did to
+clouds and append what they did to
 ``params["transforms"]``, so that a saved cloud says how it was made. `Cloud.save` writes
 ``.npz`` or ``.json`` atomically; `load_cloud` reads either back.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
+import math
 import os
 import zipfile
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
 from cumuli import _validate as check
 from cumuli._atomic import atomic_target
+from cumuli.io.jsonable import jsonable
 
 DENSITY_MODELS = ("spheroid", "metaball")
 #: Most primitives a cloud may hold.
@@ -34,24 +38,33 @@ MAX_PRIMITIVES = 1 << 20
 ROTATION_TOLERANCE = 1e-3
 #: Tag and version written into saved clouds.
 FILE_FORMAT = "cumuli.cloud"
-FILE_VERSION = 1
-#: Largest cloud file `load_cloud` reads (a light grid of 512³ float32 is 512 MiB).
+FILE_VERSION = 2
+#: Versions `load_cloud` reads (version 1 files may carry a light grid, which is ignored).
+READABLE_VERSIONS = (1, 2)
+#: Largest cloud file `load_cloud` reads.
 MAX_FILE_BYTES = 1 << 31
-#: Largest light grid accepted from a file (voxels).
-MAX_LIGHT_VOXELS = 512**3
 #: Largest element count of each array in a saved ``.npz`` (checked before it is inflated).
 _NPZ_LIMITS = {
     "centres": 3 * MAX_PRIMITIVES,
     "radii": 3 * MAX_PRIMITIVES,
     "rotations": 9 * MAX_PRIMITIVES,
     "meta": 1 << 28,
-    "light": MAX_LIGHT_VOXELS,
 }
+
+
+#: Fields of a cloud's scene-file dict (`Cloud.to_dict`).
+_DICT_FIELDS = ("kind", "centres", "radii", "rotations", "model", "kappa", "phi", "params", "stats")
 
 
 @dataclass(eq=False)
 class Cloud:
-    """A cloud: primitives, density model, provenance and (optionally) its light grid."""
+    """A cloud: primitives, density model and provenance (``params``, ``stats``).
+
+    The drawable of kind ``"cloud"``: the 2018 paper's ray marcher draws it (see ARCHITECTURE.md).
+    """
+
+    #: Scene-file tag of this kind of drawable.
+    kind: ClassVar[str] = "cloud"
 
     centres: np.ndarray
     radii: np.ndarray
@@ -61,20 +74,16 @@ class Cloud:
     phi: float = 0.6
     stats: dict[str, Any] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
-    light: np.ndarray | None = None
-    light_box: tuple[tuple[float, float, float], tuple[float, float, float]] | None = None
-    #: Normalised sun direction the light grid was computed for (a different sun: stale grid).
-    light_sun: tuple[float, float, float] | None = None
-    #: What else the light grid was computed with (noise, fBm, extinction, step, method,
-    #: resolution, solid angle, density model, primitives): `cumuli.light.light_params`.
-    #: Written by `cumuli.light_grid`; None for a grid set by hand. Assigning ``light`` or
-    #: ``light_box`` clears it, since the record no longer describes the new grid.
-    light_params: dict[str, Any] | None = None
 
     def __setattr__(self, name: str, value: Any) -> None:
-        # During __init__ light_params does not exist yet; it is assigned after light/light_box.
-        if name in ("light", "light_box") and "light_params" in self.__dict__:
-            object.__setattr__(self, "light_params", None)
+        if name not in _FIELD_NAMES:
+            if name in ("light", "light_box", "light_sun", "light_params"):
+                raise AttributeError(
+                    f"Cloud.{name} no longer exists: a cloud describes shape only. Light is the "
+                    "light stage's: cu.light_grid(...) returns a cu.LightGrid (values, box, sun, "
+                    "record); give one to cu.prepare_light(scene, lights=[grid])"
+                )
+            raise AttributeError(f"Cloud has no field {name!r}")
         object.__setattr__(self, name, value)
 
     def __post_init__(self) -> None:
@@ -148,6 +157,17 @@ class Cloud:
         return (self.centres - half).min(axis=0), (self.centres + half).max(axis=0)
 
     @property
+    def candidate_scale(self) -> float:
+        """Radius factor that makes the primitives bound the density (RENDER_CONTRACT): 1 for
+        spheroids, √N for metaballs (``Σ 1/|qᵢ|² ≥ 1`` needs some ``|qᵢ| ≤ √N``)."""
+        return math.sqrt(max(self.n, 1)) if self.model == "metaball" else 1.0
+
+    def layer_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The box the marcher draws this cloud in (primitives grown by `candidate_scale`); the
+        compositor orders clouds by a ray's entry into it."""
+        return self.bounds(self.candidate_scale)
+
+    @property
     def bbox(self) -> tuple[np.ndarray, np.ndarray]:
         """World axis-aligned bounds ``(min, max)`` of the primitives, float32 (3,) each."""
         return self.bounds()
@@ -217,7 +237,7 @@ class Cloud:
             check.threads(threads),
         )
 
-    # --- transforms (new clouds; the light grid is dropped) --------------------------------
+    # --- transforms (new clouds) ----------------------------------------------------------
     def _derived(self, transform: dict[str, Any], **changes: Any) -> Cloud:
         params = json.loads(json.dumps(self.params, default=_json_default))
         params.setdefault("transforms", []).append(transform)
@@ -235,7 +255,7 @@ class Cloud:
         return Cloud(**fields)
 
     def translated(self, offset: Sequence[float]) -> Cloud:
-        """A copy moved by ``offset`` (world units); the light grid is dropped."""
+        """A copy moved by ``offset`` (world units)."""
         off = check.vec3(offset, "offset")
         centres = (self.centres.astype(np.float64) + np.array(off)).astype(np.float32)
         return self._derived({"translate": list(off)}, centres=centres)
@@ -244,7 +264,7 @@ class Cloud:
         """A copy scaled uniformly by ``factor`` > 0 about ``about`` (default: the cloud's centre).
 
         Centres move away from ``about`` and every radius is multiplied by ``factor``; rotations
-        are unchanged. The light grid is dropped.
+        are unchanged.
         """
         f = check.real(factor, "factor", 0.0, lo_open=True)
         pivot = check.vec3(about, "about") if about is not None else tuple(map(float, self.centre))
@@ -259,7 +279,7 @@ class Cloud:
         """A copy filled by another density model (``"spheroid"`` or ``"metaball"``).
 
         The metaball model (eqs. 19–21) works on any primitive set: its iso-surface
-        ``Σ 1/|q_i|² ≥ 1`` uses each primitive's unit-sphere frame. The light grid is dropped.
+        ``Σ 1/|q_i|² ≥ 1`` uses each primitive's unit-sphere frame.
         """
         if model not in DENSITY_MODELS:
             raise ValueError(f"model must be one of {DENSITY_MODELS}, got {model!r}")
@@ -274,12 +294,62 @@ class Cloud:
         """This cloud and ``others`` as one cloud (see `merge`)."""
         return merge([self, *others])
 
+    # --- scene files --------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The cloud as JSON types for scene files: primitives, density model and parameters."""
+        return {
+            "kind": self.kind,
+            "centres": self.centres.tolist(),
+            "radii": self.radii.tolist(),
+            "rotations": self.rotations.tolist(),
+            "model": self.model,
+            "kappa": self.kappa,
+            "phi": self.phi,
+            "params": jsonable(self.params),
+            "stats": jsonable(self.stats),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "cloud") -> Cloud:
+        """Inverse of :meth:`to_dict`; missing or unknown fields raise ValueError naming them."""
+        if not isinstance(data, dict):
+            raise ValueError(f"{where} must be a JSON object, got {type(data).__name__}")
+        missing = [k for k in ("centres", "radii") if k not in data]
+        if missing:
+            raise ValueError(f"{where} is missing field(s): {', '.join(missing)}")
+        known = {
+            "kind",
+            "centres",
+            "radii",
+            "rotations",
+            "model",
+            "kappa",
+            "phi",
+            "params",
+            "stats",
+        }
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"{where} has unknown field(s): {', '.join(unknown)}")
+        return cls(
+            centres=np.asarray(data["centres"], dtype=np.float32),
+            radii=np.asarray(data["radii"], dtype=np.float32),
+            rotations=None
+            if data.get("rotations") is None
+            else np.asarray(data["rotations"], dtype=np.float32),
+            model=data.get("model", "spheroid"),
+            kappa=data.get("kappa", 0.5),
+            phi=data.get("phi", 0.6),
+            params=dict(data.get("params") or {}),
+            stats=dict(data.get("stats") or {}),
+        )
+
     # --- files --------------------------------------------------------------------------------
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the cloud to ``path`` (``.npz`` or ``.json``, by extension), atomically.
 
         Everything needed to use or rebuild it is kept: primitives, density model and parameters,
-        ``stats``, ``params`` (generator, arguments, seed, transforms) and the light grid if any.
+        ``stats`` and ``params`` (generator, arguments, seed, transforms).
         The file is written to a temporary in the same folder and renamed into place, so a failed
         save leaves no partial file. Returns the path written.
         """
@@ -287,7 +357,6 @@ class Cloud:
         suffix = path.suffix.lower()
         if suffix not in (".npz", ".json"):
             raise ValueError(f"path must end in .npz or .json, got {path.name!r}")
-        light = self._checked_light()
         meta = self._meta()
         try:
             meta_text = json.dumps(meta, default=_json_default, allow_nan=False)
@@ -303,41 +372,15 @@ class Cloud:
                     "rotations": self.rotations,
                     "meta": np.frombuffer(meta_text.encode("utf-8"), dtype=np.uint8),
                 }
-                if light is not None:
-                    arrays["light"] = light
                 np.savez_compressed(fh, **arrays)
             else:
                 doc = dict(meta)
                 doc["centres"] = self.centres.tolist()
                 doc["radii"] = self.radii.tolist()
                 doc["rotations"] = self.rotations.tolist()
-                if light is not None:
-                    doc["light_shape"] = list(light.shape)
-                    doc["light"] = light.ravel().tolist()
                 text = json.dumps(doc, default=_json_default, allow_nan=False)
                 fh.write(text.encode("utf-8"))
         return path
-
-    def _checked_light(self) -> np.ndarray | None:
-        """The light grid as float32, checked as `load_cloud` will check it (None if absent)."""
-        if self.light is None:
-            return None
-        light = np.asarray(self.light)
-        if light.dtype.kind not in "fiu":
-            raise TypeError(f"light must be a real numeric array, got dtype {light.dtype}")
-        light = np.ascontiguousarray(light, dtype=np.float32)
-        if light.ndim != 3 or light.size == 0 or not np.isfinite(light).all():
-            raise ValueError(f"light must be a finite, non-empty 3D grid, got shape {light.shape}")
-        box = self.light_box
-        try:
-            lo, hi = (check.vec3(v, "light_box") for v in box)  # type: ignore[union-attr]
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"light_box must be (lo, hi), two finite 3-vectors, got {box!r}"
-            ) from None
-        if not all(h > low for low, h in zip(lo, hi, strict=True)):
-            raise ValueError(f"light_box must have hi > lo on every axis, got {box!r}")
-        return light
 
     def _meta(self) -> dict[str, Any]:
         return {
@@ -348,26 +391,24 @@ class Cloud:
             "phi": self.phi,
             "stats": self.stats,
             "params": self.params,
-            "light_box": None
-            if self.light_box is None
-            else [list(map(float, self.light_box[0])), list(map(float, self.light_box[1]))],
-            "light_sun": None if self.light_sun is None else list(map(float, self.light_sun)),
-            "light_params": None if self.light is None else self.light_params,
         }
 
     def __repr__(self) -> str:
         lo, hi = self.bbox
         return (
             f"Cloud(n={self.n}, model={self.model!r}, bbox=({lo.round(2).tolist()}, "
-            f"{hi.round(2).tolist()}), light={'yes' if self.light is not None else 'no'})"
+            f"{hi.round(2).tolist()}))"
         )
+
+
+_FIELD_NAMES = frozenset(f.name for f in dataclasses.fields(Cloud))
 
 
 def merge(clouds: Iterable[Cloud]) -> Cloud:
     """One cloud holding the primitives of all ``clouds`` (in order).
 
     All clouds must share the density model and its parameters (κ, φ): one cloud has one density
-    model. ``params`` records the parts' params; ``stats`` their stats. No light grid.
+    model. ``params`` records the parts' params; ``stats`` their stats.
     """
     parts = list(clouds)
     if not parts:
@@ -435,39 +476,12 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
         raise ValueError(f"{path.name}: not a readable cumuli cloud file ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != FILE_FORMAT:
         raise ValueError(f"{path.name}: not a cumuli cloud file (format tag missing)")
-    if meta.get("version") != FILE_VERSION:
+    if meta.get("version") not in READABLE_VERSIONS:
         raise ValueError(f"{path.name}: unsupported cloud file version {meta.get('version')!r}")
     for key in ("model", "kappa", "phi"):
         if key not in meta:
             raise ValueError(f"{path.name}: missing {key!r}")
-    light = arrays.get("light")
-    light_box = meta.get("light_box")
-    if light is not None:
-        if light.dtype.kind not in "fiu":
-            raise ValueError(f"{path.name}: light must be numeric")
-        light = np.ascontiguousarray(light, dtype=np.float32)
-        if light.ndim != 3 or light.size > MAX_LIGHT_VOXELS or not np.isfinite(light).all():
-            raise ValueError(f"{path.name}: light must be a finite 3D grid")
-        if light_box is None:
-            raise ValueError(f"{path.name}: light grid without light_box")
     try:
-        if light_box is not None:
-            if not isinstance(light_box, (list, tuple)) or len(light_box) != 2:
-                raise ValueError(f"light_box must be [lo, hi], got {light_box!r}")
-            light_box = (
-                check.vec3(light_box[0], "light_box"),
-                check.vec3(light_box[1], "light_box"),
-            )
-            if not all(h > lo for lo, h in zip(*light_box, strict=True)):
-                raise ValueError(f"light_box must have hi > lo on every axis, got {light_box}")
-        light_sun = meta.get("light_sun")
-        if light_sun is not None:
-            light_sun = check.direction(light_sun, "light_sun")
-        light_params = meta.get("light_params")
-        if light_params is not None:
-            light_params = _check_light_params(light_params)
-        if light is None:
-            light_sun = light_params = None
         return Cloud(
             arrays["centres"],
             arrays["radii"],
@@ -477,38 +491,18 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             phi=meta["phi"],
             stats=dict(meta.get("stats") or {}),
             params=dict(meta.get("params") or {}),
-            light=light,
-            light_box=light_box,
-            light_sun=light_sun,
-            light_params=light_params,
         )
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise ValueError(f"{path.name}: invalid cloud data: {exc}") from None
-
-
-def _check_light_params(value: Any) -> dict[str, Any]:
-    """A light_params record read from a file: a flat object of JSON scalars / number lists."""
-    if not isinstance(value, dict) or not all(isinstance(k, str) for k in value):
-        raise ValueError(f"light_params must be an object, got {type(value).__name__}")
-    for key, v in value.items():
-        scalar = v is None or isinstance(v, (bool, int, float, str))
-        numbers = isinstance(v, list) and all(
-            isinstance(x, (int, float)) and not isinstance(x, bool) for x in v
-        )
-        if not (scalar or numbers):
-            raise ValueError(f"light_params[{key!r}] must be a number, string or list of numbers")
-    return dict(value)
 
 
 def _read_npz(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
     arrays: dict[str, np.ndarray] = {}
     with zipfile.ZipFile(path) as zf:
         names = set(zf.namelist())
-        for key in ("centres", "radii", "rotations", "meta", "light"):
+        for key in ("centres", "radii", "rotations", "meta"):
             member = key + ".npy"
             if member not in names:
-                if key == "light":
-                    continue
                 raise ValueError(f"{path.name}: missing array {key!r}")
             with zf.open(member) as fh:
                 # Check the declared shape before numpy allocates it.
@@ -545,13 +539,6 @@ def _read_json(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
             arrays[key] = np.asarray(doc[key], dtype=np.float32)
         except (TypeError, ValueError) as exc:
             raise ValueError(f"{path.name}: {key} is not a numeric array ({exc})") from None
-    if doc.get("light") is not None:
-        shape = doc.get("light_shape")
-        try:
-            light = np.asarray(doc["light"], dtype=np.float32).reshape(shape)
-        except (TypeError, ValueError) as exc:
-            raise ValueError(f"{path.name}: light does not match light_shape ({exc})") from None
-        arrays["light"] = light
     return doc, arrays
 
 

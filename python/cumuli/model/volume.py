@@ -8,16 +8,19 @@ wind, voxelised frame by frame in C++.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-from dataclasses import dataclass
-from typing import Any
+import dataclasses
+from collections.abc import Mapping, Sequence
+from dataclasses import asdict, dataclass, field
+from typing import Any, ClassVar
 
 import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli.io.jsonable import array_from_json, array_to_json, jsonable
 from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise, _fbm_params
+from cumuli.sky import Sky, Sun
 
 #: Largest edge of a database volume.
 MAX_EDGE = 2048
@@ -210,3 +213,171 @@ def evolving_cloud_volumes(
         *cloud.core_args(), core_noise, const, *fbm, *evo, lo, hi, check.threads(threads)
     )
     return VolumeDatabase(vols, lo, hi)
+
+
+#: VolumeLighting keyword arguments a VolumeCloud may carry for computing its light.
+VOLUME_LIGHTING_KEYS = (
+    "sh_order", "sh_samples", "step", "shexp", "shexp_bins", "fit_samples", "ms_points",
+    "ms_orders", "seed",
+)  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class VolumeCloud:
+    """A density volume in a world box: the drawable of kind ``"volume"`` (a frame of an endless
+    animation, or any voxelised cloud), drawn by the volume marcher (RENDER_CONTRACT, volumes).
+
+    ``density`` is ``(D, H, W)`` (``[z, y, x]``, ≥ 0) over ``box = (lo, hi)``; ``sigma_t``,
+    ``albedo``, ``g`` and ``step`` are the marcher's (see :func:`cumuli.render_volume`). ``light``
+    is an optional precomputed ``(D, H, W, 4)`` light volume (``τ_sun``, ``E_sky`` RGB, as
+    :meth:`cumuli.VolumeLighting.light` makes) with the ``light_sun`` and ``light_sky`` it was made
+    for: the light stage uses it while the scene's sun and sky are those, and otherwise computes
+    the light itself with :class:`cumuli.VolumeLighting` and the ``lighting`` keywords
+    (``sh_order``, ``sh_samples``, ``step``, ``ms_points``, ...). Arrays are copied and read-only.
+    """
+
+    #: Scene-file tag of this kind of drawable.
+    kind: ClassVar[str] = "volume"
+
+    density: np.ndarray
+    box: tuple[tuple[float, float, float], tuple[float, float, float]]
+    sigma_t: float = 1.0
+    albedo: float = 1.0
+    g: float = 0.2
+    step: float | None = None
+    light: np.ndarray | None = None
+    light_sun: Sun | None = None
+    light_sky: Sky | None = None
+    lighting: dict[str, Any] = field(default_factory=dict)
+    params: dict[str, Any] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        dens = np.array(_float_volumes(self.density, "density", 3), copy=True)
+        if (dens < 0).any():
+            raise ValueError("density must not hold negative values")
+        dens.setflags(write=False)
+        s(self, "density", dens)
+        if not isinstance(self.box, Sequence) or len(self.box) != 2:
+            raise TypeError(f"box must be (box_min, box_max), got {self.box!r}")
+        s(self, "box", _box(self.box[0], self.box[1]))
+        s(self, "sigma_t", check.real(self.sigma_t, "sigma_t", 0.0))
+        s(self, "albedo", check.real(self.albedo, "albedo", 0.0, 1.0))
+        s(self, "g", check.real(self.g, "g", -1.0, 1.0, lo_open=True, hi_open=True))
+        if self.step is not None:
+            s(self, "step", check.real(self.step, "step", 0.0, lo_open=True))
+        if self.light is not None:
+            light = np.array(_float_volumes(self.light, "light", 4), copy=True)
+            if light.shape != (*dens.shape, 4):
+                raise ValueError(f"light must have shape {(*dens.shape, 4)}, got {light.shape}")
+            light.setflags(write=False)
+            s(self, "light", light)
+            if not isinstance(self.light_sun, Sun) or not isinstance(self.light_sky, Sky):
+                raise TypeError("a light volume needs light_sun (a Sun) and light_sky (a Sky)")
+        elif self.light_sun is not None or self.light_sky is not None:
+            raise ValueError("light_sun and light_sky describe a light volume: give light too")
+        if not isinstance(self.lighting, Mapping):
+            raise TypeError(f"lighting must be a mapping, got {type(self.lighting).__name__}")
+        unknown = sorted(set(self.lighting) - set(VOLUME_LIGHTING_KEYS))
+        if unknown:
+            raise ValueError(
+                f"lighting has unknown key(s) {unknown}; known: {', '.join(VOLUME_LIGHTING_KEYS)}"
+            )
+        s(self, "lighting", dict(self.lighting))
+        s(self, "params", dict(self.params))
+
+    @classmethod
+    def from_frame(cls, lighting: Any, frame: Any, **render: Any) -> VolumeCloud:
+        """The displayed volume of an endless animation's ``frame`` (an `AnimationFrame` or a
+        database index) with its light from ``lighting`` (a :class:`cumuli.VolumeLighting` of the
+        same database): blended density and blended optical depths, as the paper does.
+
+        ``render`` sets ``g`` and ``step``; ``sigma_t`` and ``albedo`` are the lighting's.
+        """
+        density = lighting.density(frame)
+        index = frame.index if isinstance(frame, AnimationFrame) else int(frame)
+        return cls(
+            density=density,
+            box=lighting.database.box,
+            sigma_t=lighting.sigma_t,
+            albedo=lighting.albedo,
+            light=lighting.light(frame),
+            light_sun=lighting.sun,
+            light_sky=lighting.sky,
+            params={"frame": index},
+            **render,
+        )
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        """``(D, H, W)`` of the density."""
+        return tuple(int(v) for v in self.density.shape)  # type: ignore[return-value]
+
+    def layer_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The volume's box (float32): the compositor orders it by a ray's entry into it."""
+        lo, hi = self.box
+        return np.asarray(lo, np.float32), np.asarray(hi, np.float32)
+
+    def translated(self, offset: Sequence[float]) -> VolumeCloud:
+        """A copy moved by ``offset`` (a precomputed light stays valid: it moves with it)."""
+        off = check.vec3(offset, "offset")
+        lo, hi = self.box
+        box = (
+            tuple(a + o for a, o in zip(lo, off, strict=True)),
+            tuple(a + o for a, o in zip(hi, off, strict=True)),
+        )
+        return dataclasses.replace(self, box=box)
+
+    # --- scene files --------------------------------------------------------------------------
+    def to_dict(self) -> dict[str, Any]:
+        """The volume as JSON types for scene files (arrays as exact base64 float32)."""
+        return {
+            "kind": self.kind,
+            "density": array_to_json(self.density),
+            "box": [list(self.box[0]), list(self.box[1])],
+            "sigma_t": self.sigma_t,
+            "albedo": self.albedo,
+            "g": self.g,
+            "step": self.step,
+            "light": None if self.light is None else array_to_json(self.light),
+            "light_sun": None if self.light_sun is None else jsonable(asdict(self.light_sun)),
+            "light_sky": None if self.light_sky is None else jsonable(asdict(self.light_sky)),
+            "lighting": jsonable(self.lighting),
+            "params": jsonable(self.params),
+        }
+
+    @classmethod
+    def from_dict(cls, data: Any, where: str = "volume") -> VolumeCloud:
+        """Inverse of :meth:`to_dict`; missing or unknown fields raise ValueError naming them."""
+        if not isinstance(data, Mapping):
+            raise ValueError(f"{where} must be a JSON object, got {type(data).__name__}")
+        known = {f.name for f in dataclasses.fields(cls)} | {"kind"}
+        unknown = sorted(set(data) - known)
+        if unknown:
+            raise ValueError(f"{where} has unknown field(s): {', '.join(unknown)}")
+        missing = [k for k in ("density", "box") if k not in data]
+        if missing:
+            raise ValueError(f"{where} is missing field(s): {', '.join(missing)}")
+        light = data.get("light")
+        sun, sky = data.get("light_sun"), data.get("light_sky")
+        try:
+            return cls(
+                density=array_from_json(data["density"], f"{where}.density"),
+                box=tuple(data["box"]),
+                sigma_t=data.get("sigma_t", 1.0),
+                albedo=data.get("albedo", 1.0),
+                g=data.get("g", 0.2),
+                step=data.get("step"),
+                light=None if light is None else array_from_json(light, f"{where}.light"),
+                light_sun=None if sun is None else Sun(**sun),
+                light_sky=None if sky is None else Sky(**sky),
+                lighting=data.get("lighting") or {},
+                params=data.get("params") or {},
+            )
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(f"{where}: {exc}") from None
+
+    def __repr__(self) -> str:
+        lo, hi = self.box
+        light = "yes" if self.light is not None else "no"
+        return f"VolumeCloud(shape={self.shape}, box=({list(lo)}, {list(hi)}), light={light})"

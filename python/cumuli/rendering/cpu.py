@@ -1,35 +1,41 @@
-"""The CPU reference marcher: ``render(..., backend="cpu")`` (RENDER_CONTRACT, DESIGN §4).
+"""The CPU twin of the 2018 marcher (RENDER_CONTRACT, DESIGN §4): ``_core.render_cpu``.
 
 The same render pass as the GLSL marcher (Algorithms 1 and 3 of Jiménez de Parga & Gómez Palomo
 2018), run by the C++ core on all cores without the GIL. It is slow next to the GPU but exact and
 independent of any driver: the parity tests hold the GLSL marcher to it, and it renders where no
-OpenGL context can be made.
+OpenGL context can be made. :func:`draw_clouds_cpu` is its layer drawer for the compositor
+(``cumuli.rendering.compositor``); ``cumuli.render_cpu`` renders a whole scene with the CPU twins
+of every kind.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli.camera import Camera
+from cumuli.light.ndt import LightGrid
+from cumuli.light.prepare import LitScene, prepare_light
+from cumuli.model.cloud import Cloud
+from cumuli.scene import Scene
 
 #: Largest image edge the CPU marcher accepts.
 MAX_EDGE = 1 << 14
-#: Largest image in pixels (the core's own limit, checked here before any light grid is made).
+#: Largest image in pixels (the core's own limit, checked before any light grid is made).
 MAX_PIXELS = 1 << 26
 
 
-def cloud_core_dict(cloud: Any, kappa: float | None = None) -> dict[str, Any]:
-    """The dict ``_core.render_cpu`` takes for one cloud (its light grid must be present).
+def cloud_core_dict(cloud: Cloud, grid: LightGrid, kappa: float | None = None) -> dict[str, Any]:
+    """The dict ``_core.render_cpu`` takes for one cloud and its light grid.
 
     ``kappa`` overrides the cloud's own κ when given (``RenderSettings.kappa``).
     """
-    if cloud.light is None or cloud.light_box is None:
-        raise ValueError("cloud has no light grid (cloud.light / light_box); see prepare_light")
     centres, radii, rotations, model, cloud_kappa, phi = cloud.core_args()
-    lo, hi = cloud.light_box
+    lo, hi = grid.box
     return {
         "centres": centres,
         "radii": radii,
@@ -37,23 +43,34 @@ def cloud_core_dict(cloud: Any, kappa: float | None = None) -> dict[str, Any]:
         "model": model,
         "kappa": float(cloud_kappa if kappa is None else kappa),
         "phi": float(phi),
-        "light": np.ascontiguousarray(cloud.light, dtype=np.float32),
-        "light_lo": check.vec3(lo, "cloud.light_box[0]"),
-        "light_hi": check.vec3(hi, "cloud.light_box[1]"),
+        "light": np.ascontiguousarray(grid, dtype=np.float32),
+        "light_lo": check.vec3(lo, "light box lo"),
+        "light_hi": check.vec3(hi, "light box hi"),
     }
 
 
 def render_cpu_args(
-    scene: Any, camera: Any, width: int, height: int, threads: int = 0
+    scene: Scene | LitScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    threads: int = 0,
+    indices: Sequence[int] | None = None,
+    with_sky: bool = True,
 ) -> dict[str, Any]:
-    """Keyword arguments of ``_core.render_cpu`` for a scene whose clouds carry light grids.
+    """Keyword arguments of ``_core.render_cpu`` for the 2018 clouds ``indices`` (all by default)
+    of a scene (its light prepared first when it is not a `LitScene`).
 
     Exposed for tests and tools that want to change one knob of the core call (for example
     ``density_constant``, a constant density in place of fBm for analytic checks).
     """
+    lit = scene if isinstance(scene, LitScene) else prepare_light(scene, threads=threads)
+    scene = lit.scene
     width = check.integer(width, "width", 1, MAX_EDGE)
     height = check.integer(height, "height", 1, MAX_EDGE)
     threads = check.threads(threads)
+    if indices is None:
+        indices = range(len(scene.clouds))
     s = scene.settings
     sky = scene.sky
     sun = scene.sun
@@ -64,7 +81,7 @@ def render_cpu_args(
         "fov": float(camera.fov),
         "width": width,
         "height": height,
-        "clouds": [cloud_core_dict(c, s.kappa) for c in scene.clouds],
+        "clouds": [cloud_core_dict(scene.clouds[k], lit.lights[k], s.kappa) for k in indices],
         "sun_direction": sun.direction,
         "sun_radiance": sun.radiance,
         "sky_zenith": sky.zenith,
@@ -92,31 +109,19 @@ def render_cpu_args(
         "frequency": float(s.frequency),
         "noise": scene.noise._core,
         "threads": threads,
+        "with_sky": bool(with_sky),
     }
 
 
-def render_cpu(scene: Any, camera: Any, width: int, height: int, threads: int = 0) -> np.ndarray:
-    """Render ``scene`` seen by ``camera`` on the CPU; returns ``(height, width, 4)`` float32.
-
-    Linear RGBA, row 0 at the top; alpha is ``1 − T``. Clouds without a (current) light grid get
-    one first, by the same helper the GL renderer uses (:func:`cumuli.prepare_light`).
-    ``threads=0`` uses every core; the image does not depend on the thread count.
-    """
-    from cumuli.camera import Camera
-    from cumuli.rendering.renderer import prepare_light
-    from cumuli.scene import Scene
-
-    if not isinstance(scene, Scene):
-        raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
-    if not isinstance(camera, Camera):
-        raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
-    # Arguments are checked before the (possibly long) light pass runs.
-    width = check.integer(width, "width", 1, MAX_EDGE)
-    height = check.integer(height, "height", 1, MAX_EDGE)
-    if width * height > MAX_PIXELS:
-        raise ValueError(
-            f"image of {width}x{height} pixels is larger than the limit of {MAX_PIXELS} pixels"
-        )
-    threads = check.threads(threads)
-    prepare_light(scene)
-    return _core.render_cpu(**render_cpu_args(scene, camera, width, height, threads))
+def draw_clouds_cpu(
+    lit: LitScene,
+    indices: Sequence[int],
+    camera: Camera,
+    width: int,
+    height: int,
+    with_sky: bool,
+    threads: int = 0,
+) -> np.ndarray:
+    """The CPU twin of :meth:`cumuli.rendering.marcher.MarcherGL.draw`."""
+    args = render_cpu_args(lit, camera, width, height, threads, indices, with_sky)
+    return _core.render_cpu(**args)

@@ -1,18 +1,21 @@
-"""Rendering lit density volumes (the database frames of Iwasaki et al. 2011).
+"""The volume marcher: lit density volumes (the database frames of Iwasaki et al. 2011).
 
-:func:`render_volume` marches a ``(D, H, W)`` density volume lit by a ``(D, H, W, 4)`` light volume
+:class:`VolumeRenderer` (GL) and :func:`render_volume_cpu` (its C++ twin) march a ``(D, H, W)``
+density volume lit by a ``(D, H, W, 4)`` light volume
 (``τ_sun``, sky irradiance RGB, from :meth:`cumuli.VolumeLighting.light`) with emission–absorption:
 ``S = albedo·(sun·τ_sun·HG(g, cos θ) + E_sky/4π)``, ``colour += T·(1 − e^{−σ_t ρ h})·S``,
 ``T *= e^{−σ_t ρ h}`` in equal steps along the ray inside the volume's box; then
-``rgb = colour + T·sky(d)``, ``alpha = 1 − T``. ``backend="cpu"`` runs the C++ reference,
-``backend="gl"`` the fragment shader ``shaders/volume_march.frag.glsl`` over 3D textures; both give
-``(H, W, 4)`` float32 images with row 0 on top.
+``rgb = colour + T·sky(d)``, ``alpha = 1 − T`` (or, for the compositor, the premultiplied layer
+``(colour, 1 − T)``). The GL side is the fragment shader ``shaders/volume/march.frag.glsl`` over
+3D textures; both give ``(H, W, 4)`` float32 images with row 0 on top. :class:`VolumeGL` and
+:func:`draw_volume_cpu` are the drawers of `VolumeCloud` (kind ``"volume"``);
+:func:`cumuli.render_volume` renders one volume through the compositor.
 
 The camera is a :class:`cumuli.Camera` (or any object with ``position``, ``target``, ``fov`` —
 vertical, degrees — and optionally ``up``); the sky a :class:`cumuli.Sky` (or what
 :func:`cumuli.sky.as_sky` accepts), whose radiance without the sun disc also lights the
 volume through :class:`cumuli.VolumeLighting`. Background, sky model and phase function are the
-render pass's own (``shaders/sky.glsl``, ``shaders/phase.glsl`` and their C++ twins).
+render pass's own (``shaders/common/sky.glsl``, ``shaders/common/phase.glsl`` and their C++ twins).
 """
 
 from __future__ import annotations
@@ -28,10 +31,10 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext, _resolve_context
+from cumuli.light.prepare import LitScene
 from cumuli.model.volume import _box, _float_volumes
 from cumuli.sky import Sun, as_sky, sky_args
 
-BACKENDS = ("cpu", "gl")
 #: Most steps a ray may take (the shader's loop bound).
 MAX_STEPS = 1 << 16
 #: Largest image edge.
@@ -99,54 +102,6 @@ def _inputs(
     return vol, lig, lo, hi, width, height, step
 
 
-def render_volume(
-    volume: Any,
-    light: Any,
-    box: tuple[Sequence[float], Sequence[float]],
-    camera: Any,
-    width: int,
-    height: int,
-    sun: Sun | None = None,
-    sky: Any = None,
-    backend: str = "cpu",
-    *,
-    sigma_t: float = 1.0,
-    albedo: float = 1.0,
-    g: float = 0.2,
-    step: float | None = None,
-    threads: int = 0,
-    context: GLContext | None = None,
-) -> np.ndarray:
-    """Render a lit density volume: ``(height, width, 4)`` float32 linear RGBA, row 0 on top.
-
-    ``volume`` ``(D, H, W)`` densities over ``box = (box_min, box_max)``; ``light`` ``(D, H, W, 4)``
-    from :meth:`cumuli.VolumeLighting.light` (made with the same ``sigma_t``). ``step`` defaults
-    to half the smallest voxel edge. ``g`` is the Henyey–Greenstein asymmetry of sun scattering.
-    """
-    if backend not in BACKENDS:
-        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
-    sun = Sun() if sun is None else sun
-    if not isinstance(sun, Sun):
-        raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
-    vol, lig, lo, hi, width, height, step = _inputs(volume, light, box, width, height, step)
-    cam = camera_rays(camera)
-    sky = as_sky(sky)
-    sigma_t = check.real(sigma_t, "sigma_t", 0.0)
-    albedo = check.real(albedo, "albedo", 0.0, 1.0)
-    g = check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True)
-    if backend == "cpu":
-        return _core.render_volume_cpu(
-            vol, lig, lo, hi, cam["position"], cam["forward"], cam["right"], cam["up"],
-            cam["tan_half_fov"], width, height, sun.direction, sun.radiance, sky_args(sky),
-            sigma_t, albedo, g, step, check.threads(threads),
-        )  # fmt: skip
-    with VolumeRenderer(context) as renderer:
-        return renderer.render(
-            vol, lig, (lo, hi), cam, width, height, sun, sky,
-            sigma_t=sigma_t, albedo=albedo, g=g, step=step,
-        )  # fmt: skip
-
-
 class VolumeRenderer:
     """The GL volume marcher (``shaders/volume_march.frag.glsl``), reusable across frames.
 
@@ -179,9 +134,11 @@ class VolumeRenderer:
         albedo: float = 1.0,
         g: float = 0.2,
         step: float | None = None,
+        with_sky: bool = True,
     ) -> np.ndarray:
-        """As :func:`render_volume` with ``backend="gl"``; ``camera`` may also be the dict of
-        :func:`camera_rays`."""
+        """As :func:`cumuli.render_volume` with ``backend="gl"``; ``camera`` may also be the dict
+        of :func:`camera_rays`. ``with_sky=False`` gives the premultiplied layer
+        ``(colour, 1 − T)`` the compositor combines."""
         if self.program is None or self.context.closed:
             raise ValueError("this VolumeRenderer has been released")
         sun = Sun() if sun is None else sun
@@ -235,6 +192,7 @@ class VolumeRenderer:
                 "u_g": check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True),
                 "u_step": step,
                 "u_max_steps": MAX_STEPS,
+                "u_with_sky": bool(with_sky),
             }
             for name, value in values.items():
                 if name in prog:
@@ -266,3 +224,89 @@ class VolumeRenderer:
 
     def __exit__(self, *exc: object) -> None:
         self.release()
+
+
+def render_volume_cpu(
+    volume: np.ndarray,
+    light: np.ndarray,
+    box: tuple[tuple[float, float, float], tuple[float, float, float]],
+    camera: Any,
+    width: int,
+    height: int,
+    sun: Sun,
+    sky: Any,
+    *,
+    sigma_t: float,
+    albedo: float,
+    g: float,
+    step: float | None,
+    threads: int = 0,
+    with_sky: bool = True,
+) -> np.ndarray:
+    """The C++ twin of :meth:`VolumeRenderer.render` (``_core.render_volume_cpu``)."""
+    vol, lig, lo, hi, width, height, step = _inputs(volume, light, box, width, height, step)
+    cam = camera if isinstance(camera, dict) else camera_rays(camera)
+    return _core.render_volume_cpu(
+        vol, lig, lo, hi, cam["position"], cam["forward"], cam["right"], cam["up"],
+        cam["tan_half_fov"], width, height, sun.direction, sun.radiance, sky_args(as_sky(sky)),
+        check.real(sigma_t, "sigma_t", 0.0), check.real(albedo, "albedo", 0.0, 1.0),
+        check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True), step,
+        check.threads(threads), bool(with_sky),
+    )  # fmt: skip
+
+
+def _volume_args(lit: LitScene, k: int) -> tuple[Any, ...]:
+    volume = lit.scene.clouds[k]
+    return volume.density, lit.lights[k], volume.box
+
+
+class VolumeGL:
+    """Draws `VolumeCloud` drawables of a lit scene with :class:`VolumeRenderer` (a layer drawer,
+    see :mod:`cumuli.rendering.kinds`); one volume per draw."""
+
+    groups = False
+
+    def __init__(self, gl: GLContext, tiles: Any = None) -> None:
+        self.renderer = VolumeRenderer(gl)
+
+    @staticmethod
+    def check(scene: Any, indices: Sequence[int]) -> None:
+        """Nothing to check before the light pass."""
+
+    def draw(
+        self,
+        lit: LitScene,
+        indices: Sequence[int],
+        camera: Camera,
+        width: int,
+        height: int,
+        with_sky: bool,
+    ) -> np.ndarray:
+        (k,) = indices
+        v = lit.scene.clouds[k]
+        return self.renderer.render(
+            *_volume_args(lit, k), camera, width, height, lit.scene.sun, lit.scene.sky,
+            sigma_t=v.sigma_t, albedo=v.albedo, g=v.g, step=v.step, with_sky=with_sky,
+        )  # fmt: skip
+
+    def release(self) -> None:
+        self.renderer.release()
+
+
+def draw_volume_cpu(
+    lit: LitScene,
+    indices: Sequence[int],
+    camera: Camera,
+    width: int,
+    height: int,
+    with_sky: bool,
+    threads: int = 0,
+) -> np.ndarray:
+    """The CPU twin of :meth:`VolumeGL.draw`."""
+    (k,) = indices
+    v = lit.scene.clouds[k]
+    return render_volume_cpu(
+        *_volume_args(lit, k), camera, width, height, lit.scene.sun, lit.scene.sky,
+        sigma_t=v.sigma_t, albedo=v.albedo, g=v.g, step=v.step, threads=threads,
+        with_sky=with_sky,
+    )  # fmt: skip

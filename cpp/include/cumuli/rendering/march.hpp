@@ -93,6 +93,9 @@ struct MarchScene {
   SunParams sun;
   SkyParams sky;
   const Noise* noise = nullptr;  // may be null only when settings.density_constant ≥ 0
+  // false: no sky behind the clouds, output (colour, 1 − T), a premultiplied layer for the
+  // compositor (composite.hpp).
+  bool with_sky = true;
 
   void validate(const MarchSettings& settings) const;
 };

@@ -30,6 +30,7 @@ struct VolumeRenderParams {
   int width = 64, height = 48;
   SunParams sun;  // direction (unit, towards the sun) and radiance
   SkyParams sky;
+  bool with_sky = true;  // false: output the premultiplied layer (colour, 1 − T)
   float sigma_t = 1.0f;
   float albedo = 1.0f;
   float g = 0.2f;     // Henyey–Greenstein asymmetry

@@ -1,0 +1,31 @@
+// The compositor (RENDER_CONTRACT "Compositor"): premultiplied layers, one per drawable of any
+// kind, combined over the sky per pixel, front to back by each layer's box entry along the
+// camera ray — the rule the 2018 marcher applies to its own clouds (boxes that overlap along a
+// ray are not interleaved). Both backends composite with this function, so a mixed scene's GL
+// and CPU images differ only where their layers do.
+#pragma once
+
+#include <vector>
+
+#include "cumuli/phase.hpp"
+#include "cumuli/primitives.hpp"
+#include "cumuli/rendering/march.hpp"
+
+namespace cumuli {
+
+// One drawable's layer: (height·width·4) floats (colour premultiplied, alpha = 1 − T), row 0 at
+// the top, and the world box every contribution of the drawable lies in.
+struct Layer {
+  const float* rgba = nullptr;
+  Box box;
+};
+
+// out (height·width·4): rgb = Σ_k T_k·C_k + T·sky(d), alpha = 1 − T, with T_k the product of
+// (1 − A_j) over the layers j the ray enters before k (entry max(t_in, 0), ties in layer order)
+// and T over all of them. A layer whose box the ray misses (or that lies behind the camera)
+// contributes nothing at that pixel. The result does not depend on the thread count.
+void composite_layers(const std::vector<Layer>& layers, const CameraParams& camera, int width,
+                      int height, const SkyParams& sky, const SunParams& sun, float* out,
+                      int threads);
+
+}  // namespace cumuli

@@ -1,0 +1,196 @@
+"""The light step of a scene: every drawable's light for the scene's sun and sky, as a value.
+
+`prepare_light` runs the light pass of each drawable's kind — the NDT light grid for a 2018
+`Cloud` (:func:`cumuli.light_grid` with ``settings.light_params()``), the per-voxel sun and sky
+light for a `VolumeCloud` (:class:`cumuli.VolumeLighting`) — and returns an immutable
+:class:`LitScene` that the renderers draw. Nothing is stored on the clouds, and a failed call
+changes no object.
+
+Light a caller already has is passed in ``lights``: a `LightGrid` made by `light_grid` is used
+while its record and sun match what the scene's settings would make (otherwise recomputed); a
+grid made by hand (``LightGrid(values, box)``, no record) is used as it is. Results are
+memoised by content (the cloud's primitives, the parameters, the sun and sky), so rendering the
+same scene again — every frame of a camera path — does not repeat the light pass.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import threading
+from collections import OrderedDict
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from cumuli import _validate as check
+from cumuli.light.ndt import LightGrid, LightRecord, light_grid
+from cumuli.light.volume import VolumeLighting
+from cumuli.model.cloud import Cloud
+from cumuli.model.volume import VolumeCloud, VolumeDatabase
+from cumuli.scene import Scene
+
+#: Light objects kept by the memo (least recently used dropped first).
+MEMO_SIZE = 64
+_memo: OrderedDict[Any, Any] = OrderedDict()
+_memo_lock = threading.Lock()
+
+
+@dataclass(frozen=True, eq=False)
+class LitScene:
+    """A scene with the light of every drawable: ``lights[k]`` belongs to ``scene.clouds[k]``
+    (a :class:`cumuli.LightGrid` for a `Cloud`, a ``(D, H, W, 4)`` light volume for a
+    `VolumeCloud`). Made by :func:`prepare_light`; the renderers take it in place of a scene."""
+
+    scene: Scene
+    lights: tuple[Any, ...]
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.scene, Scene):
+            raise TypeError(f"scene must be a cumuli.Scene, got {type(self.scene).__name__}")
+        if len(self.lights) != len(self.scene.clouds):
+            raise ValueError(
+                f"a LitScene needs one light per cloud: {len(self.scene.clouds)} clouds, "
+                f"{len(self.lights)} lights"
+            )
+
+
+def _remember(key: Any, make: Callable[[], Any]) -> Any:
+    with _memo_lock:
+        if key in _memo:
+            _memo.move_to_end(key)
+            return _memo[key]
+    value = make()
+    with _memo_lock:
+        _memo[key] = value
+        while len(_memo) > MEMO_SIZE:
+            _memo.popitem(last=False)
+    return value
+
+
+def clear_memo() -> None:
+    """Forget every memoised light (they are recomputed on demand)."""
+    with _memo_lock:
+        _memo.clear()
+
+
+# --- light passes, one per kind ----------------------------------------------------------------
+def cloud_light(cloud: Cloud, scene: Scene, given: Any = None, threads: int = 0) -> LightGrid:
+    """The NDT light grid `cloud` renders with in ``scene`` (see the module docstring)."""
+    params = scene.settings.light_params()
+    sun = scene.sun.direction
+    if given is not None:
+        if not isinstance(given, LightGrid):
+            raise TypeError(
+                f"the light of a Cloud must be a cumuli.LightGrid, got {type(given).__name__}"
+            )
+        if given.record is None:
+            # Made by hand: trusted as it is, unless it says it was made for another sun.
+            if given.sun is None or np.allclose(given.sun, sun, rtol=0, atol=1e-6):
+                return given
+        elif np.allclose(given.sun, sun, rtol=0, atol=1e-6) and given.record == LightRecord.of(
+            cloud, scene.noise, params
+        ):
+            return given
+    record = LightRecord.of(cloud, scene.noise, params)
+    return _remember(
+        ("cloud", record, sun),
+        lambda: light_grid(cloud, scene.sun, scene.noise, params=params, threads=threads),
+    )
+
+
+def _digest(*arrays: np.ndarray) -> str:
+    h = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        h.update(str(a.shape).encode())
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def volume_light(
+    volume: VolumeCloud, scene: Scene, given: Any = None, threads: int = 0
+) -> np.ndarray:
+    """The ``(D, H, W, 4)`` light of a `VolumeCloud` under the scene's sun and sky: its own
+    precomputed light (or ``given``) when made for them, else computed by `VolumeLighting`."""
+    if given is not None:
+        light = np.asarray(given, dtype=np.float32)
+        if light.shape != (*volume.shape, 4) or not np.isfinite(light).all():
+            raise ValueError(
+                f"the light of a VolumeCloud must be a finite {(*volume.shape, 4)} array"
+            )
+        return light
+    if volume.light is not None and (volume.light_sun, volume.light_sky) == (scene.sun, scene.sky):
+        return volume.light
+    key = (
+        "volume",
+        _digest(volume.density),
+        volume.box,
+        volume.sigma_t,
+        volume.albedo,
+        tuple(sorted(volume.lighting.items())),
+        scene.sun,
+        scene.sky,
+    )
+
+    def make() -> np.ndarray:
+        database = VolumeDatabase(volume.density[None], *volume.box)
+        lighting = VolumeLighting(
+            database, scene.sun, scene.sky, sigma_t=volume.sigma_t, albedo=volume.albedo,
+            threads=threads, **volume.lighting,
+        )  # fmt: skip
+        light = lighting.light(0, threads=threads)
+        light.setflags(write=False)
+        return light
+
+    return _remember(key, make)
+
+
+#: The light pass of each kind of drawable: ``(drawable, scene, given, threads) -> light``.
+LIGHT_PASSES: dict[str, Callable[..., Any]] = {
+    Cloud.kind: cloud_light,
+    VolumeCloud.kind: volume_light,
+}
+
+
+def prepare_light(
+    scene: Scene | LitScene,
+    lights: Mapping[int, Any] | Sequence[Any] | None = None,
+    threads: int = 0,
+) -> LitScene:
+    """The light of every drawable of ``scene`` for its sun and sky: a :class:`LitScene`.
+
+    ``lights`` gives light the caller already has, by cloud index (a mapping) or aligned with
+    ``scene.clouds`` (a sequence, ``None`` where the light is to be computed). A `LitScene`
+    passed in is checked again (its lights count as given). Nothing is stored on the clouds.
+    """
+    if isinstance(scene, LitScene):
+        if lights is None:
+            lights = scene.lights
+        scene = scene.scene
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
+    threads = check.threads(threads)
+    n = len(scene.clouds)
+    given: list[Any] = [None] * n
+    if isinstance(lights, Mapping):
+        for k, v in lights.items():
+            if isinstance(k, bool) or not isinstance(k, (int, np.integer)) or not 0 <= k < n:
+                raise ValueError(f"lights: {k!r} is not the index of one of the {n} clouds")
+            given[int(k)] = v
+    elif lights is not None:
+        if isinstance(lights, (str, bytes)) or not isinstance(lights, Sequence):
+            raise TypeError(f"lights must be a mapping or a sequence, got {type(lights).__name__}")
+        if len(lights) != n:
+            raise ValueError(f"lights must hold one entry per cloud ({n}), got {len(lights)}")
+        given = list(lights)
+    out = []
+    for k, drawable in enumerate(scene.clouds):
+        light_pass = LIGHT_PASSES.get(drawable.kind)
+        if light_pass is None:
+            raise TypeError(f"scene.clouds[{k}]: no light pass for kind {drawable.kind!r}")
+        try:
+            out.append(light_pass(drawable, scene, given[k], threads))
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
+    return LitScene(scene, tuple(out))

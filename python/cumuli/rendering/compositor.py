@@ -1,0 +1,397 @@
+"""The compositor: one `render` for scenes holding any kinds of cloud (RENDER_CONTRACT,
+"Compositor").
+
+A render is three steps: the checks that need no light, the light step
+(:func:`cumuli.prepare_light`, skipped for a :class:`cumuli.LitScene`), and the draw. A scene
+whose drawables one drawer can draw in a single pass over the sky — only 2018 clouds (the
+marcher orders them per pixel itself), or a single drawable — is drawn so, bit-identical to that
+drawer on its own. Otherwise every drawable is drawn as a premultiplied layer ``(colour, 1 − T)``
+and ``_core.composite_layers`` (C++, shared by both backends) combines them over the sky, front
+to back per pixel by the ray's entry into each drawable's ``layer_box()``.
+
+:class:`Renderer` owns a GL context and one drawer per kind (made on first use);
+:func:`render` uses a process-wide one, or the CPU twins with ``backend="cpu"``.
+"""
+
+from __future__ import annotations
+
+import threading
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import numpy as np
+
+from cumuli import _core
+from cumuli import _validate as check
+from cumuli.camera import Camera
+from cumuli.gl import GLContext
+from cumuli.light.prepare import LitScene, prepare_light
+from cumuli.model.volume import VolumeCloud
+from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUPED_KINDS
+from cumuli.rendering.volume import MAX_IMAGE, camera_rays
+from cumuli.scene import Scene
+from cumuli.sky import Sun, as_sky, sky_args
+
+#: Largest tile drawn in one call (keeps each draw short on software GL and under driver timeouts).
+TILE = 1024
+#: Largest image accepted, in pixels (2²⁶ RGBA32F pixels = 1 GiB of output).
+MAX_PIXELS = 1 << 26
+#: Largest image edge of the CPU backend.
+MAX_EDGE = 1 << 14
+BACKENDS = ("gl", "cpu")
+
+#: A draw call: ``(kind, indices, with_sky) -> (H, W, 4) image``.
+DrawFn = Callable[[str, Sequence[int], bool], np.ndarray]
+
+
+def plan(scene: Scene) -> list[tuple[str, list[int]]]:
+    """The draw calls of ``scene``: one ``(kind, indices)`` over the sky when one pass can draw
+    everything (an empty scene draws the sky with the marcher), else one per drawable."""
+    kinds = scene.kinds
+    if not kinds:
+        return [("cloud", [])]
+    if len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS):
+        return [(kinds[0], list(range(len(kinds))))]
+    return [(kind, [k]) for k, kind in enumerate(kinds)]
+
+
+def compose(
+    lit: LitScene, camera: Camera, width: int, height: int, draw: DrawFn, threads: int = 0
+) -> np.ndarray:
+    """Draw ``lit`` with ``draw`` and composite the layers over the sky (see the module doc)."""
+    calls = plan(lit.scene)
+    if len(calls) == 1:
+        kind, indices = calls[0]
+        return draw(kind, indices, True)
+    scene = lit.scene
+    layers = np.stack([draw(kind, indices, False) for kind, indices in calls])
+    boxes = np.array([scene.clouds[k].layer_box() for k in range(len(scene.clouds))], np.float32)
+    return _core.composite_layers(
+        layers, boxes, camera.position, camera.target, camera.up, float(camera.fov),
+        sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
+    )  # fmt: skip
+
+
+def _lit(scene: Any) -> tuple[LitScene | None, Scene]:
+    if isinstance(scene, LitScene):
+        return scene, scene.scene
+    if isinstance(scene, Scene):
+        return None, scene
+    raise TypeError(f"scene must be a cumuli.Scene or cumuli.LitScene, got {type(scene).__name__}")
+
+
+def _check_size(
+    width: Any, height: Any, max_edge: int, limit_name: str | None = None
+) -> tuple[int, int]:
+    for name, v in (("width", width), ("height", height)):
+        if isinstance(v, bool) or not isinstance(v, (int, np.integer)):
+            raise TypeError(f"{name} must be an integer, got {type(v).__name__}")
+        if v < 1:
+            raise ValueError(f"{name} must be >= 1, got {v}")
+        if v > max_edge:
+            why = f" ({limit_name})" if limit_name else ""
+            raise ValueError(f"{name} must be <= {max_edge}{why}, got {v}")
+    if int(width) * int(height) > MAX_PIXELS:
+        raise ValueError(
+            f"image of {width}x{height} pixels is larger than the limit of {MAX_PIXELS} pixels"
+        )
+    return int(width), int(height)
+
+
+def _check_kinds(scene: Scene, drawers: dict[str, Any], backend: str) -> None:
+    for k, kind in enumerate(scene.kinds):
+        if kind not in drawers:
+            raise TypeError(f"scene.clouds[{k}]: the {backend} backend has no drawer for {kind!r}")
+
+
+# --------------------------------------------------------------------------------------------
+class Tiles:
+    """Draws a full-screen pass tile by tile into a reused RGBA32F framebuffer and reads it back
+    with row 0 on top (each fragment computes its whole-image pixel from ``u_tile_origin`` and
+    ``u_tile_height``, so tiling changes nothing). Times the draws with the context's query."""
+
+    def __init__(self, gl: GLContext, tile: int) -> None:
+        self.gl = gl
+        self.tile = tile
+        self._fbo: Any = None
+        self._tex: Any = None
+        self._size = (0, 0)
+        #: GPU time of the last draw's tiles in nanoseconds; None when a draw could not be timed.
+        self.last_gpu_ns: int | None = None
+
+    def _framebuffer(self, w: int, h: int) -> Any:
+        if self._size != (w, h):
+            self.release()
+            self._tex = self.gl.ctx.texture((w, h), 4, dtype="f4")
+            self._fbo = self.gl.ctx.framebuffer(color_attachments=[self._tex])
+            self._size = (w, h)
+        return self._fbo
+
+    def draw(self, vao: Any, set_uniform: Callable[[str, Any], None], width: int, height: int):
+        import moderngl
+
+        out = np.empty((height, width, 4), np.float32)
+        tw, th = min(self.tile, width), min(self.tile, height)
+        fbo = self._framebuffer(tw, th)
+        fbo.use()
+        query = self.gl.timer_query()
+        total: int | None = 0
+        for y0 in range(0, height, th):  # y0: top row of the tile
+            h = min(th, height - y0)
+            for x0 in range(0, width, tw):
+                w = min(tw, width - x0)
+                fbo.viewport = (0, 0, w, h)
+                set_uniform("u_tile_origin", (x0, y0))
+                set_uniform("u_tile_height", h)
+                with query:
+                    vao.render(mode=moderngl.TRIANGLES, vertices=3)
+                    # Software rasterisers (llvmpipe) defer the draw until a flush, so without
+                    # this the query would time the submission, not the work.
+                    self.gl.ctx.finish()
+                elapsed = int(query.elapsed)
+                # llvmpipe answers 2³²−1 for a query it could not time (seen on the first draw).
+                if total is not None and 0 <= elapsed < 0xFFFFFFFF:
+                    total += elapsed
+                else:
+                    total = None
+                data = fbo.read(viewport=(0, 0, w, h), components=4, dtype="f4")
+                tile = np.frombuffer(data, np.float32).reshape(h, w, 4)
+                out[y0 : y0 + h, x0 : x0 + w] = tile[::-1]
+        self.last_gpu_ns = total
+        return out
+
+    def release(self) -> None:
+        if not self.gl.closed:
+            for obj in (self._fbo, self._tex):
+                if obj is not None:
+                    obj.release()
+        self._fbo = self._tex = None
+        self._size = (0, 0)
+
+
+class Renderer:
+    """A GL renderer of scenes of every kind; use as a context manager or call :meth:`close`.
+
+    Parameters
+    ----------
+    context:
+        An existing :class:`cumuli.gl.GLContext` to draw with (not closed by :meth:`close`);
+        by default the renderer creates and owns one.
+    tile:
+        Largest tile edge drawn per draw call (images larger than this are rendered in tiles).
+    """
+
+    def __init__(self, context: GLContext | None = None, tile: int = TILE) -> None:
+        self.closed = False
+        self._owns_context = False
+        self._drawers: dict[str, Any] = {}
+        # Arguments first: a bad one must not leave a context behind.
+        self.tile = check.integer(tile, "tile", 16, 4096)
+        if context is not None:
+            if not isinstance(context, GLContext):
+                raise TypeError(
+                    f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
+                )
+            if context.closed:
+                raise ValueError("context is closed")
+        self._owns_context = context is None
+        self.gl = GLContext() if context is None else context
+        self.tiles = Tiles(self.gl, self.tile)
+        try:
+            self.drawer("cloud")  # the marcher compiles now: a broken driver fails here
+        except Exception:
+            self.close()
+            raise
+        self.max_texture_size = int(self.gl.ctx.info["GL_MAX_TEXTURE_SIZE"])
+        #: GPU time of the last render's draws in nanoseconds (GL timer queries of the tiled
+        #: passes); None when the driver could not time a draw.
+        self.last_gpu_ns: int | None = None
+
+    @property
+    def renderer_string(self) -> str:
+        """The GL_RENDERER string of the context (e.g. ``llvmpipe (LLVM 15.0.6, 256 bits)``)."""
+        return self.gl.renderer
+
+    def drawer(self, kind: str) -> Any:
+        """The GL drawer of ``kind`` (made on first use)."""
+        if kind not in self._drawers:
+            self._drawers[kind] = GL_DRAWERS[kind](self.gl, self.tiles)
+        return self._drawers[kind]
+
+    def render(
+        self, scene: Scene | LitScene, camera: Camera, width: int, height: int
+    ) -> np.ndarray:
+        """Render ``scene`` seen by ``camera``: ``(height, width, 4)`` float32 linear RGBA, row 0
+        at the top, alpha = 1 − transmittance. A `Scene`'s light is prepared first
+        (:func:`cumuli.prepare_light`); a `LitScene` is drawn with its own."""
+        if self.closed:
+            raise RuntimeError("this Renderer is closed")
+        lit, plain = _lit(scene)
+        if not isinstance(camera, Camera):
+            raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
+        width, height = _check_size(width, height, self.max_texture_size, "GL_MAX_TEXTURE_SIZE")
+        _check_kinds(plain, GL_DRAWERS, "GL")
+        for kind, indices in plan(plain):  # before the light pass, which could be long
+            GL_DRAWERS[kind].check(plain, indices)
+        lit = prepare_light(plain) if lit is None else lit
+        gpu_ns: list[int | None] = []
+
+        def draw(kind: str, indices: Sequence[int], with_sky: bool) -> np.ndarray:
+            drawer = self.drawer(kind)
+            self.tiles.last_gpu_ns = None
+            img = drawer.draw(lit, indices, camera, width, height, with_sky)
+            gpu_ns.append(self.tiles.last_gpu_ns if kind in GROUPED_KINDS else None)
+            return img
+
+        image = compose(lit, camera, width, height, draw)
+        self.last_gpu_ns = sum(gpu_ns) if gpu_ns and None not in gpu_ns else None  # type: ignore
+        return image
+
+    # --- lifetime ---------------------------------------------------------------------------
+    def close(self) -> None:
+        """Release every GL object (and the context when this renderer created it)."""
+        if self.closed:
+            return
+        self.closed = True
+        if hasattr(self, "gl") and not self.gl.closed:
+            for drawer in self._drawers.values():
+                try:
+                    drawer.release()
+                except Exception:
+                    pass
+            if hasattr(self, "tiles"):
+                self.tiles.release()
+        self._drawers.clear()
+        if self._owns_context and hasattr(self, "gl"):
+            self.gl.close()
+
+    def __enter__(self) -> Renderer:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    def __del__(self) -> None:  # best effort; close() is the contract
+        try:
+            self.close()
+        except Exception:
+            pass
+
+
+# --------------------------------------------------------------------------------------------
+_shared: Renderer | None = None
+_shared_lock = threading.Lock()
+
+
+def shared_renderer() -> Renderer:
+    """The process-wide renderer used by :func:`render` (created on first use)."""
+    global _shared
+    with _shared_lock:
+        if _shared is None or _shared.closed or _shared.gl.closed:
+            from cumuli.gl import default_context
+
+            # Shares the process-wide context with the other GL conveniences (one EGL context).
+            _shared = Renderer(context=default_context())
+        return _shared
+
+
+def render_cpu(
+    scene: Scene | LitScene, camera: Camera, width: int, height: int, threads: int = 0
+) -> np.ndarray:
+    """Render ``scene`` seen by ``camera`` with the C++ twins of every drawer and the C++
+    compositor; returns ``(height, width, 4)`` float32 linear RGBA, row 0 at the top, alpha
+    ``1 − T``. ``threads=0`` uses every core; the image does not depend on the thread count."""
+    lit, plain = _lit(scene)
+    if not isinstance(camera, Camera):
+        raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
+    # Arguments are checked before the (possibly long) light pass runs.
+    width, height = _check_size(width, height, MAX_EDGE)
+    threads = check.threads(threads)
+    _check_kinds(plain, CPU_DRAWERS, "CPU")
+    lit = prepare_light(plain, threads=threads) if lit is None else lit
+
+    def draw(kind: str, indices: Sequence[int], with_sky: bool) -> np.ndarray:
+        return CPU_DRAWERS[kind](lit, indices, camera, width, height, with_sky, threads)
+
+    return compose(lit, camera, width, height, draw, threads)
+
+
+def render(
+    scene: Scene | LitScene,
+    camera: Camera | None = None,
+    width: int = 640,
+    height: int = 480,
+    backend: str = "gl",
+) -> np.ndarray:
+    """Render ``scene`` (a `Scene` or a `LitScene`) to an ``(height, width, 4)`` float32 linear
+    RGBA image, row 0 on top.
+
+    ``backend="gl"`` runs the GLSL drawers in a process-wide headless context; ``"cpu"`` runs
+    their C++ twins (same contract, for parity and for machines without EGL). ``camera``
+    defaults to :meth:`Scene.default_camera`.
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    _, plain = _lit(scene)
+    if camera is None:
+        camera = plain.default_camera()
+    if backend == "gl":
+        return shared_renderer().render(scene, camera, width, height)
+    return render_cpu(scene, camera, width, height)
+
+
+def _as_camera(camera: Any) -> Camera:
+    if isinstance(camera, Camera):
+        return camera
+    if isinstance(camera, dict):
+        raise TypeError("camera must be a cumuli.Camera or an object with position, target, fov")
+    rays = camera_rays(camera)  # validates a duck-typed camera
+    target = np.add(rays["position"], rays["forward"])
+    return Camera(rays["position"], tuple(target), getattr(camera, "up", (0, 1, 0)), camera.fov)
+
+
+def render_volume(
+    volume: Any,
+    light: Any,
+    box: tuple[Sequence[float], Sequence[float]],
+    camera: Any,
+    width: int,
+    height: int,
+    sun: Sun | None = None,
+    sky: Any = None,
+    backend: str = "cpu",
+    *,
+    sigma_t: float = 1.0,
+    albedo: float = 1.0,
+    g: float = 0.2,
+    step: float | None = None,
+    threads: int = 0,
+    context: GLContext | None = None,
+) -> np.ndarray:
+    """Render one lit density volume: ``(height, width, 4)`` float32 linear RGBA, row 0 on top.
+
+    ``volume`` ``(D, H, W)`` densities over ``box = (box_min, box_max)``; ``light`` ``(D, H, W, 4)``
+    from :meth:`cumuli.VolumeLighting.light` (made with the same ``sigma_t``). ``step`` defaults
+    to half the smallest voxel edge. ``g`` is the Henyey–Greenstein asymmetry of sun scattering.
+    A thin wrapper: a scene holding one :class:`cumuli.VolumeCloud` through :func:`render`.
+    """
+    if backend not in BACKENDS:
+        raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    sun = Sun() if sun is None else sun
+    if not isinstance(sun, Sun):
+        raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
+    sky = as_sky(sky)
+    width = check.integer(width, "width", 1, MAX_IMAGE)
+    height = check.integer(height, "height", 1, MAX_IMAGE)
+    cam = _as_camera(camera)
+    vc = VolumeCloud(
+        density=volume, box=box, sigma_t=sigma_t, albedo=albedo, g=g, step=step, light=light,
+        light_sun=sun, light_sky=sky,
+    )  # fmt: skip
+    scene = Scene([vc], sun=sun, sky=sky)
+    if backend == "cpu":
+        return render_cpu(scene, cam, width, height, threads=threads)
+    if context is None:
+        return shared_renderer().render(scene, cam, width, height)
+    with Renderer(context=context) as renderer:
+        return renderer.render(scene, cam, width, height)

@@ -1,0 +1,275 @@
+"""The 2018 paper's GLSL ray marcher (Jiménez de Parga & Gómez Palomo 2018, Algorithms 1 and 3).
+
+:class:`MarcherGL` compiles ``shaders/march/march.frag.glsl`` (one variant per candidate sort,
+on first use) on a :class:`cumuli.gl.GLContext` and draws a group of 2018 clouds of a lit scene:
+primitives and clouds as storage buffers, light grids packed into one 3D atlas, the noise lattice
+as a REPEAT/LINEAR 3D texture, a full-screen triangle per tile into an RGBA32F framebuffer read
+back with row 0 at the top. The maths is RENDER_CONTRACT.md; the C++ twin is
+``cumuli.rendering.cpu`` (``_core.render_cpu``).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import Any
+
+import moderngl
+import numpy as np
+
+from cumuli.camera import Camera
+from cumuli.gl import GLContext
+from cumuli.light.prepare import LitScene
+from cumuli.model.cloud import Cloud
+from cumuli.scene import Scene
+from cumuli.settings import CANDIDATE_SORTS, MAX_CANDIDATES, MAX_CLOUDS
+
+#: Most primitives per cloud the GL marcher accepts, by density model. Every loop of the shader
+#: is bounded, but not by a constant: per pixel, candidate collection tests all N primitives of
+#: each cloud the ray's box test hits, and a metaball sample sums the field over all N
+#: primitives (up to max_steps samples), so one fragment costs O(N) resp. O(N·max_steps). A
+#: draw that runs for seconds trips GPU watchdogs (Windows TDR ≈ 2 s, Linux drivers' hang
+#: checks) and loses the context. Up to these sizes a tile stays far below that on a desktop GPU
+#: (512-primitive clouds are benchmarked); larger clouds go to backend="cpu", which has no
+#: watchdog, or must be split.
+MAX_GL_PRIMITIVES = {"spheroid": 65536, "metaball": 1024}
+
+
+def check_gl_limits(scene: Scene, indices: Sequence[int] | None = None) -> None:
+    """Refuse clouds too large for one GL draw (:data:`MAX_GL_PRIMITIVES`) with a clear error."""
+    for k in range(len(scene.clouds)) if indices is None else indices:
+        cloud = scene.clouds[k]
+        if not isinstance(cloud, Cloud):
+            continue
+        limit = MAX_GL_PRIMITIVES[cloud.model]
+        if cloud.n > limit:
+            raise ValueError(
+                f"scene.clouds[{k}] has {cloud.n} primitives; the GL renderer takes at most "
+                f"{limit} per {cloud.model} cloud (per-pixel work grows with the primitive count "
+                "and a long draw can trip the GPU watchdog): use backend='cpu' or fewer "
+                "primitives (split the cloud)"
+            )
+
+
+def pack_clouds(
+    clouds: Sequence[Cloud], grids: Sequence[Any], kappa_override: float | None
+) -> tuple[bytes, bytes, np.ndarray]:
+    """Storage-buffer bytes for primitives and clouds and the light atlas ``[z, y, x]``.
+
+    Layout: see shaders/march/scene_data.glsl. Light grids are stacked along z; each cloud
+    records its first slice. Boxes, the LOD centre and r̄² come from the cloud in the core's
+    float32 order (`Cloud.layer_box`, `Cloud.centre`, `Cloud.mean_r2`).
+    """
+    prims: list[np.ndarray] = []
+    floats = np.zeros((max(len(clouds), 1), 24), np.float32)
+    ints = np.zeros((max(len(clouds), 1), 8), np.int32)
+    first = 0
+    z0 = 0
+    atlas_w = max((g.shape[2] for g in grids), default=1)
+    atlas_h = max((g.shape[1] for g in grids), default=1)
+    atlas_d = max(sum(g.shape[0] for g in grids), 1)
+    atlas = np.zeros((atlas_d, atlas_h, atlas_w), np.float32)
+    for k, (cloud, grid) in enumerate(zip(clouds, grids, strict=True)):
+        n = cloud.n
+        p = np.zeros((n, 20), np.float32)
+        p[:, 0:3] = cloud.centres
+        p[:, 4:7] = cloud.radii
+        for a in range(3):  # rotation columns = the ellipsoid's axes
+            p[:, 8 + 4 * a : 11 + 4 * a] = cloud.rotations[:, :, a]
+        prims.append(p)
+        lo, hi = cloud.layer_box()
+        values = np.ascontiguousarray(grid, dtype=np.float32)
+        d, h, w = values.shape
+        llo, lhi = grid.box
+        floats[k, 0:3], floats[k, 3] = lo, cloud.candidate_scale
+        floats[k, 4:7] = hi
+        floats[k, 8:11] = cloud.centre  # the LOD distance
+        floats[k, 12:15] = llo
+        floats[k, 16:19] = lhi
+        floats[k, 20] = cloud.kappa if kappa_override is None else kappa_override
+        # Kept apart, so the shader computes (fbm·r̄²)·φ in the C++ order.
+        floats[k, 21] = cloud.mean_r2
+        floats[k, 22] = cloud.phi
+        ints[k, 0:4] = (first, n, 1 if cloud.model == "metaball" else 0, 0)
+        ints[k, 4:8] = (w, h, d, z0)
+        atlas[z0 : z0 + d, :h, :w] = values
+        first += n
+        z0 += d
+    prim_bytes = (np.concatenate(prims) if prims else np.zeros((1, 20), np.float32)).tobytes()
+    cloud_bytes = np.concatenate([floats.view(np.uint32), ints.view(np.uint32)], axis=1).tobytes()
+    return prim_bytes, cloud_bytes, atlas
+
+
+class MarcherGL:
+    """Draws 2018 clouds of a :class:`LitScene` with the GLSL marcher (a layer drawer, see
+    :mod:`cumuli.rendering.kinds`). Several clouds are marched in one pass, front to back by
+    their box entry, as the paper does."""
+
+    #: Draws several clouds of its kind in one pass (the compositor's single-pass path).
+    groups = True
+
+    def __init__(self, gl: GLContext, tiles: Any) -> None:
+        self.gl = gl
+        self.tiles = tiles
+        self._variants: dict[str, tuple[Any, Any]] = {}
+        self._noise_tex: Any = None
+        self._noise_key: tuple[int, int] | None = None
+        self.program: Any = None
+        self.vao: Any = None
+        info = gl.ctx.info
+        self.max_3d_texture_size = int(info["GL_MAX_3D_TEXTURE_SIZE"])
+        #: Largest storage buffer the shader may index (the primitives of all clouds share one).
+        self.max_storage_block_size = int(info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 27))
+        self._use_variant("insertion")
+
+    def _use_variant(self, candidate_sort: str) -> None:
+        """Make the marcher compiled for ``candidate_sort`` current (compiled on first use)."""
+        if candidate_sort not in self._variants:
+            program = self.gl.program(
+                "common/fullscreen.vert.glsl",
+                "march/march.frag.glsl",
+                defines={"CANDIDATE_SORT": CANDIDATE_SORTS.index(candidate_sort)},
+            )
+            try:
+                vao = self.gl.ctx.vertex_array(program, [])
+            except Exception:
+                program.release()
+                raise
+            self._variants[candidate_sort] = (program, vao)
+        self.program, self.vao = self._variants[candidate_sort]
+
+    def _noise_texture(self, scene: Scene) -> Any:
+        key = (scene.noise.seed, scene.noise.size)
+        if self._noise_key != key:
+            if self._noise_tex is not None:
+                self._noise_tex.release()
+                self._noise_tex = None
+            n = scene.noise.size
+            tex = self.gl.ctx.texture3d((n, n, n), 1, scene.noise.lattice.tobytes(), dtype="f4")
+            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            tex.repeat_x = tex.repeat_y = tex.repeat_z = True
+            self._noise_tex, self._noise_key = tex, key
+        return self._noise_tex
+
+    def _set(self, name: str, value: Any) -> None:
+        # Uniforms the compiler optimised away are simply absent.
+        if name in self.program:
+            self.program[name].value = value
+
+    @staticmethod
+    def check(scene: Scene, indices: Sequence[int]) -> None:
+        """Checks that need no light: cloud count and primitives per cloud."""
+        if len(indices) > MAX_CLOUDS:
+            raise ValueError(f"the GL renderer draws at most {MAX_CLOUDS} clouds")
+        check_gl_limits(scene, indices)
+
+    def draw(
+        self,
+        lit: LitScene,
+        indices: Sequence[int],
+        camera: Camera,
+        width: int,
+        height: int,
+        with_sky: bool,
+    ) -> np.ndarray:
+        """The clouds ``indices`` of ``lit`` over the sky (``with_sky``) or as a premultiplied
+        layer ``(colour, 1 − T)``: ``(height, width, 4)`` float32, row 0 on top."""
+        scene = lit.scene
+        clouds = [scene.clouds[k] for k in indices]
+        grids = [lit.lights[k] for k in indices]
+        prim_bytes, cloud_bytes, atlas = pack_clouds(clouds, grids, scene.settings.kappa)
+        if len(prim_bytes) > self.max_storage_block_size:
+            # Beyond it the driver clamps or drops the reads: primitives would silently vanish.
+            raise ValueError(
+                f"the scene's {sum(c.n for c in clouds)} primitives need "
+                f"{len(prim_bytes)} bytes of storage buffer, more than this GL's "
+                f"GL_MAX_SHADER_STORAGE_BLOCK_SIZE={self.max_storage_block_size}; use fewer "
+                "primitives or backend='cpu'"
+            )
+        if max(atlas.shape) > self.max_3d_texture_size:
+            raise ValueError(
+                f"the light grids need a {atlas.shape[::-1]} atlas, larger than "
+                f"GL_MAX_3D_TEXTURE_SIZE={self.max_3d_texture_size}; use fewer clouds or a "
+                "smaller settings.light_resolution"
+            )
+        ctx = self.gl.ctx
+        scratch: list[Any] = []
+        try:
+            prim_buf = ctx.buffer(prim_bytes)
+            scratch.append(prim_buf)
+            cloud_buf = ctx.buffer(cloud_bytes)
+            scratch.append(cloud_buf)
+            d, h, w = atlas.shape
+            light_tex = ctx.texture3d((w, h, d), 1, atlas.tobytes(), dtype="f4")
+            scratch.append(light_tex)
+            light_tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+            light_tex.repeat_x = light_tex.repeat_y = light_tex.repeat_z = False
+            prim_buf.bind_to_storage_buffer(0)
+            cloud_buf.bind_to_storage_buffer(1)
+            self._use_variant(scene.settings.candidate_sort)
+            self._noise_texture(scene).use(location=0)
+            light_tex.use(location=1)
+            self._set_uniforms(scene, len(clouds), camera, width, height, with_sky)
+            return self.tiles.draw(self.vao, self._set, width, height)
+        finally:
+            for obj in scratch:
+                obj.release()
+
+    def _set_uniforms(
+        self, scene: Scene, count: int, camera: Camera, width: int, height: int, with_sky: bool
+    ) -> None:
+        s = scene.settings
+        f, r, u = camera.basis()
+        set_ = self._set
+        set_("u_lattice", 0)
+        set_("u_light_atlas", 1)
+        set_("u_cam_pos", tuple(np.float32(camera.position).tolist()))
+        set_("u_cam_f", tuple(f.tolist()))
+        set_("u_cam_r", tuple(r.tolist()))
+        set_("u_cam_u", tuple(u.tolist()))
+        set_("u_th", math.tan(math.radians(camera.fov) / 2))
+        set_("u_aspect", width / height)
+        set_("u_image_size", (width, height))
+        set_("u_sun_dir", scene.sun.direction)
+        set_("u_sun_radiance", scene.sun.radiance)
+        sky = scene.sky
+        set_("u_sky_zenith", sky.zenith)
+        set_("u_sky_horizon", sky.horizon)
+        set_("u_sky_ground", sky.ground)
+        set_("u_sky_exponent", sky.exponent)
+        rad = math.radians(sky.sun_disc_radius)
+        set_("u_sun_disc", (math.cos(1.5 * rad), math.cos(rad)))
+        set_("u_sun_disc_intensity", sky.sun_disc_intensity)
+        set_("u_with_sky", bool(with_sky))
+        set_("u_cloud_count", count)
+        set_("u_absorption", s.absorption)
+        set_("u_step_ref", s.step_ref)
+        set_("u_lod_a", s.lod_a)
+        set_("u_lod_delta", s.lod_delta)
+        set_("u_step_min", s.step_min)
+        set_("u_step_max", s.step_max)
+        set_("u_fixed_step", s.fixed_step)
+        set_("u_g", s.hg_g)
+        set_("u_max_steps", s.max_steps)
+        set_("u_max_candidates", min(s.max_candidates, MAX_CANDIDATES))
+        set_("u_union", s.march == "union")
+        set_("u_exact", s.exact_noise)
+        set_("u_octaves", s.octaves)
+        set_("u_gain", s.gain)
+        set_("u_lacunarity", s.lacunarity)
+        set_("u_frequency", s.frequency)
+
+    def release(self) -> None:
+        """Release the programs and the noise texture (idempotent)."""
+        if not self.gl.closed:
+            for program, vao in self._variants.values():
+                for obj in (vao, program):
+                    try:
+                        obj.release()
+                    except Exception:
+                        pass
+            if self._noise_tex is not None:
+                self._noise_tex.release()
+        self._variants.clear()
+        self._noise_tex = None
+        self._noise_key = None
