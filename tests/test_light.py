@@ -311,7 +311,7 @@ def test_metaballs(noise):
     # The box is the primitives grown by √N (plus half a voxel).
     np.testing.assert_allclose(grid.box[1], hi, atol=1e-5)
     assert grid.min() < 0.95
-    naive = cu.light_grid(cloud, sun, noise, resolution=4, method="naive", )
+    naive = cu.light_grid(cloud, sun, noise, resolution=4, method="naive")
     assert (naive <= grid + 1e-6).all()
 
 
@@ -472,9 +472,9 @@ def test_values_bounded_and_sun_forms_equivalent(noise):
     assert (grid > 0).all()
     assert (grid <= 1.0 + C_DEFAULT * st.samples + 1e-6).all()
     # Forward scattering (eq. 6) only adds light: without it every voxel is darker or equal.
-    dark = cu.light_grid(cloud, (0.3, 0.8, 0.2), noise, resolution=8, solid_angle=0.0, )
+    dark = cu.light_grid(cloud, (0.3, 0.8, 0.2), noise, resolution=8, solid_angle=0.0)
     assert (dark <= grid).all() and (dark < grid).any()
-    same = cu.light_grid(cloud, np.array([0.6, 1.6, 0.4]), noise, resolution=8, )
+    same = cu.light_grid(cloud, np.array([0.6, 1.6, 0.4]), noise, resolution=8)
     np.testing.assert_array_equal(grid, same)  # directions are normalised
 
 
