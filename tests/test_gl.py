@@ -1,4 +1,4 @@
-"""GLSL ↔ C++ parity for fBm (shaders/noise.glsl via cumuli.gl.fbm) and GL resource hygiene."""
+"""GLSL ↔ C++ parity for fBm (shaders/common/noise.glsl via cumuli.gl.fbm) and GL hygiene."""
 
 from __future__ import annotations
 

@@ -66,9 +66,13 @@ def vec3(value: Any, name: str, *, bound: float | None = None) -> tuple[float, f
 
 
 def direction(value: Any, name: str) -> tuple[float, float, float]:
-    """Return ``value`` normalised; zero-length or non-finite vectors are rejected."""
+    """Return ``value`` normalised; zero-length or non-finite vectors are rejected. A vector that
+    is already unit length (to 4 ulps) is returned as it is, so normalising is idempotent and a
+    direction read back from a file equals the one saved."""
     v = vec3(value, name)
     n = math.sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2])
+    if abs(n - 1.0) <= 4 * 2.220446049250313e-16:
+        return v
     if n < 1e-12:
         raise ValueError(f"{name} must not be the zero vector")
     if math.isinf(n):  # components beyond ~1e154 overflow when squared: scale them down first

@@ -206,7 +206,7 @@ def _resolve_context(context: GLContext | None) -> GLContext:
     return context
 
 
-# --- fBm on the GPU (shaders/noise.glsl through shaders/fbm_points.comp.glsl) ---------------------
+# --- fBm on the GPU (common/noise.glsl through noise/fbm_points.comp.glsl) -----------------------
 
 #: Points per dispatch: 4 Mi points is 48 MiB of xyz, under llvmpipe's 128 MiB storage-block limit;
 #: drivers with a smaller GL_MAX_SHADER_STORAGE_BLOCK_SIZE get smaller batches.
@@ -345,7 +345,7 @@ def fbm(
     exact: bool = False,
     context: GLContext | None = None,
 ) -> np.ndarray:
-    """fBm (eq. 1) of ``noise`` at ``(N, 3)`` points, evaluated by ``shaders/noise.glsl`` on a GPU.
+    """fBm (eq. 1) of ``noise`` at ``(N, 3)`` points, by ``shaders/common/noise.glsl`` on a GPU.
 
     This is the GLSL twin of :meth:`cumuli.Noise.fbm`, used to check that the shaders and the C++
     core agree. ``exact=True`` blends the 8 texels by hand with float weights (agrees with the

@@ -2,7 +2,7 @@
 
 A ``size³`` lattice of uniform values in [0, 1) and its fractal Brownian motion,
 ``fbm(p) = Σ_{i=1..n} wⁱ · lattice(sⁱ · f · p)``, looked up with the GL texel-centre trilinear
-convention so that the GLSL twin in ``shaders/noise.glsl`` agrees.
+convention so that the GLSL twin in ``shaders/common/noise.glsl`` agrees.
 """
 
 from __future__ import annotations

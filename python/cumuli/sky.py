@@ -88,7 +88,7 @@ class Sky:
         )
 
     def colour(self, directions: np.ndarray, sun: Sun) -> np.ndarray:
-        """Sky radiance for unit directions ``(..., 3)`` (numpy reference of shaders/sky.glsl)."""
+        """Sky radiance for unit directions ``(..., 3)`` (numpy twin of shaders/common/sky.glsl)."""
         d = np.asarray(directions, dtype=np.float32)
         zen, hor, gnd = (
             np.asarray(c, dtype=np.float32) for c in (self.zenith, self.horizon, self.ground)

@@ -31,7 +31,7 @@ float LightGrid::sample(glm::vec3 p) const {
   auto at = [&](int x, int y, int z) {
     return values[(static_cast<std::size_t>(z) * ny + y) * nx + x];
   };
-  // Blend along x, then y, then z (as noise.cpp and shaders/noise.glsl do).
+  // Blend along x, then y, then z (as noise.cpp and shaders/common/noise.glsl do).
   const float c00 = at(x0, y0, z0) + w.x * (at(x1, y0, z0) - at(x0, y0, z0));
   const float c10 = at(x0, y1, z0) + w.x * (at(x1, y1, z0) - at(x0, y1, z0));
   const float c01 = at(x0, y0, z1) + w.x * (at(x1, y0, z1) - at(x0, y0, z1));

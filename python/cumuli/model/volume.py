@@ -313,6 +313,10 @@ class VolumeCloud:
         """``(D, H, W)`` of the density."""
         return tuple(int(v) for v in self.density.shape)  # type: ignore[return-value]
 
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """The volume's box as float32 ``(lo, hi)`` (what a camera frames)."""
+        return self.layer_box()
+
     def layer_box(self) -> tuple[np.ndarray, np.ndarray]:
         """The volume's box (float32): the compositor orders it by a ray's entry into it."""
         lo, hi = self.box

@@ -103,7 +103,7 @@ def _inputs(
 
 
 class VolumeRenderer:
-    """The GL volume marcher (``shaders/volume_march.frag.glsl``), reusable across frames.
+    """The GL volume marcher (``shaders/volume/march.frag.glsl``), reusable across frames.
 
     Compiles the program once on ``context`` (the default context when ``None``); each
     :meth:`render` uploads the density and light as 3D float textures and draws one triangle

@@ -1,6 +1,6 @@
 // Emission–absorption ray marching through a density volume lit by a per-voxel light volume
 // (Iwasaki et al. 2011's rendering of the database volumes): the CPU reference that
-// shaders/volume_march.frag.glsl mirrors.
+// shaders/volume/march.frag.glsl mirrors.
 //
 // Per pixel: the ray o + t·d (pinhole camera, vertical fov, row 0 on top, pixel centres) is
 // clipped to the volume's box and marched in equal steps no longer than `step`. At a sample,
