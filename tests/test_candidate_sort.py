@@ -2,8 +2,8 @@
 
 Insertion sort, iterative quicksort and Batcher's odd-even mergesort are compile-time variants of
 shaders/march/march.frag.glsl that must order candidates identically (by t_in, ties by primitive
-index), so their images are bit-identical; "none" leaves them unsorted, changes the image where intervals
-overlap, and the CPU marcher reproduces it.
+index), so their images are bit-identical; "none" leaves them unsorted, changes the image where
+intervals overlap, and the CPU marcher reproduces it.
 """
 
 from __future__ import annotations
