@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from cumuli._version import __version__
 from cumuli.anim import frames
+from cumuli.anim.cluster import sweep
 from cumuli.anim.endless import (
     EndlessAnimation,
     blend_volumes,
@@ -83,6 +84,7 @@ __all__ = [
     "render",
     "render_cpu",
     "render_frames",
+    "sweep",
     "Renderer",
     "RenderSettings",
     "Scene",

@@ -6,6 +6,7 @@ import math
 import os
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -92,6 +93,7 @@ def render_frames(
     pattern: str = "frame_{:04d}.png",
     progress: bool = True,
     alpha: bool = False,
+    client: Any = None,
 ) -> list[Path]:
     """Render ``scene`` from each camera and write numbered images into ``out_dir``.
 
@@ -99,7 +101,9 @@ def render_frames(
     format (``.png`` sRGB8 or ``.exr`` float32). ``out_dir`` is created if missing. A tqdm bar
     shows progress unless ``progress=False``. Frames are opaque (the render is already
     composited over the sky) unless ``alpha=True`` keeps the clouds' coverage ``1 − T`` as alpha.
-    Returns the paths written, in order.
+    Returns the paths written, in order. With a ``dask.distributed`` ``client`` every frame is
+    a task on the cluster (see :mod:`cumuli.anim.cluster`; ``out_dir`` must be a folder the
+    workers see); the images are the same.
     """
     from cumuli.io.images import write_image
     from cumuli.rendering.compositor import render
@@ -129,6 +133,16 @@ def render_frames(
         raise OSError(f"cannot create out_dir {str(folder)!r}: {exc.strerror or exc}") from exc
     if not os.access(folder, os.W_OK):
         raise OSError(f"out_dir {str(folder)!r} is not writable")
+    if client is not None:
+        from cumuli.anim.cluster import _check_client, render_task, run
+
+        _check_client(client, backend)
+        data = scene.to_dict()
+        tasks = [
+            (render_task, (data, cam.to_dict(), width, height, backend, str(folder / n), alpha))
+            for cam, n in zip(cams, names, strict=True)
+        ]
+        return [Path(p) for p in run(tasks, client, progress)]
     from tqdm.auto import tqdm
 
     paths = []
