@@ -13,6 +13,10 @@ void bind_volume_light(py::module_& m);
 void bind_march(py::module_& m);
 void bind_volume_march(py::module_& m);
 void bind_anim(py::module_& m);
+void bind_seedbox(py::module_& m);
+void bind_sprite_atlas(py::module_& m);
+void bind_caf(py::module_& m);
+void bind_weather(py::module_& m);
 }  // namespace cumuli::bind
 
 PYBIND11_MODULE(_core, m) {
@@ -25,4 +29,8 @@ PYBIND11_MODULE(_core, m) {
   cumuli::bind::bind_march(m);
   cumuli::bind::bind_volume_march(m);
   cumuli::bind::bind_anim(m);
+  cumuli::bind::bind_seedbox(m);
+  cumuli::bind::bind_sprite_atlas(m);
+  cumuli::bind::bind_caf(m);
+  cumuli::bind::bind_weather(m);
 }
