@@ -1,0 +1,1 @@
+"""Animation stage: time-dependent skies and clouds."""

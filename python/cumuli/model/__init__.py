@@ -1,0 +1,1 @@
+"""Model stage: cloud data and generators."""
