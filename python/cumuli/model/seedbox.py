@@ -48,7 +48,8 @@ def _real_range(
 class SeedBox:
     """One seed box ([TM] §3.1): a box that grows child boxes along reproduction directions.
 
-    ``centre`` S and ``half_size`` h (world); ``directions`` D_i (normalised here) with full cone
+    ``centre`` S and ``half_size`` h (world); ``directions`` D_i (any length, the generator
+    normalises them) with full cone
     ``apertures`` θ_i in degrees ([0, 360]); ``levels`` L in [1, 16]; ``boxes_per_level``
     ``(n_min, n_max)`` drawn per (level, direction) (``count_per="direction"``) or per level
     (``"level"``: each box then picks its direction uniformly); ``reach`` λ in world units (None:
@@ -81,7 +82,11 @@ class SeedBox:
             dirs = dirs.tolist()
         if not isinstance(dirs, (tuple, list)) or not 1 <= len(dirs) <= 64:
             raise ValueError("directions must hold 1 to 64 vectors (x, y, z)")
-        set_(self, "directions", tuple(check.direction(d, "directions") for d in dirs))
+        for d in dirs:
+            check.direction(d, "directions")  # finite and non-zero
+        # Kept as given (the generator normalises): re-normalising on every load would change
+        # the last bits, hence the clouds, of a saved model.
+        set_(self, "directions", tuple(check.vec3(d, "directions") for d in dirs))
         aps = self.apertures
         if isinstance(aps, np.ndarray):
             aps = aps.tolist()
