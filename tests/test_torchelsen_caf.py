@@ -301,3 +301,16 @@ def test_caf_ranks_like_the_ndt_light_grid(sun) -> None:
     rho = rank_correlation(caf, grid)
     assert rho > 0.8, rho
     assert rank_correlation(absorption_factors(c, sun).caf, grid) > 0.7
+
+
+def test_shading_settings_round_trip() -> None:
+    sh = BillboardShading(
+        d_min=0.1, ambient=(0.2, 0.3, 0.4), height_levels=((0.0, 0.5), (1.0, 1.0)),
+        max_distance=math.inf, overlap="union", caf_at="billboard", shading="fragment",
+    )  # fmt: skip
+    d = sh.to_dict()
+    assert d["max_distance"] == "inf"
+    import json
+
+    assert BillboardShading.from_dict(json.loads(json.dumps(d))) == sh
+    assert BillboardShading() == BillboardShading.from_dict(BillboardShading().to_dict())

@@ -234,3 +234,16 @@ def test_three_layers_and_schedule() -> None:
     assert ys[0] > ys[1] > ys[2]
     s = Schedule([(0.0, 0.0), (10.0, 1.0)])
     assert s(-5) == 0.0 and s(5) == 0.5 and s(50) == 1.0 and Schedule(0.3)(100) == 0.3
+
+
+def test_weather_does_not_depend_on_threads(models) -> None:
+    state = SkyState(0.0, models, variants=3, count=40)
+    layer = CloudLayer(40.0, 8.0, (4.0, 1.0), (state,))
+    a = Weather(AREA, [layer], cv=0.0, seed=9, threads=1)
+    b = Weather(AREA, [layer], cv=0.0, seed=9, threads=0)
+    for dt in dts(30):
+        a.step(dt)
+        b.step(dt)
+    assert same_state(a, b)
+    for p, q in zip(a.variants[0], b.variants[0], strict=True):
+        assert np.array_equal(p.centres, q.centres) and np.array_equal(p.boxes, q.boxes)
