@@ -314,3 +314,22 @@ def test_shading_settings_round_trip() -> None:
 
     assert BillboardShading.from_dict(json.loads(json.dumps(d))) == sh
     assert BillboardShading() == BillboardShading.from_dict(BillboardShading().to_dict())
+
+
+def test_instance_vertex_colours_match_the_placed_cloud() -> None:
+    from cumuli.light.caf import instance_vertex_colours
+
+    v = seed_box_cloud(presets.nimbus(), 2)
+    v = v.translated(-v.centre.astype(np.float64))
+    field = BillboardField([v], [[10, 40, -5], [200, 44, 30]], yaw=[90, 180])
+    sun = Sun((0.4, 0.8, -0.3))
+    fl = field_absorption_factors(field, sun, max_distance=15.0)
+    right, up = (0.6, 0.0, 0.8), (0.0, 1.0, 0.0)
+    for i in range(2):
+        placed = v.rotated_y(float(field.yaw[i]), about=(0, 0, 0)).translated(field.offsets[i])
+        ref = vertex_colours(placed, sun, absorption_factors(placed, sun, max_distance=15.0),
+                             right, up)  # fmt: skip
+        got = instance_vertex_colours(field, i, sun, fl, right, up)
+        assert np.allclose(got, ref, atol=1e-5)
+    with pytest.raises(ValueError, match="another sun"):
+        instance_vertex_colours(field, 0, Sun((0, 1, 0)), fl, right, up)

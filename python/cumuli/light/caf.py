@@ -279,6 +279,54 @@ class FieldLight:
         return self.caf[self.first[i] : self.first[i + 1]]
 
 
+def _local(v: Any, c: float, s: float) -> tuple[float, float, float]:
+    """``R_yᵀ·v``: a world vector in an instance's local frame."""
+    x, y, z = (float(a) for a in v)
+    return (c * x - s * z, y, s * x + c * z)
+
+
+def instance_vertex_colours(
+    field_: BillboardField,
+    index: int,
+    sun: Sun,
+    light: FieldLight,
+    right: Sequence[float],
+    up: Sequence[float],
+    shading: BillboardShading | None = None,
+    sky: Any = None,
+    threads: int = 0,
+) -> np.ndarray:
+    """`vertex_colours` of instance ``index`` of a field, ``(K, 4, 3)`` in the corner order of
+    `quad_corners`: shaded in the variant's local frame (sun, camera right/up turned by −yaw),
+    with the instance's CAF block of ``light`` (`field_absorption_factors`). The world corners
+    are the local ones turned by yaw and moved by the offset."""
+    if not isinstance(field_, BillboardField):
+        raise TypeError(f"field must be a BillboardField, got {type(field_).__name__}")
+    if not isinstance(light, FieldLight) or not isinstance(sun, Sun):
+        raise TypeError("light must be a FieldLight and sun a cumuli.Sun")
+    i = check.integer(index, "index", 0, field_.n - 1)
+    if light.first.size != field_.n + 1:
+        raise ValueError("light was computed for another field (instance count differs)")
+    tol = (shading or BillboardShading()).relight_tolerance
+    cos_angle = float(np.clip(np.dot(sun.direction, light.sun), -1.0, 1.0))
+    if math.degrees(math.acos(cos_angle)) > tol:
+        raise ValueError("light was computed for another sun direction: recompute it")
+    cloud = field_.variants[int(field_.variant[i])]
+    c, s = _core.yaw_cos_sin(float(field_.yaw[i]))
+    block = light.instance(i)
+    expected = cloud.n_boxes if light.at == "box" else cloud.n_billboards
+    if block.size != expected:
+        raise ValueError("light was computed for another field (variant sizes differ)")
+    local_sun = Sun(_local(sun.direction, c, s), sun.colour, sun.intensity)
+    params = dict(light.params, cloud=cloud_digest(cloud))
+    record = BillboardLight(block, light.length[light.first[i] : light.first[i + 1]],
+                            local_sun.direction, light.at, params)  # fmt: skip
+    return vertex_colours(
+        cloud, local_sun, record, _local(check.vec3(right, "right"), c, s),
+        _local(check.vec3(up, "up"), c, s), shading, sky, threads=threads,
+    )  # fmt: skip
+
+
 def field_absorption_factors(
     field_: BillboardField,
     sun: Sun | Sequence[float],
@@ -342,7 +390,10 @@ def field_absorption_factors(
 def quad_corners(cloud: BillboardCloud, right: Sequence[float], up: Sequence[float]) -> np.ndarray:
     """Camera-facing quad corners ``(K, 4, 3)``: ``v0 = p − ½w·r′ − ½h·u′``, ``v1 = p + ½w·r′ −
     ½h·u′``, ``v2 = p + ½w·r′ + ½h·u′``, ``v3 = p − ½w·r′ + ½h·u′``, ``(r′, u′)`` the camera's
-    right/up turned by each billboard's rotation about the view axis (C++)."""
+    right/up turned by each billboard's rotation ρ about the view axis, ``r′ = cos ρ·r + sin ρ·u``,
+    ``u′ = −sin ρ·r + cos ρ·u`` (C++). Triangles ``(v0, v1, v2)``, ``(v0, v2, v3)``; with the
+    sprite's `SpriteAtlas.uv_rects` ``(u0, v0, u1, v1)`` (v from the top row) the corners take
+    ``(u0, v1), (u1, v1), (u1, v0), (u0, v0)``: the sprite's top row is at the quad's top."""
     r = check.vec3(right, "right")
     u = check.vec3(up, "up")
     return _core.billboard_corners(cloud.centres, cloud.sizes, cloud.rotation, r, u)
