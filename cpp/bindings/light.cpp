@@ -348,6 +348,70 @@ Overlap overlap_of(const std::string& s) {
   throw py::value_error("overlap must be 'sum' or 'union', got '" + s + "'");
 }
 
+std::vector<int> columns_of(const IntArray& a, std::size_t n, std::size_t q, const char* name) {
+  std::vector<int> out = owners_of(a, n, q, name);
+  for (int o : out)
+    if (o < 0) throw py::value_error(std::string(name) + " must hold caf column indices");
+  return out;
+}
+
+std::vector<glm::vec2> sizes_of(const FloatArray& sizes, const FloatArray& rotation, std::size_t n) {
+  if (sizes.ndim() != 2 || sizes.shape(1) != 2 || static_cast<std::size_t>(sizes.shape(0)) != n)
+    throw py::value_error("sizes must have shape (K, 2) matching centres");
+  if (rotation.ndim() != 1 || static_cast<std::size_t>(rotation.shape(0)) != n)
+    throw py::value_error("rotation must have shape (K,) matching centres");
+  std::vector<glm::vec2> sz(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    sz[i] = glm::vec2(sizes.data()[2 * i], sizes.data()[2 * i + 1]);
+    if (!std::isfinite(sz[i].x) || !std::isfinite(sz[i].y) || !std::isfinite(rotation.data()[i]))
+      throw py::value_error("sizes and rotation must be finite");
+  }
+  return sz;
+}
+
+struct ShadeInputs {
+  std::vector<ShadeLight> lights;
+  ShadeParams params;
+  ShadeFrame frame;
+  std::size_t q = 0;
+};
+
+ShadeInputs shade_inputs(const FloatArray& caf, const FloatArray& boxes,
+                         const FloatArray& light_dirs, const FloatArray& light_radiance,
+                         float d_min, float d_max, float k_dir, const std::string& directional,
+                         V3 ambient, float k_amb,
+                         const std::vector<std::array<float, 2>>& height_levels) {
+  ShadeInputs in;
+  const std::vector<Box> b = boxes_of(boxes, "boxes");
+  if (b.empty()) throw py::value_error("boxes must not be empty");
+  const std::vector<glm::vec3> dirs = vec3s(light_dirs, "light directions");
+  const std::vector<glm::vec3> rad = vec3s(light_radiance, "light radiance");
+  if (rad.size() != dirs.size()) throw py::value_error("one radiance per light direction");
+  if (caf.ndim() != 2 || static_cast<std::size_t>(caf.shape(0)) != dirs.size())
+    throw py::value_error("caf must have shape (lights, Q)");
+  in.q = static_cast<std::size_t>(caf.shape(1));
+  for (py::ssize_t i = 0; i < caf.size(); ++i)
+    if (!std::isfinite(caf.data()[i])) throw py::value_error("caf must be finite");
+  in.lights.resize(dirs.size());
+  for (std::size_t l = 0; l < dirs.size(); ++l) {
+    const float len = glm::length(dirs[l]);
+    if (!(len > 0.0f)) throw py::value_error("light directions must be non-zero");
+    in.lights[l] = ShadeLight{dirs[l] / len, rad[l]};
+  }
+  in.params.d_min = d_min;
+  in.params.d_max = d_max;
+  in.params.k_dir = k_dir;
+  if (directional == "linear") in.params.directional = Directional::Linear;
+  else if (directional == "smoothstep") in.params.directional = Directional::Smoothstep;
+  else throw py::value_error("directional must be 'linear' or 'smoothstep'");
+  in.params.ambient = v3(ambient);
+  in.params.k_amb = k_amb;
+  for (const auto& h : height_levels) in.params.height_levels.emplace_back(h[0], h[1]);
+  in.params.validate();
+  in.frame = shade_frame(b);
+  return in;
+}
+
 }  // namespace
 
 void bind_caf(py::module_& m) {
@@ -448,44 +512,17 @@ void bind_caf(py::module_& m) {
          const FloatArray& boxes, const FloatArray& light_dirs, const FloatArray& light_radiance,
          float d_min, float d_max, float k_dir, const std::string& directional, V3 ambient,
          float k_amb, const std::vector<std::array<float, 2>>& height_levels, int threads) {
-        const std::vector<Box> b = boxes_of(boxes, "boxes");
-        if (b.empty()) throw py::value_error("boxes must not be empty");
+        const ShadeInputs in = shade_inputs(caf, boxes, light_dirs, light_radiance, d_min, d_max,
+                                            k_dir, directional, ambient, k_amb, height_levels);
         const std::vector<glm::vec3> p = vec3s(points, "points");
-        const std::vector<glm::vec3> dirs = vec3s(light_dirs, "light directions");
-        const std::vector<glm::vec3> rad = vec3s(light_radiance, "light radiance");
-        if (rad.size() != dirs.size()) throw py::value_error("one radiance per light direction");
-        if (caf.ndim() != 2 || static_cast<std::size_t>(caf.shape(0)) != dirs.size())
-          throw py::value_error("caf must have shape (lights, Q)");
-        const auto q = static_cast<std::size_t>(caf.shape(1));
-        const std::vector<int> idx = owners_of(index, p.size(), q, "index");
-        for (int o : idx)
-          if (o < 0) throw py::value_error("index must hold caf column indices");
-        for (py::ssize_t i = 0; i < caf.size(); ++i)
-          if (!std::isfinite(caf.data()[i])) throw py::value_error("caf must be finite");
-        std::vector<ShadeLight> lights(dirs.size());
-        for (std::size_t l = 0; l < dirs.size(); ++l) {
-          const float len = glm::length(dirs[l]);
-          if (!(len > 0.0f)) throw py::value_error("light directions must be non-zero");
-          lights[l] = ShadeLight{dirs[l] / len, rad[l]};
-        }
-        ShadeParams sp;
-        sp.d_min = d_min;
-        sp.d_max = d_max;
-        sp.k_dir = k_dir;
-        if (directional == "linear") sp.directional = Directional::Linear;
-        else if (directional == "smoothstep") sp.directional = Directional::Smoothstep;
-        else throw py::value_error("directional must be 'linear' or 'smoothstep'");
-        sp.ambient = v3(ambient);
-        sp.k_amb = k_amb;
-        for (const auto& h : height_levels) sp.height_levels.emplace_back(h[0], h[1]);
-        sp.validate();
-        const ShadeFrame frame = shade_frame(b);
+        const std::vector<int> idx = columns_of(index, p.size(), in.q, "index");
         auto out = new_array({static_cast<py::ssize_t>(p.size()), 3});
         float* po = out.mutable_data();
         const float* pc = caf.data();
         {
           py::gil_scoped_release release;
-          billboard_shade(p.data(), idx.data(), p.size(), pc, q, frame, lights, sp, po, threads);
+          billboard_shade(p.data(), idx.data(), p.size(), pc, in.q, in.frame, in.lights, in.params,
+                          po, threads);
         }
         return out;
       },
@@ -497,18 +534,43 @@ void bind_caf(py::module_& m) {
       "cloud frame (centre, radius, heights) comes from the boxes.");
 
   m.def(
+      "billboard_vertex_colours",
+      [](const FloatArray& centres, const FloatArray& sizes, const FloatArray& rotation,
+         const IntArray& index, const FloatArray& caf, const FloatArray& boxes,
+         const FloatArray& light_dirs, const FloatArray& light_radiance, float d_min, float d_max,
+         float k_dir, const std::string& directional, V3 ambient, float k_amb,
+         const std::vector<std::array<float, 2>>& height_levels, V3 right, V3 up, int threads) {
+        const ShadeInputs in = shade_inputs(caf, boxes, light_dirs, light_radiance, d_min, d_max,
+                                            k_dir, directional, ambient, k_amb, height_levels);
+        const std::vector<glm::vec3> c = vec3s(centres, "centres");
+        const std::vector<glm::vec2> sz = sizes_of(sizes, rotation, c.size());
+        const std::vector<int> idx = columns_of(index, c.size(), in.q, "index");
+        const auto n = static_cast<py::ssize_t>(c.size());
+        auto out = new_array({n, 4, 3});
+        auto corners = new_array({n, 4, 3});
+        float *po = out.mutable_data(), *pk = corners.mutable_data();
+        const float *pc = caf.data(), *pr = rotation.data();
+        {
+          py::gil_scoped_release release;
+          billboard_vertex_colours(c.data(), sz.data(), pr, idx.data(), c.size(), pc, in.q,
+                                   in.frame, in.lights, in.params, v3(right), v3(up), po, pk,
+                                   threads);
+        }
+        return py::make_tuple(out, corners);
+      },
+      py::arg("centres"), py::arg("sizes"), py::arg("rotation"), py::arg("index"), py::arg("caf"),
+      py::arg("boxes"), py::arg("light_dirs"), py::arg("light_radiance"), py::arg("d_min"),
+      py::arg("d_max"), py::arg("k_dir"), py::arg("directional"), py::arg("ambient"),
+      py::arg("k_amb"), py::arg("height_levels"), py::arg("right"), py::arg("up"),
+      py::arg("threads") = 0,
+      "[TM]'s vertex shading: ((K, 4, 3) colours, (K, 4, 3) corners) of the camera-facing quads.");
+
+  m.def(
       "billboard_corners",
       [](const FloatArray& centres, const FloatArray& sizes, const FloatArray& rotation, V3 right,
          V3 up) {
         const std::vector<glm::vec3> c = vec3s(centres, "centres");
-        if (sizes.ndim() != 2 || sizes.shape(1) != 2 ||
-            static_cast<std::size_t>(sizes.shape(0)) != c.size())
-          throw py::value_error("sizes must have shape (K, 2) matching centres");
-        if (rotation.ndim() != 1 || static_cast<std::size_t>(rotation.shape(0)) != c.size())
-          throw py::value_error("rotation must have shape (K,) matching centres");
-        std::vector<glm::vec2> sz(c.size());
-        for (std::size_t i = 0; i < c.size(); ++i)
-          sz[i] = glm::vec2(sizes.data()[2 * i], sizes.data()[2 * i + 1]);
+        const std::vector<glm::vec2> sz = sizes_of(sizes, rotation, c.size());
         auto out = new_array({static_cast<py::ssize_t>(c.size()), 4, 3});
         billboard_corners(c.data(), sz.data(), rotation.data(), c.size(), v3(right), v3(up),
                           out.mutable_data());

@@ -403,4 +403,26 @@ void billboard_corners(const glm::vec3* centres, const glm::vec2* sizes, const f
   }
 }
 
+void billboard_vertex_colours(const glm::vec3* centres, const glm::vec2* sizes,
+                              const float* rotation, const int* index, std::size_t n,
+                              const float* caf, std::size_t q, const ShadeFrame& frame,
+                              const std::vector<ShadeLight>& lights, const ShadeParams& params,
+                              glm::vec3 right, glm::vec3 up, float* out, float* corners,
+                              int threads) {
+  std::vector<float> local;
+  if (corners == nullptr) {
+    local.resize(n * 12);
+    corners = local.data();
+  }
+  billboard_corners(centres, sizes, rotation, n, right, up, corners);
+  std::vector<glm::vec3> points(n * 4);
+  std::vector<int> vertex_index(n * 4);
+  for (std::size_t v = 0; v < n * 4; ++v) {
+    points[v] = glm::vec3(corners[3 * v], corners[3 * v + 1], corners[3 * v + 2]);
+    vertex_index[v] = index[v / 4];
+  }
+  billboard_shade(points.data(), vertex_index.data(), n * 4, caf, q, frame, lights, params, out,
+                  threads);
+}
+
 }  // namespace cumuli

@@ -399,6 +399,48 @@ def quad_corners(cloud: BillboardCloud, right: Sequence[float], up: Sequence[flo
     return _core.billboard_corners(cloud.centres, cloud.sizes, cloud.rotation, r, u)
 
 
+def _shade_args(
+    cloud: BillboardCloud,
+    sun: Sun,
+    light: BillboardLight,
+    shading: BillboardShading | None,
+    sky: Any,
+    extra: Sequence[tuple[Sun, BillboardLight]],
+) -> tuple[list[Any], str]:
+    """The core's shading arguments after (caf, ...): checks every (sun, light) pair."""
+    if not isinstance(cloud, BillboardCloud):
+        raise TypeError(f"cloud must be a BillboardCloud, got {type(cloud).__name__}")
+    shading = shading if shading is not None else BillboardShading()
+    if not isinstance(shading, BillboardShading):
+        raise TypeError("shading must be a BillboardShading")
+    cafs, dirs, rads = [], [], []
+    for i, pair in enumerate([(sun, light), *extra]):
+        s, lt = pair
+        if not isinstance(s, Sun) or not isinstance(lt, BillboardLight):
+            raise TypeError(f"light {i} must be a (cumuli.Sun, BillboardLight) pair")
+        lt.check(cloud, s, shading.relight_tolerance)
+        if lt.at != light.at:
+            raise ValueError("every light's CAF must be computed at the same place (box/billboard)")
+        cafs.append(lt.caf)
+        dirs.append(s.direction)
+        rads.append(s.radiance)
+    levels = [list(lv) for lv in shading.height_levels] if shading.height_levels else []
+    args = [
+        np.stack(cafs).astype(np.float32),
+        cloud.boxes,
+        np.asarray(dirs, dtype=np.float32),
+        np.asarray(rads, dtype=np.float32),
+        shading.d_min,
+        shading.d_max,
+        shading.k_dir,
+        shading.directional,
+        shading.ambient_colour(sky),
+        shading.k_amb,
+        levels,
+    ]
+    return args, light.at
+
+
 def shade_points(
     cloud: BillboardCloud,
     points: Any,
@@ -412,48 +454,16 @@ def shade_points(
 ) -> np.ndarray:
     """Colours ``(N, 3)`` at points lying on billboards ``billboard[i]`` (spec §4.2; C++):
     ``k_amb·ambient + H·Σ_ℓ CAF_ℓ·D_ℓ·radiance_ℓ`` over the sun and the ``extra`` lights (each
-    with its own CAF record). The fragment-mode entry point; `vertex_colours` calls it at the
-    quad corners."""
-    if not isinstance(cloud, BillboardCloud):
-        raise TypeError(f"cloud must be a BillboardCloud, got {type(cloud).__name__}")
-    shading = shading if shading is not None else BillboardShading()
-    if not isinstance(shading, BillboardShading):
-        raise TypeError("shading must be a BillboardShading")
-    lights = [(sun, light), *extra]
-    cafs, dirs, rads = [], [], []
-    for i, (s, lt) in enumerate(lights):
-        if not isinstance(s, Sun) or not isinstance(lt, BillboardLight):
-            raise TypeError(f"light {i} must be a (cumuli.Sun, BillboardLight) pair")
-        lt.check(cloud, s, shading.relight_tolerance)
-        if lt.at != light.at:
-            raise ValueError("every light's CAF must be computed at the same place (box/billboard)")
-        cafs.append(lt.caf)
-        dirs.append(s.direction)
-        rads.append(s.radiance)
+    with its own CAF record). The fragment-mode entry point (``shading="fragment"``)."""
+    args, at = _shade_args(cloud, sun, light, shading, sky, extra)
     pts = check.points3(points, "points")
     bb = np.asarray(billboard)
     if bb.dtype.kind not in "iu" or bb.shape != (pts.shape[0],):
         raise ValueError(f"billboard must be an integer array of shape ({pts.shape[0]},)")
     if bb.size and (bb.min() < 0 or bb.max() >= cloud.n_billboards):
         raise ValueError(f"billboard must hold indices in [0, {cloud.n_billboards})")
-    index = (cloud.box[bb] if light.at == "box" else bb).astype(np.int32)
-    levels = [list(lv) for lv in shading.height_levels] if shading.height_levels else []
-    return _core.billboard_shade(
-        pts,
-        index,
-        np.stack(cafs).astype(np.float32),
-        cloud.boxes,
-        np.asarray(dirs, dtype=np.float32),
-        np.asarray(rads, dtype=np.float32),
-        shading.d_min,
-        shading.d_max,
-        shading.k_dir,
-        shading.directional,
-        shading.ambient_colour(sky),
-        shading.k_amb,
-        levels,
-        check.threads(threads),
-    )
+    index = (cloud.box[bb] if at == "box" else bb).astype(np.int32)
+    return _core.billboard_shade(pts, index, *args, check.threads(threads))
 
 
 def vertex_colours(
@@ -468,12 +478,16 @@ def vertex_colours(
     threads: int = 0,
 ) -> np.ndarray:
     """Per-vertex colours ``(K, 4, 3)`` of the camera-facing quads (corners as `quad_corners`
-    for the camera's ``right``/``up``), [TM]'s vertex shading; what the renderer interpolates."""
-    corners = quad_corners(cloud, right, up)
-    k = cloud.n_billboards
-    ids = np.repeat(np.arange(k, dtype=np.int32), 4)
-    out = shade_points(cloud, corners.reshape(-1, 3), ids, sun, light, shading, sky, extra, threads)
-    return out.reshape(k, 4, 3)
+    for the camera's ``right``/``up``): [TM]'s vertex shading, what the renderer interpolates
+    over the triangles ``(v0, v1, v2)``, ``(v0, v2, v3)`` (C++ ``billboard_vertex_colours``)."""
+    args, at = _shade_args(cloud, sun, light, shading, sky, extra)
+    r = check.vec3(right, "right")
+    u = check.vec3(up, "up")
+    index = (cloud.box if at == "box" else np.arange(cloud.n_billboards)).astype(np.int32)
+    colours, _ = _core.billboard_vertex_colours(
+        cloud.centres, cloud.sizes, cloud.rotation, index, *args, r, u, check.threads(threads)
+    )
+    return colours
 
 
 def light_grid_at_boxes(

@@ -161,4 +161,15 @@ void billboard_shade(const glm::vec3* points, const int* index, std::size_t n, c
 void billboard_corners(const glm::vec3* centres, const glm::vec2* sizes, const float* rotation,
                        std::size_t n, glm::vec3 right, glm::vec3 up, float* out);
 
+// [TM]'s per-vertex shading of n camera-facing billboards: the corners of billboard_corners for
+// the camera's right/up, shaded by billboard_shade with column index[i] of caf for billboard i
+// (its box, or itself with per-billboard CAFs). out: (n, 4, 3) colours in corner order;
+// corners (optional, may be null): (n, 4, 3) positions.
+void billboard_vertex_colours(const glm::vec3* centres, const glm::vec2* sizes,
+                              const float* rotation, const int* index, std::size_t n,
+                              const float* caf, std::size_t q, const ShadeFrame& frame,
+                              const std::vector<ShadeLight>& lights, const ShadeParams& params,
+                              glm::vec3 right, glm::vec3 up, float* out, float* corners,
+                              int threads);
+
 }  // namespace cumuli
