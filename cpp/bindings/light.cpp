@@ -1,15 +1,19 @@
 // Bindings of the light stage (python/cumuli/light): the NDT light-grid precompute (light/ndt.hpp,
 // Algorithm 2, eqs. 3–7) and the endless animation's volume light (light/volume_light.hpp: sun
-// and sky optical depths, SH exponential, multiple scattering). Long loops release the GIL.
+// and sky optical depths, SH exponential, multiple scattering), and the billboard clouds'
+// absorption factors and vertex shading (light/caf.hpp). Long loops release the GIL.
 #include "cumuli/light/ndt.hpp"
 
 #include <array>
+#include <cmath>
 #include <stdexcept>
 #include <string>
 
+#include <glm/geometric.hpp>
 #include <pybind11/stl.h>
 
 #include "common.hpp"
+#include "cumuli/light/caf.hpp"
 #include "cumuli/light/volume_light.hpp"
 
 namespace cumuli::bind {
@@ -288,6 +292,302 @@ void bind_volume_light(py::module_& m) {
         return out;
       },
       "Light plus `orders` orders of isotropic multiple scattering through the sample points.");
+}
+
+namespace {
+
+using IntArray = py::array_t<int, py::array::c_style | py::array::forcecast>;
+
+std::vector<Box> boxes_of(const FloatArray& a, const char* name) {
+  if (a.ndim() != 3 || a.shape(1) != 2 || a.shape(2) != 3)
+    throw py::value_error(std::string(name) + " must have shape (M, 2, 3)");
+  std::vector<Box> out(static_cast<std::size_t>(a.shape(0)));
+  const float* d = a.data();
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i].lo = glm::vec3(d[6 * i], d[6 * i + 1], d[6 * i + 2]);
+    out[i].hi = glm::vec3(d[6 * i + 3], d[6 * i + 4], d[6 * i + 5]);
+    for (int k = 0; k < 3; ++k)
+      if (!std::isfinite(out[i].lo[k]) || !std::isfinite(out[i].hi[k]) || out[i].lo[k] > out[i].hi[k])
+        throw py::value_error(std::string(name) + " must be finite with lo <= hi");
+  }
+  return out;
+}
+
+std::vector<glm::vec3> vec3s(const FloatArray& a, const char* name) {
+  require_points(a, name);
+  std::vector<glm::vec3> out(static_cast<std::size_t>(a.shape(0)));
+  const float* d = a.data();
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i] = glm::vec3(d[3 * i], d[3 * i + 1], d[3 * i + 2]);
+    if (!std::isfinite(out[i].x) || !std::isfinite(out[i].y) || !std::isfinite(out[i].z))
+      throw py::value_error(std::string(name) + " must be finite");
+  }
+  return out;
+}
+
+std::vector<int> owners_of(const IntArray& a, std::size_t n, std::size_t boxes, const char* name) {
+  if (a.ndim() != 1 || static_cast<std::size_t>(a.shape(0)) != n)
+    throw py::value_error(std::string(name) + " must have shape (N,) matching the points");
+  std::vector<int> out(a.data(), a.data() + n);
+  for (int o : out)
+    if (o < -1 || o >= static_cast<int>(boxes))
+      throw py::value_error(std::string(name) + " must hold box indices (or -1)");
+  return out;
+}
+
+glm::vec3 unit(V3 v, const char* name) {
+  const glm::vec3 d = v3(v);
+  const float len = glm::length(d);
+  if (!std::isfinite(len) || !(len > 0.0f)) throw py::value_error(std::string(name) + " must be a non-zero finite vector");
+  return d / len;
+}
+
+Overlap overlap_of(const std::string& s) {
+  if (s == "sum") return Overlap::Sum;
+  if (s == "union") return Overlap::Union;
+  throw py::value_error("overlap must be 'sum' or 'union', got '" + s + "'");
+}
+
+std::vector<int> columns_of(const IntArray& a, std::size_t n, std::size_t q, const char* name) {
+  std::vector<int> out = owners_of(a, n, q, name);
+  for (int o : out)
+    if (o < 0) throw py::value_error(std::string(name) + " must hold caf column indices");
+  return out;
+}
+
+std::vector<glm::vec2> sizes_of(const FloatArray& sizes, const FloatArray& rotation, std::size_t n) {
+  if (sizes.ndim() != 2 || sizes.shape(1) != 2 || static_cast<std::size_t>(sizes.shape(0)) != n)
+    throw py::value_error("sizes must have shape (K, 2) matching centres");
+  if (rotation.ndim() != 1 || static_cast<std::size_t>(rotation.shape(0)) != n)
+    throw py::value_error("rotation must have shape (K,) matching centres");
+  std::vector<glm::vec2> sz(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    sz[i] = glm::vec2(sizes.data()[2 * i], sizes.data()[2 * i + 1]);
+    if (!std::isfinite(sz[i].x) || !std::isfinite(sz[i].y) || !std::isfinite(rotation.data()[i]))
+      throw py::value_error("sizes and rotation must be finite");
+  }
+  return sz;
+}
+
+struct ShadeInputs {
+  std::vector<ShadeLight> lights;
+  ShadeParams params;
+  ShadeFrame frame;
+  std::size_t q = 0;
+};
+
+ShadeInputs shade_inputs(const FloatArray& caf, const FloatArray& boxes,
+                         const FloatArray& light_dirs, const FloatArray& light_radiance,
+                         float d_min, float d_max, float k_dir, const std::string& directional,
+                         V3 ambient, float k_amb,
+                         const std::vector<std::array<float, 2>>& height_levels) {
+  ShadeInputs in;
+  const std::vector<Box> b = boxes_of(boxes, "boxes");
+  if (b.empty()) throw py::value_error("boxes must not be empty");
+  const std::vector<glm::vec3> dirs = vec3s(light_dirs, "light directions");
+  const std::vector<glm::vec3> rad = vec3s(light_radiance, "light radiance");
+  if (rad.size() != dirs.size()) throw py::value_error("one radiance per light direction");
+  if (caf.ndim() != 2 || static_cast<std::size_t>(caf.shape(0)) != dirs.size())
+    throw py::value_error("caf must have shape (lights, Q)");
+  in.q = static_cast<std::size_t>(caf.shape(1));
+  for (py::ssize_t i = 0; i < caf.size(); ++i)
+    if (!std::isfinite(caf.data()[i])) throw py::value_error("caf must be finite");
+  in.lights.resize(dirs.size());
+  for (std::size_t l = 0; l < dirs.size(); ++l) {
+    const float len = glm::length(dirs[l]);
+    if (!(len > 0.0f)) throw py::value_error("light directions must be non-zero");
+    in.lights[l] = ShadeLight{dirs[l] / len, rad[l]};
+  }
+  in.params.d_min = d_min;
+  in.params.d_max = d_max;
+  in.params.k_dir = k_dir;
+  if (directional == "linear") in.params.directional = Directional::Linear;
+  else if (directional == "smoothstep") in.params.directional = Directional::Smoothstep;
+  else throw py::value_error("directional must be 'linear' or 'smoothstep'");
+  in.params.ambient = v3(ambient);
+  in.params.k_amb = k_amb;
+  for (const auto& h : height_levels) in.params.height_levels.emplace_back(h[0], h[1]);
+  in.params.validate();
+  in.frame = shade_frame(b);
+  return in;
+}
+
+}  // namespace
+
+void bind_caf(py::module_& m) {
+  m.def(
+      "caf_path_lengths",
+      [](const FloatArray& boxes, const FloatArray& points, const IntArray& owner, V3 sun,
+         const std::string& overlap, bool include_self, int threads) {
+        const std::vector<Box> b = boxes_of(boxes, "boxes");
+        const std::vector<glm::vec3> p = vec3s(points, "points");
+        const std::vector<int> o = owners_of(owner, p.size(), b.size(), "owner");
+        const Overlap ov = overlap_of(overlap);
+        const glm::vec3 s = unit(sun, "sun");
+        py::array_t<double> out(static_cast<py::ssize_t>(p.size()));
+        double* po = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          const BoxIndex index(b);
+          caf_path_lengths(index, p.data(), o.data(), p.size(), s, ov, include_self, po, threads);
+        }
+        return out;
+      },
+      py::arg("boxes"), py::arg("points"), py::arg("owner"), py::arg("sun"), py::arg("overlap"),
+      py::arg("include_self"), py::arg("threads") = 0,
+      "Light path length L through the boxes from each point towards the sun: (N,) float64.");
+
+  m.def(
+      "caf_values",
+      [](const py::array_t<double, py::array::c_style | py::array::forcecast>& lengths,
+         double max_distance, const std::string& curve) {
+        CafCurve c;
+        if (curve == "linear") c = CafCurve::Linear;
+        else if (curve == "exp") c = CafCurve::Exp;
+        else throw py::value_error("curve must be 'linear' or 'exp', got '" + curve + "'");
+        if (!(max_distance > 0.0)) throw py::value_error("max_distance must be > 0");
+        auto out = new_array({static_cast<py::ssize_t>(lengths.size())});
+        for (py::ssize_t i = 0; i < lengths.size(); ++i)
+          out.mutable_data()[i] = caf_value(lengths.data()[i], max_distance, c);
+        return out;
+      },
+      py::arg("lengths"), py::arg("max_distance"), py::arg("curve"),
+      "CAF of path lengths: clamp(1 − L/D, 0, 1) (linear) or exp(−3L/D); D = inf gives 1.");
+
+  m.def(
+      "field_path_lengths",
+      [](const py::list& variant_boxes, const py::list& variant_points,
+         const py::list& variant_owners, const IntArray& variant, const FloatArray& offsets,
+         const FloatArray& yaw, V3 sun, const std::string& overlap, bool include_self,
+         bool between_clouds, int threads) {
+        const std::size_t nv = variant_boxes.size();
+        if (variant_points.size() != nv || variant_owners.size() != nv)
+          throw py::value_error("variant boxes, points and owners must have the same length");
+        std::vector<BoxIndex> indices;
+        std::vector<std::vector<glm::vec3>> pts(nv);
+        std::vector<std::vector<int>> own(nv);
+        indices.reserve(nv);
+        for (std::size_t v = 0; v < nv; ++v) {
+          indices.emplace_back(boxes_of(variant_boxes[v].cast<FloatArray>(), "variant boxes"));
+          pts[v] = vec3s(variant_points[v].cast<FloatArray>(), "variant points");
+          own[v] = owners_of(variant_owners[v].cast<IntArray>(), pts[v].size(),
+                             indices.back().size(), "variant owners");
+        }
+        require_points(offsets, "offsets");
+        const auto ni = static_cast<std::size_t>(offsets.shape(0));
+        if (variant.ndim() != 1 || static_cast<std::size_t>(variant.shape(0)) != ni ||
+            yaw.ndim() != 1 || static_cast<std::size_t>(yaw.shape(0)) != ni)
+          throw py::value_error("variant and yaw must have shape (NC,) matching offsets");
+        std::vector<Instance> inst(ni);
+        const std::vector<glm::vec3> off = vec3s(offsets, "offsets");
+        std::size_t total = 0;
+        for (std::size_t i = 0; i < ni; ++i) {
+          const int v = variant.data()[i];
+          if (v < 0 || static_cast<std::size_t>(v) >= nv)
+            throw py::value_error("variant ids must index the variants");
+          if (!std::isfinite(yaw.data()[i])) throw py::value_error("yaw must be finite");
+          inst[i] = Instance{v, off[i], yaw.data()[i]};
+          total += pts[static_cast<std::size_t>(v)].size();
+        }
+        const Overlap ov = overlap_of(overlap);
+        const glm::vec3 s = unit(sun, "sun");
+        py::array_t<double> out(static_cast<py::ssize_t>(total));
+        double* po = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          field_path_lengths(indices, pts, own, inst, s, ov, include_self, between_clouds, po,
+                             threads);
+        }
+        return out;
+      },
+      py::arg("variant_boxes"), py::arg("variant_points"), py::arg("variant_owners"),
+      py::arg("variant"), py::arg("offsets"), py::arg("yaw"), py::arg("sun"), py::arg("overlap"),
+      py::arg("include_self"), py::arg("between_clouds"), py::arg("threads") = 0,
+      "Path lengths of every instance's points (instance order, flat), optionally through the "
+      "other instances' boxes too.");
+
+  m.def(
+      "billboard_shade",
+      [](const FloatArray& points, const IntArray& index, const FloatArray& caf,
+         const FloatArray& boxes, const FloatArray& light_dirs, const FloatArray& light_radiance,
+         float d_min, float d_max, float k_dir, const std::string& directional, V3 ambient,
+         float k_amb, const std::vector<std::array<float, 2>>& height_levels, int threads) {
+        const ShadeInputs in = shade_inputs(caf, boxes, light_dirs, light_radiance, d_min, d_max,
+                                            k_dir, directional, ambient, k_amb, height_levels);
+        const std::vector<glm::vec3> p = vec3s(points, "points");
+        const std::vector<int> idx = columns_of(index, p.size(), in.q, "index");
+        auto out = new_array({static_cast<py::ssize_t>(p.size()), 3});
+        float* po = out.mutable_data();
+        const float* pc = caf.data();
+        {
+          py::gil_scoped_release release;
+          billboard_shade(p.data(), idx.data(), p.size(), pc, in.q, in.frame, in.lights, in.params,
+                          po, threads);
+        }
+        return out;
+      },
+      py::arg("points"), py::arg("index"), py::arg("caf"), py::arg("boxes"), py::arg("light_dirs"),
+      py::arg("light_radiance"), py::arg("d_min"), py::arg("d_max"), py::arg("k_dir"),
+      py::arg("directional"), py::arg("ambient"), py::arg("k_amb"), py::arg("height_levels"),
+      py::arg("threads") = 0,
+      "Colours (N, 3) = k_amb·ambient + H·Σ_ℓ caf[ℓ, index]·D_ℓ·radiance_ℓ at points; the "
+      "cloud frame (centre, radius, heights) comes from the boxes.");
+
+  m.def(
+      "billboard_vertex_colours",
+      [](const FloatArray& centres, const FloatArray& sizes, const FloatArray& rotation,
+         const IntArray& index, const FloatArray& caf, const FloatArray& boxes,
+         const FloatArray& light_dirs, const FloatArray& light_radiance, float d_min, float d_max,
+         float k_dir, const std::string& directional, V3 ambient, float k_amb,
+         const std::vector<std::array<float, 2>>& height_levels, V3 right, V3 up, int threads) {
+        const ShadeInputs in = shade_inputs(caf, boxes, light_dirs, light_radiance, d_min, d_max,
+                                            k_dir, directional, ambient, k_amb, height_levels);
+        const std::vector<glm::vec3> c = vec3s(centres, "centres");
+        const std::vector<glm::vec2> sz = sizes_of(sizes, rotation, c.size());
+        const std::vector<int> idx = columns_of(index, c.size(), in.q, "index");
+        const auto n = static_cast<py::ssize_t>(c.size());
+        auto out = new_array({n, 4, 3});
+        auto corners = new_array({n, 4, 3});
+        float *po = out.mutable_data(), *pk = corners.mutable_data();
+        const float *pc = caf.data(), *pr = rotation.data();
+        {
+          py::gil_scoped_release release;
+          billboard_vertex_colours(c.data(), sz.data(), pr, idx.data(), c.size(), pc, in.q,
+                                   in.frame, in.lights, in.params, v3(right), v3(up), po, pk,
+                                   threads);
+        }
+        return py::make_tuple(out, corners);
+      },
+      py::arg("centres"), py::arg("sizes"), py::arg("rotation"), py::arg("index"), py::arg("caf"),
+      py::arg("boxes"), py::arg("light_dirs"), py::arg("light_radiance"), py::arg("d_min"),
+      py::arg("d_max"), py::arg("k_dir"), py::arg("directional"), py::arg("ambient"),
+      py::arg("k_amb"), py::arg("height_levels"), py::arg("right"), py::arg("up"),
+      py::arg("threads") = 0,
+      "[TM]'s vertex shading: ((K, 4, 3) colours, (K, 4, 3) corners) of the camera-facing quads.");
+
+  m.def(
+      "billboard_corners",
+      [](const FloatArray& centres, const FloatArray& sizes, const FloatArray& rotation, V3 right,
+         V3 up) {
+        const std::vector<glm::vec3> c = vec3s(centres, "centres");
+        const std::vector<glm::vec2> sz = sizes_of(sizes, rotation, c.size());
+        auto out = new_array({static_cast<py::ssize_t>(c.size()), 4, 3});
+        billboard_corners(c.data(), sz.data(), rotation.data(), c.size(), v3(right), v3(up),
+                          out.mutable_data());
+        return out;
+      },
+      py::arg("centres"), py::arg("sizes"), py::arg("rotation"), py::arg("right"), py::arg("up"),
+      "Camera-facing quad corners (K, 4, 3): v0 bottom-left, v1 bottom-right, v2 top-right, v3 "
+      "top-left of the quad turned by each billboard's rotation about the view axis.");
+
+  m.def(
+      "yaw_cos_sin",
+      [](double degrees) {
+        double c, s;
+        yaw_cos_sin(degrees, c, s);
+        return py::make_tuple(c, s);
+      },
+      py::arg("degrees"), "(cos, sin) of an angle in degrees, exact at multiples of 90°.");
 }
 
 }  // namespace cumuli::bind

@@ -1,10 +1,13 @@
 // Bindings of the model stage (python/cumuli/model): the cloud-shape generators (Gaussian
-// cumulus, L-system, metaballs, mesh → ellipsoids), cloud density, and the voxelised evolving
-// clouds of the endless-animation database (anim/endless.hpp).
+// cumulus, L-system, metaballs, mesh → ellipsoids), cloud density, the voxelised evolving
+// clouds of the endless-animation database (anim/endless.hpp), and the seed-and-box billboard
+// clouds with their sprite atlas (model/seedbox.hpp, model/sprite_atlas.hpp).
 #include <algorithm>
 #include <cmath>
 #include <array>
 #include <map>
+#include <tuple>
+#include <utility>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -17,6 +20,8 @@
 #include "cumuli/model/gaussian.hpp"
 #include "cumuli/model/lsystem.hpp"
 #include "cumuli/model/mesh_ellipsoids.hpp"
+#include "cumuli/model/seedbox.hpp"
+#include "cumuli/model/sprite_atlas.hpp"
 #include "cumuli/noise.hpp"
 #include "cumuli/parallel.hpp"
 
@@ -374,6 +379,158 @@ void bind_volumes(py::module_& m) {
       },
       "Voxelise an evolving cloud: (frames, D, H, W) float32 densities.");
 
+}
+
+namespace {
+
+template <class T>
+py::array_t<T> int_array(const std::vector<T>& v) {
+  py::array_t<T> out(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+std::pair<int, int> int_pair(const py::dict& d, const char* key) {
+  const auto t = d[key].cast<std::array<int, 2>>();
+  return {t[0], t[1]};
+}
+
+SeedBoxParams seed_params(const py::handle& h) {
+  const py::dict d = h.cast<py::dict>();
+  SeedBoxParams p;
+  p.centre = v3(d["centre"].cast<V3>());
+  p.half_size = v3(d["half_size"].cast<V3>());
+  for (const auto& v : d["directions"].cast<std::vector<V3>>()) p.directions.push_back(v3(v));
+  p.apertures = d["apertures"].cast<std::vector<float>>();
+  p.levels = d["levels"].cast<int>();
+  std::tie(p.boxes_min, p.boxes_max) = int_pair(d, "boxes_per_level");
+  p.reach = d["reach"].cast<float>();
+  const auto child = d["child_scale"].cast<std::array<float, 2>>();
+  p.child_min = child[0];
+  p.child_max = child[1];
+  std::tie(p.billboards_min, p.billboards_max) = int_pair(d, "billboards_per_box");
+  const auto per = d["count_per"].cast<std::string>();
+  if (per == "direction") p.count_per = CountPer::Direction;
+  else if (per == "level") p.count_per = CountPer::Level;
+  else throw py::value_error("count_per must be 'direction' or 'level', got '" + per + "'");
+  p.flat_base = d["flat_base"].cast<bool>();
+  return p;
+}
+
+}  // namespace
+
+void bind_seedbox(py::module_& m) {
+  m.attr("SEEDBOX_MAX_BOXES") = kMaxCloudBoxes;
+  m.attr("SEEDBOX_MAX_BILLBOARDS") = kMaxCloudBillboards;
+  m.attr("SEEDBOX_MAX_SEEDS") = kMaxSeedBoxes;
+  m.def(
+      "seed_box_worst_case",
+      [](const py::list& seeds) {
+        std::vector<SeedBoxParams> s;
+        for (const auto& h : seeds) s.push_back(seed_params(h));
+        std::uint64_t boxes = 0, billboards = 0;
+        worst_case_counts(s, boxes, billboards);
+        return py::make_tuple(boxes, billboards);
+      },
+      py::arg("seeds"), "(boxes, billboards) in the worst case of a seed-box parameter set.");
+  m.def(
+      "seed_box_cloud",
+      [](const py::list& seeds, std::array<float, 2> size, float aspect_min,
+         const std::vector<int>& textures, bool rotate, float min_spacing, bool ellipsoid,
+         std::uint64_t seed, int threads) {
+        std::vector<SeedBoxParams> s;
+        for (const auto& h : seeds) s.push_back(seed_params(h));
+        BillboardParams bb;
+        bb.size_min = size[0];
+        bb.size_max = size[1];
+        bb.aspect_min = aspect_min;
+        bb.textures = textures;
+        bb.rotate = rotate;
+        bb.min_spacing = min_spacing;
+        bb.ellipsoid = ellipsoid;
+        validate_seed_box_cloud(s, bb);  // before releasing the GIL: ValueError naming the field
+        BillboardCloudData r;
+        {
+          py::gil_scoped_release release;
+          r = seed_box_cloud(s, bb, seed, threads);
+        }
+        const auto m_boxes = static_cast<py::ssize_t>(r.boxes.size());
+        const auto k = static_cast<py::ssize_t>(r.centres.size());
+        auto boxes = new_array({m_boxes, 2, 3});
+        float* b = boxes.mutable_data();
+        for (py::ssize_t i = 0; i < m_boxes; ++i)
+          for (int c = 0; c < 3; ++c) {
+            b[6 * i + c] = r.boxes[static_cast<std::size_t>(i)].lo[c];
+            b[6 * i + 3 + c] = r.boxes[static_cast<std::size_t>(i)].hi[c];
+          }
+        auto sizes = new_array({k, 2});
+        float* sz = sizes.mutable_data();
+        for (py::ssize_t i = 0; i < k; ++i) {
+          sz[2 * i] = r.sizes[static_cast<std::size_t>(i)].x;
+          sz[2 * i + 1] = r.sizes[static_cast<std::size_t>(i)].y;
+        }
+        py::dict out;
+        out["boxes"] = boxes;
+        out["box_level"] = int_array(r.box_level);
+        out["box_seed"] = int_array(r.box_seed);
+        out["box_direction"] = int_array(r.box_direction);
+        out["centres"] = points_array(r.centres);
+        out["sizes"] = sizes;
+        out["texture"] = int_array(r.texture);
+        out["box"] = int_array(r.box);
+        out["rotation"] = scalar_array(r.rotation);
+        py::dict stats;
+        stats["boxes"] = r.boxes.size();
+        stats["billboards"] = r.centres.size();
+        stats["boxes_per_level"] = r.boxes_per_level;
+        stats["billboards_drawn"] = r.billboards_drawn;
+        stats["dropped_by_spacing"] = r.dropped_by_spacing;
+        out["stats"] = stats;
+        return out;
+      },
+      py::arg("seeds"), py::arg("billboard_size"), py::arg("aspect_min"), py::arg("textures"),
+      py::arg("rotate"), py::arg("min_spacing"), py::arg("ellipsoid"), py::arg("seed"),
+      py::arg("threads") = 0,
+      "Seed-and-box cloud (Torchelsen & Musse 2005 §3, eq. 1): dict of boxes and billboards.");
+  m.def("variant_seed", &variant_seed, py::arg("seed"), py::arg("basis"), py::arg("variant"),
+        "Generator seed of variant v of basis model b: Rng::stream(seed, b·2¹⁶ + v).");
+}
+
+void bind_sprite_atlas(py::module_& m) {
+  m.attr("ATLAS_MAX_SPRITES") = kMaxAtlasSprites;
+  m.attr("ATLAS_MIN_SIZE") = kMinAtlasSprite;
+  m.attr("ATLAS_MAX_SIZE") = kMaxAtlasSprite;
+  m.def(
+      "sprite_atlas",
+      [](const std::string& style, int n, int size, std::uint64_t seed, int threads) {
+        AtlasStyle s;
+        if (style == "sunny") s = AtlasStyle::Sunny;
+        else if (style == "rainy") s = AtlasStyle::Rainy;
+        else if (style == "wispy") s = AtlasStyle::Wispy;
+        else throw py::value_error("style must be 'sunny', 'rainy' or 'wispy', got '" + style + "'");
+        if (n < 1 || n > kMaxAtlasSprites) throw py::value_error("n must be in [1, 256]");
+        if (size < kMinAtlasSprite || size > kMaxAtlasSprite)
+          throw py::value_error("size must be in [8, 512]");
+        SpriteAtlas a;
+        {
+          py::gil_scoped_release release;
+          a = sprite_atlas(s, n, size, seed, threads);
+        }
+        auto img = to_array(a.rgba, {static_cast<py::ssize_t>(a.ny) * a.size,
+                                     static_cast<py::ssize_t>(a.nx) * a.size, 4});
+        return py::make_tuple(img, py::make_tuple(a.nx, a.ny));
+      },
+      py::arg("style"), py::arg("n"), py::arg("size"), py::arg("seed"), py::arg("threads") = 0,
+      "Procedural sprite atlas: ((H, W, 4) float32 straight-alpha RGBA, (nx, ny) grid).");
+  m.def(
+      "atlas_grid",
+      [](int n) {
+        if (n < 1 || n > kMaxAtlasSprites) throw py::value_error("n must be in [1, 256]");
+        int nx, ny;
+        atlas_grid(n, nx, ny);
+        return py::make_tuple(nx, ny);
+      },
+      py::arg("n"));
 }
 
 }  // namespace cumuli::bind

@@ -14,6 +14,10 @@ void bind_march(py::module_& m);
 void bind_volume_march(py::module_& m);
 void bind_composite(py::module_& m);
 void bind_anim(py::module_& m);
+void bind_seedbox(py::module_& m);
+void bind_sprite_atlas(py::module_& m);
+void bind_caf(py::module_& m);
+void bind_weather(py::module_& m);
 }  // namespace cumuli::bind
 
 PYBIND11_MODULE(_core, m) {
@@ -27,4 +31,8 @@ PYBIND11_MODULE(_core, m) {
   cumuli::bind::bind_volume_march(m);
   cumuli::bind::bind_composite(m);
   cumuli::bind::bind_anim(m);
+  cumuli::bind::bind_seedbox(m);
+  cumuli::bind::bind_sprite_atlas(m);
+  cumuli::bind::bind_caf(m);
+  cumuli::bind::bind_weather(m);
 }

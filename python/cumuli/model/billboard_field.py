@@ -1,0 +1,216 @@
+"""`BillboardField`: NC instances of NM billboard-cloud variants (Torchelsen & Musse 2005 §3.1, §5).
+
+[TM] replicates a few generated cloud models many times ("10 cloud models … replicated 200 times");
+a field holds the variants' geometry once and per instance a variant id, a source state id (the
+weather's sky state), an offset, a yaw about +y (beyond [TM]) and an alpha (fades). Instance ``i``
+places variant ``variant[i]`` at ``world = R_y(yaw[i])·local + offsets[i]`` with
+``R_y = [[c, 0, s], [0, 1, 0], [−s, 0, c]]`` (``c, s`` exact at multiples of 90°); billboards keep
+their size and view-axis rotation (they face the camera). Renderers draw instance by instance
+(GPU instancing: one vertex buffer per variant, per-instance offset/yaw/alpha).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any, ClassVar
+
+import numpy as np
+
+from cumuli import _core
+from cumuli import _validate as check
+from cumuli.model.billboards import BillboardCloud, rotate_y
+
+#: Most instances a field holds (spec §10: ≤ 2²⁰ instances per layer).
+MAX_INSTANCES = 1 << 20
+
+
+def _column(value: Any, n: int, name: str, dtype: Any, default: float) -> np.ndarray:
+    if value is None:
+        out = np.full(n, default, dtype=dtype)
+    else:
+        a = np.asarray(value)
+        if a.dtype.kind not in "fiu":
+            raise TypeError(f"{name} must be numeric, got dtype {a.dtype}")
+        if a.shape != (n,):
+            raise ValueError(f"{name} must have shape ({n},), got {a.shape}")
+        if not np.isfinite(a).all():
+            raise ValueError(f"{name} contains NaN or infinite values")
+        if np.dtype(dtype).kind == "i" and (a != np.round(a)).any():
+            raise ValueError(f"{name} must hold integers")
+        out = np.array(a, dtype=dtype)
+    out.setflags(write=False)
+    return out
+
+
+class BillboardField:
+    """Instances of billboard-cloud variants; see the module docstring.
+
+    Parameters
+    ----------
+    variants:
+        The NM (or, in a weather layer, all states' NBM·NM) `BillboardCloud` variants.
+    offsets:
+        ``(NC, 3)`` instance positions (world).
+    variant:
+        ``(NC,)`` variant ids (default ``i mod NM``).
+    yaw:
+        ``(NC,)`` degrees about +y (default 0).
+    alpha:
+        ``(NC,)`` in [0, 1] multiplying the variant's opacity (default 1).
+    state:
+        ``(NC,)`` source sky-state ids (default 0).
+    """
+
+    kind: ClassVar[str] = "billboard_field"
+
+    def __init__(
+        self,
+        variants: Sequence[BillboardCloud],
+        offsets: Any,
+        variant: Any = None,
+        yaw: Any = None,
+        alpha: Any = None,
+        state: Any = None,
+        params: dict[str, Any] | None = None,
+    ) -> None:
+        if isinstance(variants, BillboardCloud) or not isinstance(variants, (list, tuple)):
+            raise TypeError("variants must be a sequence of BillboardCloud")
+        if not 1 <= len(variants) <= 1 << 24:
+            raise ValueError("variants must hold at least one cloud")
+        for i, v in enumerate(variants):
+            if not isinstance(v, BillboardCloud):
+                raise TypeError(f"variants[{i}] must be a BillboardCloud, got {type(v).__name__}")
+        off = check.points3(offsets, "offsets", bound=check.MAX_COORD)
+        n = off.shape[0]
+        if n > MAX_INSTANCES:
+            raise ValueError(f"a field holds at most {MAX_INSTANCES} instances, got {n}")
+        nv = len(variants)
+        var = (
+            _column(np.arange(n) % nv, n, "variant", np.int32, 0)
+            if variant is None
+            else _column(variant, n, "variant", np.int32, 0)
+        )
+        if n and (var.min() < 0 or var.max() >= nv):
+            raise ValueError(f"variant must hold ids in [0, {nv})")
+        yaw_a = _column(yaw, n, "yaw", np.float32, 0.0)
+        alpha_a = _column(alpha, n, "alpha", np.float32, 1.0)
+        if n and (alpha_a.min() < 0 or alpha_a.max() > 1):
+            raise ValueError("alpha must be in [0, 1]")
+        state_a = _column(state, n, "state", np.int32, 0)
+        if n and state_a.min() < 0:
+            raise ValueError("state must be >= 0")
+        off.setflags(write=False)
+        self.variants: tuple[BillboardCloud, ...] = tuple(variants)
+        self.offsets = off
+        self.variant = var
+        self.yaw = yaw_a
+        self.alpha = alpha_a
+        self.state = state_a
+        self.params: dict[str, Any] = dict(params or {})
+
+    @property
+    def n(self) -> int:
+        """NC, the number of instances."""
+        return int(self.offsets.shape[0])
+
+    def __len__(self) -> int:
+        return self.n
+
+    def _cos_sin(self) -> tuple[np.ndarray, np.ndarray]:
+        cs = np.array([_core.yaw_cos_sin(float(a)) for a in self.yaw], dtype=np.float64)
+        cs = cs.reshape(-1, 2)
+        return cs[:, 0], cs[:, 1]
+
+    def instance_bounds(self) -> np.ndarray:
+        """``(NC, 2, 3)`` world AABB of each instance's quads at any view orientation."""
+        out = np.empty((self.n, 2, 3), dtype=np.float32)
+        c, s = self._cos_sin()
+        for v, cloud in enumerate(self.variants):
+            idx = np.flatnonzero(self.variant == v)
+            if idx.size == 0:
+                continue
+            if cloud.n_billboards:
+                pts, r = cloud.centres.astype(np.float64), cloud.half_diagonals().astype(np.float64)
+            else:
+                pts, r = (
+                    cloud.box_centres.astype(np.float64),
+                    np.linalg.norm(cloud.box_half_sizes.astype(np.float64), axis=1),
+                )
+            # Instances in chunks of about 10⁶ points: (instances, points, 3) float64 at a time.
+            step = max(1, (1 << 20) // max(pts.shape[0], 1))
+            for k in range(0, idx.size, step):
+                ii = idx[k : k + step]
+                ci, si = c[ii][:, None], s[ii][:, None]
+                x = ci * pts[None, :, 0] + si * pts[None, :, 2]
+                z = -si * pts[None, :, 0] + ci * pts[None, :, 2]
+                y = np.broadcast_to(pts[None, :, 1], x.shape)
+                w = np.stack([x, y, z], axis=-1) + self.offsets[ii].astype(np.float64)[:, None]
+                lo = (w - r[None, :, None]).min(axis=1).astype(np.float32)
+                hi = (w + r[None, :, None]).max(axis=1).astype(np.float32)
+                out[ii, 0] = np.nextafter(lo, -np.inf)
+                out[ii, 1] = np.nextafter(hi, np.inf)
+        return out
+
+    def bounds(self) -> tuple[np.ndarray, np.ndarray]:
+        """World AABB ``(lo, hi)`` of every instance's quads; raises on an empty field."""
+        if self.n == 0:
+            raise ValueError("an empty field has no bounds")
+        b = self.instance_bounds()
+        return b[:, 0].min(axis=0), b[:, 1].max(axis=0)
+
+    def world_billboards(self, index: int) -> dict[str, np.ndarray]:
+        """Instance ``index``'s billboards in world space: ``centres (K, 3)``, ``sizes``,
+        ``texture``, ``rotation``, ``box`` (the variant's arrays) and ``alpha`` (scalar array)."""
+        i = check.integer(index, "index", 0, self.n - 1)
+        cloud = self.variants[int(self.variant[i])]
+        c, s = _core.yaw_cos_sin(float(self.yaw[i]))
+        centres = rotate_y(cloud.centres, c, s) + self.offsets[i].astype(np.float64)
+        return {
+            "centres": centres.astype(np.float32),
+            "sizes": cloud.sizes,
+            "texture": cloud.texture,
+            "rotation": cloud.rotation,
+            "box": cloud.box,
+            "alpha": np.float32(self.alpha[i] * cloud.opacity),
+        }
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able (scene files): variants as their dicts, instance arrays as lists."""
+        return {
+            "kind": self.kind,
+            "variants": [v.to_dict() for v in self.variants],
+            "offsets": self.offsets.tolist(),
+            "variant": self.variant.tolist(),
+            "yaw": self.yaw.tolist(),
+            "alpha": self.alpha.tolist(),
+            "state": self.state.tolist(),
+            "params": self.params,
+        }
+
+    @classmethod
+    def from_dict(cls, data: Any) -> BillboardField:
+        """Inverse of :meth:`to_dict` (validated)."""
+        if not isinstance(data, dict):
+            raise TypeError(f"billboard field must be an object, got {type(data).__name__}")
+        if data.get("kind", cls.kind) != cls.kind:
+            raise ValueError(f"kind must be {cls.kind!r}, got {data.get('kind')!r}")
+        for key in ("variants", "offsets"):
+            if key not in data:
+                raise ValueError(f"billboard field is missing {key!r}")
+        if not isinstance(data["variants"], list):
+            raise ValueError("variants must be a list")
+        offsets = np.asarray(data["offsets"], dtype=np.float32)
+        if offsets.size == 0:
+            offsets = offsets.reshape(0, 3)
+        return cls(
+            [BillboardCloud.from_dict(v) for v in data["variants"]],
+            offsets,
+            variant=data.get("variant"),
+            yaw=data.get("yaw"),
+            alpha=data.get("alpha"),
+            state=data.get("state"),
+            params=data.get("params"),
+        )
+
+    def __repr__(self) -> str:
+        return f"BillboardField(instances={self.n}, variants={len(self.variants)})"

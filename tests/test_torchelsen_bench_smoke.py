@@ -1,0 +1,43 @@
+"""The billboard benchmark runs in --quick mode and writes the documented JSON and plot (speed is
+not checked)."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def test_bench_billboards_quick(tmp_path: Path) -> None:
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
+    env["MPLBACKEND"] = "Agg"
+    res = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "bench_billboards.py"), "--quick", "--out",
+         str(tmp_path)],
+        capture_output=True, text=True, timeout=300, env=env,
+    )  # fmt: skip
+    assert res.returncode == 0, res.stderr + res.stdout
+    data = json.loads((tmp_path / "billboards.json").read_text())
+    assert (tmp_path / "billboards.png").stat().st_size > 1000
+    assert data["benchmark"] == "billboards" and data["quick"] is True
+    for key in ("cpu_model", "cores", "gl_renderer", "commit", "date"):
+        assert key in data["machine"]
+    levels = data["generation_vs_levels"]
+    boxes = [levels[k]["boxes"] for k in sorted(levels, key=int)]
+    assert boxes == sorted(boxes) and boxes[0] < boxes[-1]
+    for row in [*levels.values(), *data["generation_vs_boxes_per_level"].values()]:
+        assert 0 < row["1_thread"]["min"] <= row["1_thread"]["median"] <= row["1_thread"]["max"]
+    for row in data["caf_vs_boxes"].values():
+        assert row["sum"]["median"] > 0 and row["union"]["median"] > 0
+        assert row["union_over_sum"] == row["union"]["median"] / row["sum"]["median"]
+    for n, row in data["weather_step_vs_instances"].items():
+        assert row["step_s"]["median"] > 0 and abs(row["instances"] - int(n)) <= max(
+            2, int(n) // 20
+        )
+    spearman = data["caf_vs_ndt"]["cumulus"]["spearman"]
+    assert all(-1 <= v["sum"] <= 1 and -1 <= v["union"] <= 1 for v in spearman.values())
