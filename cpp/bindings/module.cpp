@@ -13,6 +13,10 @@ void bind_volume_light(py::module_& m);
 void bind_march(py::module_& m);
 void bind_volume_march(py::module_& m);
 void bind_anim(py::module_& m);
+void bind_particles(py::module_& m);
+void bind_particle_light(py::module_& m);
+void bind_sprites(py::module_& m);
+void bind_impostors(py::module_& m);
 }  // namespace cumuli::bind
 
 PYBIND11_MODULE(_core, m) {
@@ -25,4 +29,8 @@ PYBIND11_MODULE(_core, m) {
   cumuli::bind::bind_march(m);
   cumuli::bind::bind_volume_march(m);
   cumuli::bind::bind_anim(m);
+  cumuli::bind::bind_particles(m);
+  cumuli::bind::bind_particle_light(m);
+  cumuli::bind::bind_sprites(m);
+  cumuli::bind::bind_impostors(m);
 }
