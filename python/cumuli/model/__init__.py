@@ -1,0 +1,1 @@
+"""Model stage: what a cloud is, before any light."""

@@ -1,0 +1,1 @@
+"""Rendering stage: one drawer per kind of cloud (GL and its C++ CPU twin)."""
