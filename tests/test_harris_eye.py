@@ -30,17 +30,28 @@ def hand_light(pc: ParticleCloud, values, suns) -> ParticleLight:
     return ParticleLight(np.asarray(values, np.float32).reshape(pc.n, len(suns)), dirs)
 
 
+BACKENDS = ["cpu", pytest.param("gl", marks=pytest.mark.gl)]
+
+
+def draw(backend: str, *args, **kwargs) -> np.ndarray:
+    """The particle layer by the CPU twin or the GL pipeline (same arguments)."""
+    if backend == "gl":
+        return draw_particles_gl(*args, **kwargs)
+    return draw_particles_cpu(*args, **kwargs)
+
+
 def kernel(kind: str, peak: float, d) -> np.ndarray:
     return _core.splat_kernel(kind, peak, np.asarray(d, np.float32))
 
 
-def test_single_particle_centre_profile_and_footprint() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_single_particle_centre_profile_and_footprint(backend: str) -> None:
     """§10.2.1: centre pixel = peak·C + (1 − peak·α)·sky; profile K(d); r_px = r(H/2)/(Z·th)."""
     sun = cu.Sun((0.0, 1.0, 0.0), colour=(1.0, 0.9, 0.8), intensity=2.0)
     pc = ParticleCloud([(0.0, 0.0, 10.0)], 1.0, 8.0, 0.9)
     light = hand_light(pc, [0.7], [sun])
     s = SpriteSettings(kernel="hermite", peak=0.8, ambient=(0.05, 0.05, 0.1))
-    layer = draw_particles_cpu(pc, light, sun, EYE, W, H, s)
+    layer = draw(backend, pc, light, sun, EYE, W, H, s)
     c_k = np.array(s.ambient) + 0.9 * 8 / (4 * math.pi) * 0.7 * 0.75 * np.array(sun.radiance)
     alpha = 1 - math.exp(-8)
     assert layer[16, 16, :3] == pytest.approx(0.8 * c_k, rel=1e-6)
@@ -68,13 +79,14 @@ def test_single_particle_centre_profile_and_footprint() -> None:
         assert depth == pytest.approx(z) and vis == 1
 
 
-def test_alpha_is_one_minus_product_and_colour_is_over() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_alpha_is_one_minus_product_and_colour_is_over(backend: str) -> None:
     """§10.2.2: A = 1 − Π(1 − w_k α_k), C the back-to-front over of w_k C_k."""
     sun = cu.Sun((0.0, 1.0, 0.0))
     taus = np.array([0.3, 0.6, 1.1])
     pc = ParticleCloud([(0, 0, 14.0), (0, 0, 12.0), (0, 0, 10.0)], 1.0, taus, 0.9)
     light = hand_light(pc, [1.0, 0.5, 0.25], [sun])
-    layer = draw_particles_cpu(pc, light, sun, EYE, W, H)
+    layer = draw(backend, pc, light, sun, EYE, W, H)
     alphas = 1 - np.exp(-taus)
     assert layer[16, 16, 3] == pytest.approx(1 - np.prod(1 - alphas), rel=1e-6)
     colour = 0.0
@@ -83,36 +95,41 @@ def test_alpha_is_one_minus_product_and_colour_is_over() -> None:
     assert layer[16, 16, 0] == pytest.approx(colour, rel=1e-5)
 
 
-def test_over_depends_on_order_unless_disjoint() -> None:
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_over_depends_on_order_unless_disjoint(backend: str) -> None:
     """§10.2.3: swapping two overlapping sprites changes the image; disjoint ones do not."""
 
-    def draw(order, centres):
+    def layer_of(order: list[int], centres: list[tuple]) -> np.ndarray:
         sp = Sprites(
             centres=np.array(centres)[order],
             half_sizes=np.full(2, 1.0),
             colours=np.array([(1, 0, 0), (0, 0, 1)], np.float32)[order],
             alpha=np.array([0.9, 0.5])[order],
         )
+        if backend == "gl":
+            with SpriteLayerRenderer() as r:
+                return r.draw(sp, EYE, W, H)
         return draw_sprites_cpu(sp, EYE, W, H)
 
     overlapping = [(0.2, 0, 10), (-0.2, 0, 10)]
-    assert not np.allclose(draw([0, 1], overlapping), draw([1, 0], overlapping))
+    assert not np.allclose(layer_of([0, 1], overlapping), layer_of([1, 0], overlapping))
     disjoint = [(2.5, 0, 10), (-2.5, 0, 10)]
-    assert np.array_equal(draw([0, 1], disjoint), draw([1, 0], disjoint))
-    # The analytic over at the centre of the overlap.
-    img = draw([0, 1], [(0, 0, 10), (0, 0, 10)])
-    assert img[16, 16, :3] == pytest.approx([0.5 * 1, 0, 1.0], rel=1e-6)  # blue over red
+    assert np.array_equal(layer_of([0, 1], disjoint), layer_of([1, 0], disjoint))
+    # The analytic over at the centre of the overlap: blue (α 0.5) over red (α 0.9).
+    img = layer_of([0, 1], [(0, 0, 10), (0, 0, 10)])
+    assert img[16, 16, :3] == pytest.approx([0.5 * 1, 0, 1.0], rel=1e-6)
     assert img[16, 16, 3] == pytest.approx(1 - 0.1 * 0.5, rel=1e-6)
 
 
+@pytest.mark.parametrize("backend", BACKENDS)
 @pytest.mark.parametrize("phase, g", [("rayleigh", 0.0), ("isotropic", 0.0), ("hg", 0.6)])
-def test_phase_ratio_forward_vs_side(phase: str, g: float) -> None:
+def test_phase_ratio_forward_vs_side(phase: str, g: float, backend: str) -> None:
     """§10.2.4 ([H] Figs. 11/12): an isolated particle lit with i = 1 seen at 0° and 90°."""
     pc = ParticleCloud([(0, 0, 10.0)], 1.0, 8.0, 0.9)
     s = SpriteSettings(phase=phase, hg_g=g, solid_angle=0.05)
     centre = []
     for sun in (cu.Sun((0, 0, 1)), cu.Sun((0, 1, 0))):  # cos θ = 1 (into the sun), 0
-        layer = draw_particles_cpu(pc, hand_light(pc, [1.0], [sun]), sun, EYE, W, H, s)
+        layer = draw(backend, pc, hand_light(pc, [1.0], [sun]), sun, EYE, W, H, s)
         centre.append(layer[16, 16, 0])
     want = {
         "rayleigh": 2.0,
