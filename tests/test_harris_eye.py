@@ -215,6 +215,22 @@ def test_texture_mode_matches_numpy_reference() -> None:
     assert checked > 100
 
 
+def test_corners_follow_the_raster_convention() -> None:
+    """Sprites.corners: v0..v3 project to the rectangle the rasteriser fills, (s, t) = (±1, ±1)."""
+    sp = Sprites(centres=[(0.5, 0.3, 12.0)], half_sizes=[(2.0, 1.0)], colours=[(1, 1, 1)],
+                 alpha=[1.0], rotation=[25.0])  # fmt: skip
+    corners = sp.corners(EYE)[0]
+    cam = camera_dict(EYE, W, H)
+    jc, ic, hx, hy, *_ = _core.project_sprites(sp.centres, sp.half_sizes, sp.radians(), cam)[0]
+    tiny = np.full((4, 2), 1e-3, np.float32)
+    proj = _core.project_sprites(corners.astype(np.float32), tiny, np.zeros(4, np.float32), cam)
+    c, s_ = math.cos(math.radians(25)), math.sin(math.radians(25))
+    for (s, t), (j, i) in zip([(-1, -1), (1, -1), (1, 1), (-1, 1)], proj[:, :2], strict=True):
+        # screen offset of (s, t): s·hx·(cos ψ, −sin ψ) + t·hy·(−sin ψ, −cos ψ)
+        assert j == pytest.approx(jc + s * hx * c - t * hy * s_, abs=1e-3)
+        assert i == pytest.approx(ic - s * hx * s_ - t * hy * c, abs=1e-3)
+
+
 def test_culling_and_threads_change_nothing() -> None:
     """§10.2.8 (CPU): culling never changes a pixel; the thread count neither."""
     pc = particle_cumulus(n_particles=400, seed=2)

@@ -425,6 +425,31 @@ def test_readback_path_matches_cpp(gl_context, settings: SpriteSettings) -> None
 
 
 @pytest.mark.gl
+def test_glsl_compute_beyond_llvmpipe_loop_limit(gl_context) -> None:
+    """llvmpipe ends a shader after 65535 loop iterations per invocation: one dispatch over 15000
+    particles used to stop at particle 13107 (outputs left 0). The host now splits dispatches."""
+    rng = np.random.default_rng(0)
+    pc = ParticleCloud(rng.uniform(-5, 5, (15000, 3)), 0.05, 0.5, 0.5)
+    s = SpriteSettings(light_resolution=16)
+    cpu = particle_light(pc, SUN_Z, s).light
+    gl = particle_light(pc, SUN_Z, s, method="gl", context=gl_context).light
+    assert np.abs(gl - cpu).max() <= 1e-6
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("readback", ["pixel", "solid_angle"])
+def test_glsl_compute_huge_footprints_and_patches(gl_context, readback: str) -> None:
+    """N_L > 1024 (work groups of 1024) with footprints and read-back patches of ~10⁵–10⁶ pixels."""
+    rng = np.random.default_rng(1)
+    pc = ParticleCloud(rng.normal(size=(6, 3)), [3, 2, 2.5, 1, 3.2, 2], 2.0, 0.9)
+    s = SpriteSettings(light_resolution=1500, readback=readback)
+    cpu = particle_light(pc, cu.Sun(), s, return_buffers=True)
+    gl = particle_light(pc, cu.Sun(), s, method="gl", return_buffers=True, context=gl_context)
+    assert np.abs(gl.light - cpu.light).max() <= 1e-6
+    assert np.abs(gl.buffers - cpu.buffers).max() <= 1e-6
+
+
+@pytest.mark.gl
 def test_readback_with_8bit_buffer_stays_close(gl_context) -> None:
     """quantize=8 reads back an RGBA8 framebuffer: GL's own 8-bit blending (rounding rule not
     fixed by GL) stays within a few 1/255 steps of the C++ emulation."""

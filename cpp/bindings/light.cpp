@@ -374,7 +374,11 @@ void bind_particle_light(py::module_& m) {
         }
         const auto lights = static_cast<py::ssize_t>(suns.size());
         const py::ssize_t nl = s.resolution;
-        // Sizes before allocating: buffers are L·N_L² floats per cloud.
+        // Sizes before allocating: N·L light values and L·N_L² buffer floats per cloud.
+        double values = 0.0;
+        for (const ParticleView& v : views) values += static_cast<double>(v.n) * lights;
+        if (values > double(py::ssize_t{1} << 28))
+          throw py::value_error("particles × lights exceeds 2^28 light values: relight in parts");
         if (return_buffers &&
             static_cast<double>(clouds.size()) * lights * nl * nl > double(py::ssize_t{1} << 31))
           throw py::value_error("return_buffers would allocate more than 2^31 floats");

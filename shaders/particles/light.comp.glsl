@@ -2,7 +2,7 @@
 // Multiple forward scattering light pass of Harris 2002 (§2.2.1, §2.3, Fig. 4; spec harris.md §4):
 // the GLSL compute twin of cumuli::particle_light_one (cpp/src/light/particle_light.cpp).
 //
-// One work group per light. The N_L² light buffer (cleared to 1) lives in an SSBO; particles come
+// One work group per light. The N_L² light buffer (1 everywhere, uploaded) lives in an SSBO; particles come
 // in processing order (nearest the light first) with their buffer position, footprint radius,
 // forward factor a·τ·p_fwd·γ/4π and alpha 1 − e^{−τ} — computed once by the C++ core, so that the
 // pixel each particle reads back (a floor of its position) is the C++'s pixel exactly [decision:
@@ -10,7 +10,16 @@
 // Per particle: invocation 0 reads back I_k (pixel, bilinear or solid-angle patch, the C++ order of
 // operations) and stores it; barrier; every invocation blends its share of the footprint pixels,
 // B ← w·g + (1 − w·α)·B with w = K(d), g = forward·I_k (recurrence (4)); barrier.
-layout(local_size_x = 64) in;
+//
+// One dispatch handles the particles [u_first, u_end) of the processing order; the buffer persists
+// between dispatches. llvmpipe stops a shader after 65535 loop iterations per invocation (its loop
+// limiter), so the host splits the particles into dispatches within a budget of iterations
+// (cumuli/light/particles_gl.py) — harmless on GPUs, where the split only adds dispatches.
+#ifndef LOCAL_SIZE
+#define LOCAL_SIZE 64
+#endif
+#define MAX_PATCH 4096
+layout(local_size_x = LOCAL_SIZE) in;
 
 #include "common/splat.glsl"
 
@@ -24,6 +33,8 @@ layout(std430, binding = 1) writeonly buffer Light { float light[]; };   // [par
 layout(std430, binding = 2) coherent buffer Buffers { float buf[]; };    // [light][y][x]
 
 uniform int u_count;     // N particles
+uniform int u_first;     // first particle (processing order) of this dispatch
+uniform int u_end;       // one past the last
 uniform int u_lights;    // L
 uniform int u_res;       // N_L
 uniform int u_kernel;    // 0 gaussian, 1 hermite
@@ -33,6 +44,7 @@ uniform bool u_clamp;
 uniform int u_quantize;  // 0 or 8
 
 shared float s_g;
+shared float s_rows[MAX_PATCH];  // row sums of the solid-angle patch
 
 float at(int base, int x, int y) { return buf[base + y * u_res + x]; }
 
@@ -60,14 +72,10 @@ float read_back(int base, Splat s) {
         float b1 = lerp1(at(base, x0, y1), at(base, x1, y1), wx);
         return lerp1(b0, b1, wy);
     }
+    // Solid-angle patch: the row sums were left in s_rows by every invocation (see main).
     int side = s.patch_side;
-    precise float half_side = 0.5 * float(side);
-    float last = float(u_res - side);
-    int ox = int(clamp(floor(s.x - half_side), 0.0, last));
-    int oy = int(clamp(floor(s.y - half_side), 0.0, last));
     precise float sum = 0.0;
-    for (int y = oy; y < oy + side; ++y)
-        for (int x = ox; x < ox + side; ++x) sum += at(base, x, y);
+    for (int y = 0; y < side; ++y) sum += s_rows[y];
     precise float mean = sum / float(side * side);
     return mean;
 }
@@ -77,12 +85,25 @@ void main() {
     int lid = int(gl_LocalInvocationID.x);
     int size = int(gl_WorkGroupSize.x);
     int base = l * u_res * u_res;
-    for (int p = lid; p < u_res * u_res; p += size) buf[base + p] = 1.0;
-    memoryBarrierBuffer();
-    barrier();
     float top = float(u_res - 1);
-    for (int k = 0; k < u_count; ++k) {
+    for (int k = u_first; k < u_end; ++k) {
         Splat s = splats[l * u_count + k];
+        if (u_readback == 2) {
+            // Patch rows in parallel, each summed in x order (the C++ order), then row sums in
+            // y order by invocation 0.
+            int side = s.patch_side;
+            precise float half_side = 0.5 * float(side);
+            float last = float(u_res - side);
+            int ox = int(clamp(floor(s.x - half_side), 0.0, last));
+            int oy = int(clamp(floor(s.y - half_side), 0.0, last));
+            for (int row = lid; row < side; row += size) {
+                precise float acc = 0.0;
+                for (int x = ox; x < ox + side; ++x) acc += at(base, x, oy + row);
+                s_rows[row] = acc;
+            }
+            memoryBarrierShared();
+            barrier();
+        }
         if (lid == 0) {
             float intensity = read_back(base, s);
             light[s.index * u_lights + l] = intensity;
@@ -103,16 +124,17 @@ void main() {
             precise float dx = (float(ix) + 0.5) - s.x;
             precise float dy = (float(iy) + 0.5) - s.y;
             precise float d = sqrt(dx * dx + dy * dy) / s.r_px;
-            if (!(d < 1.0)) continue;
-            float wk = splat_kernel(u_kernel, u_peak, d);
-            int idx = base + iy * u_res + ix;
-            precise float b = wk * g + (1.0 - wk * s.alpha) * buf[idx];
-            if (u_quantize == 8) {
-                b = floor(clamp(b, 0.0, 1.0) * 255.0 + 0.5) / 255.0;
-            } else if (u_clamp) {
-                b = clamp(b, 0.0, 1.0);
+            if (d < 1.0) {
+                float wk = splat_kernel(u_kernel, u_peak, d);
+                int idx = base + iy * u_res + ix;
+                precise float b = wk * g + (1.0 - wk * s.alpha) * buf[idx];
+                if (u_quantize == 8) {
+                    b = floor(clamp(b, 0.0, 1.0) * 255.0 + 0.5) / 255.0;
+                } else if (u_clamp) {
+                    b = clamp(b, 0.0, 1.0);
+                }
+                buf[idx] = b;
             }
-            buf[idx] = b;
         }
         memoryBarrierBuffer();
         barrier();

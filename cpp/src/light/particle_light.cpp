@@ -134,9 +134,14 @@ float light_read_back(const float* buffer, int n, const LightSplat& s, Readback 
   const float top = static_cast<float>(n - side);
   const int ox = static_cast<int>(std::clamp(std::floor(s.x - half), 0.0f, top));
   const int oy = static_cast<int>(std::clamp(std::floor(s.y - half), 0.0f, top));
+  // Row sums, then their sum, in order: the GLSL twin sums the rows in parallel (a patch can
+  // hold ~10⁶ pixels) and adds them up the same way.
   float sum = 0.0f;
-  for (int y = oy; y < oy + side; ++y)
-    for (int x = ox; x < ox + side; ++x) sum += buffer[y * n + x];
+  for (int y = oy; y < oy + side; ++y) {
+    float row = 0.0f;
+    for (int x = ox; x < ox + side; ++x) row += buffer[y * n + x];
+    sum += row;
+  }
   return sum / static_cast<float>(side * side);
 }
 

@@ -208,6 +208,7 @@ class SpriteSettings:
 
 
 def as_settings(settings: SpriteSettings | None) -> SpriteSettings:
+    """``settings``, or the defaults for None (TypeError for anything else)."""
     if settings is None:
         return SpriteSettings()
     if not isinstance(settings, SpriteSettings):

@@ -17,13 +17,48 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli.gl import GLContext, _resolve_context
+from cumuli.gl import GLContext, _resolve_context, load_shader, with_defines
 from cumuli.light.particles import PHASES, SpriteSettings
 from cumuli.model.particles import ParticleCloud
 
 _SPLAT = np.dtype([("geom", "<f4", 5), ("index", "<i4"), ("patch", "<i4"), ("pad", "<i4")])
-_LOCAL = 64  # local_size_x of the shaders
+_LOCAL = 64  # local_size_x of phase_values.comp.glsl
 _MAX_GROUPS = 65535
+#: Loop iterations one invocation of light.comp.glsl may spend per dispatch. llvmpipe ends a shader
+#: after 65535 loop iterations per invocation; the estimate below (per particle, of invocation 0,
+#: the busiest) counts each loop iteration twice, so half that limit leaves a margin of ~4.
+_ITERATION_BUDGET = 32768
+
+
+def _local_size(resolution: int) -> int:
+    """Work-group size of the light pass: 64, or 1024 above N_L = 1024 so that one particle's
+    footprint (≤ N_L² pixels) never needs more than 16384 iterations per invocation."""
+    return 64 if resolution <= 1024 else 1024
+
+
+def _dispatch_ranges(geom: np.ndarray, patch: np.ndarray, nl: int, readback: str) -> list:
+    """Split the processing order into [first, end) ranges within the iteration budget."""
+    local = _local_size(nl)
+    top = np.float32(nl - 1)
+    x, y, r = geom[..., 0], geom[..., 1], geom[..., 2]
+    x0, x1 = (np.clip(np.floor(v), 0, top) for v in (x - r, x + r))
+    y0, y1 = (np.clip(np.floor(v), 0, top) for v in (y - r, y + r))
+    count = (x1 - x0 + 1).astype(np.int64) * (y1 - y0 + 1).astype(np.int64)
+    cost = 8 + 2 * -(-count // local)
+    if readback == "solid_angle":
+        side = patch.astype(np.int64)
+        cost = cost + 2 * (-(-side // local) * side + side) + 4
+    cumulative = np.cumsum(cost.max(axis=0))
+    ranges, first, spent = [], 0, 0
+    n = cumulative.size
+    while first < n:
+        end = int(np.searchsorted(cumulative, spent + _ITERATION_BUDGET, side="right"))
+        end = max(end, first + 1)  # one particle always fits the real limit (see _local_size)
+        ranges.append((first, end))
+        spent = int(cumulative[end - 1])
+        first = end
+    return ranges
+
 
 #: Wall seconds of the last light pass run here (dispatch/draw loop only, uploads excluded).
 last_seconds: float | None = None
@@ -74,34 +109,34 @@ def _compute(
     group = max(1, min(lights, _MAX_GROUPS, block // per_light))
     light = np.empty((n, lights), dtype=np.float32)
     buffers = np.empty((lights, nl, nl), dtype=np.float32) if return_buffers else None
-    program = context.compute("particles/light.comp.glsl")
+    local = _local_size(nl)
+    source = with_defines(load_shader("particles/light.comp.glsl"), {"LOCAL_SIZE": local})
+    program = ctx.compute_shader(source)
     made: list[Any] = [program]
     last_seconds = 0.0
+    values = {
+        "u_count": n,
+        "u_res": nl,
+        "u_kernel": ("gaussian", "hermite").index(settings.kernel),
+        "u_peak": settings.peak,
+        "u_readback": ("pixel", "bilinear", "solid_angle").index(settings.readback),
+        "u_clamp": settings.clamp,
+        "u_quantize": settings.quantize,
+    }
     try:
-        values = {
-            "u_count": n,
-            "u_res": nl,
-            "u_kernel": ("gaussian", "hermite").index(settings.kernel),
-            "u_peak": settings.peak,
-            "u_readback": ("pixel", "bilinear", "solid_angle").index(settings.readback),
-            "u_clamp": settings.clamp,
-            "u_quantize": settings.quantize,
-        }
         for name, value in values.items():
             if name in program:
                 program[name].value = value
         for first in range(0, lights, group):
             count = min(group, lights - first)
-            rec = _records(
-                geom[first : first + count],
-                index[first : first + count],
-                patch[first : first + count],
-            )
+            part = slice(first, first + count)
+            rec = _records(geom[part], index[part], patch[part])
+            ranges = _dispatch_ranges(geom[part], patch[part], nl, settings.readback)
             src = ctx.buffer(rec.tobytes())
             made.append(src)
             out = ctx.buffer(reserve=n * count * 4)
             made.append(out)
-            buf = ctx.buffer(reserve=count * nl * nl * 4)
+            buf = ctx.buffer(np.ones(count * nl * nl, np.float32).tobytes())  # cleared to white
             made.append(buf)
             src.bind_to_storage_buffer(0)
             out.bind_to_storage_buffer(1)
@@ -110,17 +145,16 @@ def _compute(
                 program["u_lights"].value = count
             ctx.finish()
             t0 = time.perf_counter()
-            program.run(count, 1, 1)
-            ctx.memory_barrier()
+            for lo, hi in ranges:
+                program["u_first"].value = lo
+                program["u_end"].value = hi
+                program.run(count, 1, 1)
+                ctx.memory_barrier()
             ctx.finish()
             last_seconds += time.perf_counter() - t0
-            light[:, first : first + count] = np.frombuffer(out.read(), np.float32).reshape(
-                n, count
-            )
+            light[:, part] = np.frombuffer(out.read(), np.float32).reshape(n, count)
             if buffers is not None:
-                buffers[first : first + count] = np.frombuffer(buf.read(), np.float32).reshape(
-                    count, nl, nl
-                )
+                buffers[part] = np.frombuffer(buf.read(), np.float32).reshape(count, nl, nl)
             for obj in (src, out, buf):
                 obj.release()
                 made.remove(obj)
@@ -157,7 +191,9 @@ def _read_back(target: Any, nl: int, x: np.float32, y: np.float32, side: int, mo
     ox = int(np.clip(np.floor(f32(x - half)), f32(0), last))
     oy = int(np.clip(np.floor(f32(y - half)), f32(0), last))
     patch = target.read(ox, oy, side, side)
-    total = np.cumsum(patch.ravel(), dtype=np.float32)[-1]  # sequential, as the C++ loop
+    # Row sums in x order, then their sum in y order: the C++ twin's order (cumsum is sequential).
+    rows = np.cumsum(patch, axis=1, dtype=np.float32)[:, -1]
+    total = np.cumsum(rows, dtype=np.float32)[-1]
     return f32(total / f32(side * side))
 
 

@@ -226,10 +226,12 @@ def impostor_resolution(
     if s.resolution_rule == "paper":
         req = check.real(res_req, "res_req", 0.0)
         return int(_core.impostor_resolution(req, s.min_res, s.max_res, s.pow2))
-    if camera is None:
-        raise ValueError(
-            "the skyworks resolution rule needs camera, width, height, radius, distance"
-        )
+    if not isinstance(camera, Camera):
+        raise TypeError("the skyworks resolution rule needs camera (a cumuli.Camera)")
+    width = check.integer(width, "width", 1, 1 << 15)
+    height = check.integer(height, "height", 1, 1 << 15)
+    radius = check.real(radius, "radius", 0.0, check.MAX_COORD, lo_open=True)
+    distance = check.real(distance, "distance", 0.0, lo_open=True)
     th, aspect = _tan_aspect(camera, width, height)
     near_r = _core.impostor_near_corner_radius(s.near, th, aspect)
     return int(

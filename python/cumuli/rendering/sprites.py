@@ -133,6 +133,25 @@ class Sprites:
         assert self.rotation is not None
         return (self.rotation * np.float32(math.pi / 180.0)).astype(np.float32)
 
+    def corners(self, camera: Camera) -> np.ndarray:
+        """World positions ``(N, 4, 3)`` of the corners v0..v3 (bottom-left, bottom-right,
+        top-right, top-left) as ``camera`` sees the sprites: ``centre ± half_w·r' ± half_h·u'``
+        with ``r' = cos ψ·r + sin ψ·u``, ``u' = −sin ψ·r + cos ψ·u`` (the camera's right and up
+        turned by the rotation ψ) — where per-vertex colours (e.g. billboard shading from the
+        corner's position relative to the cloud) are evaluated. float64."""
+        if not isinstance(camera, Camera):
+            raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
+        _, r, u = (v.astype(np.float64) for v in camera.basis())
+        psi = self.radians().astype(np.float64)[:, None]
+        right = np.cos(psi) * r + np.sin(psi) * u
+        up = -np.sin(psi) * r + np.cos(psi) * u
+        st = np.array([(-1, -1), (1, -1), (1, 1), (-1, 1)], dtype=np.float64)
+        half = self.half_sizes.astype(np.float64)
+        offsets = (st[None, :, 0:1] * half[:, None, 0:1]) * right[:, None, :] + (
+            st[None, :, 1:2] * half[:, None, 1:2]
+        ) * up[:, None, :]
+        return self.centres.astype(np.float64)[:, None, :] + offsets
+
     def records(self) -> np.ndarray:
         """The per-instance vertex records of the GL draw."""
         rec = np.empty(len(self), dtype=_RECORD)

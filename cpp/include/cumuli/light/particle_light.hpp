@@ -87,7 +87,8 @@ struct LightSplat {
 std::vector<LightSplat> light_splats(const ParticleView& particles, const LightFrame& frame,
                                      const ParticleLightSettings& settings);
 
-// Read-back of I_k from `buffer` (N_L² floats, [y][x]) before drawing `s`.
+// Read-back of I_k from `buffer` (N_L² floats, [y][x]) before drawing `s`. The solid-angle patch
+// mean sums each row in x order, then the row sums in y order, then divides by side².
 float light_read_back(const float* buffer, int n, const LightSplat& s, Readback mode);
 // Blend one splat with source (w·g, w·α) into the buffer (then clamp / quantize).
 void light_splat(float* buffer, int n, const LightSplat& s, float g,
