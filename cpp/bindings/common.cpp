@@ -1,5 +1,7 @@
 #include "common.hpp"
 
+#include <stdexcept>
+
 namespace cumuli::bind {
 
 CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
@@ -37,6 +39,27 @@ CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
   cloud.validate();
   cloud.density.mean_r2 = cloud.mean_squared_radius();
   return cloud;
+}
+
+ParticleView particle_view(const FloatArray& centres, const FloatArray& radii,
+                           const FloatArray& tau, const FloatArray& albedo) {
+  require_points(centres, "centres");
+  const py::ssize_t n = centres.shape(0);
+  const auto check = [n](const FloatArray& a, const char* name) {
+    if (a.ndim() != 1 || a.shape(0) != n)
+      throw py::value_error(std::string(name) + " must have shape (N,) matching centres");
+  };
+  check(radii, "radii");
+  check(tau, "tau");
+  check(albedo, "albedo");
+  ParticleView v{centres.data(), radii.data(), tau.data(), albedo.data(),
+                 static_cast<std::size_t>(n)};
+  try {
+    v.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return v;
 }
 
 VolumeGrid grid_of(const FloatArray& vols, int lead, const V3& lo, const V3& hi, const char* name,

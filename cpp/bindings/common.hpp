@@ -11,6 +11,7 @@
 
 #include "cumuli/light/volume_light.hpp"
 #include "cumuli/model/cloud.hpp"
+#include "cumuli/model/particles.hpp"
 #include "cumuli/rendering/volume_march.hpp"
 
 namespace cumuli::bind {
@@ -35,6 +36,13 @@ inline py::array_t<float> new_array(const std::vector<py::ssize_t>& shape) {
 CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
                              const FloatArray& rotations, const std::string& model, float kappa,
                              float phi);
+
+// --- particle clouds (Harris 2002) ------------------------------------------------------------
+
+// A ParticleView over numpy arrays (kept alive by the caller): centres (N, 3), radii, tau and
+// albedo (N,) float32. Shapes are checked here (ValueError), values by ParticleView::validate.
+ParticleView particle_view(const FloatArray& centres, const FloatArray& radii,
+                           const FloatArray& tau, const FloatArray& albedo);
 
 // --- volumes (endless animation, volume light, volume marcher) ---------------------------------
 

@@ -15,6 +15,7 @@
 #include "common.hpp"
 #include "cumuli/light/caf.hpp"
 #include "cumuli/light/volume_light.hpp"
+#include "cumuli/light/particle_light.hpp"
 
 namespace cumuli::bind {
 
@@ -588,6 +589,196 @@ void bind_caf(py::module_& m) {
         return py::make_tuple(c, s);
       },
       py::arg("degrees"), "(cos, sin) of an angle in degrees, exact at multiples of 90°.");
+}
+
+namespace {
+
+template <class T>
+T pick(const py::dict& d, const char* key, T fallback) {
+  return d.contains(key) ? d[key].cast<T>() : fallback;
+}
+
+PhaseKind phase_kind(const std::string& s) {
+  if (s == "rayleigh") return PhaseKind::Rayleigh;
+  if (s == "isotropic") return PhaseKind::Isotropic;
+  if (s == "hg") return PhaseKind::HenyeyGreenstein;
+  throw py::value_error("phase must be 'rayleigh', 'isotropic' or 'hg', got '" + s + "'");
+}
+
+SplatKernel splat_kernel_kind(const std::string& s) {
+  if (s == "gaussian") return SplatKernel::Gaussian;
+  if (s == "hermite") return SplatKernel::Hermite;
+  throw py::value_error("kernel must be 'gaussian' or 'hermite', got '" + s + "'");
+}
+
+// ParticleLightSettings from the dict Python builds out of a SpriteSettings.
+ParticleLightSettings light_settings(const py::dict& d) {
+  ParticleLightSettings s;
+  s.resolution = pick<int>(d, "light_resolution", s.resolution);
+  s.solid_angle = pick<float>(d, "solid_angle", s.solid_angle);
+  s.phase = phase_kind(pick<std::string>(d, "phase", "rayleigh"));
+  s.hg_g = pick<float>(d, "hg_g", s.hg_g);
+  s.kernel = splat_kernel_kind(pick<std::string>(d, "kernel", "gaussian"));
+  s.peak = pick<float>(d, "peak", s.peak);
+  const std::string rb = pick<std::string>(d, "readback", "pixel");
+  if (rb == "pixel") s.readback = Readback::Pixel;
+  else if (rb == "bilinear") s.readback = Readback::Bilinear;
+  else if (rb == "solid_angle") s.readback = Readback::SolidAngle;
+  else throw py::value_error("readback must be 'pixel', 'bilinear' or 'solid_angle'");
+  s.readback_solid_angle = pick<float>(d, "readback_solid_angle", s.readback_solid_angle);
+  s.forward = pick<bool>(d, "forward", s.forward);
+  s.clamp = pick<bool>(d, "clamp", s.clamp);
+  s.quantize = pick<int>(d, "quantize", s.quantize);
+  s.allow_gain = pick<bool>(d, "allow_gain", s.allow_gain);
+  s.validate();
+  return s;
+}
+
+std::vector<glm::vec3> unit_directions(const FloatArray& dirs) {
+  if (dirs.ndim() != 2 || dirs.shape(1) != 3 || dirs.shape(0) < 1 || dirs.shape(0) > 1024)
+    throw py::value_error("light directions must have shape (L, 3) with 1 <= L <= 1024");
+  std::vector<glm::vec3> out(static_cast<std::size_t>(dirs.shape(0)));
+  for (std::size_t l = 0; l < out.size(); ++l) {
+    const glm::vec3 v(dirs.data()[3 * l], dirs.data()[3 * l + 1], dirs.data()[3 * l + 2]);
+    const float len = glm::length(v);
+    if (!std::isfinite(len) || !(len > 0.0f))
+      throw py::value_error("light directions must be finite and non-zero");
+    out[l] = glm::normalize(v);
+  }
+  return out;
+}
+
+}  // namespace
+
+// The multiple forward scattering light pass of Harris 2002 (light/particle_light.hpp).
+void bind_particle_light(py::module_& m) {
+  m.def(
+      "particle_light",
+      [](const py::list& clouds, const FloatArray& directions, const py::dict& settings,
+         bool return_buffers, int threads) {
+        const ParticleLightSettings s = light_settings(settings);
+        const std::vector<glm::vec3> suns = unit_directions(directions);
+        std::vector<FloatArray> keep;  // the converted arrays stay alive while the core runs
+        std::vector<ParticleView> views;
+        for (std::size_t c = 0; c < clouds.size(); ++c) {
+          const py::tuple t = clouds[c].cast<py::tuple>();
+          if (t.size() != 4) throw py::value_error("each cloud is (centres, radii, tau, albedo)");
+          for (int i = 0; i < 4; ++i) keep.push_back(t[i].cast<FloatArray>());
+          const std::size_t b = keep.size() - 4;
+          views.push_back(particle_view(keep[b], keep[b + 1], keep[b + 2], keep[b + 3]));
+          try {
+            check_energy(views.back(), s);
+          } catch (const std::invalid_argument& e) {
+            throw py::value_error(e.what());
+          }
+        }
+        const auto lights = static_cast<py::ssize_t>(suns.size());
+        const py::ssize_t nl = s.resolution;
+        // Sizes before allocating: N·L light values and L·N_L² buffer floats per cloud.
+        double values = 0.0;
+        for (const ParticleView& v : views) values += static_cast<double>(v.n) * lights;
+        if (values > double(py::ssize_t{1} << 28))
+          throw py::value_error("particles × lights exceeds 2^28 light values: relight in parts");
+        if (return_buffers &&
+            static_cast<double>(clouds.size()) * lights * nl * nl > double(py::ssize_t{1} << 31))
+          throw py::value_error("return_buffers would allocate more than 2^31 floats");
+        py::list result;
+        std::vector<float*> light_ptrs, buffer_ptrs;
+        std::vector<py::array_t<float>> outs, bufs;
+        for (const ParticleView& v : views) {
+          outs.push_back(new_array({static_cast<py::ssize_t>(v.n), lights}));
+          light_ptrs.push_back(outs.back().mutable_data());
+          if (return_buffers) {
+            bufs.push_back(new_array({lights, nl, nl}));
+            buffer_ptrs.push_back(bufs.back().mutable_data());
+          } else {
+            buffer_ptrs.push_back(nullptr);
+          }
+        }
+        {
+          py::gil_scoped_release release;
+          particle_light(views, suns, s, light_ptrs, buffer_ptrs, threads);
+        }
+        for (std::size_t c = 0; c < views.size(); ++c)
+          result.append(py::make_tuple(outs[c], return_buffers ? py::object(bufs[c]) : py::none()));
+        return result;
+      },
+      py::arg("clouds"), py::arg("directions"), py::arg("settings"),
+      py::arg("return_buffers") = false, py::arg("threads") = 0,
+      "Harris 2002 light pass for clouds × lights: [(light (N, L), buffers (L, N_L, N_L) | None)].");
+
+  m.def(
+      "particle_light_splats",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& tau,
+         const FloatArray& albedo, const FloatArray& directions, const py::dict& settings) {
+        const ParticleLightSettings s = light_settings(settings);
+        const ParticleView v = particle_view(centres, radii, tau, albedo);
+        try {
+          check_energy(v, s);
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        const std::vector<glm::vec3> suns = unit_directions(directions);
+        const auto lights = static_cast<py::ssize_t>(suns.size());
+        const auto n = static_cast<py::ssize_t>(v.n);
+        // Per light and processing order: x, y, r_px, forward, alpha (float32), index, patch.
+        auto geom = new_array({lights, n, 5});
+        py::array_t<std::int32_t> index({lights, n}), patch({lights, n});
+        auto frames = new_array({lights, 4, 3});
+        float* g = geom.mutable_data();
+        std::int32_t* idx = index.mutable_data();
+        std::int32_t* pat = patch.mutable_data();
+        float* fr = frames.mutable_data();
+        float radius = 0.0f;
+        for (py::ssize_t l = 0; l < lights; ++l) {
+          const LightFrame f = light_frame(v, suns[static_cast<std::size_t>(l)]);
+          radius = f.radius;
+          const glm::vec3 rows[4] = {f.centre, f.forward, f.right, f.up};
+          for (int r = 0; r < 4; ++r)
+            for (int a = 0; a < 3; ++a) fr[(l * 4 + r) * 3 + a] = rows[r][a];
+          const std::vector<LightSplat> splats = light_splats(v, f, s);
+          for (py::ssize_t i = 0; i < n; ++i) {
+            const LightSplat& q = splats[static_cast<std::size_t>(i)];
+            float* row = g + (l * n + i) * 5;
+            row[0] = q.x;
+            row[1] = q.y;
+            row[2] = q.r_px;
+            row[3] = q.forward;
+            row[4] = q.alpha;
+            idx[l * n + i] = static_cast<std::int32_t>(q.index);
+            pat[l * n + i] = q.patch;
+          }
+        }
+        return py::make_tuple(geom, index, patch, frames, radius);
+      },
+      "The light pass's splats per light in processing order: (geometry (L, N, 5) = x, y, r_px, "
+      "forward factor, alpha; index (L, N); patch (L, N); frames (L, 4, 3) = centre, f, r, u; R_b).");
+
+  m.def(
+      "splat_kernel",
+      [](const std::string& kernel, float peak, const FloatArray& d) {
+        const SplatKernel k = splat_kernel_kind(kernel);
+        if (!std::isfinite(peak) || !(peak > 0.0f) || peak > 1.0f)
+          throw py::value_error("peak must be in (0, 1]");
+        auto out = new_array(shape_of(d));
+        for (py::ssize_t i = 0; i < d.size(); ++i)
+          out.mutable_data()[i] = splat_kernel(k, peak, d.data()[i]);
+        return out;
+      },
+      "The splat kernel K(d) (0 for d >= 1) at distances d in units of the splat radius.");
+
+  m.def(
+      "phase_4pi",
+      [](const std::string& phase, float g, const FloatArray& c) {
+        const PhaseKind k = phase_kind(phase);
+        if (!std::isfinite(g) || !(g > -1.0f) || !(g < 1.0f))
+          throw py::value_error("hg_g must be in (-1, 1)");
+        auto out = new_array(shape_of(c));
+        for (py::ssize_t i = 0; i < c.size(); ++i)
+          out.mutable_data()[i] = phase_4pi(k, g, c.data()[i]);
+        return out;
+      },
+      "Harris 2002 phase functions normalised to 4π at cosines c: rayleigh, isotropic or hg.");
 }
 
 }  // namespace cumuli::bind

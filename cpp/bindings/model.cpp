@@ -17,6 +17,7 @@
 #include "common.hpp"
 #include "cumuli/anim/endless.hpp"
 #include "cumuli/model/cloud.hpp"
+#include "cumuli/model/particles.hpp"
 #include "cumuli/model/gaussian.hpp"
 #include "cumuli/model/lsystem.hpp"
 #include "cumuli/model/mesh_ellipsoids.hpp"
@@ -531,6 +532,113 @@ void bind_sprite_atlas(py::module_& m) {
         return py::make_tuple(nx, ny);
       },
       py::arg("n"));
+}
+
+// Particle clouds of Harris 2002 (model/particles.hpp): generators, bounds, density volume.
+void bind_particles(py::module_& m) {
+  m.attr("PARTICLES_MAX") = static_cast<py::ssize_t>(kMaxParticles);
+  const auto arrays = [](ParticleArrays&& a) {
+    const auto n = static_cast<py::ssize_t>(a.size());
+    return py::make_tuple(to_array(a.centres, {n, 3}), to_array(a.radii, {n}),
+                          to_array(a.tau, {n}), to_array(a.albedo, {n}));
+  };
+  m.def(
+      "particle_fill",
+      [arrays](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+               const std::string& model, float kappa, float phi, int n, float radius_min,
+               float radius_max, float tau, float albedo, const Noise* noise, int octaves,
+               float gain, float lacunarity, float frequency, float tau_floor, std::uint64_t seed,
+               int threads) {
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+        ParticleFillParams p;
+        p.n = n;
+        p.radius_min = radius_min;
+        p.radius_max = radius_max;
+        p.tau = tau;
+        p.albedo = albedo;
+        p.noise = noise;
+        p.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+        p.tau_floor = tau_floor;
+        p.seed = seed;
+        p.validate();
+        ParticleArrays out;
+        {
+          py::gil_scoped_release release;
+          out = particle_fill(cloud, p, threads);
+        }
+        return arrays(std::move(out));
+      },
+      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
+      py::arg("kappa"), py::arg("phi"), py::arg("n"), py::arg("radius_min"),
+      py::arg("radius_max"), py::arg("tau"), py::arg("albedo"), py::arg("noise").none(true),
+      py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"),
+      py::arg("tau_floor"), py::arg("seed"), py::arg("threads"),
+      "Fill a cloud's ellipsoid union with particles: (centres, radii, tau, albedo).");
+
+  m.def(
+      "particles_from_volume",
+      [arrays](const FloatArray& density, V3 lo, V3 hi, int n, float radius, float tau,
+               float albedo, float tau_floor, std::uint64_t seed, int threads) {
+        if (density.ndim() != 3) throw py::value_error("density must be a (D, H, W) volume");
+        VolumeSampleParams p;
+        p.n = n;
+        p.radius = radius;
+        p.tau = tau;
+        p.albedo = albedo;
+        p.tau_floor = tau_floor;
+        p.seed = seed;
+        p.validate();
+        const float* data = density.data();
+        const int d = static_cast<int>(density.shape(0)), h = static_cast<int>(density.shape(1)),
+                  w = static_cast<int>(density.shape(2));
+        ParticleArrays out;
+        {
+          py::gil_scoped_release release;
+          out = particles_from_volume(data, d, h, w, Box{v3(lo), v3(hi)}, p, threads);
+        }
+        return arrays(std::move(out));
+      },
+      py::arg("density"), py::arg("lo"), py::arg("hi"), py::arg("n"), py::arg("radius"),
+      py::arg("tau"), py::arg("albedo"), py::arg("tau_floor"), py::arg("seed"),
+      py::arg("threads"),
+      "Importance-sample a density volume into particles: (centres, radii, tau, albedo).");
+
+  m.def(
+      "particle_sphere",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& tau,
+         const FloatArray& albedo) {
+        const ParticleView v = particle_view(centres, radii, tau, albedo);
+        const Box b = particle_bounds(v);
+        const Sphere s = particle_sphere(v);
+        return py::make_tuple(py::make_tuple(b.lo.x, b.lo.y, b.lo.z),
+                              py::make_tuple(b.hi.x, b.hi.y, b.hi.z),
+                              py::make_tuple(s.centre.x, s.centre.y, s.centre.z), s.radius);
+      },
+      "((lo), (hi), (sphere centre), sphere radius) of a particle cloud, float32 as the core.");
+
+  m.def(
+      "particles_to_volume",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& tau,
+         const FloatArray& albedo, std::array<int, 3> res, V3 lo, V3 hi, int threads) {
+        const ParticleView v = particle_view(centres, radii, tau, albedo);
+        for (int a = 0; a < 3; ++a)
+          if (res[a] < 1 || res[a] > 2048)
+            throw py::value_error("resolution must be in [1, 2048] per axis");
+        if (static_cast<double>(res[0]) * res[1] * res[2] > double(1 << 28))
+          throw py::value_error("resolution has more than 2^28 voxels");
+        const Box box{v3(lo), v3(hi)};
+        for (int a = 0; a < 3; ++a)
+          if (!std::isfinite(box.lo[a]) || !std::isfinite(box.hi[a]) || !(box.hi[a] > box.lo[a]))
+            throw py::value_error("box must be finite with hi > lo on every axis");
+        auto out = new_array({res[2], res[1], res[0]});
+        float* dst = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          particles_to_volume(v, res[0], res[1], res[2], box, dst, threads);
+        }
+        return out;
+      },
+      "Sample the particles' Gaussian-blob extinction on a (nz, ny, nx) grid [z, y, x].");
 }
 
 }  // namespace cumuli::bind

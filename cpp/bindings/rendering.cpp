@@ -1,5 +1,7 @@
-// Bindings of the render stage's CPU twins (python/cumuli/rendering): the reference marcher of the
-// 2018 paper (render/march.hpp, `render_cpu`) and the volume marcher (render/volume_march.hpp).
+// Bindings of the rendering stage (python/cumuli/rendering): the CPU twins — the 2018 paper's
+// reference marcher (march.hpp, `render_cpu`), the volume marcher (volume_march.hpp), the shared
+// sprite rasteriser (sprite_raster.hpp) — the compositor (composite.hpp) and the impostor maths
+// of Harris 2002 (impostor.hpp).
 #include "cumuli/rendering/march.hpp"
 
 #include <cmath>
@@ -8,6 +10,8 @@
 
 #include "common.hpp"
 #include "cumuli/rendering/composite.hpp"
+#include "cumuli/rendering/impostor.hpp"
+#include "cumuli/rendering/sprite_raster.hpp"
 #include "cumuli/rendering/volume_march.hpp"
 
 namespace cumuli::bind {
@@ -266,6 +270,247 @@ void bind_composite(py::module_& m) {
       py::arg("sun_radiance"), py::arg("threads") = 0,
       "Composite premultiplied layers (L, H, W, 4) over the sky, front to back per pixel by the "
       "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top.");
+}
+
+namespace {
+
+// The camera as Python passes it: position, forward, right, up (float32 basis of
+// cumuli.Camera.basis), tan_half, width, height, near.
+SpriteCamera sprite_camera(const py::dict& d) {
+  SpriteCamera c;
+  c.position = vec3_arg(d["position"], "camera position");
+  c.forward = vec3_arg(d["forward"], "camera forward");
+  c.right = vec3_arg(d["right"], "camera right");
+  c.up = vec3_arg(d["up"], "camera up");
+  c.tan_half = d["tan_half"].cast<float>();
+  c.width = d["width"].cast<int>();
+  c.height = d["height"].cast<int>();
+  c.near = d["near"].cast<float>();
+  try {
+    c.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  if (py::ssize_t{c.width} * c.height > kMaxPixels)
+    throw py::value_error("image has more than " + std::to_string(kMaxPixels) + " pixels");
+  return c;
+}
+
+SplatKernel kernel_of(const std::string& s) {
+  if (s == "gaussian") return SplatKernel::Gaussian;
+  if (s == "hermite") return SplatKernel::Hermite;
+  throw py::value_error("kernel must be 'gaussian' or 'hermite', got '" + s + "'");
+}
+
+using IntArray = py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>;
+
+std::vector<Sprite> sprites_of(const FloatArray& centres, const FloatArray& half_sizes,
+                               const FloatArray& rotation, const FloatArray& colours,
+                               const FloatArray& alpha, const IntArray& texture) {
+  require_points(centres, "centres");
+  const py::ssize_t n = centres.shape(0);
+  if (half_sizes.ndim() != 2 || half_sizes.shape(0) != n || half_sizes.shape(1) != 2)
+    throw py::value_error("half_sizes must have shape (N, 2)");
+  if (colours.ndim() != 3 || colours.shape(0) != n || colours.shape(1) != 4 || colours.shape(2) != 3)
+    throw py::value_error("colours must have shape (N, 4, 3)");
+  for (const auto* a : {&rotation, &alpha})
+    if (a->ndim() != 1 || a->shape(0) != n)
+      throw py::value_error("rotation and alpha must have shape (N,)");
+  if (texture.ndim() != 1 || texture.shape(0) != n)
+    throw py::value_error("texture must have shape (N,)");
+  std::vector<Sprite> out(static_cast<std::size_t>(n));
+  const float *c = centres.data(), *h = half_sizes.data(), *col = colours.data();
+  for (py::ssize_t k = 0; k < n; ++k) {
+    Sprite& s = out[static_cast<std::size_t>(k)];
+    s.centre = glm::vec3(c[3 * k], c[3 * k + 1], c[3 * k + 2]);
+    s.half_size = glm::vec2(h[2 * k], h[2 * k + 1]);
+    s.rotation = rotation.data()[k];
+    for (int v = 0; v < 4; ++v)
+      s.colour[v] = glm::vec3(col[12 * k + 3 * v], col[12 * k + 3 * v + 1], col[12 * k + 3 * v + 2]);
+    s.alpha = alpha.data()[k];
+    s.texture = texture.data()[k];
+  }
+  return out;
+}
+
+glm::dvec3 dvec(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[1], a[2]); }
+py::tuple dtuple(glm::dvec3 v) { return py::make_tuple(v.x, v.y, v.z); }
+
+}  // namespace
+
+// The shared sprite pipeline's CPU twin (render/sprite_raster.hpp): sprites and Harris particles.
+void bind_sprites(py::module_& m) {
+  m.def(
+      "rasterise_sprites",
+      [](const FloatArray& centres, const FloatArray& half_sizes, const FloatArray& rotation,
+         const FloatArray& colours, const FloatArray& alpha, const IntArray& texture,
+         const py::dict& camera, const std::string& kernel, float peak, const py::object& atlas,
+         std::array<int, 2> grid, int threads) {
+        const std::vector<Sprite> sprites =
+            sprites_of(centres, half_sizes, rotation, colours, alpha, texture);
+        const SpriteCamera cam = sprite_camera(camera);
+        SpriteRasterSettings st;
+        st.kernel = kernel_of(kernel);
+        st.peak = peak;
+        FloatArray atlas_array;
+        SpriteAtlas at;
+        const SpriteAtlas* atlas_ptr = nullptr;
+        if (!atlas.is_none()) {
+          atlas_array = atlas.cast<FloatArray>();
+          if (atlas_array.ndim() != 3 || atlas_array.shape(2) != 4)
+            throw py::value_error("atlas must have shape (H, W, 4)");
+          at.rgba = atlas_array.data();
+          at.height = static_cast<int>(atlas_array.shape(0));
+          at.width = static_cast<int>(atlas_array.shape(1));
+          at.nx = grid[0];
+          at.ny = grid[1];
+          atlas_ptr = &at;
+        }
+        auto out = new_array({cam.height, cam.width, 4});
+        float* dst = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          rasterise_sprites(sprites, cam, st, atlas_ptr, dst, threads);
+        }
+        return out;
+      },
+      py::arg("centres"), py::arg("half_sizes"), py::arg("rotation"), py::arg("colours"),
+      py::arg("alpha"), py::arg("texture"), py::arg("camera"), py::arg("kernel"), py::arg("peak"),
+      py::arg("atlas").none(true), py::arg("grid"), py::arg("threads") = 0,
+      "Rasterise view-plane-parallel sprites back to front into a premultiplied (H, W, 4) layer.");
+
+  m.def(
+      "project_sprites",
+      [](const FloatArray& centres, const FloatArray& half_sizes, const FloatArray& rotation,
+         const py::dict& camera) {
+        require_points(centres, "centres");
+        const py::ssize_t n = centres.shape(0);
+        auto zeros_c = new_array({n, 4, 3});
+        std::fill(zeros_c.mutable_data(), zeros_c.mutable_data() + zeros_c.size(), 0.0f);
+        py::array_t<float> ones(n);
+        std::fill(ones.mutable_data(), ones.mutable_data() + n, 1.0f);
+        IntArray tex(n);
+        std::fill(tex.mutable_data(), tex.mutable_data() + n, -1);
+        const std::vector<Sprite> sprites = sprites_of(centres, half_sizes, rotation, zeros_c, ones, tex);
+        const SpriteCamera cam = sprite_camera(camera);
+        auto out = new_array({n, 6});
+        float* o = out.mutable_data();
+        for (py::ssize_t k = 0; k < n; ++k) {
+          const ScreenSprite q = project_sprite(sprites[static_cast<std::size_t>(k)], cam);
+          const float row[6] = {q.jc, q.ic, q.hx, q.hy, q.depth, q.visible ? 1.0f : 0.0f};
+          std::copy(row, row + 6, o + 6 * k);
+        }
+        return out;
+      },
+      "Screen projection of sprites: (N, 6) = j_c, i_c, hx, hy (pixels), depth Z, visible.");
+
+  m.def(
+      "particle_sprites",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& tau,
+         const FloatArray& albedo, const FloatArray& light, const FloatArray& directions,
+         const FloatArray& radiances, const py::dict& camera, float solid_angle,
+         const std::string& phase, float hg_g, V3 ambient, const std::string& sort, bool cull) {
+        const ParticleView v = particle_view(centres, radii, tau, albedo);
+        const auto n = static_cast<py::ssize_t>(v.n);
+        if (directions.ndim() != 2 || directions.shape(1) != 3 || radiances.ndim() != 2 ||
+            radiances.shape(1) != 3 || radiances.shape(0) != directions.shape(0))
+          throw py::value_error("light directions and radiances must have shape (L, 3)");
+        const py::ssize_t nl = directions.shape(0);
+        if (light.ndim() != 2 || light.shape(0) != n || light.shape(1) != nl)
+          throw py::value_error("light must have shape (N, L) matching the particles and lights");
+        std::vector<SpriteLight> lights(static_cast<std::size_t>(nl));
+        for (py::ssize_t l = 0; l < nl; ++l) {
+          const float* d = directions.data() + 3 * l;
+          const float* r = radiances.data() + 3 * l;
+          const glm::vec3 dir(d[0], d[1], d[2]);
+          if (!(glm::length(dir) > 0.0f) || !std::isfinite(glm::length(dir)))
+            throw py::value_error("light directions must be finite and non-zero");
+          lights[static_cast<std::size_t>(l)] = {glm::normalize(dir), glm::vec3(r[0], r[1], r[2])};
+        }
+        ParticleSpriteSettings s;
+        s.solid_angle = solid_angle;
+        if (phase == "rayleigh") s.phase = PhaseKind::Rayleigh;
+        else if (phase == "isotropic") s.phase = PhaseKind::Isotropic;
+        else if (phase == "hg") s.phase = PhaseKind::HenyeyGreenstein;
+        else throw py::value_error("phase must be 'rayleigh', 'isotropic' or 'hg'");
+        s.hg_g = hg_g;
+        s.ambient = v3(ambient);
+        if (sort == "distance") s.sort = SpriteSort::Distance;
+        else if (sort == "depth") s.sort = SpriteSort::Depth;
+        else throw py::value_error("sort must be 'distance' or 'depth'");
+        s.cull = cull;
+        const SpriteCamera cam = sprite_camera(camera);
+        ParticleSpriteList list;
+        {
+          py::gil_scoped_release release;
+          list = particle_sprites(v, light.data(), lights, cam, s);
+        }
+        const auto m_ = static_cast<py::ssize_t>(list.index.size());
+        py::array_t<std::int64_t> index(m_);
+        auto colour = new_array({m_, 3});
+        auto alpha = new_array({m_});
+        for (py::ssize_t i = 0; i < m_; ++i) {
+          index.mutable_data()[i] = list.index[static_cast<std::size_t>(i)];
+          for (int a = 0; a < 3; ++a)
+            colour.mutable_data()[3 * i + a] = list.colour[static_cast<std::size_t>(i)][a];
+          alpha.mutable_data()[i] = list.alpha[static_cast<std::size_t>(i)];
+        }
+        return py::make_tuple(index, colour, alpha);
+      },
+      "Eye pass sprites of a particle cloud: (index back to front, colours (M, 3), alpha (M,)).");
+
+  m.def(
+      "sphere_outside_frustum",
+      [](V3 centre, float radius, const py::dict& camera) {
+        return sphere_outside_frustum(v3(centre), radius, sprite_camera(camera));
+      },
+      "Whether a sphere lies wholly outside the camera frustum (conservative).");
+}
+
+// Impostor mathematics of Harris 2002 §3 (render/impostor.hpp).
+void bind_impostors(py::module_& m) {
+  m.def(
+      "tight_impostor_view",
+      [](std::array<double, 3> eye, std::array<double, 3> centre, double radius) {
+        const ImpostorView v = tight_impostor_view(dvec(eye), dvec(centre), radius);
+        py::dict d;
+        d["distance"] = v.distance;
+        d["half_angle"] = v.half_angle;
+        d["fov"] = v.fov_degrees;
+        d["half_size"] = v.half_size;
+        d["forward"] = dtuple(v.forward);
+        d["right"] = dtuple(v.right);
+        d["up"] = dtuple(v.up);
+        d["near_point"] = dtuple(v.near_point);
+        d["far_point"] = dtuple(v.far_point);
+        return d;
+      },
+      "The tight impostor camera of a bounding sphere seen from an eye (dict).");
+  m.def("impostor_translation_error",
+        [](std::array<double, 3> n, std::array<double, 3> f, std::array<double, 3> e) {
+          return translation_error(dvec(n), dvec(f), dvec(e));
+        },
+        "α_trans (radians): the angle at the eye between the near and far points.");
+  m.def("impostor_backwards",
+        [](std::array<double, 3> n, std::array<double, 3> f, std::array<double, 3> e) {
+          return impostor_backwards(dvec(n), dvec(f), dvec(e));
+        },
+        "Whether the eye is nearer the far point than the near point.");
+  m.def("impostor_focal_length_px", &focal_length_px, "f_px = (H/2)/tan(fov/2).");
+  m.def("impostor_required_resolution", &required_resolution, "res_req = res_scale·f_px·2R/d.");
+  m.def("impostor_resolution", &impostor_resolution,
+        "min(max_res, max(min_res, pow2ceil(res_req))).");
+  m.def("impostor_resolution_skyworks", &impostor_resolution_skyworks,
+        "SkyWorks' impostor resolution rule.");
+  m.def("impostor_near_corner_radius", &near_corner_radius, "near·√(1 + th²(1 + aspect²)).");
+  m.def("impostor_half_diagonal_fov", &half_diagonal_fov, "atan(th·√(1 + aspect²)), radians.");
+  m.def("needs_screen_impostor",
+        [](std::array<double, 3> eye, std::array<double, 3> centre, double radius, double th,
+           double aspect, double near) {
+          return needs_screen_impostor(dvec(eye), dvec(centre), radius, th, aspect, near);
+        },
+        "Whether the sphere must be drawn through a screen impostor from the eye.");
+  m.def("screen_impostor_size", &screen_impostor_size, "⌈size/factor⌉.");
 }
 
 }  // namespace cumuli::bind

@@ -5,3 +5,20 @@ float hg_phase(float g, float c) {
     float denom = 1.0 + g * g - 2.0 * g * c;
     return (1.0 - g * g) / (4.0 * PI * denom * sqrt(denom));
 }
+
+// Rayleigh phase (Harris 2002 §2.1: p(θ) = ¾(1 + cos²θ)), normalised by 1/4π like hg_phase:
+// 3(1 + c²)/(16π). C++ twin: cumuli::rayleigh (cpp/include/cumuli/phase.hpp).
+float rayleigh_phase(float c) {
+    const float SIXTEEN_PI = 50.26548245743669;
+    return 3.0 * (1.0 + c * c) / SIXTEEN_PI;
+}
+
+// The phase functions of the Harris 2002 particle passes normalised to 4π (∫p dω = 4π):
+// kind 0 Rayleigh ¾(1 + c²), 1 isotropic, 2 Henyey-Greenstein (1 − g²)/(d·√d), d = 1 + g² − 2gc.
+// C++ twin: cumuli::phase_4pi.
+float phase_4pi(int kind, float g, float c) {
+    if (kind == 0) return 0.75 * (1.0 + c * c);
+    if (kind == 1) return 1.0;
+    float denom = 1.0 + g * g - 2.0 * g * c;
+    return (1.0 - g * g) / (denom * sqrt(denom));
+}
