@@ -33,8 +33,10 @@ void bind_light(py::module_& m) {
           s.method = LightMethod::Ndt;
         } else if (method == "naive") {
           s.method = LightMethod::Naive;
+        } else if (method == "shared") {
+          s.method = LightMethod::Shared;
         } else {
-          throw py::value_error("method must be 'ndt' or 'naive', got '" + method + "'");
+          throw py::value_error("method must be 'ndt', 'naive' or 'shared', got '" + method + "'");
         }
         s.step = step;
         s.extinction = extinction;

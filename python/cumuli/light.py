@@ -10,7 +10,10 @@ from ``v`` to the far end of segment ``i`` (``T_0 = 1``) and ``C = ½·γ_solid/
 
 ``method="ndt"`` (Algorithm 2, "no duplicate tracing") marches every point of the union of the
 intervals once, attributing a sample to the covering primitive with the smallest ``|q|``;
-``method="naive"`` marches every interval in full, overlaps twice, as the paper's baseline.
+``method="naive"`` marches every interval in full, overlaps twice, as the paper's baseline;
+``method="shared"`` shares samples between voxels: each sun-parallel line of a grid sheared along
+the sun is marched once (as NDT marches a ray) and every voxel blends the four lines around it
+(not the per-voxel definition; its difference from ``"ndt"`` is stated in the README).
 See ``cpp/include/cumuli/lighting.hpp`` for the exact definition.
 """
 
@@ -41,7 +44,7 @@ MAX_STEPS_PER_RAY: int = int(_core.LIGHT_MAX_STEPS_PER_RAY)
 DEFAULT_EXTINCTION: float = 0.3
 #: Default γ of eq. (6) in steradians (the paper's ≈ 1e-4); the renderer's grids use it too.
 DEFAULT_SOLID_ANGLE: float = 1e-4
-METHODS = ("ndt", "naive")
+METHODS = ("ndt", "naive", "shared")
 
 
 @dataclass(frozen=True)
@@ -49,7 +52,8 @@ class LightStats:
     """What a light-grid computation cost."""
 
     method: str
-    #: Samples marched in total (every step inside a candidate interval, empty or not).
+    #: Samples marched in total (every step inside a candidate interval, empty or not; for
+    #: ``"shared"`` every sample once, however many voxels read it).
     samples_total: int
     #: Samples marched for each voxel, ``[z, y, x]`` uint32.
     samples: np.ndarray
@@ -215,7 +219,14 @@ def light_grid(
     resolution:
         Voxels per axis: one int (a cube) or ``(x, y, z)``, each in ``[2, MAX_RESOLUTION]``.
     method:
-        ``"ndt"`` (no duplicate tracing, default) or ``"naive"`` (every candidate interval in full).
+        ``"ndt"`` (no duplicate tracing, default), ``"naive"`` (every candidate interval in full)
+        or ``"shared"`` (samples shared along sun-parallel lines: each line of a grid sheared
+        along the sun is marched once with a step ``Δ' = λ/round(λ/Δ)`` that puts a sample
+        boundary on every voxel layer, ``λ`` the layer spacing along the line; a voxel's ``L`` is
+        the bilinear blend of the four lines around it on its layer. On the default cumulus the
+        grid differs from ``"ndt"``'s by a mean ``|ΔL|`` ≈ 0.01–0.02 and at most ≈ 0.2–0.3 at
+        sharp shadow edges; ``stats.samples`` then counts, per voxel, the samples of its nearest
+        line from the voxel towards the sun).
     step:
         March step ``Δ`` in world units (``> 0``; the light-box diagonal / step must not exceed
         ``MAX_STEPS_PER_RAY``).
