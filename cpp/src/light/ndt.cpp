@@ -652,9 +652,12 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
     }
   });
 
-  // Resample: each voxel blends the four lines around it on its layer.
+  // Resample: each voxel blends the four lines around it on its layer (a few ns a voxel: small
+  // grids are not worth starting threads for).
   const int stride[3] = {1, res[0], res[0] * res[1]};  // [z][y][x]
-  parallel_chunks(static_cast<std::size_t>(ra), s.threads, [&](std::size_t j0, std::size_t j1) {
+  const std::size_t voxels = static_cast<std::size_t>(ra) * rb * rc;
+  const int resample_threads = voxels < (std::size_t{1} << 16) ? 1 : s.threads;
+  parallel_chunks(static_cast<std::size_t>(ra), resample_threads, [&](std::size_t j0, std::size_t j1) {
     for (std::size_t jj = j0; jj < j1; ++jj) {
       const int j = static_cast<int>(jj);
       const float* Sj = S.data() + jj * lines;

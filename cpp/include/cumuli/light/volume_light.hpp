@@ -49,10 +49,39 @@ float sample_trilinear(const float* vol, const VolumeGrid& g, glm::vec3 p);
 float optical_depth_ray(const float* vol, const VolumeGrid& g, glm::vec3 p, glm::vec3 dir,
                         float step_voxels);
 
+// How the bulk optical depths below are computed.
+//  - March: one ray per voxel (per direction, per point), optical_depth_ray / _segment: the
+//    brute-force reference.
+//  - Sweep (issue 14): the volume is swept slice by slice so that each voxel's ray reuses the
+//    depth already known one slice further along it. Along a direction ω (the sun, each SH
+//    direction), slices are taken across the axis a the ray crosses fastest in voxels; from the
+//    exit side on, a voxel x whose ray reaches the next slice plane (at h = cell_a / |ω_a|) inside
+//    the box gets
+//        f(x) = ∫₀^h ρ(x + uω) du  +  ℓ(x') · Ḡ(x'),      x' = x + hω,  ℓ(x') = ℓ(x) − h,
+//    where ℓ is the exact distance to the box exit and Ḡ the bilinear blend, on that slice, of
+//    the mean density along the ray g = f/ℓ of the four voxels around x' (clamped at the edges);
+//    a voxel whose ray leaves the box first is marched to the exit. The segment is integrated
+//    like March (midpoint rule, steps ≤ step_voxels voxels). Towards a point q the sweep runs
+//    outwards from q in order of distance max_k |x_k − q_k| / cell_k: x' is the point of the
+//    segment one slice closer to q, ℓ(x') = |x' − q|, and voxels within 2 cells of q (or whose
+//    neighbours are not known yet) are marched directly. Blending the mean density rather than
+//    the depth keeps a constant density exact (f = ρ·ℓ); for other volumes the blend smooths the
+//    depth across about a voxel (bench_animation states the difference from March).
+enum class DepthMethod { March, Sweep };
+
 // Optical depth towards the sun (`to_sun` points from the scene to the sun) for every voxel
 // centre of `count` volumes: count × voxels floats.
 std::vector<float> sun_optical_depth(const float* volumes, int count, const VolumeGrid& g,
-                                     glm::vec3 to_sun, float step_voxels, int threads);
+                                     glm::vec3 to_sun, float step_voxels, int threads,
+                                     DepthMethod method = DepthMethod::March);
+
+// The Sweep of one volume along direction `dir` (normalised), into f (voxels floats); `phi` is
+// reusable scratch; `vol_yzx` (optional) the same volume as transpose_yzx lays it out, which
+// speeds up directions that cross x fastest. Single-threaded.
+void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, float step_voxels,
+                         float* f, std::vector<float>& phi, const float* vol_yzx = nullptr);
+// The volume re-laid [x][z][y] (y innermost).
+std::vector<float> transpose_yzx(const float* vol, const VolumeGrid& g);
 
 // --- spherical harmonics -------------------------------------------------------------------
 constexpr int kMaxShOrder = 4;  // bands 0..3, 16 coefficients (the paper's 4th order)
@@ -72,7 +101,8 @@ struct SphereQuadrature {
 // SH projection of per-voxel optical depth over the quadrature's directions:
 // count × voxels × order² floats (coefficients innermost).
 std::vector<float> sh_optical_depth(const float* volumes, int count, const VolumeGrid& g,
-                                    int order, int n_theta, float step_voxels, int threads);
+                                    int order, int n_theta, float step_voxels, int threads,
+                                    DepthMethod method = DepthMethod::March);
 
 // SH projection (order² coefficients per channel, 3 channels) of the render pass's sky radiance
 // (phase.hpp sky_radiance) without its sun disc: the sun's own light is the τ_sun term.
@@ -135,7 +165,7 @@ float optical_depth_segment(const float* vol, const VolumeGrid& g, glm::vec3 a, 
 // Optical depth from every voxel centre to every point: count × voxels × points floats.
 std::vector<float> point_optical_depth(const float* volumes, int count, const VolumeGrid& g,
                                        const std::vector<glm::vec3>& points, float step_voxels,
-                                       int threads);
+                                       int threads, DepthMethod method = DepthMethod::March);
 
 // Adds `orders` orders of isotropic multiple scattering to `light` (voxels × 4, from
 // light_volume) in place, as irradiance in channels 1..3. The first order's isotropic irradiance
