@@ -502,9 +502,27 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
   const int c1 = *std::max_element(hic.begin(), hic.end());
   const int nb = b1 - b0 + 1, nc = c1 - c0 + 1;
   const std::size_t lines = static_cast<std::size_t>(nb) * nc;
-  // S of every line at every layer it serves, [layer][line]; samples its value depends on.
-  std::vector<float> S(lines * ra, 0.0f);
-  std::vector<std::uint32_t> beyond(samples_out ? lines * ra : 0, 0);
+  // The layers each line serves form one interval [j_lo, j_hi] (empty: j_hi < j_lo). S of every
+  // line at every layer it serves, packed line by line from offset[line] (about one value per
+  // voxel, whatever the shear); `beyond`: the samples each value depends on.
+  std::vector<int> served_lo(lines, ra), served_hi(lines, -1);
+  std::vector<std::size_t> offset(lines + 1, 0);
+  for (std::size_t line = 0; line < lines; ++line) {
+    const int lb = b0 + static_cast<int>(line / nc), lc = c0 + static_cast<int>(line % nc);
+    for (int j = 0; j < ra; ++j) {
+      if (lb >= lob[j] && lb <= hib[j] && lc >= loc[j] && lc <= hic[j]) {
+        served_lo[line] = std::min(served_lo[line], j);
+        served_hi[line] = j;
+      }
+    }
+    offset[line + 1] =
+        offset[line] + static_cast<std::size_t>(std::max(0, served_hi[line] - served_lo[line] + 1));
+  }
+  std::vector<float> S(offset[lines], 0.0f);
+  std::vector<std::uint32_t> beyond(samples_out ? offset[lines] : 0, 0);
+  const auto at = [&](std::size_t line, int j) {
+    return offset[line] + static_cast<std::size_t>(j - served_lo[line]);
+  };
 
   const float scatter = s.scatter_constant();
   const float scatter_per_length = scatter / s.step;
@@ -524,13 +542,8 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
     std::vector<int> prim;
     for (std::size_t line = first; line < last; ++line) {
       const int lb = b0 + static_cast<int>(line / nc), lc = c0 + static_cast<int>(line % nc);
-      // The layers this line serves form one interval [j_lo, j_hi].
-      int j_lo = ra, j_hi = -1;
-      for (int j = 0; j < ra; ++j) {
-        const bool served = lb >= lob[j] && lb <= hib[j] && lc >= loc[j] && lc <= hic[j];
-        if (served) j_lo = std::min(j_lo, j), j_hi = j;
-      }
-      if (j_hi < 0) continue;
+      const int j_lo = served_lo[line], j_hi = served_hi[line];
+      if (j_hi < j_lo) continue;
       const int j_start = toward > 0 ? j_lo : j_hi;  // the served layer farthest from the sun
       glm::vec3 origin;
       origin[a] = box.lo[a] + (static_cast<float>(j_start) + 0.5f) * cell[a];
@@ -643,9 +656,8 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
           --i;
           if (rho[i] > 0.0f) Sv = scatter_per_length * len[i] + att[i] * Sv;
         }
-        S[static_cast<std::size_t>(j) * lines + line] = Sv;
-        if (samples_out)
-          beyond[static_cast<std::size_t>(j) * lines + line] = static_cast<std::uint32_t>(m - i);
+        S[at(line, j)] = Sv;
+        if (samples_out) beyond[at(line, j)] = static_cast<std::uint32_t>(m - i);
         if (j == j_start) break;
       }
       line_samples[line] = m;
@@ -660,7 +672,7 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
   parallel_chunks(static_cast<std::size_t>(ra), resample_threads, [&](std::size_t j0, std::size_t j1) {
     for (std::size_t jj = j0; jj < j1; ++jj) {
       const int j = static_cast<int>(jj);
-      const float* Sj = S.data() + jj * lines;
+
       for (int ib = 0; ib < rb; ++ib) {
         const float ub = static_cast<float>(ib) - sb * j;
         const float fb_floor = std::floor(ub);
@@ -672,15 +684,17 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
           const float wc = uc - fc_floor;
           const std::size_t l00 = kb * nc + static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
           const std::size_t l10 = l00 + nc, l01 = l00 + 1, l11 = l00 + nc + 1;
-          const float s0 = Sj[l00] + wc * (Sj[l01] - Sj[l00]);
-          const float s1 = Sj[l10] + wc * (Sj[l11] - Sj[l10]);
+          const float v00 = S[at(l00, j)], v01 = S[at(l01, j)];
+          const float v10 = S[at(l10, j)], v11 = S[at(l11, j)];
+          const float s0 = v00 + wc * (v01 - v00);
+          const float s1 = v10 + wc * (v11 - v10);
           const std::size_t v = static_cast<std::size_t>(j) * stride[a] +
                                 static_cast<std::size_t>(ib) * stride[b] +
                                 static_cast<std::size_t>(ic) * stride[c];
           light[v] = s0 + wb * (s1 - s0);
           if (samples_out) {
             const std::size_t near = wb < 0.5f ? (wc < 0.5f ? l00 : l01) : (wc < 0.5f ? l10 : l11);
-            samples_out[v] = beyond[jj * lines + near];
+            samples_out[v] = beyond[at(near, j)];
           }
         }
       }
