@@ -52,21 +52,24 @@ float optical_depth_ray(const float* vol, const VolumeGrid& g, glm::vec3 p, glm:
 // How the bulk optical depths below are computed.
 //  - March: one ray per voxel (per direction, per point), optical_depth_ray / _segment: the
 //    brute-force reference.
-//  - Sweep (issue 14): the volume is swept slice by slice so that each voxel's ray reuses the
-//    depth already known one slice further along it. Along a direction ω (the sun, each SH
-//    direction), slices are taken across the axis a the ray crosses fastest in voxels; from the
-//    exit side on, a voxel x whose ray reaches the next slice plane (at h = cell_a / |ω_a|) inside
-//    the box gets
-//        f(x) = ∫₀^h ρ(x + uω) du  +  ℓ(x') · Ḡ(x'),      x' = x + hω,  ℓ(x') = ℓ(x) − h,
-//    where ℓ is the exact distance to the box exit and Ḡ the bilinear blend, on that slice, of
-//    the mean density along the ray g = f/ℓ of the four voxels around x' (clamped at the edges);
-//    a voxel whose ray leaves the box first is marched to the exit. The segment is integrated
-//    like March (midpoint rule, steps ≤ step_voxels voxels). Towards a point q the sweep runs
-//    outwards from q in order of distance max_k |x_k − q_k| / cell_k: x' is the point of the
-//    segment one slice closer to q, ℓ(x') = |x' − q|, and voxels within 2 cells of q (or whose
-//    neighbours are not known yet) are marched directly. Blending the mean density rather than
-//    the depth keeps a constant density exact (f = ρ·ℓ); for other volumes the blend smooths the
-//    depth across about a voxel (bench_animation states the difference from March).
+//  - Sweep (issue 14): each voxel reuses what its neighbours' rays already integrated.
+//    Along a direction ω (the sun, each SH direction): let a be the axis the ray crosses fastest
+//    in voxels; the lines (l_b + s_b·u, u, l_c + s_c·u) of a grid sheared along ω (u the layer
+//    coordinate along a, s the shift per layer, one line per voxel column of a layer) are each
+//    integrated once, from the box face on the exit side back, by Simpson's rule between voxel
+//    layers (panels ≤ 8·step voxels; trilinear density, clamped to the edges, so lines half a
+//    voxel beyond the box see the edge density). A voxel's depth is the bilinear blend of the
+//    four lines around it of ∫ from its layer to where its own ray leaves the box (the lines'
+//    integrals are linear between layers): f is blended once, not once per slice, so the blur
+//    does not grow with the distance travelled. Towards a point q the volume is swept outwards
+//    from q in order of the max-norm distance in voxels: a voxel x whose ray to q crosses the
+//    slice one voxel closer to q at x' (the slice across the axis a where |q − x| is largest in
+//    voxels) gets
+//        f(x) = ∫ ρ from x to x' (Simpson)  +  |x' − q| · Ḡ(x'),
+//    Ḡ the bilinear blend, on that slice, of the mean density along the segment g = f/|x − q| of
+//    the four voxels around x'; voxels within 2 voxels of q, or whose neighbours are not known
+//    yet, are marched directly. Blending the mean density rather than the depth keeps a constant
+//    density exact (f = ρ·ℓ). Results do not depend on the thread count.
 enum class DepthMethod { March, Sweep };
 
 // Optical depth towards the sun (`to_sun` points from the scene to the sun) for every voxel
