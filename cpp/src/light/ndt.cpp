@@ -415,7 +415,8 @@ float light_at(const RayContext& r, LightMethod method, const Candidate* cand, i
 // March. Along a line the layers are λ = cell_a / |d_a| apart. The line is cut into segments of
 // Δ' = λ / n, n = max(1, round(λ / Δ)), so every layer crossing is a segment boundary; within the
 // union of the line's candidate intervals each segment (truncated at an interval's end, as in the
-// per-voxel march) gives one sample at its midpoint, attributed and gated exactly as NDT's. Walking
+// per-voxel march) gives one sample at its midpoint, attributed by NDT's rule and gated by eq. (2)
+// (|q| from the candidate test's quadratic, exp by a polynomial good to 2e-7). Walking
 // back from the sun, S = I₀ beyond the last sample and, per sample i of length ℓᵢ,
 //   S ← C · (ℓᵢ/Δ) · [ρᵢ > 0] + exp(−A·ρᵢ·ℓᵢ) · S,
 // which is eq. (7)'s L(v) for a ray starting at the near end of sample i; S read at a layer
