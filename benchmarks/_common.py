@@ -168,6 +168,31 @@ def rate(count: int, seconds: dict[str, float]) -> dict[str, float]:
     }
 
 
+def target(limit: float, reached: float | None, comparison: str, **extra: Any) -> dict[str, Any]:
+    """One issue target as the benchmarks report it: ``{limit, comparison, reached, met}`` plus
+    ``extra`` (e.g. ``baseline``: today's method and the ratio to it). ``reached`` None means the
+    run did not measure it (``--quick``): ``met`` is then None, not a verdict."""
+    if comparison not in ("<=", ">="):
+        raise ValueError(f"comparison must be '<=' or '>=', got {comparison!r}")
+    met = None
+    if reached is not None:
+        met = bool(reached <= limit) if comparison == "<=" else bool(reached >= limit)
+    return {"limit": limit, "comparison": comparison, "reached": reached, "met": met, **extra}
+
+
+def show_target(name: str, t: dict[str, Any], unit: str = "") -> str:
+    """One line for a :func:`target`: limit, what was reached, the verdict and any baseline."""
+    verdict = {True: "met", False: "MISSED", None: "-"}[t["met"]]
+    got = "not measured (--quick)" if t["reached"] is None else f"{t['reached']:.4g}{unit}"
+    line = f"target {name}: {t['comparison']} {t['limit']:.4g}{unit}, reached {got} [{verdict}]"
+    base = t.get("baseline")
+    if base and base.get("reached") is not None:
+        line += f"; today's {base['method']}: {base['reached']:.4g}{unit}"
+        if base.get("ratio") is not None:
+            line += f" ({base['ratio']:.3g}x)"
+    return line
+
+
 def write_json(path: Path, data: dict[str, Any]) -> Path:
     """Write ``data`` as indented JSON atomically (temporary in the same folder, then replace)."""
     path = Path(path)

@@ -432,25 +432,34 @@ def test_bench_light_quick_writes_json_and_plot(tmp_path):
             assert row["naive_over_ndt_samples"] >= 1.0
             assert row["ndt"]["march_s"]["median"] > 0
             assert row["ndt"]["samples_per_voxel"] > 0
+            # The shared grid marches fewer samples and states its difference from NDT.
+            assert row["shared"]["samples_total"] < row["ndt"]["samples_total"]
+            diff = row["shared_minus_ndt"]
+            assert 0 < diff["mean_abs"] <= diff["p99_abs"] <= diff["max_abs"] < 1
+            assert row["ndt_over_shared_time"] > 0
     assert "cpu_model" in data["machine"]
     # Each issue target says what it asks, what this run reached and whether that meets it;
     # --quick does not measure 20³ / 64³, so those are null, not a verdict.
     targets = data["targets"]
-    assert set(targets) == {"ndt_20_ms", "naive_over_ndt_cumulus", "ndt_64_ms"}
-    assert targets["ndt_20_ms"] == {"limit": 1.0, "comparison": "<=", "reached": None, "met": None}
-    assert targets["ndt_64_ms"]["limit"] == 30.0 and targets["ndt_64_ms"]["met"] is None
+    assert set(targets) == {"light_20_ms", "naive_over_ndt_cumulus", "light_64_ms"}
+    for name, limit in (("light_20_ms", 1.0), ("light_64_ms", 30.0)):
+        t = targets[name]
+        assert (t["limit"], t["comparison"], t["reached"], t["met"]) == (limit, "<=", None, None)
+        assert t["method"] == "shared" and t["baseline"]["method"] == "ndt"
     ratio = targets["naive_over_ndt_cumulus"]
     assert ratio["limit"] == 1.8 and ratio["comparison"] == ">=" and ratio["reached"] > 0
     assert ratio["met"] is (ratio["reached"] >= 1.8)
-    # The fBm floor: Noise.fbm alone on as many points as NDT sampled, at both grid sizes.
+    # The fBm floor: Noise.fbm alone on as many points as each method sampled, at both grids.
     floor = data["fbm_floor"]
     assert set(floor) == {"8", "12"}
-    for r, f in floor.items():
-        ndt = data["clouds"]["cumulus"]["resolutions"][r]["ndt"]
-        assert f["points"] == ndt["samples_total"] > 0
-        assert f["fbm_s"]["median"] > 0 and f["ns_per_point"] > 0
-        assert f["ndt_march_s"] == ndt["march_s"]["median"]
-        assert f["fbm_share_of_ndt"] == pytest.approx(f["fbm_s"]["median"] / f["ndt_march_s"])
+    for r, by_method in floor.items():
+        assert set(by_method) == {"shared", "ndt"}
+        for m, f in by_method.items():
+            row = data["clouds"]["cumulus"]["resolutions"][r][m]
+            assert f["points"] == row["samples_total"] > 0
+            assert f["fbm_s"]["median"] > 0 and f["ns_per_point"] > 0
+            assert f["ndt_march_s"] == row["march_s"]["median"]
+            assert f["fbm_share_of_ndt"] == pytest.approx(f["fbm_s"]["median"] / f["ndt_march_s"])
     assert "fBm floor" in res.stdout
     assert ("[met]" in res.stdout) is ratio["met"]
 

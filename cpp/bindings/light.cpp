@@ -38,8 +38,10 @@ void bind_light(py::module_& m) {
           s.method = LightMethod::Ndt;
         } else if (method == "naive") {
           s.method = LightMethod::Naive;
+        } else if (method == "shared") {
+          s.method = LightMethod::Shared;
         } else {
-          throw py::value_error("method must be 'ndt' or 'naive', got '" + method + "'");
+          throw py::value_error("method must be 'ndt', 'naive' or 'shared', got '" + method + "'");
         }
         s.step = step;
         s.extinction = extinction;
@@ -93,6 +95,12 @@ void bind_light(py::module_& m) {
 
 namespace {
 
+DepthMethod depth_method(const std::string& method) {
+  if (method == "sweep") return DepthMethod::Sweep;
+  if (method == "march") return DepthMethod::March;
+  throw py::value_error("method must be 'sweep' or 'march', got '" + method + "'");
+}
+
 ShExpTable table_of(const py::array_t<float>& a, const py::array_t<float>& b, float max_norm,
                     int order, bool squaring) {
   if (squaring) return shexp_squaring(order);
@@ -111,34 +119,42 @@ ShExpTable table_of(const py::array_t<float>& a, const py::array_t<float>& b, fl
 void bind_volume_light(py::module_& m) {
   m.def(
       "sun_optical_depth",
-      [](const FloatArray& vols, V3 lo, V3 hi, V3 to_sun, float step, int threads) {
+      [](const FloatArray& vols, V3 lo, V3 hi, V3 to_sun, float step, int threads,
+         const std::string& method) {
         const VolumeGrid g = grid_of(vols, 1, lo, hi, "volumes");
+        const DepthMethod how = depth_method(method);
         const int n = static_cast<int>(vols.shape(0));
         const float* v = vols.data();
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = sun_optical_depth(v, n, g, v3(to_sun), step, threads);
+          out = sun_optical_depth(v, n, g, v3(to_sun), step, threads, how);
         }
         return to_array(out, shape_of(vols));
       },
-      "Optical depth towards the sun per voxel: (N, D, H, W).");
+      py::arg("volumes"), py::arg("box_min"), py::arg("box_max"), py::arg("to_sun"),
+      py::arg("step"), py::arg("threads"), py::arg("method") = "march",
+      "Optical depth towards the sun per voxel: (N, D, H, W); method 'march' or 'sweep'.");
 
   m.def(
       "sh_optical_depth",
-      [](const FloatArray& vols, V3 lo, V3 hi, int order, int n_theta, float step, int threads) {
+      [](const FloatArray& vols, V3 lo, V3 hi, int order, int n_theta, float step, int threads,
+         const std::string& method) {
         const VolumeGrid g = grid_of(vols, 1, lo, hi, "volumes");
+        const DepthMethod how = depth_method(method);
         const int n = static_cast<int>(vols.shape(0));
         const float* v = vols.data();
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = sh_optical_depth(v, n, g, order, n_theta, step, threads);
+          out = sh_optical_depth(v, n, g, order, n_theta, step, threads, how);
         }
         auto shape = shape_of(vols);
         shape.push_back(order * order);
         return to_array(out, shape);
       },
+      py::arg("volumes"), py::arg("box_min"), py::arg("box_max"), py::arg("order"),
+      py::arg("n_theta"), py::arg("step"), py::arg("threads"), py::arg("method") = "march",
       "SH coefficients of per-voxel optical depth over directions: (N, D, H, W, order²).");
 
   m.def(
@@ -245,8 +261,10 @@ void bind_volume_light(py::module_& m) {
 
   m.def(
       "point_optical_depth",
-      [](const FloatArray& vols, V3 lo, V3 hi, const FloatArray& points, float step, int threads) {
+      [](const FloatArray& vols, V3 lo, V3 hi, const FloatArray& points, float step, int threads,
+         const std::string& method) {
         const VolumeGrid g = grid_of(vols, 1, lo, hi, "volumes");
+        const DepthMethod how = depth_method(method);
         require_points(points, "points");
         std::vector<glm::vec3> pts(static_cast<std::size_t>(points.shape(0)));
         for (std::size_t i = 0; i < pts.size(); ++i)
@@ -256,12 +274,14 @@ void bind_volume_light(py::module_& m) {
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = point_optical_depth(v, n, g, pts, step, threads);
+          out = point_optical_depth(v, n, g, pts, step, threads, how);
         }
         auto shape = shape_of(vols);
         shape.push_back(static_cast<py::ssize_t>(pts.size()));
         return to_array(out, shape);
       },
+      py::arg("volumes"), py::arg("box_min"), py::arg("box_max"), py::arg("points"),
+      py::arg("step"), py::arg("threads"), py::arg("method") = "march",
       "Optical depth from every voxel centre to every sample point: (N, D, H, W, K).");
 
   m.def(

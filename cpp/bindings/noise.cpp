@@ -1,7 +1,11 @@
 // Bindings for cumuli/noise.hpp.
 #include "cumuli/noise.hpp"
 
+#include <stdexcept>
+#include <string>
+
 #include "common.hpp"
+#include "cumuli/simd.hpp"
 
 namespace cumuli::bind {
 
@@ -16,6 +20,32 @@ FbmParams make_params(int octaves, float gain, float lacunarity, float frequency
 }  // namespace
 
 void bind_noise(py::module_& m) {
+  // SIMD level of the bulk loops (cumuli/simd.hpp); the Python layer is cumuli.noise.simd_*.
+  m.def("simd_level", [] { return std::string(simd_name(simd_level())); },
+        "The SIMD level the core's fBm uses now: 'scalar', 'avx2' or 'avx512'.");
+  m.def(
+      "set_simd_level",
+      [](const std::string& name) {
+        try {
+          if (name == "auto") {
+            reset_simd_level();
+          } else {
+            set_simd_level(parse_simd_level(name));
+          }
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+      },
+      py::arg("level"), "Use this SIMD level ('auto': back to CUMULI_SIMD or the widest).");
+  m.def(
+      "simd_levels",
+      [] {
+        py::list out;
+        for (const SimdLevel l : {SimdLevel::Scalar, SimdLevel::Avx2, SimdLevel::Avx512})
+          if (simd_supported(l)) out.append(simd_name(l));
+        return out;
+      },
+      "The SIMD levels this CPU and build support, narrowest first.");
   py::class_<Noise>(m, "Noise")
       .def(py::init<std::uint64_t, int>(), py::arg("seed"), py::arg("size") = 64)
       .def_property_readonly("size", &Noise::size)

@@ -8,6 +8,8 @@ convention so that the GLSL twin in ``shaders/common/noise.glsl`` agrees.
 from __future__ import annotations
 
 import math
+import os
+import warnings
 from collections.abc import Sequence
 
 import numpy as np
@@ -23,9 +25,47 @@ MAX_GRID_EDGE = 2048
 #: Voxels `Noise.fbm_grid` evaluates per call of the core (whole z planes, at least one): bounds
 #: its float32 point buffer to ~48 MiB, however large the volume.
 GRID_SLAB_VOXELS = 1 << 22
+#: SIMD levels the core knows, narrowest first (see :func:`simd_level`).
+SIMD_LEVELS = ("scalar", "avx2", "avx512")
+
 #: Largest magnitude allowed for the lattice coordinates ``p · f · sⁱ`` and for the fBm sum: the
 #: core works in float32, where they overflow to inf (and the lookup gives NaN) at 3.4e38.
 MAX_FBM_MAGNITUDE = 1e37
+
+
+def simd_level() -> str:
+    """The SIMD level the core's bulk fBm uses now: ``"scalar"``, ``"avx2"`` or ``"avx512"``.
+
+    Chosen at run time from the CPU (the widest it supports), unless the environment variable
+    ``CUMULI_SIMD`` (read at first use) or :func:`set_simd_level` says otherwise. Every level gives
+    bit-identical results; only the speed differs.
+    """
+    return str(_core.simd_level())
+
+
+def simd_levels() -> list[str]:
+    """The SIMD levels this CPU and build support, narrowest first (``"scalar"`` always)."""
+    return [str(v) for v in _core.simd_levels()]
+
+
+def set_simd_level(level: str) -> None:
+    """Make the core's bulk fBm use ``level`` from now on (all threads), e.g. to compare paths.
+
+    ``"auto"`` goes back to ``CUMULI_SIMD`` or the widest supported level. A level this CPU
+    lacks raises ``ValueError``.
+    """
+    if not isinstance(level, str) or level not in (*SIMD_LEVELS, "auto"):
+        raise ValueError(f"level must be one of {(*SIMD_LEVELS, 'auto')}, got {level!r}")
+    _core.set_simd_level(level)
+
+
+_env_simd = os.environ.get("CUMULI_SIMD", "")
+if _env_simd not in ("", "auto", *SIMD_LEVELS):
+    warnings.warn(
+        f"CUMULI_SIMD={_env_simd!r} is not one of {('auto', *SIMD_LEVELS)}; using {simd_level()!r}",
+        RuntimeWarning,
+        stacklevel=2,
+    )
 
 
 class Noise:

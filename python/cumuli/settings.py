@@ -19,7 +19,7 @@ MARCH_MODES = ("paper", "union")
 #: Candidate sorts of the GL marcher (compile-time variants of shaders/march/march.frag.glsl).
 CANDIDATE_SORTS = ("insertion", "quicksort", "oddeven", "none")
 #: Light-grid methods the renderer may use (`cumuli.light_grid`).
-LIGHT_METHODS = ("ndt", "naive")
+LIGHT_METHODS = ("ndt", "naive", "shared")
 
 
 @dataclass(frozen=True)

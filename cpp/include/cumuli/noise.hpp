@@ -38,8 +38,9 @@ class Noise {
   // eq. (1): Σ_{i=1..n} w^i · lattice(s^i · f · p).
   float fbm(glm::vec3 p, const FbmParams& params) const;
 
-  // fBm of `count` points (xyz interleaved) into `out`, on `threads` threads (0 = all).
-  // Bit-identical to calling fbm() on each point, whatever the thread count.
+  // fBm of `count` points (xyz interleaved) into `out`, on `threads` threads (0 = all), with
+  // the SIMD kernel of simd_level() (simd.hpp). Bit-identical to calling fbm() on each point,
+  // whatever the thread count and the SIMD level.
   void fbm_many(const float* points, std::size_t count, float* out, const FbmParams& params,
                 int threads) const;
 
@@ -48,9 +49,6 @@ class Noise {
   void split(float x, int& index, float& weight) const;
   // Trilinear blend of the 2×2×2 texels whose lower corner is (ix, iy, iz) (already wrapped).
   float blend(int ix, int iy, int iz, float wx, float wy, float wz) const;
-  // fbm() of a block of up to kBlock points (xyz interleaved), octave-major so the index and
-  // weight arithmetic runs as vector loops.
-  void fbm_block(const float* points, std::size_t count, float* out, const FbmParams& params) const;
 
   std::uint64_t seed_;
   int size_;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdint>
+#include <cstring>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -18,6 +20,12 @@ namespace cumuli {
 namespace {
 
 constexpr float kPi = 3.14159265358979323846f;
+
+// floor(x) for |x| < 2²² with integer arithmetic that vectorises (see noise.cpp's floor_small).
+inline float floor_small_light(float x) {
+  const int t = static_cast<int>(x);
+  return static_cast<float>(t - static_cast<int>(static_cast<float>(t) > x));
+}
 
 // Running sums of eq. (7) along one ray.
 struct Accum {
@@ -395,6 +403,309 @@ float light_at(const RayContext& r, LightMethod method, const Candidate* cand, i
   return r.acc.scatter + intensity * r.acc.transmittance;
 }
 
+// --- method Shared: each sun-parallel line marched once, resampled into the grid -------------
+//
+// Geometry. Let a be the grid axis the sun line crosses fastest in voxel units (largest
+// |d_a| / cell_a) and b, c the other two. Moving one voxel layer along a, a sun line moves
+// s_b = (d_b / d_a)·(cell_a / cell_b) voxels along b (|s_b| ≤ 1) and s_c along c. Line (l_b, l_c)
+// is the one whose voxel coordinates on layer j are (l_b + s_b·j, l_c + s_c·j): the lines form a
+// grid sheared with the sun, one line per voxel column of a layer, and the voxel centres of layer
+// j lie between four of them at the fractions frac(i_b − s_b·j), frac(i_c − s_c·j).
+//
+// March. Along a line the layers are λ = cell_a / |d_a| apart. The line is cut into segments of
+// Δ' = λ / n, n = max(1, round(λ / Δ)), so every layer crossing is a segment boundary; within the
+// union of the line's candidate intervals each segment (truncated at an interval's end, as in the
+// per-voxel march) gives one sample at its midpoint, attributed by NDT's rule and gated by eq. (2)
+// (|q| from the candidate test's quadratic, exp by a polynomial good to 2e-7). Walking
+// back from the sun, S = I₀ beyond the last sample and, per sample i of length ℓᵢ,
+//   S ← C · (ℓᵢ/Δ) · [ρᵢ > 0] + exp(−A·ρᵢ·ℓᵢ) · S,
+// which is eq. (7)'s L(v) for a ray starting at the near end of sample i; S read at a layer
+// crossing is L of that point of the line. A voxel's L is the bilinear blend of the four lines
+// around it on its layer.
+//
+// Difference from the per-voxel definition: the voxel's value is read from lines up to a voxel
+// away sideways (an interpolation of the fBm-detailed field across a voxel), and the samples sit
+// on a grid of step Δ' ≤ 1.5·Δ anchored at the layers instead of at each interval's entry. Each
+// sample is marched once for all the voxels behind it instead of once per voxel.
+// exp(x) for x ≤ 0 in plain float arithmetic that the compiler vectorises (libm's expf is a
+// call per value): x = k·ln2 + r with |r| ≤ ln2/2, exp(r) by its degree-6 Taylor polynomial
+// (relative error < 2e-7), times 2^k built from the exponent bits; 0 below −87.
+inline float exp_nonpositive(float x) {
+  const float xc = std::max(x, -87.0f);
+  const float kf = floor_small_light(xc * 1.44269504f + 0.5f);
+  const float r = (xc - kf * 0.693359375f) - kf * -2.12194440e-4f;
+  const float poly =
+      1.0f +
+      r * (1.0f +
+           r * (0.5f + r * (1.0f / 6.0f +
+                            r * (1.0f / 24.0f + r * (1.0f / 120.0f + r * (1.0f / 720.0f))))));
+  const std::int32_t bits = (static_cast<std::int32_t>(kf) + 127) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return poly * scale * static_cast<float>(x >= -87.0f);  // a product, not a branch
+}
+
+// The per-sample arithmetic of a shared line as plain loops over its arrays, compiled for the
+// baseline and (GCC on glibc) for AVX2 / AVX-512 too, picked at load time: the same IEEE
+// operations in every clone (no FMA), so the same bits.
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__GLIBC__)
+#define CUMULI_VEC_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define CUMULI_VEC_CLONES
+#endif
+
+// eq. (2): a sample is cloud where |q| ≤ 1 and ρ < γ = exp(−|q| / ((1 − κ) + 2κρ)); ρ ← 0 where
+// it is not. |q|² comes from the candidate test's quadratic.
+CUMULI_VEC_CLONES void spheroid_gate(const float* q2, float* rho, std::size_t n, float kappa) {
+  for (std::size_t i = 0; i < n; ++i) {
+    const float q = std::sqrt(std::max(q2[i], 0.0f));
+    const float gamma = exp_nonpositive(-q / ((1.0f - kappa) + 2.0f * kappa * rho[i]));
+    rho[i] = ((q2[i] <= 1.0f) & (rho[i] < gamma)) ? rho[i] : 0.0f;
+  }
+}
+
+// att = exp(−A·ρ·ℓ) per sample.
+CUMULI_VEC_CLONES void attenuation(const float* rho, const float* len, float* att, std::size_t n,
+                                   float extinction) {
+  for (std::size_t i = 0; i < n; ++i) att[i] = exp_nonpositive(-extinction * rho[i] * len[i]);
+}
+
+LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& density,
+                             const LightSettings& s, const Box& box, float* light,
+                             std::uint32_t* samples_out) {
+  const int res[3] = {s.resolution[0], s.resolution[1], s.resolution[2]};
+  const glm::vec3 cell = (box.hi - box.lo) / glm::vec3(res[0], res[1], res[2]);
+  const glm::vec3 d = s.sun_dir;
+  int a = 0;
+  for (int k = 1; k < 3; ++k)
+    if (std::fabs(d[k]) / cell[k] > std::fabs(d[a]) / cell[a]) a = k;
+  const int b = (a + 1) % 3, c = (a + 2) % 3;
+  const int ra = res[a], rb = res[b], rc = res[c];
+  const float sb = (d[b] / d[a]) * (cell[a] / cell[b]);
+  const float sc = (d[c] / d[a]) * (cell[a] / cell[c]);
+  const int toward = d[a] > 0.0f ? 1 : -1;  // layer index step towards the sun
+  const float lambda = cell[a] / std::fabs(d[a]);
+  const int per_layer =
+      std::max(1, static_cast<int>(std::lround(static_cast<double>(lambda) / s.step)));
+  const float sub = lambda / static_cast<float>(per_layer);  // Δ'
+
+  // Lines used on layer j along b: floor(−s_b·j) .. floor(R_b − 1 − s_b·j) + 1 (and along c).
+  std::vector<int> lob(ra), hib(ra), loc(ra), hic(ra);
+  for (int j = 0; j < ra; ++j) {
+    lob[j] = static_cast<int>(std::floor(-sb * j));
+    hib[j] = static_cast<int>(std::floor(static_cast<float>(rb - 1) - sb * j)) + 1;
+    loc[j] = static_cast<int>(std::floor(-sc * j));
+    hic[j] = static_cast<int>(std::floor(static_cast<float>(rc - 1) - sc * j)) + 1;
+  }
+  const int b0 = *std::min_element(lob.begin(), lob.end());
+  const int b1 = *std::max_element(hib.begin(), hib.end());
+  const int c0 = *std::min_element(loc.begin(), loc.end());
+  const int c1 = *std::max_element(hic.begin(), hic.end());
+  const int nb = b1 - b0 + 1, nc = c1 - c0 + 1;
+  const std::size_t lines = static_cast<std::size_t>(nb) * nc;
+  // The layers each line serves form one interval [j_lo, j_hi] (empty: j_hi < j_lo). S of every
+  // line at every layer it serves, packed line by line from offset[line] (about one value per
+  // voxel, whatever the shear); `beyond`: the samples each value depends on.
+  std::vector<int> served_lo(lines, ra), served_hi(lines, -1);
+  std::vector<std::size_t> offset(lines + 1, 0);
+  for (std::size_t line = 0; line < lines; ++line) {
+    const int lb = b0 + static_cast<int>(line / nc), lc = c0 + static_cast<int>(line % nc);
+    for (int j = 0; j < ra; ++j) {
+      if (lb >= lob[j] && lb <= hib[j] && lc >= loc[j] && lc <= hic[j]) {
+        served_lo[line] = std::min(served_lo[line], j);
+        served_hi[line] = j;
+      }
+    }
+    offset[line + 1] =
+        offset[line] + static_cast<std::size_t>(std::max(0, served_hi[line] - served_lo[line] + 1));
+  }
+  std::vector<float> S(offset[lines], 0.0f);
+  std::vector<std::uint32_t> beyond(samples_out ? offset[lines] : 0, 0);
+  const auto at = [&](std::size_t line, int j) {
+    return offset[line] + static_cast<std::size_t>(j - served_lo[line]);
+  };
+
+  const float scatter = s.scatter_constant();
+  const float scatter_per_length = scatter / s.step;
+  const int capacity = static_cast<int>(cloud.primitives.size());
+  const SunCandidates collector(cloud, d);
+  const bool spheroid = cloud.density.model == DensityModel::Spheroid;
+  const float kappa = cloud.density.kappa;
+  std::vector<std::uint64_t> line_samples(lines, 0);
+
+  parallel_chunks(lines, s.threads, [&](std::size_t first, std::size_t last) {
+    std::vector<Candidate> cand(static_cast<std::size_t>(capacity));
+    SunCandidates::Scratch scratch(collector.size());
+    ActiveBuffers active(static_cast<std::size_t>(capacity));
+    // Per sample of the current line: position, t of its midpoint, length, far end, |q|² of its
+    // primitive (for eq. 2's gate), primitive, density, attenuation.
+    std::vector<float> xyz, mid, len, t1s, q2s, rho, att;
+    std::vector<int> prim;
+    for (std::size_t line = first; line < last; ++line) {
+      const int lb = b0 + static_cast<int>(line / nc), lc = c0 + static_cast<int>(line % nc);
+      const int j_lo = served_lo[line], j_hi = served_hi[line];
+      if (j_hi < j_lo) continue;
+      const int j_start = toward > 0 ? j_lo : j_hi;  // the served layer farthest from the sun
+      glm::vec3 origin;
+      origin[a] = box.lo[a] + (static_cast<float>(j_start) + 0.5f) * cell[a];
+      origin[b] = box.lo[b] + (static_cast<float>(lb) + sb * j_start + 0.5f) * cell[b];
+      origin[c] = box.lo[c] + (static_cast<float>(lc) + sc * j_start + 0.5f) * cell[c];
+
+      // March the union of the candidate intervals on the Δ' grid (NDT's merge and attribution).
+      const int n = collector.collect(origin, scratch, cand.data());
+      const float* pa = collector.a();
+      // At most one sample per Δ' segment of the span plus one per interval end.
+      float span = 0.0f;
+      for (int k = 0; k < n; ++k) span = std::max(span, cand[k].t_out);
+      const std::size_t most = static_cast<std::size_t>(span / sub) + 2 * static_cast<std::size_t>(n) + 2;
+      if (len.size() < most) {
+        xyz.resize(3 * most), mid.resize(most), len.resize(most), t1s.resize(most);
+        q2s.resize(most);
+        prim.resize(most), rho.resize(most), att.resize(most);
+      }
+      std::size_t m = 0;
+      int ci = 0;
+      while (ci < n) {
+        // One piece of the union: candidates [cfirst, ci) overlap into [A, B].
+        const int cfirst = ci;
+        float B = cand[ci].t_out;
+        for (++ci; ci < n && cand[ci].t_in <= B; ++ci) B = std::max(B, cand[ci].t_out);
+        const float A = cand[cfirst].t_in;
+        const std::size_t m0 = m;
+        long long k = static_cast<long long>(std::floor(A / sub));
+        while (k > 0 && static_cast<float>(k) * sub > A) --k;
+        while (static_cast<float>(k + 1) * sub <= A) ++k;
+        for (;; ++k) {
+          const float ta = static_cast<float>(k) * sub;
+          if (!(ta < B)) break;
+          const float t0 = std::max(ta, A);
+          const float t1 = std::min(static_cast<float>(k + 1) * sub, B);
+          if (!(t1 > t0)) continue;
+          mid[m] = 0.5f * (t0 + t1);
+          len[m] = t1 - t0;
+          t1s[m] = t1;
+          ++m;
+        }
+        // Attribution (union_owner's rule): the covering candidate with the smallest |q|², the
+        // first in candidate order on ties, |q|² from the candidate test's quadratic. Candidate
+        // by candidate over the samples it covers, so the inner loop is a vector loop.
+        const auto quadratic = [&](int j, std::size_t i0, std::size_t i1, bool keep_smaller) {
+          const auto js = static_cast<std::size_t>(j);
+          const float oo = scratch.oo[js], b2 = 2.0f * scratch.b[js], qa = pa[js];
+          for (std::size_t i = i0; i < i1; ++i) {
+            const float q2 = oo + mid[i] * (b2 + mid[i] * qa);
+            const bool take = !keep_smaller || q2 < q2s[i];
+            q2s[i] = take ? q2 : q2s[i];
+            prim[i] = take ? j : prim[i];
+          }
+        };
+        if (ci - cfirst == 1 || !spheroid) {
+          quadratic(cand[cfirst].primitive, m0, m, false);
+        } else {
+          std::fill(q2s.begin() + static_cast<std::ptrdiff_t>(m0),
+                    q2s.begin() + static_cast<std::ptrdiff_t>(m), INFINITY);
+          for (int cc = cfirst; cc < ci; ++cc) {
+            // Samples are in increasing t: those with t_in ≤ s ≤ t_out are one run.
+            const float* base = mid.data();
+            const auto i0 = static_cast<std::size_t>(
+                std::lower_bound(base + m0, base + m, cand[cc].t_in) - base);
+            const auto i1 = static_cast<std::size_t>(
+                std::upper_bound(base + i0, base + m, cand[cc].t_out) - base);
+            quadratic(cand[cc].primitive, i0, i1, true);
+          }
+          // Rounding can leave a sample just past every interval: give it the last one that
+          // ended before it.
+          for (std::size_t i = m0; i < m; ++i) {
+            if (q2s[i] != INFINITY) continue;
+            int owner = cand[cfirst].primitive;
+            for (int cc = cfirst; cc < ci; ++cc)
+              if (cand[cc].t_out < mid[i]) owner = cand[cc].primitive;
+            quadratic(owner, i, i + 1, false);
+          }
+        }
+      }
+      for (std::size_t i = 0; i < m; ++i) {
+        xyz[3 * i] = origin.x + mid[i] * d.x;
+        xyz[3 * i + 1] = origin.y + mid[i] * d.y;
+        xyz[3 * i + 2] = origin.z + mid[i] * d.z;
+      }
+      if (density.constant >= 0.0f) {
+        std::fill(rho.begin(), rho.begin() + static_cast<std::ptrdiff_t>(m), density.constant);
+      } else if (m > 0) {
+        density.noise->fbm_many(xyz.data(), m, rho.data(), density.fbm, 1);
+      }
+      if (spheroid) {
+        spheroid_gate(q2s.data(), rho.data(), m, kappa);
+      } else {
+        DensitySource known;
+        for (std::size_t i = 0; i < m; ++i) {
+          known.constant = rho[i];
+          rho[i] = metaball_density(cloud, glm::vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]),
+                                    known)
+                       .rho;
+        }
+      }
+      attenuation(rho.data(), len.data(), att.data(), m, s.extinction);
+      // Walk back from the sun; the served layers in order of decreasing t.
+      float Sv = s.intensity;
+      std::size_t i = m;
+      const int j_far = toward > 0 ? j_hi : j_lo;
+      for (int j = j_far;; j -= toward) {
+        const long long k_layer = static_cast<long long>(std::abs(j - j_start)) * per_layer;
+        const float t_layer = static_cast<float>(k_layer) * sub;
+        while (i > 0 && t1s[i - 1] > t_layer) {
+          --i;
+          if (rho[i] > 0.0f) Sv = scatter_per_length * len[i] + att[i] * Sv;
+        }
+        S[at(line, j)] = Sv;
+        if (samples_out) beyond[at(line, j)] = static_cast<std::uint32_t>(m - i);
+        if (j == j_start) break;
+      }
+      line_samples[line] = m;
+    }
+  });
+
+  // Resample: each voxel blends the four lines around it on its layer (a few ns a voxel: small
+  // grids are not worth starting threads for).
+  const int stride[3] = {1, res[0], res[0] * res[1]};  // [z][y][x]
+  const std::size_t voxels = static_cast<std::size_t>(ra) * rb * rc;
+  const int resample_threads = voxels < (std::size_t{1} << 16) ? 1 : s.threads;
+  parallel_chunks(static_cast<std::size_t>(ra), resample_threads, [&](std::size_t j0, std::size_t j1) {
+    for (std::size_t jj = j0; jj < j1; ++jj) {
+      const int j = static_cast<int>(jj);
+
+      for (int ib = 0; ib < rb; ++ib) {
+        const float ub = static_cast<float>(ib) - sb * j;
+        const float fb_floor = std::floor(ub);
+        const float wb = ub - fb_floor;
+        const std::size_t kb = static_cast<std::size_t>(static_cast<int>(fb_floor) - b0);
+        for (int ic = 0; ic < rc; ++ic) {
+          const float uc = static_cast<float>(ic) - sc * j;
+          const float fc_floor = std::floor(uc);
+          const float wc = uc - fc_floor;
+          const std::size_t l00 = kb * nc + static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
+          const std::size_t l10 = l00 + nc, l01 = l00 + 1, l11 = l00 + nc + 1;
+          const float v00 = S[at(l00, j)], v01 = S[at(l01, j)];
+          const float v10 = S[at(l10, j)], v11 = S[at(l11, j)];
+          const float s0 = v00 + wc * (v01 - v00);
+          const float s1 = v10 + wc * (v11 - v10);
+          const std::size_t v = static_cast<std::size_t>(j) * stride[a] +
+                                static_cast<std::size_t>(ib) * stride[b] +
+                                static_cast<std::size_t>(ic) * stride[c];
+          light[v] = s0 + wb * (s1 - s0);
+          if (samples_out) {
+            const std::size_t near = wb < 0.5f ? (wc < 0.5f ? l00 : l01) : (wc < 0.5f ? l10 : l11);
+            samples_out[v] = beyond[at(near, j)];
+          }
+        }
+      }
+    }
+  });
+  LightStats stats;
+  for (const std::uint64_t n : line_samples) stats.samples += n;
+  return stats;
+}
+
 }  // namespace
 
 float LightSettings::scatter_constant() const { return 0.5f * solid_angle / (4.0f * kPi); }
@@ -461,6 +772,12 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
   const SunCandidates collector(cloud, s.sun_dir);
 
   const auto start = std::chrono::steady_clock::now();
+  if (s.method == LightMethod::Shared) {
+    LightStats stats = light_grid_shared(cloud, density, s, box, light, samples);
+    stats.seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    return stats;
+  }
   // Samples per row of voxels, summed after the loop (no shared counter between threads).
   std::vector<std::uint64_t> row_samples(static_cast<std::size_t>(rz) * ry, 0);
   parallel_chunks(static_cast<std::size_t>(rz) * ry, s.threads, [&](std::size_t b, std::size_t e) {

@@ -39,7 +39,7 @@ MAX_STEPS_PER_RAY: int = int(_core.LIGHT_MAX_STEPS_PER_RAY)
 DEFAULT_EXTINCTION: float = 0.3
 #: Default γ of eq. (6) in steradians (the paper's ≈ 1e-4); the renderer's grids use it too.
 DEFAULT_SOLID_ANGLE: float = 1e-4
-METHODS = ("ndt", "naive")
+METHODS = ("ndt", "naive", "shared")
 
 
 def _resolution(value: Any) -> tuple[int, int, int]:

@@ -22,6 +22,15 @@ from cumuli.sky import Sun, as_sky, sky_args
 
 #: SH exponential methods of VolumeLighting.
 SHEXP_METHODS = ("squaring", "fit")
+#: How the optical depths are precomputed: ``"sweep"`` (slice sweeps that reuse each voxel's
+#: neighbours, the default) or ``"march"`` (one brute-force march per voxel and direction/point).
+DEPTH_METHODS = ("sweep", "march")
+
+
+def _depth_method(method: Any) -> str:
+    if not isinstance(method, str) or method not in DEPTH_METHODS:
+        raise ValueError(f"method must be one of {DEPTH_METHODS}, got {method!r}")
+    return method
 
 
 class VolumeLighting:
@@ -42,6 +51,17 @@ class VolumeLighting:
     this); at low optical depth both are within a few per cent. Optical depths are density ×
     length; ``sigma_t`` turns them into transmittance ``exp(−σ_t f)``, and the renderer must use
     the same value.
+
+    ``method="sweep"`` (default) computes the optical depths by sweeping each volume: along the
+    sun and along each quadrature direction every sun-parallel line of a grid sheared along the
+    direction is integrated once and each voxel reads the four lines around it; towards each
+    sample point the volume is swept outwards from the point, each voxel continuing the depth of
+    the voxels one slice closer (see ``volume_light.hpp``). ``method="march"`` marches every
+    voxel's ray (the brute-force reference, tens of times slower). Against ``"march"``, the swept
+    depths of the README's cumulus database differ by a few per cent on average (the benchmark
+    states the figures) and the sky visibility error quoted above is unchanged. A tqdm bar shows
+    the precompute's progress over the volumes (``progress=False`` hides it; it only appears for
+    precomputes longer than half a second).
 
     Multiple isotropic scattering (§3.2, eq. 8) goes through ``ms_points`` sample points spread
     uniformly over the box (seeded): the optical depth from every voxel to every point is
@@ -70,6 +90,8 @@ class VolumeLighting:
         albedo: float = 1.0,
         seed: int = 0,
         threads: int = 0,
+        method: str = "sweep",
+        progress: bool = True,
     ) -> None:
         if not isinstance(database, VolumeDatabase):
             raise TypeError(
@@ -94,6 +116,9 @@ class VolumeLighting:
         self.ms_orders = check.integer(ms_orders, "ms_orders", 0, 16)
         self.albedo = check.real(albedo, "albedo", 0.0, 1.0)
         self.seed = check.integer(seed, "seed", 0, 2**64 - 1)
+        self.method = _depth_method(method)
+        if not isinstance(progress, bool):
+            raise TypeError(f"progress must be a bool, got {type(progress).__name__}")
         nc = self.sh_order**2
         if database.volumes.size * nc > check.MAX_POINTS:
             raise ValueError(f"the SH optical depths would exceed {check.MAX_POINTS} values")
@@ -104,10 +129,36 @@ class VolumeLighting:
             )
         lo, hi = database.box
         vols = database.volumes
-        self.sun_depth = _core.sun_optical_depth(vols, lo, hi, sun.direction, self.step, threads)
-        self.sky_depth = _core.sh_optical_depth(
-            vols, lo, hi, self.sh_order, self.sh_samples, self.step, threads
+        self.sun_depth = _core.sun_optical_depth(
+            vols, lo, hi, sun.direction, self.step, threads, self.method
         )
+        self.points = np.zeros((0, 3), np.float32)
+        self.point_depth: np.ndarray | None = None
+        if self.ms_points > 0:
+            self.points = _core.volume_sample_points(lo, hi, self.ms_points, self.seed)
+            self.point_depth = np.empty((*vols.shape, self.ms_points), np.float32)
+        # Sky and point depths volume by volume (the long steps), with a progress bar.
+        self.sky_depth = np.empty((*vols.shape, nc), np.float32)
+        from tqdm.auto import tqdm
+
+        for i in tqdm(
+            range(database.n),
+            desc="VolumeLighting precompute",
+            unit="volume",
+            disable=not progress,
+            delay=0.5,
+            leave=False,
+        ):
+            vol = vols[i : i + 1]
+            self.sky_depth[i] = _core.sh_optical_depth(
+                vol, lo, hi, self.sh_order, self.sh_samples, self.step, threads, self.method
+            )[0]
+            if self.point_depth is not None:
+                self.point_depth[i] = _core.point_optical_depth(
+                    vol, lo, hi, self.points, self.step, threads, self.method
+                )[0]
+        if self.point_depth is not None:
+            self.point_depth.setflags(write=False)
         self.sky_sh = _core.sky_sh(sky_args(self.sky), self.sh_order, self.sh_samples)
         if shexp == "fit":
             flat = self.sky_depth.reshape(-1, nc)
@@ -121,14 +172,6 @@ class VolumeLighting:
             self.shexp_a = np.ones(1, np.float32)
             self.shexp_b = np.ones(1, np.float32)
             self.shexp_max_norm = 0.0
-        self.points = np.zeros((0, 3), np.float32)
-        self.point_depth: np.ndarray | None = None
-        if self.ms_points > 0:
-            self.points = _core.volume_sample_points(lo, hi, self.ms_points, self.seed)
-            self.point_depth = _core.point_optical_depth(
-                vols, lo, hi, self.points, self.step, threads
-            )
-            self.point_depth.setflags(write=False)
         for arr in (
             self.sun_depth,
             self.sky_depth,
@@ -231,9 +274,12 @@ def sun_optical_depth(
     to_sun: Sequence[float],
     step: float = 0.5,
     threads: int = 0,
+    method: str = "sweep",
 ) -> np.ndarray:
     """Optical depth ``∫ ρ du`` from every voxel centre towards the sun (``(N, D, H, W)`` or
-    ``(D, H, W)`` in, same shape out; trilinear, steps of ``step`` voxels; C++)."""
+    ``(D, H, W)`` in, same shape out; trilinear, steps of ``step`` voxels; C++). ``method``:
+    ``"sweep"`` (one sweep per volume, as :class:`VolumeLighting`) or ``"march"`` (brute
+    force)."""
     arr = np.asarray(volumes)
     single = arr.ndim == 3
     arr = _float_volumes(arr[None] if single else arr, "volumes", 4)
@@ -245,6 +291,7 @@ def sun_optical_depth(
         check.direction(to_sun, "to_sun"),
         check.real(step, "step", 1e-3, 64.0),
         check.threads(threads),
+        _depth_method(method),
     )
     return out[0] if single else out
 
@@ -257,8 +304,10 @@ def sh_optical_depth(
     sh_samples: int = 6,
     step: float = 0.5,
     threads: int = 0,
+    method: str = "sweep",
 ) -> np.ndarray:
-    """SH coefficients (``sh_order²``, innermost) of each voxel's optical depth over directions."""
+    """SH coefficients (``sh_order²``, innermost) of each voxel's optical depth over directions
+    (``method`` as :func:`sun_optical_depth`)."""
     arr = np.asarray(volumes)
     single = arr.ndim == 3
     arr = _float_volumes(arr[None] if single else arr, "volumes", 4)
@@ -266,7 +315,14 @@ def sh_optical_depth(
     order = check.integer(sh_order, "sh_order", 1, 4)
     samples = check.integer(sh_samples, "sh_samples", order, 64)
     out = _core.sh_optical_depth(
-        arr, lo, hi, order, samples, check.real(step, "step", 1e-3, 64.0), check.threads(threads)
+        arr,
+        lo,
+        hi,
+        order,
+        samples,
+        check.real(step, "step", 1e-3, 64.0),
+        check.threads(threads),
+        _depth_method(method),
     )
     return out[0] if single else out
 
@@ -290,9 +346,11 @@ def point_optical_depth(
     points: Any,
     step: float = 0.5,
     threads: int = 0,
+    method: str = "sweep",
 ) -> np.ndarray:
     """Optical depth ``∫ ρ`` along the segment from every voxel centre to every ``(K, 3)`` point:
-    ``(N, D, H, W, K)`` (or ``(D, H, W, K)`` for one volume); C++."""
+    ``(N, D, H, W, K)`` (or ``(D, H, W, K)`` for one volume); C++ (``method`` as
+    :func:`sun_optical_depth`)."""
     arr = np.asarray(volumes)
     single = arr.ndim == 3
     arr = _float_volumes(arr[None] if single else arr, "volumes", 4)
@@ -301,6 +359,12 @@ def point_optical_depth(
     if arr.size * pts.shape[0] > check.MAX_POINTS:
         raise ValueError(f"volumes × points exceed {check.MAX_POINTS} values")
     out = _core.point_optical_depth(
-        arr, lo, hi, pts, check.real(step, "step", 1e-3, 64.0), check.threads(threads)
+        arr,
+        lo,
+        hi,
+        pts,
+        check.real(step, "step", 1e-3, 64.0),
+        check.threads(threads),
+        _depth_method(method),
     )
     return out[0] if single else out

@@ -218,7 +218,7 @@ def evolving_cloud_volumes(
 #: VolumeLighting keyword arguments a VolumeCloud may carry for computing its light.
 VOLUME_LIGHTING_KEYS = (
     "sh_order", "sh_samples", "step", "shexp", "shexp_bins", "fit_samples", "ms_points",
-    "ms_orders", "seed",
+    "ms_orders", "seed", "method",
 )  # fmt: skip
 
 

@@ -29,6 +29,15 @@
 //  - Naive (the paper's baseline): every candidate interval is marched in full, in sorted order,
 //    each sample attributed to its own candidate; overlaps are marched (and attenuate) twice.
 // For pairwise disjoint primitives both give bit-identical fields.
+//  - Shared (issue 14): the samples of voxels on one sun-parallel line are shared. Each line of a
+//    grid sheared along the sun (one line per voxel column of a layer) is marched once, as NDT
+//    marches a ray (union intervals, attribution, gating), on a step Δ' ≈ Δ that puts a segment
+//    boundary on every voxel layer; L at each layer crossing comes from one backward sweep, and a
+//    voxel's L is the bilinear blend of the four lines around it on its layer. Not the per-voxel
+//    definition: the difference (max and mean |ΔL| against Ndt) is measured by
+//    benchmarks/bench_light.py and bounded in tests/test_light_shared.py. `samples` per voxel
+//    is then the count of samples its nearest line marched from the voxel's layer towards the
+//    sun, and LightStats::samples the number actually marched (each once).
 #pragma once
 
 #include <cstdint>
@@ -40,7 +49,7 @@
 
 namespace cumuli {
 
-enum class LightMethod { Ndt, Naive };
+enum class LightMethod { Ndt, Naive, Shared };
 
 struct LightSettings {
   static constexpr int kMaxResolution = 256;  // per axis: 256³ voxels is already minutes of CPU

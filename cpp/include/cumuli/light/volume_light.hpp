@@ -49,10 +49,42 @@ float sample_trilinear(const float* vol, const VolumeGrid& g, glm::vec3 p);
 float optical_depth_ray(const float* vol, const VolumeGrid& g, glm::vec3 p, glm::vec3 dir,
                         float step_voxels);
 
+// How the bulk optical depths below are computed.
+//  - March: one ray per voxel (per direction, per point), optical_depth_ray / _segment: the
+//    brute-force reference.
+//  - Sweep (issue 14): each voxel reuses what its neighbours' rays already integrated.
+//    Along a direction ω (the sun, each SH direction): let a be the axis the ray crosses fastest
+//    in voxels; the lines (l_b + s_b·u, u, l_c + s_c·u) of a grid sheared along ω (u the layer
+//    coordinate along a, s the shift per layer, one line per voxel column of a layer) are each
+//    integrated once, from the box face on the exit side back, by Simpson's rule between voxel
+//    layers (panels ≤ 8·step voxels; trilinear density, clamped to the edges, so lines half a
+//    voxel beyond the box see the edge density). A voxel's depth is the bilinear blend of the
+//    four lines around it of ∫ from its layer to where its own ray leaves the box (the lines'
+//    integrals are linear between layers): f is blended once, not once per slice, so the blur
+//    does not grow with the distance travelled. Towards a point q the volume is swept outwards
+//    from q in order of the max-norm distance in voxels: a voxel x whose ray to q crosses the
+//    slice one voxel closer to q at x' (the slice across the axis a where |q − x| is largest in
+//    voxels) gets
+//        f(x) = ∫ ρ from x to x' (Simpson)  +  |x' − q| · Ḡ(x'),
+//    Ḡ the bilinear blend, on that slice, of the mean density along the segment g = f/|x − q| of
+//    the four voxels around x'; voxels within 2 voxels of q, or whose neighbours are not known
+//    yet, are marched directly. Blending the mean density rather than the depth keeps a constant
+//    density exact (f = ρ·ℓ). Results do not depend on the thread count.
+enum class DepthMethod { March, Sweep };
+
 // Optical depth towards the sun (`to_sun` points from the scene to the sun) for every voxel
 // centre of `count` volumes: count × voxels floats.
 std::vector<float> sun_optical_depth(const float* volumes, int count, const VolumeGrid& g,
-                                     glm::vec3 to_sun, float step_voxels, int threads);
+                                     glm::vec3 to_sun, float step_voxels, int threads,
+                                     DepthMethod method = DepthMethod::March);
+
+// The Sweep of one volume along direction `dir` (normalised), into f (voxels floats); `phi` is
+// reusable scratch; `vol_yzx` (optional) the same volume as transpose_yzx lays it out, which
+// speeds up directions that cross x fastest. Single-threaded.
+void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, float step_voxels,
+                         float* f, std::vector<float>& phi, const float* vol_yzx = nullptr);
+// The volume re-laid [x][z][y] (y innermost).
+std::vector<float> transpose_yzx(const float* vol, const VolumeGrid& g);
 
 // --- spherical harmonics -------------------------------------------------------------------
 constexpr int kMaxShOrder = 4;  // bands 0..3, 16 coefficients (the paper's 4th order)
@@ -72,7 +104,8 @@ struct SphereQuadrature {
 // SH projection of per-voxel optical depth over the quadrature's directions:
 // count × voxels × order² floats (coefficients innermost).
 std::vector<float> sh_optical_depth(const float* volumes, int count, const VolumeGrid& g,
-                                    int order, int n_theta, float step_voxels, int threads);
+                                    int order, int n_theta, float step_voxels, int threads,
+                                    DepthMethod method = DepthMethod::March);
 
 // SH projection (order² coefficients per channel, 3 channels) of the render pass's sky radiance
 // (phase.hpp sky_radiance) without its sun disc: the sun's own light is the τ_sun term.
@@ -135,7 +168,7 @@ float optical_depth_segment(const float* vol, const VolumeGrid& g, glm::vec3 a, 
 // Optical depth from every voxel centre to every point: count × voxels × points floats.
 std::vector<float> point_optical_depth(const float* volumes, int count, const VolumeGrid& g,
                                        const std::vector<glm::vec3>& points, float step_voxels,
-                                       int threads);
+                                       int threads, DepthMethod method = DepthMethod::March);
 
 // Adds `orders` orders of isotropic multiple scattering to `light` (voxels × 4, from
 // light_volume) in place, as irradiance in channels 1..3. The first order's isotropic irradiance

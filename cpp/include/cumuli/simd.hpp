@@ -1,0 +1,35 @@
+// Runtime choice of the SIMD width used by the core's bulk loops (fBm first of all; Jiménez de
+// Parga & Gómez Palomo 2018, eq. 1, evaluated 8 or 16 points at a time).
+//
+// One binary runs on any x86-64: the wide paths are compiled with GCC/Clang `target` attributes
+// (AVX2, AVX-512F) next to the baseline (SSE2) code and picked at run time from what the CPU and
+// the OS support. Every path performs the same float32 operations in the same order (no FMA, no
+// reassociation), so their results are bit-identical; the level only changes speed.
+//
+// The level in use is, in order of precedence: the last set_simd_level(), else the environment
+// variable CUMULI_SIMD (scalar | avx2 | avx512 | auto) read at first use — a level the machine
+// lacks falls back to the widest one it has below it —, else the widest supported level.
+#pragma once
+
+#include <string>
+
+namespace cumuli {
+
+enum class SimdLevel : int { Scalar = 0, Avx2 = 1, Avx512 = 2 };
+
+// "scalar", "avx2" or "avx512".
+const char* simd_name(SimdLevel level);
+// The level of a name (as simd_name writes it); throws std::invalid_argument otherwise.
+SimdLevel parse_simd_level(const std::string& name);
+// Whether this build has the level's code and this CPU (and OS) can run it.
+bool simd_supported(SimdLevel level);
+// The widest supported level.
+SimdLevel simd_best();
+// The level the core's bulk loops use now.
+SimdLevel simd_level();
+// Use `level` from now on (all threads). Throws std::invalid_argument if it is not supported.
+void set_simd_level(SimdLevel level);
+// Back to the default: CUMULI_SIMD if set, else the widest supported level.
+void reset_simd_level();
+
+}  // namespace cumuli

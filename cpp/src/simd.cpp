@@ -1,0 +1,98 @@
+#include "cumuli/simd.hpp"
+
+#include <atomic>
+#include <cstdlib>
+#include <stdexcept>
+
+namespace cumuli {
+
+namespace {
+
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
+#define CUMULI_X86_DISPATCH 1
+#endif
+
+// -1: not chosen yet (the first simd_level() reads CUMULI_SIMD).
+std::atomic<int> g_level{-1};
+
+SimdLevel default_level() {
+  SimdLevel level = simd_best();
+  if (const char* env = std::getenv("CUMULI_SIMD")) {
+    const std::string name(env);
+    if (name.empty() || name == "auto") return level;
+    try {
+      SimdLevel want = parse_simd_level(name);
+      while (!simd_supported(want)) want = static_cast<SimdLevel>(static_cast<int>(want) - 1);
+      level = want;
+    } catch (const std::invalid_argument&) {
+      // An unknown name is reported by the Python layer (cumuli.noise warns at import).
+    }
+  }
+  return level;
+}
+
+}  // namespace
+
+const char* simd_name(SimdLevel level) {
+  switch (level) {
+    case SimdLevel::Avx2:
+      return "avx2";
+    case SimdLevel::Avx512:
+      return "avx512";
+    case SimdLevel::Scalar:
+    default:
+      return "scalar";
+  }
+}
+
+SimdLevel parse_simd_level(const std::string& name) {
+  if (name == "scalar") return SimdLevel::Scalar;
+  if (name == "avx2") return SimdLevel::Avx2;
+  if (name == "avx512") return SimdLevel::Avx512;
+  throw std::invalid_argument("SIMD level must be 'scalar', 'avx2' or 'avx512', got '" + name +
+                              "'");
+}
+
+bool simd_supported(SimdLevel level) {
+  switch (level) {
+    case SimdLevel::Scalar:
+      return true;
+#ifdef CUMULI_X86_DISPATCH
+    // __builtin_cpu_supports also checks that the OS saves the wide registers (XGETBV).
+    case SimdLevel::Avx2:
+      return __builtin_cpu_supports("avx2");
+    case SimdLevel::Avx512:
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512bw");
+#endif
+    default:
+      return false;
+  }
+}
+
+SimdLevel simd_best() {
+  if (simd_supported(SimdLevel::Avx512)) return SimdLevel::Avx512;
+  if (simd_supported(SimdLevel::Avx2)) return SimdLevel::Avx2;
+  return SimdLevel::Scalar;
+}
+
+SimdLevel simd_level() {
+  int level = g_level.load(std::memory_order_relaxed);
+  if (level < 0) {
+    int expected = -1;
+    const int chosen = static_cast<int>(default_level());
+    g_level.compare_exchange_strong(expected, chosen);
+    level = g_level.load(std::memory_order_relaxed);
+  }
+  return static_cast<SimdLevel>(level);
+}
+
+void set_simd_level(SimdLevel level) {
+  if (!simd_supported(level))
+    throw std::invalid_argument(std::string("SIMD level '") + simd_name(level) +
+                                "' is not supported by this CPU or build");
+  g_level.store(static_cast<int>(level), std::memory_order_relaxed);
+}
+
+void reset_simd_level() { g_level.store(static_cast<int>(default_level()), std::memory_order_relaxed); }
+
+}  // namespace cumuli
