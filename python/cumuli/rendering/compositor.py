@@ -15,6 +15,7 @@ to back per pixel by the ray's entry into each drawable's ``layer_box()``.
 
 from __future__ import annotations
 
+import os
 import threading
 from collections.abc import Callable, Sequence
 from typing import Any
@@ -24,7 +25,7 @@ import numpy as np
 from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
-from cumuli.gl import GLContext
+from cumuli.gl import GLContext, _thread_default, default_context
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
 from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUPED_KINDS
@@ -175,15 +176,17 @@ class Renderer:
     Parameters
     ----------
     context:
-        An existing :class:`cumuli.gl.GLContext` to draw with (not closed by :meth:`close`);
-        by default the renderer creates and owns one.
+        A :class:`cumuli.gl.GLContext` to draw with (never closed by :meth:`close`); by default
+        the calling thread's default context (:func:`cumuli.gl.default_context`, shared with
+        :func:`render`), so making and closing renderers opens no new EGL context. A renderer
+        belongs to the thread of its context: from another thread it raises
+        :class:`cumuli.gl.GLThreadError` (make one renderer per thread, or call :func:`render`).
     tile:
         Largest tile edge drawn per draw call (images larger than this are rendered in tiles).
     """
 
     def __init__(self, context: GLContext | None = None, tile: int = TILE) -> None:
         self.closed = False
-        self._owns_context = False
         self._drawers: dict[str, Any] = {}
         # Arguments first: a bad one must not leave a context behind.
         self.tile = check.integer(tile, "tile", 16, 4096)
@@ -194,11 +197,13 @@ class Renderer:
                 )
             if context.closed:
                 raise ValueError("context is closed")
-        self._owns_context = context is None
-        self.gl = GLContext() if context is None else context
+        self.gl = default_context() if context is None else context
+        self.gl.check_usable()
         self.tiles = Tiles(self.gl, self.tile)
         try:
-            self.drawer("cloud")  # the marcher compiles now: a broken driver fails here
+            with self.gl.activate():
+                self.drawer("cloud")  # the marcher compiles now: a broken driver fails here
+                self.gl.timer_query()
         except Exception:
             self.close()
             raise
@@ -226,6 +231,10 @@ class Renderer:
         (:func:`cumuli.prepare_light`); a `LitScene` is drawn with its own."""
         if self.closed:
             raise RuntimeError("this Renderer is closed")
+        with self.gl.activate("this Renderer's GL context"):
+            return self._render(scene, camera, width, height)
+
+    def _render(self, scene: Any, camera: Any, width: Any, height: Any) -> np.ndarray:
         lit, plain = _lit(scene)
         if not isinstance(camera, Camera):
             raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
@@ -240,7 +249,11 @@ class Renderer:
             drawer = self.drawer(kind)
             self.tiles.last_gpu_ns = None
             img = drawer.draw(lit, indices, camera, width, height, with_sky)
-            gpu_ns.append(self.tiles.last_gpu_ns if kind in GROUPED_KINDS else None)
+            gpu_ns.append(
+                self.tiles.last_gpu_ns
+                if kind in GROUPED_KINDS
+                else getattr(drawer, "last_gpu_ns", None)
+            )
             return img
 
         image = compose(lit, camera, width, height, draw)
@@ -252,18 +265,17 @@ class Renderer:
         """Release every GL object (and the context when this renderer created it)."""
         if self.closed:
             return
+        if hasattr(self, "gl") and not self.gl.closed and self.gl._pid == os.getpid():
+            with self.gl.activate("this Renderer's GL context"):
+                for drawer in self._drawers.values():
+                    try:
+                        drawer.release()
+                    except Exception:
+                        pass
+                if hasattr(self, "tiles"):
+                    self.tiles.release()
         self.closed = True
-        if hasattr(self, "gl") and not self.gl.closed:
-            for drawer in self._drawers.values():
-                try:
-                    drawer.release()
-                except Exception:
-                    pass
-            if hasattr(self, "tiles"):
-                self.tiles.release()
         self._drawers.clear()
-        if self._owns_context and hasattr(self, "gl"):
-            self.gl.close()
 
     def __enter__(self) -> Renderer:
         return self
@@ -279,20 +291,17 @@ class Renderer:
 
 
 # --------------------------------------------------------------------------------------------
-_shared: Renderer | None = None
-_shared_lock = threading.Lock()
+_shared = threading.local()
 
 
 def shared_renderer() -> Renderer:
-    """The process-wide renderer used by :func:`render` (created on first use)."""
-    global _shared
-    with _shared_lock:
-        if _shared is None or _shared.closed or _shared.gl.closed:
-            from cumuli.gl import default_context
-
-            # Shares the process-wide context with the other GL conveniences (one EGL context).
-            _shared = Renderer(context=default_context())
-        return _shared
+    """This thread's renderer used by :func:`render` (created on first use; drawn with the
+    thread's default context, shared with the other GL conveniences)."""
+    renderer = getattr(_shared, "renderer", None)
+    if renderer is None or renderer.closed or renderer.gl is not _thread_default():
+        renderer = Renderer(context=default_context())
+        _shared.renderer = renderer
+    return renderer
 
 
 def render_cpu(

@@ -113,10 +113,12 @@ class VolumeRenderer:
     def __init__(self, context: GLContext | None = None) -> None:
         self.context = _resolve_context(context)
         ctx = self.context.ctx
-        self.program: moderngl.Program | None = self.context.program(
-            "volume/quad.vert.glsl", "volume/march.frag.glsl"
-        )
-        self.vao = ctx.vertex_array(self.program, [])
+        with self.context.activate():
+            self.program: moderngl.Program | None = self.context.program(
+                "volume/quad.vert.glsl", "volume/march.frag.glsl"
+            )
+            self.vao = ctx.vertex_array(self.program, [])
+            self.context.timer_query()
         self.gpu_time_ns: int | None = None
 
     def render(
@@ -141,6 +143,16 @@ class VolumeRenderer:
         ``(colour, 1 − T)`` the compositor combines."""
         if self.program is None or self.context.closed:
             raise ValueError("this VolumeRenderer has been released")
+        with self.context.activate("this VolumeRenderer's GL context"):
+            return self._render(
+                volume, light, box, camera, width, height, sun, sky, sigma_t, albedo, g, step,
+                with_sky,
+            )  # fmt: skip
+
+    def _render(
+        self, volume: Any, light: Any, box: Any, camera: Any, width: int, height: int, sun: Any,
+        sky: Any, sigma_t: float, albedo: float, g: float, step: float | None, with_sky: bool,
+    ) -> np.ndarray:  # fmt: skip
         sun = Sun() if sun is None else sun
         if not isinstance(sun, Sun):
             raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
@@ -215,8 +227,9 @@ class VolumeRenderer:
     def release(self) -> None:
         """Release the program (idempotent)."""
         if self.program is not None and not self.context.closed:
-            self.vao.release()
-            self.program.release()
+            with self.context.activate("this VolumeRenderer's GL context"):
+                self.vao.release()
+                self.program.release()
         self.program = None
 
     def __enter__(self) -> VolumeRenderer:
@@ -268,6 +281,12 @@ class VolumeGL:
 
     def __init__(self, gl: GLContext, tiles: Any = None) -> None:
         self.renderer = VolumeRenderer(gl)
+
+    @property
+    def last_gpu_ns(self) -> int | None:
+        """GL timer-query time of the last draw (None when the driver could not time it)."""
+        ns = self.renderer.gpu_time_ns
+        return ns if ns is not None and 0 <= ns < 0xFFFFFFFF else None
 
     @staticmethod
     def check(scene: Any, indices: Sequence[int]) -> None:
