@@ -91,17 +91,18 @@ def render_frames(
     backend: str = "gl",
     pattern: str = "frame_{:04d}.png",
     progress: bool = True,
-    alpha: bool = False,
+    alpha: str = "opaque",
 ) -> list[Path]:
     """Render ``scene`` from each camera and write numbered images into ``out_dir``.
 
     ``pattern`` is a ``str.format`` pattern taking the frame number; its extension picks the
     format (``.png`` sRGB8 or ``.exr`` float32). ``out_dir`` is created if missing. A tqdm bar
-    shows progress unless ``progress=False``. Frames are opaque (the render is already
-    composited over the sky) unless ``alpha=True`` keeps the clouds' coverage ``1 − T`` as alpha.
-    Returns the paths written, in order.
+    shows progress unless ``progress=False``. ``alpha`` is :func:`cumuli.write_image`'s: frames
+    are opaque (``"opaque"``: the render is already composited over the sky) unless
+    ``alpha="keep"`` keeps the clouds' coverage ``1 − T`` (``True`` / ``False`` also mean keep /
+    opaque). Returns the paths written, in order.
     """
-    from cumuli.io.images import write_image
+    from cumuli.io.images import ALPHA_MODES, write_image
     from cumuli.rendering.compositor import render
 
     if not isinstance(scene, Scene):
@@ -114,6 +115,10 @@ def render_frames(
     for k, cam in enumerate(cams):
         if not isinstance(cam, Camera):
             raise TypeError(f"cameras[{k}] must be a cumuli.Camera, got {type(cam).__name__}")
+    if isinstance(alpha, (bool, np.bool_)):
+        alpha = "keep" if alpha else "opaque"
+    if alpha not in ALPHA_MODES:
+        raise ValueError(f"alpha must be one of {ALPHA_MODES}, got {alpha!r}")
     if not isinstance(pattern, str):
         raise TypeError(f"pattern must be a str, got {type(pattern).__name__}")
     try:
@@ -136,7 +141,5 @@ def render_frames(
         list(zip(cams, names, strict=True)), desc="frames", unit="frame", disable=not progress
     ):
         img = render(scene, cam, width=width, height=height, backend=backend)
-        if not alpha:
-            img[..., 3] = 1.0
-        paths.append(write_image(folder / name, img))
+        paths.append(write_image(folder / name, img, alpha=alpha))
     return paths
