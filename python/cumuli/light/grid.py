@@ -181,9 +181,14 @@ class LightGrid(np.ndarray):
         arr = np.array(arr, dtype=np.float32, order="C")  # a private copy
         if not np.isfinite(arr).all():
             raise ValueError("light grid values contain NaN or infinite values")
+        if arr.size and float(np.abs(arr).max()) > check.MAX_RADIANCE:
+            raise ValueError(
+                f"light grid values must be within ±{check.MAX_RADIANCE:g} (MAX_RADIANCE: times "
+                "the sun's radiance they would overflow float32)"
+            )
         bad_box = f"light grid box must be (lo, hi), two finite 3-vectors with hi > lo, got {box!r}"
         try:
-            lo, hi = (check.vec3(v, "box") for v in box)
+            lo, hi = (check.vec3(v, "box", bound=check.MAX_COORD) for v in box)
         except (TypeError, ValueError):
             raise ValueError(bad_box) from None
         if len(box) != 2 or not all(h > low for low, h in zip(lo, hi, strict=True)):

@@ -26,13 +26,26 @@ from cumuli.sky import Sky, Sun
 MAX_EDGE = 2048
 #: Most volumes a database may hold.
 MAX_VOLUMES = 1 << 16
+#: Most volumes whose (N, N) float64 similarity matrix is computed (512 MiB at the limit; the
+#: endless walk holds a few matrices of that size).
+MAX_SIMILARITY_VOLUMES = 1 << 13
+
+
+def check_similarity_size(n: int, name: str = "volumes") -> None:
+    """Refuse an (N, N) similarity matrix beyond :data:`MAX_SIMILARITY_VOLUMES` before it is
+    allocated."""
+    if n > MAX_SIMILARITY_VOLUMES:
+        raise ValueError(
+            f"{name}: the (N, N) similarity of {n} volumes would need {8 * n * n / 2**30:.1f} "
+            f"GiB; at most {MAX_SIMILARITY_VOLUMES} volumes (MAX_SIMILARITY_VOLUMES)"
+        )
 
 
 def _box(
     box_min: Any, box_max: Any
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    lo = check.vec3(box_min, "box_min")
-    hi = check.vec3(box_max, "box_max")
+    lo = check.vec3(box_min, "box_min", bound=check.MAX_COORD)
+    hi = check.vec3(box_max, "box_max", bound=check.MAX_COORD)
     if not all(h > lo_ for lo_, h in zip(lo, hi, strict=True)):
         raise ValueError(f"box_max must be greater than box_min on every axis, got {lo}, {hi}")
     return lo, hi
@@ -66,9 +79,10 @@ def _float_volumes(value: Any, name: str, ndim: int) -> np.ndarray:
         raise ValueError(f"{name}: every edge must be <= {MAX_EDGE}, got shape {value.shape}")
     if int(np.prod(value.shape, dtype=np.int64)) > check.MAX_POINTS:
         raise ValueError(f"{name} has more than {check.MAX_POINTS} values, got shape {value.shape}")
-    arr = np.ascontiguousarray(value, dtype=np.float32)
+    with np.errstate(over="ignore"):  # beyond float32: inf, refused just below
+        arr = np.ascontiguousarray(value, dtype=np.float32)
     if not np.isfinite(arr).all():
-        raise ValueError(f"{name} contains NaN or infinite values")
+        raise ValueError(f"{name} contains NaN or infinite values (or values beyond float32)")
     return arr
 
 
@@ -119,6 +133,7 @@ class VolumeDatabase:
     def similarity(self, threads: int = 0) -> np.ndarray:
         """``D_kl = Σₙ (ρ_k − ρ_l)²``: the ``(N, N)`` float64 matrix (C++, cached, read-only)."""
         if self._similarity is None:
+            check_similarity_size(self.n)
             d = _core.similarity_matrix(self._volumes, check.threads(threads))
             d.setflags(write=False)
             self._similarity = d
@@ -270,6 +285,8 @@ class VolumeCloud:
             light = np.array(_float_volumes(self.light, "light", 4), copy=True)
             if light.shape != (*dens.shape, 4):
                 raise ValueError(f"light must have shape {(*dens.shape, 4)}, got {light.shape}")
+            if float(np.abs(light).max()) > check.MAX_RADIANCE:
+                raise ValueError(f"light values must be within ±{check.MAX_RADIANCE:g}")
             light.setflags(write=False)
             s(self, "light", light)
             if not isinstance(self.light_sun, Sun) or not isinstance(self.light_sky, Sky):

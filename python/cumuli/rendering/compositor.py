@@ -241,7 +241,10 @@ class Renderer:
         width, height = _check_size(width, height, self.max_texture_size, "GL_MAX_TEXTURE_SIZE")
         _check_kinds(plain, GL_DRAWERS, "GL")
         for kind, indices in plan(plain):  # before the light pass, which could be long
-            GL_DRAWERS[kind].check(plain, indices)
+            drawer = self.drawer(kind)
+            drawer.check(plain, indices)
+            if lit is None and hasattr(drawer, "check_light"):
+                drawer.check_light(plain, indices)  # the light the light step will make
         lit = prepare_light(plain) if lit is None else lit
         gpu_ns: list[int | None] = []
 

@@ -39,6 +39,8 @@ from cumuli.sky import Sun, as_sky, sky_args
 MAX_STEPS = 1 << 16
 #: Largest image edge.
 MAX_IMAGE = 1 << 14
+#: Largest image in pixels (the compositor's limit: 2²⁶ RGBA32F pixels = 1 GiB).
+MAX_PIXELS = 1 << 26
 
 
 def camera_rays(camera: Any) -> dict[str, Any]:
@@ -92,6 +94,10 @@ def _inputs(
     lo, hi = _box(box[0], box[1])
     width = check.integer(width, "width", 1, MAX_IMAGE)
     height = check.integer(height, "height", 1, MAX_IMAGE)
+    if width * height > MAX_PIXELS:
+        raise ValueError(
+            f"image of {width}x{height} pixels is larger than the limit of {MAX_PIXELS} pixels"
+        )
     diag = math.dist(lo, hi)
     if step is None:
         d, h, w = vol.shape
