@@ -1,4 +1,5 @@
-"""The ``cumuli`` command: ``cumuli info``, ``cumuli demo -o PATH`` and ``cumuli render SCENE``.
+"""The ``cumuli`` command: ``cumuli info``, ``cumuli demo -o PATH``, ``cumuli render SCENE`` and
+``cumuli --version``.
 
 User errors (bad arguments, unwritable paths, a missing GL) print one ``cumuli: error: ...`` line
 to stderr and exit non-zero; they never show a traceback.
@@ -180,9 +181,12 @@ def _seed(text: str) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from cumuli._version import __version__
+
     parser = argparse.ArgumentParser(
         prog="cumuli", description="Volumetric clouds: information, demos and rendering."
     )
+    parser.add_argument("--version", action="version", version=f"cumuli {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     info = sub.add_parser("info", help="versions, GL renderer and thread count")

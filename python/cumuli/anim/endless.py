@@ -13,7 +13,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, _progress
 from cumuli import _validate as check
 from cumuli.model import volume as _volume
 from cumuli.model.volume import AnimationFrame, VolumeDatabase, _float_volumes
@@ -161,6 +161,9 @@ class EndlessAnimation:
 
     def density(self, frame: AnimationFrame, threads: int = 0) -> np.ndarray:
         """The frame's density volume ``(D, H, W)`` float32 (a copy when not blended)."""
+        if not isinstance(frame, AnimationFrame):
+            raise TypeError(f"frame must be a cumuli.AnimationFrame, got {type(frame).__name__}")
+        frame.check_in(self.database.n)
         vols = self.database.volumes
         if frame.weight == 1.0:
             return vols[frame.source].copy()
@@ -180,7 +183,9 @@ class EndlessAnimation:
             self.density(frame, threads),
         )
 
-    def frames(self, n: int, densities: bool = True, threads: int = 0) -> list[AnimationFrame]:
+    def frames(
+        self, n: int, densities: bool = True, threads: int = 0, progress: bool | None = None
+    ) -> list[AnimationFrame]:
         """The next ``n`` frames (with densities unless ``densities=False``): at most
         :data:`MAX_FRAME_LIST` frames, and with densities at most ``MAX_POINTS`` voxels in all
         (checked before walking; iterate the animation for longer walks)."""
@@ -194,7 +199,8 @@ class EndlessAnimation:
             shape = self.database.shape
             if n * shape[0] * shape[1] * shape[2] > check.MAX_POINTS:
                 raise ValueError(f"n={n} frames of {shape} exceed {check.MAX_POINTS} voxels")
-            return [self.next(threads) for _ in range(n)]
+            steps = _progress.bar(range(n), desc="frames", unit="frame", progress=progress)
+            return [self.next(threads) for _ in steps]
         return [self.step() for _ in range(n)]
 
     def __iter__(self) -> EndlessAnimation:

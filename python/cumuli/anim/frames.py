@@ -39,6 +39,7 @@ def fly_towards(
     a = np.asarray(check.vec3(start, "start"), dtype=np.float64)
     b = np.asarray(check.vec3(target, "target"), dtype=np.float64)
     stop = check.real(stop, "stop")
+    up = check.direction(up, "up")
     dist = float(np.linalg.norm(b - a))
     if dist < 1e-9:
         raise ValueError("start and target must differ")
@@ -102,12 +103,19 @@ def render_frames(
     ``alpha="keep"`` keeps the clouds' coverage ``1 − T`` (``True`` / ``False`` also mean keep /
     opaque). Returns the paths written, in order.
     """
-    from cumuli.io.images import ALPHA_MODES, write_image
+    from cumuli.io.images import ALPHA_MODES, FORMATS, write_image
     from cumuli.rendering.compositor import render
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
-    cams = list(cameras)
+    if isinstance(cameras, Camera):
+        raise TypeError("cameras must be a sequence of cumuli.Camera; wrap one camera in a list")
+    try:
+        cams = list(cameras)
+    except TypeError:
+        raise TypeError(
+            f"cameras must be a sequence of cumuli.Camera, got {type(cameras).__name__}"
+        ) from None
     if not cams:
         raise ValueError("cameras must not be empty")
     if len(cams) > MAX_FRAMES:
@@ -127,6 +135,11 @@ def render_frames(
         raise ValueError(f"pattern {pattern!r} must take one frame number: {exc}") from None
     if len(set(names)) != len(names) or any(os.sep in n for n in names):
         raise ValueError(f"pattern {pattern!r} must give a distinct file name per frame")
+    if Path(names[0]).suffix.lower() not in FORMATS:  # before the first frame is rendered
+        raise ValueError(
+            f"pattern {pattern!r} gives {names[0]!r}, whose extension is not one of "
+            f"{sorted(FORMATS)}"
+        )
     folder = Path(out_dir)
     try:
         folder.mkdir(parents=True, exist_ok=True)

@@ -13,7 +13,9 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import struct
 import zipfile
+import zlib
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -260,7 +262,7 @@ def load_light_grid(path: str | os.PathLike[str]) -> LightGrid:
     if not path.exists():
         raise FileNotFoundError(f"no such light-grid file: {str(path)!r}")
     if not path.is_file():
-        raise OSError(f"not a file: {str(path)!r}")
+        raise OSError(f"not a regular file: {str(path)!r}")
     try:
         with zipfile.ZipFile(path) as zf:
             arrays = {}
@@ -293,5 +295,9 @@ def load_light_grid(path: str | os.PathLike[str]) -> LightGrid:
             )
         return LightGrid(arrays["values"], meta["box"], meta.get("sun"), record)
     except (KeyError, TypeError, ValueError, zipfile.BadZipFile, EOFError, UnicodeDecodeError,
-            json.JSONDecodeError) as exc:  # fmt: skip
-        raise ValueError(f"{path.name}: not a readable light-grid file ({exc})") from None
+            json.JSONDecodeError, NotImplementedError, RuntimeError, zlib.error,
+            struct.error) as exc:  # fmt: skip
+        # zipfile raises NotImplementedError (unknown compression) and RuntimeError (encrypted)
+        raise ValueError(
+            f"{path.name}: not a readable light-grid file ({type(exc).__name__}: {exc})"
+        ) from None

@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, _progress
 from cumuli import _validate as check
 from cumuli.io.jsonable import array_from_json, array_to_json, jsonable
 from cumuli.model.cloud import Cloud
@@ -130,11 +130,13 @@ class VolumeDatabase:
     def box(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         return (self.box_min, self.box_max)
 
-    def similarity(self, threads: int = 0) -> np.ndarray:
-        """``D_kl = Σₙ (ρ_k − ρ_l)²``: the ``(N, N)`` float64 matrix (C++, cached, read-only)."""
+    def similarity(self, threads: int = 0, progress: bool | None = None) -> np.ndarray:
+        """``D_kl = Σₙ (ρ_k − ρ_l)²``: the ``(N, N)`` float64 matrix (C++, cached, read-only;
+        at most :data:`MAX_SIMILARITY_VOLUMES` volumes, checked before allocating)."""
         if self._similarity is None:
             check_similarity_size(self.n)
-            d = _core.similarity_matrix(self._volumes, check.threads(threads))
+            with _progress.core("similarity", progress):
+                d = _core.similarity_matrix(self._volumes, check.threads(threads))
             d.setflags(write=False)
             self._similarity = d
         return self._similarity
@@ -153,6 +155,24 @@ class AnimationFrame:
     weight: float
     crossfade: bool
     density: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        s(self, "index", check.integer(self.index, "frame.index", 0))
+        s(self, "source", check.integer(self.source, "frame.source", 0))
+        s(self, "target", check.integer(self.target, "frame.target", 0))
+        # A weight outside [0, 1] extrapolates beyond both volumes (densities above the
+        # database's maximum, or negative); NaN would make NaN light.
+        s(self, "weight", check.real(self.weight, "frame.weight", 0.0, 1.0))
+        s(self, "crossfade", check.flag(self.crossfade, "frame.crossfade"))
+
+    def check_in(self, n: int) -> None:
+        """Refuse a frame that refers to volumes outside a database of ``n``."""
+        for name in ("source", "target"):
+            if getattr(self, name) >= n:
+                raise ValueError(
+                    f"frame.{name}={getattr(self, name)} is outside the database (n={n})"
+                )
 
 
 def evolving_cloud_volumes(
@@ -175,6 +195,7 @@ def evolving_cloud_volumes(
     lacunarity: float = 2.0,
     frequency: float = 1.0,
     threads: int = 0,
+    progress: bool | None = None,
 ) -> VolumeDatabase:
     """A database of ``n_frames`` volumes of an evolving cumulus, without a fluid solver.
 
@@ -224,9 +245,10 @@ def evolving_cloud_volumes(
         if not isinstance(box, Sequence) or len(box) != 2:
             raise TypeError("box must be (box_min, box_max)")
         lo, hi = _box(box[0], box[1])
-    vols = _core.evolving_cloud_volumes(
-        *cloud.core_args(), core_noise, const, *fbm, *evo, lo, hi, check.threads(threads)
-    )
+    with _progress.core("cloud volumes", progress):  # a bar when it takes long
+        vols = _core.evolving_cloud_volumes(
+            *cloud.core_args(), core_noise, const, *fbm, *evo, lo, hi, check.threads(threads)
+        )
     return VolumeDatabase(vols, lo, hi)
 
 
