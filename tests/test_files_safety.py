@@ -7,6 +7,7 @@ saved images.
 from __future__ import annotations
 
 import fnmatch
+import functools
 import os
 import signal
 import stat
@@ -40,16 +41,26 @@ def _cloud() -> cu.Cloud:
     return cu.gaussian_cumulus(n=6, seed=1)
 
 
-def _savers() -> dict[str, Callable[[Path], object]]:
+@functools.cache
+def _big_image() -> np.ndarray:
     big = _noisy(400, 400, seed=5)  # ~0.5 MB as PNG, ~2.5 MB as EXR
-    big = np.concatenate([big, big[::-1], big[:, ::-1]], axis=0)  # PNG > 1.4 MB: beyond the disk
-    many = cu.Cloud(np.random.default_rng(1).uniform(-50, 50, (120_000, 3)), np.ones(120_000))
+    return np.concatenate([big, big[::-1], big[:, ::-1]], axis=0)  # PNG > 1.4 MB: beyond the disk
+
+
+@functools.cache
+def _big_cloud(n: int) -> cu.Cloud:
+    """120 000 primitives are > 1 MiB as .npz, 12 000 > 1 MiB as JSON."""
+    return cu.Cloud(np.random.default_rng(1).uniform(-50, 50, (n, 3)), np.ones(n))
+
+
+def _savers() -> dict[str, Callable[[Path], object]]:
+    """Savers of files larger than the 1 MiB disk (their data made on first use)."""
     return {
-        "a.png": lambda p: cu.write_image(p, big),
-        "a.exr": lambda p: cu.write_image(p, big),
-        "c.npz": lambda p: many.save(p),
-        "c.json": lambda p: many.save(p),
-        "s.json": lambda p: cu.Scene([many]).save(p),
+        "a.png": lambda p: cu.write_image(p, _big_image()),
+        "a.exr": lambda p: cu.write_image(p, _big_image()),
+        "c.npz": lambda p: _big_cloud(120_000).save(p),
+        "c.json": lambda p: _big_cloud(12_000).save(p),
+        "s.json": lambda p: cu.Scene([_big_cloud(12_000)]).save(p),
     }
 
 
@@ -265,8 +276,10 @@ def test_the_replace_writes_through_a_symlink(tmp_path: Path, name: str) -> None
     before = real.read_bytes()
     if name.endswith(".exr"):
         cu.write_image(link, _noisy(5, 7, seed=9))
+    elif name.startswith("s"):
+        cu.Scene([_cloud().translated((1, 2, 3))]).save(link)
     else:
-        _savers()[name](link)
+        _cloud().translated((1, 2, 3)).save(link)
     assert link.is_symlink() and link.resolve() == real
     assert real.read_bytes() != before
     assert sorted(p.name for p in real_dir.iterdir()) == [name]
