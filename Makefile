@@ -2,7 +2,9 @@
 #
 #   make demo    set up (if needed) and render the default scene to out.png / out.exr
 #   make test    set up (if needed) and run the whole test suite (pytest + notebooks)
-#   make bench   run the benchmarks (JSON + plots under benchmarks/out/), write RESULTS.md
+#   make bench   run the benchmarks (~25 min on 2 cores): JSON, plots and RESULTS.md of the run
+#                under benchmarks/out/; `make bench ARCHIVE=1` also archives the JSON under
+#                benchmarks/results/<machine>/ and rewrites benchmarks/RESULTS.md
 #   make lint    ruff on python/, tests/, benchmarks/
 #   make inplace build the extension into python/cumuli for PYTHONPATH=python development
 
@@ -50,11 +52,16 @@ test: setup
 test-fast: install
 	$(PY) -m pytest -q tests -x
 
-# Every benchmark (JSON + plots in benchmarks/out/), then archive the JSON under
-# benchmarks/results/<machine>/ and rewrite benchmarks/RESULTS.md from it.
+# Every benchmark (JSON + plots in benchmarks/out/) and a report of this run,
+# benchmarks/out/RESULTS.md. The committed results are only touched on request: ARCHIVE=1 copies
+# the JSON to benchmarks/results/<machine>/ and rewrites benchmarks/RESULTS.md from it.
+ARCHIVE ?= 0
 bench: setup
 	$(PY) benchmarks/run_all.py --out benchmarks/out
+	$(PY) benchmarks/report.py --run benchmarks/out
+ifeq ($(ARCHIVE),1)
 	$(PY) benchmarks/report.py --archive benchmarks/out
+endif
 
 bench-quick: install
 	$(PY) benchmarks/run_all.py --quick

@@ -31,7 +31,7 @@ from cumuli.demo import benchmark_scenes  # noqa: E402
 def sequence(scene: cu.Scene, cams: list[cu.Camera], w: int, h: int, client: Any) -> list[Any]:
     """The frames as arrays (one CPU thread per frame: the workers are the parallelism)."""
     data = scene.to_dict()
-    tasks = [(render_task, (data, c.to_dict(), w, h, "cpu", None, False, 1)) for c in cams]
+    tasks = [(render_task, (data, c.to_dict(), w, h, "cpu", None, "opaque", 1)) for c in cams]
     return run(tasks, client, progress=False)
 
 

@@ -1,5 +1,7 @@
 """Write ``benchmarks/RESULTS.md`` from the benchmarks' JSON (the paper's §4 claims, per machine).
 
+``python benchmarks/report.py --run benchmarks/out`` writes ``benchmarks/out/RESULTS.md``, the
+report of that one run, and touches nothing else (what ``make bench`` does by default).
 ``python benchmarks/report.py --archive benchmarks/out`` copies a run's JSON and plots into
 ``benchmarks/results/<machine>/`` (``<machine>`` from the GL renderer string: ``llvmpipe``,
 ``nvidia-h200``, ...), then rewrites RESULTS.md with one section per folder under
@@ -368,12 +370,41 @@ def write_report(results: Path = RESULTS, output: Path = REPORT) -> Path:
     return output
 
 
+def write_run_report(run_dir: Path) -> Path:
+    """``run_dir/RESULTS.md``: the report of one run's JSON (nothing is archived)."""
+    data = load(run_dir)
+    if not data:
+        raise FileNotFoundError(f"no benchmark JSON in {run_dir}")
+    first = next(iter(data.values()))
+    slug = machine_slug(first.get("machine", {}).get("gl_renderer"))
+    lines = [
+        "# Benchmark results: this run",
+        "",
+        f"Written by `benchmarks/report.py --run {run_dir}` from the JSON beside this file; the "
+        "committed results are `benchmarks/RESULTS.md` (`make bench ARCHIVE=1` adds this run "
+        "to them). Times are medians of repeats with [min–max]; methods are compared as ratios "
+        "within the run.",
+        "",
+        *section(slug, data),
+    ]
+    output = run_dir / "RESULTS.md"
+    output.write_text("\n".join(lines).rstrip() + "\n", encoding="utf-8")
+    return output
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--run", type=Path, help="write RUN/RESULTS.md from this run's JSON (and nothing else)"
+    )
     parser.add_argument("--archive", type=Path, help="copy this run folder's JSON into results/")
     parser.add_argument("--results", type=Path, default=RESULTS, help="folder of machine folders")
     parser.add_argument("--output", type=Path, default=REPORT, help="the Markdown file to write")
     args = parser.parse_args(argv)
+    if args.run is not None:
+        print(f"wrote {write_run_report(args.run)}")
+        if args.archive is None:
+            return 0
     if args.archive is not None:
         folder = archive(args.archive, args.results)
         print(f"archived {args.archive} -> {folder}")

@@ -109,6 +109,7 @@ def test_context_failure_names_the_required_version(monkeypatch: pytest.MonkeyPa
 
 
 def test_available_reports_the_reason_instead_of_raising(monkeypatch: pytest.MonkeyPatch) -> None:
+    cgl.close_default_context()  # available() reuses the thread's default context when it has one
     monkeypatch.setattr(moderngl, "create_context", _failing_create_context)
     ok, reason = cgl.available()
     assert ok is False
@@ -122,4 +123,4 @@ def test_default_context_failure_propagates_and_leaves_nothing(
     monkeypatch.setattr(moderngl, "create_context", _failing_create_context)
     with pytest.raises(cgl.GLUnavailableError):
         cgl.default_context()
-    assert cgl._default_context is None
+    assert cgl._thread_default() is None

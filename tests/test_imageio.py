@@ -23,7 +23,7 @@ def _image(h: int = 24, w: int = 32, seed: int = 0) -> np.ndarray:
 def test_exr_round_trip_is_exact_float32(tmp_path: Path) -> None:
     img = _image()
     img[2, 3] = (1e-30, 3.5e4, -2.0, 0.25)  # values HALF could not hold
-    path = cu.write_image(tmp_path / "a.exr", img)
+    path = cu.write_image(tmp_path / "a.exr", img, alpha="keep")
     assert path == tmp_path / "a.exr"
     back = cu.read_image(path)
     assert back.dtype == np.float32 and back.shape == img.shape
@@ -51,7 +51,7 @@ def test_row_zero_is_the_top(tmp_path: Path) -> None:
 
 def test_png_round_trip_within_one_8_bit_step(tmp_path: Path) -> None:
     img = _image(seed=1)
-    cu.write_image(tmp_path / "a.png", img)
+    cu.write_image(tmp_path / "a.png", img, alpha="keep")
     back = cu.read_image(tmp_path / "a.png")
     assert back.shape == img.shape and back.dtype == np.float32
     # Compared where the quantisation happens: in sRGB-encoded values, within half a step.
@@ -60,18 +60,18 @@ def test_png_round_trip_within_one_8_bit_step(tmp_path: Path) -> None:
     assert err.max() <= 0.5 * step + 1e-6
     assert np.abs(back[..., 3] - img[..., 3]).max() <= 0.5 * step + 1e-6
     # Reading then writing again changes nothing.
-    cu.write_image(tmp_path / "b.png", back)
+    cu.write_image(tmp_path / "b.png", back, alpha="keep")
     np.testing.assert_array_equal(cu.read_image(tmp_path / "b.png"), back)
 
 
 def test_png_keeps_unassociated_alpha_so_colours_do_not_darken(tmp_path: Path) -> None:
     img = np.zeros((2, 2, 4), np.float32)
     img[...] = (0.8, 0.4, 0.2, 0.25)
-    cu.write_image(tmp_path / "alpha.png", img)
+    cu.write_image(tmp_path / "alpha.png", img, alpha="keep")
     back = cu.read_image(tmp_path / "alpha.png")
     np.testing.assert_allclose(back[..., :3], img[..., :3], rtol=0.01)
     np.testing.assert_allclose(back[..., 3], 0.25, atol=0.5 / 255)
-    cu.write_image(tmp_path / "alpha.exr", img)
+    cu.write_image(tmp_path / "alpha.exr", img, alpha="keep")
     np.testing.assert_array_equal(cu.read_image(tmp_path / "alpha.exr"), img)
 
 
@@ -86,9 +86,9 @@ def test_rgb_input_gets_opaque_alpha(tmp_path: Path) -> None:
 
 def test_float64_and_float16_images_are_accepted(tmp_path: Path) -> None:
     img = _image()
-    cu.write_image(tmp_path / "d.exr", img.astype(np.float64))
+    cu.write_image(tmp_path / "d.exr", img.astype(np.float64), alpha="keep")
     np.testing.assert_array_equal(cu.read_image(tmp_path / "d.exr"), img)
-    cu.write_image(tmp_path / "h.exr", img.astype(np.float16))
+    cu.write_image(tmp_path / "h.exr", img.astype(np.float16), alpha="keep")
     np.testing.assert_array_equal(cu.read_image(tmp_path / "h.exr"), img.astype(np.float16))
 
 
@@ -112,7 +112,7 @@ def test_srgb8_codes_round_trip() -> None:
 
 
 def test_failed_write_leaves_no_file(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    def broken(tmp: Path, ext: str, rgba: np.ndarray) -> None:
+    def broken(tmp: Path, *args: object) -> None:
         tmp.write_bytes(b"partial")  # what a crash half-way would leave
         raise OSError("disk full (simulated)")
 
@@ -126,9 +126,9 @@ def test_failed_write_keeps_the_previous_file(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     old = _image(seed=3)
-    cu.write_image(tmp_path / "keep.exr", old)
+    cu.write_image(tmp_path / "keep.exr", old, alpha="keep")
 
-    def broken(tmp: Path, ext: str, rgba: np.ndarray) -> None:
+    def broken(tmp: Path, *args: object) -> None:
         raise OSError("simulated")
 
     monkeypatch.setattr(cio, "_write_with_oiio", broken)
@@ -162,7 +162,9 @@ def test_unknown_extension_is_rejected(tmp_path: Path, name: str) -> None:
 
 def test_extension_is_case_insensitive(tmp_path: Path) -> None:
     img = _image()
-    np.testing.assert_array_equal(cu.read_image(cu.write_image(tmp_path / "UP.EXR", img)), img)
+    np.testing.assert_array_equal(
+        cu.read_image(cu.write_image(tmp_path / "UP.EXR", img, alpha="keep")), img
+    )
 
 
 @pytest.mark.parametrize(

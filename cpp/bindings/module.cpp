@@ -2,7 +2,40 @@
 // (noise, model, light, render, anim; see ARCHITECTURE.md).
 #include <pybind11/pybind11.h>
 
+#include "cumuli/parallel.hpp"
+
 namespace py = pybind11;
+
+namespace {
+// The Python exception a signal handler raised during a loop (KeyboardInterrupt for Ctrl-C),
+// kept until the loop has stopped and the exception translator re-raises it.
+thread_local PyObject* pending_type = nullptr;
+thread_local PyObject* pending_value = nullptr;
+thread_local PyObject* pending_traceback = nullptr;
+
+// This thread's progress callback (done, total), set by cumuli._progress; owned reference.
+thread_local PyObject* progress_callback = nullptr;
+
+// The core's loop hook: runs Python's signal handlers (main thread only; elsewhere a no-op) and
+// says to stop when one raised; otherwise reports progress to this thread's callback.
+bool python_interrupt(std::size_t done, std::size_t total) {
+  py::gil_scoped_acquire gil;
+  if (PyErr_CheckSignals() != 0) {
+    PyErr_Fetch(&pending_type, &pending_value, &pending_traceback);
+    return true;
+  }
+  if (progress_callback != nullptr) {
+    PyObject* result = PyObject_CallFunction(progress_callback, "nn", static_cast<Py_ssize_t>(done),
+                                             static_cast<Py_ssize_t>(total));
+    if (result == nullptr) {
+      PyErr_Clear();  // a progress bar must not break the computation
+    } else {
+      Py_DECREF(result);
+    }
+  }
+  return false;
+}
+}  // namespace
 
 namespace cumuli::bind {
 void bind_noise(py::module_& m);
@@ -26,6 +59,32 @@ void bind_weather(py::module_& m);
 
 PYBIND11_MODULE(_core, m) {
   m.doc() = "cumuli C++ core: noise, cloud generators, light precompute and reference renderers";
+  // Ctrl-C (and any signal whose Python handler raises) stops long loops between chunks.
+  cumuli::interrupt_hook().store(&python_interrupt);
+  m.def(
+      "set_progress",
+      [](py::object callback) {
+        py::object previous = progress_callback != nullptr
+                                  ? py::reinterpret_steal<py::object>(progress_callback)
+                                  : py::object(py::none());
+        progress_callback = callback.is_none() ? nullptr : callback.inc_ref().ptr();
+        return previous;
+      },
+      py::arg("callback"),
+      "Set this thread's progress callback (done, total) of long C++ loops (None: none); "
+      "returns the previous one.");
+  py::register_exception_translator([](std::exception_ptr p) {
+    try {
+      if (p) std::rethrow_exception(p);
+    } catch (const cumuli::Interrupted&) {
+      if (pending_type != nullptr) {
+        PyErr_Restore(pending_type, pending_value, pending_traceback);
+        pending_type = pending_value = pending_traceback = nullptr;
+      } else {
+        PyErr_SetNone(PyExc_KeyboardInterrupt);
+      }
+    }
+  });
   cumuli::bind::bind_noise(m);
   cumuli::bind::bind_shapes(m);
   cumuli::bind::bind_volumes(m);

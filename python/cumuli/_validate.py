@@ -15,6 +15,14 @@ MAX_POINTS = 1 << 28
 #: differences and squared distances the core forms from a few such values (≲ 1e32) stay far
 #: inside float32 (max 3.4e38): finite input then cannot come out as inf or NaN.
 MAX_COORD = 1e15
+#: Largest value of a light: a sun's radiance (colour × intensity), a sky colour, the sun-disc
+#: factor, a light grid or light volume value. The renderers multiply a few of these (disc ×
+#: sun radiance, sun radiance × light × phase ≤ 1e5): ≲ 1e29, far inside float32 (3.4e38), so
+#: no accepted light renders as inf or NaN on either backend.
+MAX_RADIANCE = 1e12
+#: Largest magnitude of any real parameter: beyond it a value is inf once the core or a shader
+#: converts it to float32.
+FLOAT32_MAX = float(np.finfo(np.float32).max)
 
 
 def points3(
@@ -51,9 +59,15 @@ def points3(
 
 
 def vec3(value: Any, name: str, *, bound: float | None = None) -> tuple[float, float, float]:
-    """Return ``value`` as a tuple of three finite floats (each within ``±bound`` if given)."""
+    """Return ``value`` as a tuple of three finite floats (each within ``±bound`` if given;
+    strings are refused, not read as digits)."""
     try:
-        seq = [float(v) for v in value]
+        if isinstance(value, (str, bytes)):
+            raise TypeError
+        items = list(value)
+        if any(isinstance(v, (str, bytes, bool, np.bool_)) for v in items):
+            raise TypeError
+        seq = [float(v) for v in items]
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be a sequence of three numbers, got {value!r}") from None
     if len(seq) != 3:
@@ -63,6 +77,19 @@ def vec3(value: Any, name: str, *, bound: float | None = None) -> tuple[float, f
     if bound is not None and max(abs(v) for v in seq) > bound:
         raise ValueError(f"{name} must have components within ±{bound:g}, got {tuple(seq)}")
     return (seq[0], seq[1], seq[2])
+
+
+def radiance(value: Any, name: str) -> tuple[float, float, float]:
+    """A non-negative colour with components of at most :data:`MAX_RADIANCE`."""
+    colour = vec3(value, name)
+    if min(colour) < 0:
+        raise ValueError(f"{name} must be non-negative, got {colour}")
+    if max(colour) > MAX_RADIANCE:
+        raise ValueError(
+            f"{name} must have components of at most {MAX_RADIANCE:g} (MAX_RADIANCE: beyond it "
+            f"the renderers overflow float32), got {colour}"
+        )
+    return colour
 
 
 def direction(value: Any, name: str) -> tuple[float, float, float]:
@@ -104,19 +131,28 @@ def real(
     hi_open: bool = False,
 ) -> float:
     """Return ``value`` as a finite float within the given (optionally open) bounds."""
-    if isinstance(value, bool):
-        raise TypeError(f"{name} must be a number, got bool")
+    if isinstance(value, (bool, np.bool_, str, bytes)):
+        raise TypeError(f"{name} must be a number, got {type(value).__name__} {value!r}")
     try:
         v = float(value)
     except (TypeError, ValueError):
         raise TypeError(f"{name} must be a number, got {value!r}") from None
     if not math.isfinite(v):
         raise ValueError(f"{name} must be finite, got {v}")
+    if abs(v) > FLOAT32_MAX:
+        raise ValueError(f"{name} must be within the float32 range (±3.4e38), got {v:g}")
     if lo is not None and (v < lo or (lo_open and v == lo)):
         raise ValueError(f"{name} must be {'>' if lo_open else '>='} {lo}, got {v}")
     if hi is not None and (v > hi or (hi_open and v == hi)):
         raise ValueError(f"{name} must be {'<' if hi_open else '<='} {hi}, got {v}")
     return v
+
+
+def flag(value: Any, name: str) -> bool:
+    """A bool (Python or numpy); anything else (``nan``, ``"no"``, 1) is refused."""
+    if not isinstance(value, (bool, np.bool_)):
+        raise TypeError(f"{name} must be a bool, got {type(value).__name__} {value!r}")
+    return bool(value)
 
 
 def threads(value: Any) -> int:

@@ -37,8 +37,10 @@ class Camera:
     fov: float = 50.0
 
     def __post_init__(self) -> None:
-        pos = check.vec3(self.position, "camera.position")
-        tgt = check.vec3(self.target, "camera.target")
+        # Within ±MAX_COORD (1e15), like every generator's coordinates: the ray maths squares
+        # distances in float32.
+        pos = check.vec3(self.position, "camera.position", bound=check.MAX_COORD)
+        tgt = check.vec3(self.target, "camera.target", bound=check.MAX_COORD)
         up = check.direction(self.up, "camera.up")
         fov = check.real(self.fov, "camera.fov", 0.0, 180.0, lo_open=True, hi_open=True)
         view = np.subtract(tgt, pos, dtype=np.float64)

@@ -1,4 +1,5 @@
-"""The ``cumuli`` command: ``cumuli info``, ``cumuli demo -o PATH`` and ``cumuli render SCENE``.
+"""The ``cumuli`` command: ``cumuli info``, ``cumuli demo -o PATH``, ``cumuli render SCENE`` and
+``cumuli --version``.
 
 User errors (bad arguments, unwritable paths, a missing GL) print one ``cumuli: error: ...`` line
 to stderr and exit non-zero; they never show a traceback.
@@ -92,14 +93,6 @@ def _demo_noise(width: int, height: int, seed: int) -> np.ndarray:
     return img
 
 
-def _opaque(img: np.ndarray) -> np.ndarray:
-    """The render is already composited over the sky: alpha 1 so that viewers show the sky
-    (the render's alpha is the clouds' coverage, 1 − T)."""
-    out = img.copy()
-    out[..., 3] = 1.0
-    return out
-
-
 def _check_output(output: Path) -> None:
     """Refuse a bad output path before spending time on the render."""
     if output.suffix.lower() not in (".png", ".exr"):
@@ -112,7 +105,8 @@ def _check_output(output: Path) -> None:
 
 
 def _write_pair(output: Path, img: np.ndarray) -> list[Path]:
-    """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR)."""
+    """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR), opaque:
+    the render is already composited over the sky (its alpha is the clouds' coverage)."""
     from cumuli.io.images import write_image
 
     other = output.with_suffix(".exr" if output.suffix.lower() == ".png" else ".png")
@@ -133,7 +127,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     _check_output(args.output)
     scene = default_scene()
     img = render(scene, scene.default_camera(), args.width, args.height, backend=args.backend)
-    paths = _write_pair(args.output, _opaque(img))
+    paths = _write_pair(args.output, img)
     print(f"wrote {' and '.join(map(str, paths))} ({args.width}×{args.height}, {args.backend})")
     return 0
 
@@ -158,7 +152,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     output = Path(args.output)
     _check_output(output)
     img = render(scene, scene.default_camera(), w, h, backend=args.backend)
-    path = write_image(output, img if args.alpha else _opaque(img))
+    path = write_image(output, img, alpha="keep" if args.alpha else "opaque")
     print(f"wrote {path} ({w}×{h}, {args.backend})")
     return 0
 
@@ -187,9 +181,12 @@ def _seed(text: str) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from cumuli._version import __version__
+
     parser = argparse.ArgumentParser(
         prog="cumuli", description="Volumetric clouds: information, demos and rendering."
     )
+    parser.add_argument("--version", action="version", version=f"cumuli {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
     info = sub.add_parser("info", help="versions, GL renderer and thread count")

@@ -1,17 +1,37 @@
 """Headless OpenGL through moderngl's standalone EGL context, and shader loading.
 
-Every GL pipeline in cumuli (the fBm parity path, the ray marcher) gets its context here, loads
+Every GL pipeline in cumuli (the fBm parity path, the ray marchers) gets its context here, loads
 its GLSL from ``shaders/`` with the small ``#include "file.glsl"`` mechanism below, and releases
 every GL object with the context.
+
+Processes and threads (README, "GL, threads and processes"):
+
+- **One context per thread.** An EGL context is current in one thread at a time, so
+  :func:`default_context` (what ``cu.render``, ``cu.Renderer()``, ``cumuli.gl.fbm`` and
+  ``cu.render_volume`` use) is per thread: each thread gets its own, made on first use and
+  reused by every later call in that thread. A context made explicitly (``GLContext()``) belongs
+  to the thread that made it; using it from another thread raises :class:`GLThreadError`.
+- **Several contexts in one thread** are fine: every GL entry point makes its own context
+  current first (EGL makes the newest context current on creation).
+- **No GL after fork.** Mesa keeps its EGL display and llvmpipe's rasteriser threads per
+  process, and a forked child inherits them without the threads: it would wait for them forever.
+  A process forked after GL was used refuses GL with :class:`GLForkError` (a
+  :class:`GLUnavailableError`); worker processes that render with GL must be started with the
+  ``spawn`` (or ``forkserver``) method, or render with ``backend="cpu"``.
+- **Reuse.** Each EGL context opened and closed leaves ~38 KB behind in Mesa/glcontext, so the
+  common paths reuse the thread's default context instead of opening new ones.
 """
 
 from __future__ import annotations
 
 import atexit
 import logging
+import os
 import re
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from functools import cache
 from importlib import resources
 from pathlib import Path
@@ -32,6 +52,43 @@ _INCLUDE = re.compile(r'^\s*#include\s+"([^"]+)"\s*$', re.MULTILINE)
 
 class GLUnavailableError(RuntimeError):
     """No OpenGL 4.3+ context could be created (no EGL library or no device)."""
+
+
+class GLForkError(GLUnavailableError):
+    """GL was used by a parent of this process before it forked: Mesa's state cannot be used."""
+
+
+class GLThreadError(RuntimeError):
+    """A GL context (or an object made with it) was used from a thread that did not make it."""
+
+
+#: The process that made the first GL context (EGL state lives in it); children forked from it
+#: cannot use GL.
+_gl_pid: int | None = None
+#: Contexts made by this process (tests and diagnostics).
+contexts_made = 0
+#: Per thread: its default context (``context``) and the context current in it (``current``).
+_local = threading.local()
+
+
+def _fork_error(parent: int | None) -> GLForkError:
+    return GLForkError(
+        f"OpenGL was initialised in process {parent} before it forked this process "
+        f"({os.getpid()}): Mesa's EGL state does not survive fork (a draw would wait forever for "
+        "the parent's rasteriser threads). Start worker processes with the 'spawn' method "
+        "(multiprocessing.get_context('spawn').Pool(...), or concurrent.futures."
+        "ProcessPoolExecutor(mp_context=multiprocessing.get_context('spawn'))), or render with "
+        "backend='cpu' in the workers."
+    )
+
+
+def _thread_error(what: str, owner: str) -> GLThreadError:
+    return GLThreadError(
+        f"{what} belongs to thread {owner!r} and EGL contexts are bound to the thread that made "
+        f"them; this is thread {threading.current_thread().name!r}. Call cu.render / "
+        "cumuli.gl.fbm (each thread gets its own default context) or make a cu.Renderer() / "
+        "cumuli.gl.GLContext() in each thread."
+    )
 
 
 def shader_dir() -> Path:
@@ -84,10 +141,17 @@ def with_defines(source: str, defines: dict[str, int]) -> str:
 class GLContext:
     """A moderngl standalone (EGL) context; use as a context manager or call :meth:`close`.
 
-    Raises :class:`GLUnavailableError` with a hint when EGL or a GPU/llvmpipe device is missing.
+    Belongs to the thread that made it (:class:`GLThreadError` from others) and to this process
+    (:class:`GLForkError` in a forked child). Raises :class:`GLUnavailableError` with a hint when
+    EGL or a GPU/llvmpipe device is missing.
     """
 
     def __init__(self, require: int = 430) -> None:
+        global _gl_pid, contexts_made
+        self.closed = True  # until made: __del__ of a failed construction does nothing
+        pid = os.getpid()
+        if _gl_pid is not None and _gl_pid != pid:
+            raise _fork_error(_gl_pid)
         try:
             self.ctx: moderngl.Context = moderngl.create_context(
                 standalone=True, backend="egl", require=require
@@ -99,10 +163,40 @@ class GLContext:
                 "(Debian: apt-get install libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri) or run on a "
                 "machine with a GPU driver."
             ) from exc
+        _gl_pid = pid
+        contexts_made += 1
+        self._pid = pid
+        self._thread = threading.get_ident()
+        self._thread_name = threading.current_thread().name
+        _local.current = self  # EGL made it current
         self.renderer: str = self.ctx.info.get("GL_RENDERER", "unknown")
         self.closed = False
         self._timer_query: moderngl.Query | None = None
         log.info("GL_RENDERER: %s", self.renderer)
+
+    def check_usable(self, what: str = "this GL context") -> None:
+        """Raise unless this context can be used here: open, this process, this thread."""
+        if os.getpid() != self._pid:
+            raise _fork_error(self._pid)
+        if self.closed:
+            raise RuntimeError(f"{what} is closed (its GL context was released)")
+        if threading.get_ident() != self._thread:
+            raise _thread_error(what, self._thread_name)
+
+    @contextmanager
+    def activate(self, what: str = "this GL context") -> Iterator[GLContext]:
+        """Make this context current in this thread (checked by :meth:`check_usable`) for the
+        ``with`` body; it stays current afterwards, until another context is activated or made.
+
+        Every GL entry point of cumuli runs inside it: EGL makes a new context current when it
+        is made, so without it a second context in the same thread would receive the first
+        one's draws.
+        """
+        self.check_usable(what)
+        if getattr(_local, "current", None) is not self:
+            self.ctx.__enter__()  # eglMakeCurrent
+            _local.current = self
+        yield self
 
     @property
     def info(self) -> dict[str, Any]:
@@ -119,27 +213,72 @@ class GLContext:
         fragment_source = load_shader(fragment)
         if defines:
             fragment_source = with_defines(fragment_source, defines)
-        return self.ctx.program(vertex_shader=load_shader(vertex), fragment_shader=fragment_source)
+        with self.activate():
+            return self.ctx.program(
+                vertex_shader=load_shader(vertex), fragment_shader=fragment_source
+            )
 
     def compute(self, name: str) -> moderngl.ComputeShader:
         """Compile a compute shader from a file name under ``shaders/``."""
-        return self.ctx.compute_shader(load_shader(name))
+        with self.activate():
+            return self.ctx.compute_shader(load_shader(name))
 
     def timer_query(self) -> moderngl.Query:
         """This context's GL_TIME_ELAPSED query, made on first use and shared by every caller.
 
         moderngl (5.x) cannot release a query on its own (it goes with the context), so one per
-        context, reused, keeps long-lived contexts from accumulating them.
+        context, reused, keeps long-lived contexts from accumulating them. A context's first
+        timed draw reads 2³²−1 on llvmpipe, so a 1×1 draw is timed once here, when the query is
+        made, and the first real draw is timed properly.
         """
         if self._timer_query is None:
-            self._timer_query = self.ctx.query(time=True)
+            with self.activate():
+                query = self.ctx.query(time=True)
+                self._warm_up(query)
+                self._timer_query = query
         return self._timer_query
 
+    def _warm_up(self, query: moderngl.Query) -> None:
+        ctx = self.ctx
+        made: list[Any] = []
+        try:
+            prog = ctx.program(
+                vertex_shader="#version 330\nvoid main() { gl_Position = vec4("
+                "float((gl_VertexID << 1) & 2) * 2.0 - 1.0, float(gl_VertexID & 2) * 2.0 - 1.0, "
+                "0.0, 1.0); }",
+                fragment_shader="#version 330\nout vec4 c;\nvoid main() { c = vec4(1.0); }",
+            )
+            made.append(prog)
+            vao = ctx.vertex_array(prog, [])
+            made.append(vao)
+            tex = ctx.texture((1, 1), 4)
+            made.append(tex)
+            fbo = ctx.framebuffer(color_attachments=[tex])
+            made.append(fbo)
+            fbo.use()
+            with query:
+                vao.render(mode=moderngl.TRIANGLES, vertices=3)
+                ctx.finish()
+            _ = query.elapsed
+        finally:
+            for obj in reversed(made):
+                obj.release()
+
     def close(self) -> None:
-        """Release the context and every GL object made with it (idempotent)."""
-        if not self.closed:
-            self.ctx.release()
+        """Release the context and every GL object made with it (idempotent). In a process
+        forked from its owner it is only marked closed: the parent's context is never touched.
+        """
+        if self.closed:
+            return
+        if os.getpid() != self._pid:
             self.closed = True
+            return
+        if threading.get_ident() != self._thread:
+            raise _thread_error("this GL context", self._thread_name)
+        self.closed = True
+        if getattr(_local, "current", None) is self:
+            _local.current = None
+        self.ctx.release()
 
     def __enter__(self) -> GLContext:
         return self
@@ -155,40 +294,47 @@ class GLContext:
 
 
 def available() -> tuple[bool, str]:
-    """Whether a headless context can be made here, and the renderer string or the reason."""
+    """Whether GL can be used in this thread, and the renderer string or the reason.
+
+    Uses (and keeps) the thread's default context rather than opening and closing one.
+    """
     try:
-        with GLContext() as ctx:
-            return True, ctx.renderer
+        return True, default_context().renderer
     except GLUnavailableError as exc:
         return False, str(exc)
 
 
-# --- the process-wide context used by convenience functions -------------------------------------
+# --- the per-thread default context used by convenience functions -------------------------------
 
-_default_context: GLContext | None = None
-_default_lock = threading.Lock()
+
+def _thread_default() -> GLContext | None:
+    ctx = getattr(_local, "context", None)
+    if ctx is None or ctx.closed or ctx._pid != os.getpid():
+        return None
+    return ctx
 
 
 def default_context() -> GLContext:
-    """A process-wide :class:`GLContext`, created on first use and closed at interpreter exit.
+    """This thread's default :class:`GLContext`, created on first use and reused.
 
-    Convenience functions (``cumuli.gl.fbm`` and the like) use it when no ``context`` is given, so
-    that repeated calls do not pay for a new EGL context each time.
+    Convenience functions (``cu.render``, ``cu.Renderer()``, ``cumuli.gl.fbm`` and the like) use
+    it when no ``context`` is given, so repeated calls do not pay for (and leak) a new EGL
+    context each time. Each thread has its own (EGL contexts are bound to one thread); the main
+    thread's is closed at interpreter exit, another thread's when that thread ends.
     """
-    global _default_context
-    with _default_lock:
-        if _default_context is None or _default_context.closed:
-            _default_context = GLContext()
-        return _default_context
+    ctx = _thread_default()
+    if ctx is None:
+        ctx = GLContext()
+        _local.context = ctx
+    return ctx
 
 
 def close_default_context() -> None:
-    """Close the process-wide context if it exists (a later call makes a new one)."""
-    global _default_context
-    with _default_lock:
-        if _default_context is not None:
-            _default_context.close()
-            _default_context = None
+    """Close this thread's default context if it exists (a later call makes a new one)."""
+    ctx = getattr(_local, "context", None)
+    _local.context = None
+    if ctx is not None:
+        ctx.close()
 
 
 atexit.register(close_default_context)
@@ -203,6 +349,7 @@ def _resolve_context(context: GLContext | None) -> GLContext:
         )
     if context.closed:
         raise ValueError("context is closed")
+    context.check_usable()
     return context
 
 
@@ -237,10 +384,16 @@ class FbmProgram:
         self.gpu_time_ns: int | None = None
         self.dispatch_wall_s: float | None = None
         self._objects: list[Any] = []
+        self.program: Any = None
         ctx = self.context.ctx
         size = noise.size
         if size > int(self.context.info.get("GL_MAX_3D_TEXTURE_SIZE", 2048)):
             raise ValueError(f"noise size {size} exceeds this GL's largest 3D texture")
+        with self.context.activate():
+            self._make(ctx, noise)
+
+    def _make(self, ctx: moderngl.Context, noise: Noise) -> None:
+        size = noise.size
         try:
             self.program = self.context.compute("noise/fbm_points.comp.glsl")
             self._objects.append(self.program)
@@ -266,10 +419,22 @@ class FbmProgram:
         exact: bool = False,
     ) -> np.ndarray:
         """fBm at ``(N, 3)`` points on the GPU; returns ``(N,)`` float32."""
-        from cumuli.noise import _fbm_params, check_fbm_reach
-
         if self.program is None or self.context.closed:
             raise ValueError("this FbmProgram has been released")
+        with self.context.activate("this FbmProgram's GL context"):
+            return self._run(points, octaves, gain, lacunarity, frequency, exact)
+
+    def _run(
+        self,
+        points: np.ndarray,
+        octaves: int,
+        gain: float,
+        lacunarity: float,
+        frequency: float,
+        exact: bool,
+    ) -> np.ndarray:
+        from cumuli.noise import _fbm_params, check_fbm_reach
+
         pts = check.points3(points, "points")
         octaves, gain, lacunarity, frequency = _fbm_params(octaves, gain, lacunarity, frequency)
         check_fbm_reach(pts, (octaves, gain, lacunarity, frequency), "points")
@@ -322,9 +487,10 @@ class FbmProgram:
 
     def release(self) -> None:
         """Release the program and the lattice texture (idempotent)."""
-        if not self.context.closed:
-            for obj in self._objects:
-                obj.release()
+        if not self.context.closed and self._objects:
+            with self.context.activate("this FbmProgram's GL context"):
+                for obj in self._objects:
+                    obj.release()
         self._objects.clear()
         self.program = None
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import stat
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, fields
 from pathlib import Path
@@ -247,6 +248,9 @@ class Scene:
         _require(data["sky"], (), "scene.sky")
         sky = Sky(**_known(Sky, data["sky"], "scene.sky"))
         _require(data["noise"], ("seed",), "scene.noise")
+        unknown = sorted(set(data["noise"]) - {"seed", "size"})
+        if unknown:
+            raise ValueError(f"scene.noise has unknown field(s): {', '.join(unknown)}")
         noise = Noise(seed=data["noise"]["seed"], size=data["noise"].get("size", 64))
         _require(data["settings"], (), "scene.settings")
         settings = RenderSettings(**_known(RenderSettings, data["settings"], "scene.settings"))
@@ -275,14 +279,22 @@ class Scene:
 def load_scene(path: str | os.PathLike[str]) -> Scene:
     """Read a scene written by :meth:`Scene.save`.
 
-    Raises OSError when the file cannot be read and ValueError when it is not JSON or misses
-    fields (the message names the file and the field).
+    Raises FileNotFoundError for a missing file, OSError when it cannot be read or is not a
+    regular file (a FIFO would block), and ValueError / TypeError when it is not JSON, misses
+    fields, has unknown ones or holds a wrong type (the message names the file and the field).
     """
     path = Path(path)
     try:
-        size = path.stat().st_size if path.is_file() else 0
-    except OSError:
-        size = 0  # read_text below reports the problem
+        info = path.stat()
+    except FileNotFoundError:
+        raise FileNotFoundError(
+            f"cannot read scene file {str(path)!r}: it does not exist"
+        ) from None
+    except OSError as exc:
+        raise OSError(f"cannot read scene file {str(path)!r}: {exc.strerror or exc}") from exc
+    if not stat.S_ISREG(info.st_mode):  # a FIFO or a device would block or never end
+        raise OSError(f"scene file {str(path)!r} is not a regular file")
+    size = info.st_size
     if size > MAX_SCENE_BYTES:
         raise ValueError(f"scene file {str(path)!r} has {size} bytes, more than {MAX_SCENE_BYTES}")
     try:

@@ -9,6 +9,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli.light.grid import MAX_RESOLUTION
 from cumuli.light.ndt import DEFAULT_SOLID_ANGLE, LightParams
 
 #: Upper bounds of the settings that size shader loops and arrays (shaders/march/march.frag.glsl).
@@ -132,10 +133,16 @@ class RenderSettings:
         s(self, "gain", check.real(self.gain, "settings.gain", 0.0, lo_open=True))
         s(self, "lacunarity", check.real(self.lacunarity, "settings.lacunarity", 0.0, lo_open=True))
         s(self, "frequency", check.real(self.frequency, "settings.frequency", 0.0, lo_open=True))
+        from cumuli.noise import _fbm_params
+
+        try:  # the combinations Noise.fbm refuses (float32 overflow of the octaves)
+            _fbm_params(self.octaves, self.gain, self.lacunarity, self.frequency)
+        except ValueError as exc:
+            raise ValueError(f"settings: {exc}") from None
         s(
             self,
             "light_resolution",
-            check.integer(self.light_resolution, "settings.light_resolution", 2, 256),
+            check.integer(self.light_resolution, "settings.light_resolution", 2, MAX_RESOLUTION),
         )
         if self.light_method not in LIGHT_METHODS:
             raise ValueError(

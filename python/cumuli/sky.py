@@ -26,11 +26,16 @@ class Sun:
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "direction", check.direction(self.direction, "sun.direction"))
-        colour = check.vec3(self.colour, "sun.colour")
-        if min(colour) < 0:
-            raise ValueError(f"sun.colour must be non-negative, got {colour}")
+        colour = check.radiance(self.colour, "sun.colour")
         object.__setattr__(self, "colour", colour)
-        object.__setattr__(self, "intensity", check.real(self.intensity, "sun.intensity", 0.0))
+        intensity = check.real(self.intensity, "sun.intensity", 0.0, check.MAX_RADIANCE)
+        if max(colour) * intensity > check.MAX_RADIANCE:
+            raise ValueError(
+                f"sun.colour × sun.intensity must be at most {check.MAX_RADIANCE:g} "
+                f"(MAX_RADIANCE: beyond it the renderers overflow float32), got "
+                f"{max(colour)} × {intensity}"
+            )
+        object.__setattr__(self, "intensity", intensity)
 
     @property
     def radiance(self) -> tuple[float, float, float]:
@@ -57,10 +62,7 @@ class Sky:
 
     def __post_init__(self) -> None:
         for name in ("zenith", "horizon", "ground"):
-            colour = check.vec3(getattr(self, name), f"sky.{name}")
-            if min(colour) < 0:
-                raise ValueError(f"sky.{name} must be non-negative, got {colour}")
-            object.__setattr__(self, name, colour)
+            object.__setattr__(self, name, check.radiance(getattr(self, name), f"sky.{name}"))
         object.__setattr__(
             self, "exponent", check.real(self.exponent, "sky.exponent", 0.0, 100.0, lo_open=True)
         )
@@ -72,7 +74,7 @@ class Sky:
         object.__setattr__(
             self,
             "sun_disc_intensity",
-            check.real(self.sun_disc_intensity, "sky.sun_disc_intensity", 0.0),
+            check.real(self.sun_disc_intensity, "sky.sun_disc_intensity", 0.0, check.MAX_RADIANCE),
         )
 
     @classmethod

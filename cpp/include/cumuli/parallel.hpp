@@ -1,10 +1,20 @@
 // Deterministic parallel loops on std::thread.
 //
 // Work is split into contiguous chunks of the index range; each index is computed by exactly one
-// thread with no shared accumulation, so the output is independent of the thread count.
+// thread with no shared accumulation, so the output is independent of the thread count (and of
+// the chunking).
+//
+// Cancellation and progress: the thread that starts a loop calls an optional hook, between its
+// chunks and at most every 50 ms, with the chunks started so far and their total; the hook says
+// whether to stop (the Python bindings install one that runs Python's signal handlers, so Ctrl-C
+// interrupts a long render, and that moves a progress bar). When it says stop, no further chunk
+// is started, the running ones finish and the loop throws `Interrupted`. The core itself knows
+// no Python.
 #pragma once
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <cstddef>
 #include <exception>
 #include <mutex>
@@ -13,6 +23,50 @@
 #include <vector>
 
 namespace cumuli {
+
+// Thrown by a loop whose interrupt hook asked it to stop.
+struct Interrupted : std::exception {
+  const char* what() const noexcept override { return "interrupted"; }
+};
+
+// The hook: (chunks started, chunks in all) → true to stop. Called only on the thread that
+// started the loop.
+using InterruptHook = bool (*)(std::size_t, std::size_t);
+inline std::atomic<InterruptHook>& interrupt_hook() {
+  static std::atomic<InterruptHook> hook{nullptr};
+  return hook;
+}
+
+namespace detail {
+// True while this thread runs a chunk: a loop nested inside one does not ask the hook.
+inline thread_local bool in_chunk = false;
+
+struct ChunkScope {
+  bool saved;
+  ChunkScope() : saved(in_chunk) { in_chunk = true; }
+  ~ChunkScope() { in_chunk = saved; }
+  ChunkScope(const ChunkScope&) = delete;
+  ChunkScope& operator=(const ChunkScope&) = delete;
+};
+
+// Asks the hook at most every 50 ms.
+class InterruptPoll {
+ public:
+  InterruptPoll() : hook_(in_chunk ? nullptr : interrupt_hook().load()), last_(Clock::now()) {}
+  bool stop(std::size_t done, std::size_t total) {
+    if (hook_ == nullptr) return false;
+    const auto now = Clock::now();
+    if (now - last_ < std::chrono::milliseconds(50)) return false;
+    last_ = now;
+    return hook_(done, total);
+  }
+
+ private:
+  using Clock = std::chrono::steady_clock;
+  InterruptHook hook_;
+  Clock::time_point last_;
+};
+}  // namespace detail
 
 // Threads to use for `requested` (0 = all cores), never more than there are items.
 inline unsigned resolve_threads(int requested, std::size_t items) {
@@ -26,28 +80,51 @@ inline unsigned resolve_threads(int requested, std::size_t items) {
 template <class Fn>
 void parallel_chunks(std::size_t count, int threads, Fn&& fn) {
   const unsigned n = resolve_threads(threads, count);
+  detail::InterruptPoll poll;  // this (the calling) thread's
+  // Several chunks per thread, handed out in order, keeps threads busy when items vary in cost
+  // and lets the calling thread ask the interrupt hook often enough.
+  const std::size_t chunks = std::min<std::size_t>(count, std::size_t{n} * 32);
   if (n <= 1) {
-    fn(std::size_t{0}, count);
+    if (chunks == 0) {
+      fn(std::size_t{0}, count);
+      return;
+    }
+    for (std::size_t c = 0; c < chunks; ++c) {
+      if (poll.stop(c, chunks)) throw Interrupted{};
+      detail::ChunkScope scope;
+      fn(count * c / chunks, count * (c + 1) / chunks);
+    }
     return;
   }
-  // Several chunks per thread, handed out in order, keeps threads busy when items vary in cost.
-  const std::size_t chunks = std::min<std::size_t>(count, std::size_t{n} * 8);
   std::size_t next = 0;
   std::mutex lock;
   std::exception_ptr error;
-  auto worker = [&] {
+  auto worker = [&](bool caller) {
+    detail::ChunkScope scope;
     for (;;) {
       std::size_t c;
+      std::size_t started;
       {
         std::lock_guard<std::mutex> guard(lock);
         if (next >= chunks || error) return;
         c = next++;
+        started = next;
       }
       try {
         fn(count * c / chunks, count * (c + 1) / chunks);
       } catch (...) {
         std::lock_guard<std::mutex> guard(lock);
         if (!error) error = std::current_exception();
+      }
+      if (caller) {
+        detail::in_chunk = false;  // the poll runs outside any chunk
+        const bool stop = poll.stop(started, chunks);
+        detail::in_chunk = true;
+        if (stop) {
+          std::lock_guard<std::mutex> guard(lock);
+          if (!error) error = std::make_exception_ptr(Interrupted{});
+          return;
+        }
       }
     }
   };
@@ -58,12 +135,12 @@ void parallel_chunks(std::size_t count, int threads, Fn&& fn) {
     // others run: their std::thread destructors would call std::terminate. The threads already
     // started share the chunks instead; the chunking, hence the result, is unchanged.
     try {
-      pool.emplace_back(worker);
+      pool.emplace_back(worker, false);
     } catch (const std::system_error&) {
       break;
     }
   }
-  worker();
+  worker(true);
   for (auto& t : pool) t.join();
   if (error) std::rethrow_exception(error);
 }

@@ -39,7 +39,7 @@ def render_task(
     height: int,
     backend: str,
     path: str | None,
-    alpha: bool,
+    alpha: str,
     threads: int = 0,
 ) -> np.ndarray | str:
     """One frame, as a worker runs it: rebuild the scene from its JSON, render, write or return.
@@ -57,11 +57,11 @@ def render_task(
         img = render_cpu(built, cam, width, height, threads=threads)
     else:
         img = render(built, cam, width=width, height=height, backend=backend)
-    if not alpha:
+    if path is not None:
+        return str(write_image(path, img, alpha=alpha))
+    if alpha == "opaque":  # what write_image would save
         img[..., 3] = 1.0
-    if path is None:
-        return img
-    return str(write_image(path, img))
+    return img
 
 
 def sweep_task(
@@ -72,7 +72,7 @@ def sweep_task(
     height: int,
     backend: str,
     path: str | None,
-    alpha: bool,
+    alpha: str,
 ) -> np.ndarray | str:
     """One point of a sweep: ``scene_fn(**params)`` built where the task runs, then rendered."""
     scene = scene_fn(**params)
@@ -131,7 +131,7 @@ def sweep(
     out_dir: str | os.PathLike[str] | None = None,
     pattern: str = "sweep_{:04d}.png",
     progress: bool = True,
-    alpha: bool = False,
+    alpha: str = "opaque",
 ) -> list[np.ndarray] | list[Path]:
     """Render ``scene_fn(**p)`` for every ``p`` in ``params``: a sweep over anything a scene
     depends on (sun, density, g, seeds...).
@@ -139,10 +139,12 @@ def sweep(
     ``scene_fn`` runs where the task runs (on the workers with a ``client``), so building the
     scene is distributed too; with a client it must be picklable by cloudpickle (a function, a
     lambda or a partial). ``camera`` is a `Camera`, a function of the same parameters, or None
-    (each scene's default camera). Returns the images (opaque unless ``alpha``), or with
-    ``out_dir`` the paths of the files written there (``pattern`` numbered by sweep index).
+    (each scene's default camera). Returns the images (opaque unless ``alpha="keep"``, as
+    :func:`cumuli.write_image` saves them), or with ``out_dir`` the paths of the files written
+    there (``pattern`` numbered by sweep index).
     """
     from cumuli import _validate as check
+    from cumuli.io.images import ALPHA_MODES
 
     if not callable(scene_fn):
         raise TypeError(f"scene_fn must be callable, got {type(scene_fn).__name__}")
@@ -155,6 +157,8 @@ def sweep(
         raise TypeError("camera must be a cumuli.Camera, a function of the parameters, or None")
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
+    if alpha not in ALPHA_MODES:
+        raise ValueError(f"alpha must be one of {ALPHA_MODES}, got {alpha!r}")
     width = check.integer(width, "width", 1, 1 << 14)
     height = check.integer(height, "height", 1, 1 << 14)
     paths = _paths(out_dir, pattern, len(params))

@@ -13,9 +13,14 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, _progress
 from cumuli import _validate as check
+from cumuli.model import volume as _volume
 from cumuli.model.volume import AnimationFrame, VolumeDatabase, _float_volumes
+
+#: Most frames :meth:`EndlessAnimation.frames` returns in one list (each is a Python object;
+#: iterate the animation for longer walks).
+MAX_FRAME_LIST = 1 << 18
 
 
 def similarity_matrix(volumes: Any, threads: int = 0) -> np.ndarray:
@@ -26,6 +31,7 @@ def similarity_matrix(volumes: Any, threads: int = 0) -> np.ndarray:
         volumes = np.asarray(volumes)
     if volumes.ndim < 2:
         raise ValueError(f"volumes must have shape (N, ...), got {volumes.shape}")
+    _volume.check_similarity_size(volumes.shape[0])
     arr = _float_volumes(volumes, "volumes", volumes.ndim)
     return _core.similarity_matrix(arr, check.threads(threads))
 
@@ -119,6 +125,7 @@ class EndlessAnimation:
             raise TypeError(
                 f"database must be a cumuli.VolumeDatabase, got {type(database).__name__}"
             )
+        _volume.check_similarity_size(database.n, "database")
         self.database = database
         d = database.similarity()
         self.sigma = (
@@ -154,6 +161,9 @@ class EndlessAnimation:
 
     def density(self, frame: AnimationFrame, threads: int = 0) -> np.ndarray:
         """The frame's density volume ``(D, H, W)`` float32 (a copy when not blended)."""
+        if not isinstance(frame, AnimationFrame):
+            raise TypeError(f"frame must be a cumuli.AnimationFrame, got {type(frame).__name__}")
+        frame.check_in(self.database.n)
         vols = self.database.volumes
         if frame.weight == 1.0:
             return vols[frame.source].copy()
@@ -173,14 +183,24 @@ class EndlessAnimation:
             self.density(frame, threads),
         )
 
-    def frames(self, n: int, densities: bool = True, threads: int = 0) -> list[AnimationFrame]:
-        """The next ``n`` frames (with densities unless ``densities=False``)."""
-        n = check.integer(n, "n", 0, 1 << 24)
+    def frames(
+        self, n: int, densities: bool = True, threads: int = 0, progress: bool | None = None
+    ) -> list[AnimationFrame]:
+        """The next ``n`` frames (with densities unless ``densities=False``): at most
+        :data:`MAX_FRAME_LIST` frames, and with densities at most ``MAX_POINTS`` voxels in all
+        (checked before walking; iterate the animation for longer walks)."""
+        if isinstance(n, (int, np.integer)) and not isinstance(n, bool) and n > MAX_FRAME_LIST:
+            raise ValueError(
+                f"n={n} frames in one list is more than MAX_FRAME_LIST={MAX_FRAME_LIST}; "
+                "iterate the animation (for frame in anim) for longer walks"
+            )
+        n = check.integer(n, "n", 0, MAX_FRAME_LIST)
         if densities:
             shape = self.database.shape
             if n * shape[0] * shape[1] * shape[2] > check.MAX_POINTS:
                 raise ValueError(f"n={n} frames of {shape} exceed {check.MAX_POINTS} voxels")
-            return [self.next(threads) for _ in range(n)]
+            steps = _progress.bar(range(n), desc="frames", unit="frame", progress=progress)
+            return [self.next(threads) for _ in steps]
         return [self.step() for _ in range(n)]
 
     def __iter__(self) -> EndlessAnimation:

@@ -40,6 +40,7 @@ def fly_towards(
     a = np.asarray(check.vec3(start, "start"), dtype=np.float64)
     b = np.asarray(check.vec3(target, "target"), dtype=np.float64)
     stop = check.real(stop, "stop")
+    up = check.direction(up, "up")
     dist = float(np.linalg.norm(b - a))
     if dist < 1e-9:
         raise ValueError("start and target must differ")
@@ -92,25 +93,33 @@ def render_frames(
     backend: str = "gl",
     pattern: str = "frame_{:04d}.png",
     progress: bool = True,
-    alpha: bool = False,
+    alpha: str = "opaque",
     client: Any = None,
 ) -> list[Path]:
     """Render ``scene`` from each camera and write numbered images into ``out_dir``.
 
     ``pattern`` is a ``str.format`` pattern taking the frame number; its extension picks the
     format (``.png`` sRGB8 or ``.exr`` float32). ``out_dir`` is created if missing. A tqdm bar
-    shows progress unless ``progress=False``. Frames are opaque (the render is already
-    composited over the sky) unless ``alpha=True`` keeps the clouds' coverage ``1 − T`` as alpha.
-    Returns the paths written, in order. With a ``dask.distributed`` ``client`` every frame is
-    a task on the cluster (see :mod:`cumuli.anim.cluster`; ``out_dir`` must be a folder the
-    workers see); the images are the same.
+    shows progress unless ``progress=False``. ``alpha`` is :func:`cumuli.write_image`'s: frames
+    are opaque (``"opaque"``: the render is already composited over the sky) unless
+    ``alpha="keep"`` keeps the clouds' coverage ``1 − T`` (``True`` / ``False`` also mean keep /
+    opaque). Returns the paths written, in order. With a ``dask.distributed`` ``client`` every
+    frame is a task on the cluster (see :mod:`cumuli.anim.cluster`; ``out_dir`` must be a folder
+    the workers see); the images are the same.
     """
-    from cumuli.io.images import write_image
+    from cumuli.io.images import ALPHA_MODES, FORMATS, write_image
     from cumuli.rendering.compositor import render
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
-    cams = list(cameras)
+    if isinstance(cameras, Camera):
+        raise TypeError("cameras must be a sequence of cumuli.Camera; wrap one camera in a list")
+    try:
+        cams = list(cameras)
+    except TypeError:
+        raise TypeError(
+            f"cameras must be a sequence of cumuli.Camera, got {type(cameras).__name__}"
+        ) from None
     if not cams:
         raise ValueError("cameras must not be empty")
     if len(cams) > MAX_FRAMES:
@@ -118,6 +127,10 @@ def render_frames(
     for k, cam in enumerate(cams):
         if not isinstance(cam, Camera):
             raise TypeError(f"cameras[{k}] must be a cumuli.Camera, got {type(cam).__name__}")
+    if isinstance(alpha, (bool, np.bool_)):
+        alpha = "keep" if alpha else "opaque"
+    if alpha not in ALPHA_MODES:
+        raise ValueError(f"alpha must be one of {ALPHA_MODES}, got {alpha!r}")
     if not isinstance(pattern, str):
         raise TypeError(f"pattern must be a str, got {type(pattern).__name__}")
     try:
@@ -126,6 +139,11 @@ def render_frames(
         raise ValueError(f"pattern {pattern!r} must take one frame number: {exc}") from None
     if len(set(names)) != len(names) or any(os.sep in n for n in names):
         raise ValueError(f"pattern {pattern!r} must give a distinct file name per frame")
+    if Path(names[0]).suffix.lower() not in FORMATS:  # before the first frame is rendered
+        raise ValueError(
+            f"pattern {pattern!r} gives {names[0]!r}, whose extension is not one of "
+            f"{sorted(FORMATS)}"
+        )
     folder = Path(out_dir)
     try:
         folder.mkdir(parents=True, exist_ok=True)
@@ -150,7 +168,5 @@ def render_frames(
         list(zip(cams, names, strict=True)), desc="frames", unit="frame", disable=not progress
     ):
         img = render(scene, cam, width=width, height=height, backend=backend)
-        if not alpha:
-            img[..., 3] = 1.0
-        paths.append(write_image(folder / name, img))
+        paths.append(write_image(folder / name, img, alpha=alpha))
     return paths

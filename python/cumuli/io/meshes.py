@@ -10,8 +10,10 @@ notebooks need no downloaded models.
 
 from __future__ import annotations
 
+import codecs
 import os
 import re
+import struct
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import Any
@@ -234,6 +236,41 @@ def _check_obj_faces(path: Path) -> None:
         _scan_obj_faces(path.name, fh)
 
 
+def _check_kind(path: Path, ext: str, size: int) -> None:
+    """Refuse what is not a mesh of its extension before trimesh reads it (trimesh reports a
+    binary .obj / .off / .stl as "No module named charset_normalizer", a text .off as an
+    unpacking error)."""
+    if ext == ".stl":
+        with open(path, "rb") as fh:
+            head = fh.read(84)
+        if len(head) == 84 and 84 + 50 * struct.unpack("<I", head[80:84])[0] == size:
+            return  # a binary STL: header, count and 50 bytes per triangle
+        if not head.lstrip().lower().startswith(b"solid"):
+            raise ValueError(
+                f"{path.name}: not a mesh (neither a binary STL of consistent size nor an ASCII "
+                "STL starting with 'solid')"
+            )
+    if ext in (".obj", ".off", ".stl"):  # text formats (and ASCII STL): UTF-8 text
+        decoder = codecs.getincrementaldecoder("utf-8")()
+        try:
+            with open(path, "rb") as fh:
+                while block := fh.read(1 << 20):
+                    if b"\0" in block:
+                        raise UnicodeDecodeError("utf-8", block, 0, 1, "NUL byte")
+                    decoder.decode(block)
+            decoder.decode(b"", final=True)
+        except UnicodeDecodeError:
+            raise ValueError(
+                f"{path.name}: not a mesh (a {ext} file is text, and this one is not UTF-8 text)"
+            ) from None
+    if ext == ".off":
+        with open(path, "rb") as fh:
+            words = [line.split(b"#", 1)[0].strip() for line in fh.readlines(4096)]
+        first = next((w for w in words if w), b"")
+        if not first.upper().endswith(b"OFF"):  # OFF, COFF, NOFF, STOFF...
+            raise ValueError(f"{path.name}: not a mesh (an OFF file starts with 'OFF')")
+
+
 def load_mesh(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     """Read a triangle mesh file; returns ``(vertices (V, 3) float32, faces (F, 3) int64)``.
 
@@ -257,6 +294,7 @@ def load_mesh(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
         raise ValueError(f"{p.name}: empty file")
     if size > MAX_MESH_BYTES:
         raise ValueError(f"{p.name}: {size} bytes, more than the limit {MAX_MESH_BYTES}")
+    _check_kind(p, ext, size)
     if ext == ".ply":
         _check_ply_header(p, size)
     elif ext == ".obj":
@@ -264,7 +302,9 @@ def load_mesh(path: str | os.PathLike[str]) -> tuple[np.ndarray, np.ndarray]:
     try:
         mesh = trimesh.load(str(p), force="mesh", process=False)
     except Exception as exc:  # trimesh raises many types for corrupt files
-        raise ValueError(f"{p.name}: cannot read mesh ({type(exc).__name__}: {exc})") from None
+        raise ValueError(
+            f"{p.name}: not a mesh, or a corrupt one (trimesh: {type(exc).__name__}: {exc})"
+        ) from None
     faces = getattr(mesh, "faces", None)
     vertices = getattr(mesh, "vertices", None)
     if faces is None or vertices is None or len(faces) == 0:

@@ -13,7 +13,9 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import struct
 import zipfile
+import zlib
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
@@ -181,9 +183,14 @@ class LightGrid(np.ndarray):
         arr = np.array(arr, dtype=np.float32, order="C")  # a private copy
         if not np.isfinite(arr).all():
             raise ValueError("light grid values contain NaN or infinite values")
+        if arr.size and float(np.abs(arr).max()) > check.MAX_RADIANCE:
+            raise ValueError(
+                f"light grid values must be within ±{check.MAX_RADIANCE:g} (MAX_RADIANCE: times "
+                "the sun's radiance they would overflow float32)"
+            )
         bad_box = f"light grid box must be (lo, hi), two finite 3-vectors with hi > lo, got {box!r}"
         try:
-            lo, hi = (check.vec3(v, "box") for v in box)
+            lo, hi = (check.vec3(v, "box", bound=check.MAX_COORD) for v in box)
         except (TypeError, ValueError):
             raise ValueError(bad_box) from None
         if len(box) != 2 or not all(h > low for low, h in zip(lo, hi, strict=True)):
@@ -255,7 +262,7 @@ def load_light_grid(path: str | os.PathLike[str]) -> LightGrid:
     if not path.exists():
         raise FileNotFoundError(f"no such light-grid file: {str(path)!r}")
     if not path.is_file():
-        raise OSError(f"not a file: {str(path)!r}")
+        raise OSError(f"not a regular file: {str(path)!r}")
     try:
         with zipfile.ZipFile(path) as zf:
             arrays = {}
@@ -288,5 +295,9 @@ def load_light_grid(path: str | os.PathLike[str]) -> LightGrid:
             )
         return LightGrid(arrays["values"], meta["box"], meta.get("sun"), record)
     except (KeyError, TypeError, ValueError, zipfile.BadZipFile, EOFError, UnicodeDecodeError,
-            json.JSONDecodeError) as exc:  # fmt: skip
-        raise ValueError(f"{path.name}: not a readable light-grid file ({exc})") from None
+            json.JSONDecodeError, NotImplementedError, RuntimeError, zlib.error,
+            struct.error) as exc:  # fmt: skip
+        # zipfile raises NotImplementedError (unknown compression) and RuntimeError (encrypted)
+        raise ValueError(
+            f"{path.name}: not a readable light-grid file ({type(exc).__name__}: {exc})"
+        ) from None

@@ -30,7 +30,7 @@ from typing import Any, Literal, overload
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, _progress
 from cumuli import _validate as check
 from cumuli.light.grid import (
     DEFAULT_EXTINCTION,
@@ -123,6 +123,7 @@ def light_grid(
     threads: int = ...,
     *,
     params: LightParams | None = ...,
+    progress: bool | None = ...,
 ) -> LightGrid: ...
 
 
@@ -145,6 +146,7 @@ def light_grid(
     return_stats: Literal[True],
     threads: int = ...,
     params: LightParams | None = ...,
+    progress: bool | None = ...,
 ) -> tuple[LightGrid, LightStats]: ...
 
 
@@ -166,6 +168,7 @@ def light_grid(
     threads: int = 0,
     *,
     params: LightParams | None = None,
+    progress: bool | None = None,
 ) -> LightGrid | tuple[LightGrid, LightStats]:
     """Precompute the light grid ``L(v)`` of a cloud (first pass of §3.5, Algorithm 2).
 
@@ -201,6 +204,9 @@ def light_grid(
         Threads for the march (0 = all cores). The grid does not depend on it.
     params:
         A :class:`LightParams` (its ``kappa``, when set, overrides the cloud's κ).
+    progress:
+        A progress bar when the march takes more than a few seconds (``None``: unless
+        ``CUMULI_PROGRESS=0``; ``False``: never). See README, "Progress".
 
     Returns
     -------
@@ -229,22 +235,24 @@ def light_grid(
         target = cloud.with_model("spheroid", kappa=params.kappa)
     p = params
     constant = -1.0 if p.density_override is None else p.density_override
-    values, samples, lo, hi, total, seconds = _core.light_grid(
-        *target.core_args(),
-        noise._core if noise is not None else None,
-        sun_dir,
-        p.resolution,
-        p.method,
-        p.step,
-        p.extinction,
-        p.solid_angle,
-        p.octaves,
-        p.gain,
-        p.lacunarity,
-        p.frequency,
-        constant,
-        nthreads,
-    )
+    with _progress.core("light grid", progress):
+        out = _core.light_grid(
+            *target.core_args(),
+            noise._core if noise is not None else None,
+            sun_dir,
+            p.resolution,
+            p.method,
+            p.step,
+            p.extinction,
+            p.solid_angle,
+            p.octaves,
+            p.gain,
+            p.lacunarity,
+            p.frequency,
+            constant,
+            nthreads,
+        )
+    values, samples, lo, hi, total, seconds = out
     grid = LightGrid(values, (tuple(lo), tuple(hi)), sun_dir, LightRecord.of(cloud, noise, p))
     if return_stats:
         return grid, LightStats(p.method, int(total), samples, float(seconds))

@@ -24,6 +24,7 @@ from typing import Any
 
 import numpy as np
 
+from cumuli import _progress
 from cumuli import _validate as check
 from cumuli.light.ndt import LightGrid, LightRecord, light_grid
 from cumuli.light.volume import VolumeLighting
@@ -157,12 +158,15 @@ def prepare_light(
     scene: Scene | LitScene,
     lights: Mapping[int, Any] | Sequence[Any] | None = None,
     threads: int = 0,
+    progress: bool | None = None,
 ) -> LitScene:
     """The light of every drawable of ``scene`` for its sun and sky: a :class:`LitScene`.
 
     ``lights`` gives light the caller already has, by cloud index (a mapping) or aligned with
     ``scene.clouds`` (a sequence, ``None`` where the light is to be computed). A `LitScene`
     passed in is checked again (its lights count as given). Nothing is stored on the clouds.
+    A progress bar shows when the light passes take more than a few seconds (``progress``:
+    ``None`` unless ``CUMULI_PROGRESS=0``, ``False`` never).
     """
     if isinstance(scene, LitScene):
         if lights is None:
@@ -186,11 +190,16 @@ def prepare_light(
         given = list(lights)
     out = []
     for k, drawable in enumerate(scene.clouds):
-        light_pass = LIGHT_PASSES.get(drawable.kind)
-        if light_pass is None:
+        if LIGHT_PASSES.get(drawable.kind) is None:
             raise TypeError(f"scene.clouds[{k}]: no light pass for kind {drawable.kind!r}")
+    steps = _progress.bar(
+        scene.clouds, desc="light", total=n, unit="cloud", progress=progress if n > 1 else False
+    )
+    for k, drawable in enumerate(steps):
+        light_pass = LIGHT_PASSES[drawable.kind]
         try:
-            out.append(light_pass(drawable, scene, given[k], threads))
+            with _progress.core(f"light of cloud {k}", progress):
+                out.append(light_pass(drawable, scene, given[k], threads))
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
     return LitScene(scene, tuple(out))

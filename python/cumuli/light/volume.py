@@ -15,7 +15,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, _progress
 from cumuli import _validate as check
 from cumuli.model.volume import AnimationFrame, VolumeDatabase, _box, _float_volumes
 from cumuli.sky import Sun, as_sky, sky_args
@@ -59,9 +59,7 @@ class VolumeLighting:
     the voxels one slice closer (see ``volume_light.hpp``). ``method="march"`` marches every
     voxel's ray (the brute-force reference, tens of times slower). Against ``"march"``, the swept
     depths of the README's cumulus database differ by a few per cent on average (the benchmark
-    states the figures) and the sky visibility error quoted above is unchanged. A tqdm bar shows
-    the precompute's progress over the volumes (``progress=False`` hides it; it only appears for
-    precomputes longer than half a second).
+    states the figures) and the sky visibility error quoted above is unchanged.
 
     Multiple isotropic scattering (§3.2, eq. 8) goes through ``ms_points`` sample points spread
     uniformly over the box (seeded): the optical depth from every voxel to every point is
@@ -71,6 +69,9 @@ class VolumeLighting:
     starting from ``E_1 = sun·τ_sun + E_sky`` (the sun taken as isotropic beyond the first
     bounce). Unlike the paper the K terms are summed directly rather than through clustered cuts
     (K is small here); ``ms_points=0`` keeps single scattering only.
+
+    The precompute runs volume by volume; when it takes more than a few seconds a progress bar
+    shows (``progress=False``: none; ``None``: unless ``CUMULI_PROGRESS=0``).
     """
 
     def __init__(
@@ -91,7 +92,7 @@ class VolumeLighting:
         seed: int = 0,
         threads: int = 0,
         method: str = "sweep",
-        progress: bool = True,
+        progress: bool | None = None,
     ) -> None:
         if not isinstance(database, VolumeDatabase):
             raise TypeError(
@@ -117,8 +118,6 @@ class VolumeLighting:
         self.albedo = check.real(albedo, "albedo", 0.0, 1.0)
         self.seed = check.integer(seed, "seed", 0, 2**64 - 1)
         self.method = _depth_method(method)
-        if not isinstance(progress, bool):
-            raise TypeError(f"progress must be a bool, got {type(progress).__name__}")
         nc = self.sh_order**2
         if database.volumes.size * nc > check.MAX_POINTS:
             raise ValueError(f"the SH optical depths would exceed {check.MAX_POINTS} values")
@@ -129,36 +128,11 @@ class VolumeLighting:
             )
         lo, hi = database.box
         vols = database.volumes
-        self.sun_depth = _core.sun_optical_depth(
-            vols, lo, hi, sun.direction, self.step, threads, self.method
-        )
         self.points = np.zeros((0, 3), np.float32)
         self.point_depth: np.ndarray | None = None
         if self.ms_points > 0:
             self.points = _core.volume_sample_points(lo, hi, self.ms_points, self.seed)
-            self.point_depth = np.empty((*vols.shape, self.ms_points), np.float32)
-        # Sky and point depths volume by volume (the long steps), with a progress bar.
-        self.sky_depth = np.empty((*vols.shape, nc), np.float32)
-        from tqdm.auto import tqdm
-
-        for i in tqdm(
-            range(database.n),
-            desc="VolumeLighting precompute",
-            unit="volume",
-            disable=not progress,
-            delay=0.5,
-            leave=False,
-        ):
-            vol = vols[i : i + 1]
-            self.sky_depth[i] = _core.sh_optical_depth(
-                vol, lo, hi, self.sh_order, self.sh_samples, self.step, threads, self.method
-            )[0]
-            if self.point_depth is not None:
-                self.point_depth[i] = _core.point_optical_depth(
-                    vol, lo, hi, self.points, self.step, threads, self.method
-                )[0]
-        if self.point_depth is not None:
-            self.point_depth.setflags(write=False)
+        self._precompute(vols, lo, hi, threads, progress)
         self.sky_sh = _core.sky_sh(sky_args(self.sky), self.sh_order, self.sh_samples)
         if shexp == "fit":
             flat = self.sky_depth.reshape(-1, nc)
@@ -172,6 +146,8 @@ class VolumeLighting:
             self.shexp_a = np.ones(1, np.float32)
             self.shexp_b = np.ones(1, np.float32)
             self.shexp_max_norm = 0.0
+        if self.point_depth is not None:
+            self.point_depth.setflags(write=False)
         for arr in (
             self.sun_depth,
             self.sky_depth,
@@ -181,6 +157,30 @@ class VolumeLighting:
             self.points,
         ):
             arr.setflags(write=False)
+
+    def _precompute(
+        self, vols: np.ndarray, lo: Any, hi: Any, threads: int, progress: bool | None
+    ) -> None:
+        """The optical depths of every volume, one volume at a time (the same values as all at
+        once: voxels are independent), with a progress bar for long databases."""
+        n, d, h, w = vols.shape
+        self.sun_depth = np.empty((n, d, h, w), np.float32)
+        self.sky_depth = np.empty((n, d, h, w, self.sh_order**2), np.float32)
+        if self.ms_points > 0:
+            self.point_depth = np.empty((n, d, h, w, self.ms_points), np.float32)
+        steps = _progress.bar(range(n), desc="volume light", unit="volume", progress=progress)
+        for i in steps:
+            one = vols[i : i + 1]
+            sun = self.sun.direction
+            m = self.method
+            self.sun_depth[i] = _core.sun_optical_depth(one, lo, hi, sun, self.step, threads, m)[0]
+            self.sky_depth[i] = _core.sh_optical_depth(
+                one, lo, hi, self.sh_order, self.sh_samples, self.step, threads, m
+            )[0]
+            if self.point_depth is not None:
+                self.point_depth[i] = _core.point_optical_depth(
+                    one, lo, hi, self.points, self.step, threads, m
+                )[0]
 
     def optical_depth(
         self, frame: AnimationFrame | int, threads: int = 0
@@ -260,8 +260,7 @@ class VolumeLighting:
     def _frame(self, frame: AnimationFrame | int) -> tuple[int, int, float]:
         n = self.database.n
         if isinstance(frame, AnimationFrame):
-            if not (0 <= frame.source < n and 0 <= frame.target < n):
-                raise ValueError(f"frame refers to volumes outside the database (n={n})")
+            frame.check_in(n)
             return frame.source, frame.target, float(frame.weight)
         i = check.integer(frame, "frame", 0, n - 1)
         return i, i, 1.0

@@ -19,7 +19,9 @@ import dataclasses
 import json
 import math
 import os
+import struct
 import zipfile
+import zlib
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -410,7 +412,12 @@ def merge(clouds: Iterable[Cloud]) -> Cloud:
     All clouds must share the density model and its parameters (κ, φ): one cloud has one density
     model. ``params`` records the parts' params; ``stats`` their stats.
     """
-    parts = list(clouds)
+    try:
+        parts = list(clouds)
+    except TypeError:
+        raise TypeError(
+            f"clouds must be an iterable of Clouds, got {type(clouds).__name__}"
+        ) from None
     if not parts:
         raise ValueError("clouds must not be empty")
     for i, c in enumerate(parts):
@@ -467,13 +474,19 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
         else:
             meta, arrays = _read_json(path)
     except (
+        ValueError,  # incl. JSON and UTF-8 errors, and numpy's bad .npy magic (no file name)
         zipfile.BadZipFile,
-        json.JSONDecodeError,
-        UnicodeDecodeError,
         EOFError,
         RecursionError,  # absurdly nested JSON
+        NotImplementedError,  # zipfile: an unknown compression method
+        RuntimeError,  # zipfile: an encrypted member
+        zlib.error,
+        struct.error,
     ) as exc:
-        raise ValueError(f"{path.name}: not a readable cumuli cloud file ({exc})") from None
+        if isinstance(exc, ValueError) and str(exc).startswith(f"{path.name}:"):
+            raise
+        why = f"{type(exc).__name__}: {exc}"
+        raise ValueError(f"{path.name}: not a readable cumuli cloud file ({why})") from None
     if not isinstance(meta, dict) or meta.get("format") != FILE_FORMAT:
         raise ValueError(f"{path.name}: not a cumuli cloud file (format tag missing)")
     if meta.get("version") not in READABLE_VERSIONS:

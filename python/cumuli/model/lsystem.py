@@ -48,7 +48,38 @@ def _lsystem_grammar(axiom: Any, rules: Any, iterations: Any) -> tuple[str, dict
 def lsystem_length(axiom: str, rules: dict[str, str], iterations: int) -> int:
     """Number of symbols `lsystem_expand` would produce, computed without expanding."""
     axiom, rules, iterations = _lsystem_grammar(axiom, rules, iterations)
-    return int(_core.lsystem_length(axiom, rules, iterations)[0])
+    length = int(_core.lsystem_length(axiom, rules, iterations)[0])
+    if length < 2**64 - 1:
+        return length
+    return _exact_length(axiom, rules, iterations)  # the core saturates at 2⁶⁴ − 1
+
+
+def _exact_length(axiom: str, rules: dict[str, str], iterations: int) -> int:
+    """The length with Python integers: the symbol counts ``v`` after ``n`` rewrites are
+    ``v₀ · Mⁿ`` (``M[a][b]`` = occurrences of ``b`` in the rewrite of ``a``), by squaring."""
+    symbols = sorted(set(axiom) | set(rules) | set("".join(rules.values())))
+    at = {c: i for i, c in enumerate(symbols)}
+    k = len(symbols)
+    m = [[0] * k for _ in range(k)]
+    for c in symbols:
+        for d in rules.get(c, c):
+            m[at[c]][at[d]] += 1
+    v = [0] * k
+    for c in axiom:
+        v[at[c]] += 1
+
+    def times(a: list[list[int]], b: list[list[int]]) -> list[list[int]]:
+        cols = list(zip(*b, strict=True))
+        return [[sum(x * y for x, y in zip(row, col, strict=True)) for col in cols] for row in a]
+
+    n = iterations
+    while n:
+        if n & 1:
+            v = times([v], m)[0]
+        n >>= 1
+        if n:
+            m = times(m, m)
+    return sum(v)
 
 
 def lsystem_expand(

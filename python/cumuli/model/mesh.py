@@ -50,6 +50,7 @@ def ellipsoids_from_mesh(
     from cumuli.io.meshes import _mesh_arrays
 
     verts, f = _mesh_arrays(vertices, faces)
+    rotate = check.flag(rotate, "rotate")
     if f.shape[0] > MAX_PRIMITIVES:
         raise ValueError(f"faces: {f.shape[0]} faces, more than a cloud holds ({MAX_PRIMITIVES})")
     scale = check.real(scale, "scale", 0.0, 2.0, lo_open=True)
@@ -86,6 +87,7 @@ def mesh_cloud(
     """
     from cumuli.io.meshes import _mesh_arrays, load_mesh
 
+    rotate = check.flag(rotate, "rotate")
     if isinstance(source, (str, os.PathLike)):
         verts, f = load_mesh(source)
         origin: Any = os.fspath(source)

@@ -15,7 +15,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, _progress
 from cumuli import _validate as check
 from cumuli.io.jsonable import array_from_json, array_to_json, jsonable
 from cumuli.model.cloud import Cloud
@@ -26,13 +26,26 @@ from cumuli.sky import Sky, Sun
 MAX_EDGE = 2048
 #: Most volumes a database may hold.
 MAX_VOLUMES = 1 << 16
+#: Most volumes whose (N, N) float64 similarity matrix is computed (512 MiB at the limit; the
+#: endless walk holds a few matrices of that size).
+MAX_SIMILARITY_VOLUMES = 1 << 13
+
+
+def check_similarity_size(n: int, name: str = "volumes") -> None:
+    """Refuse an (N, N) similarity matrix beyond :data:`MAX_SIMILARITY_VOLUMES` before it is
+    allocated."""
+    if n > MAX_SIMILARITY_VOLUMES:
+        raise ValueError(
+            f"{name}: the (N, N) similarity of {n} volumes would need {8 * n * n / 2**30:.1f} "
+            f"GiB; at most {MAX_SIMILARITY_VOLUMES} volumes (MAX_SIMILARITY_VOLUMES)"
+        )
 
 
 def _box(
     box_min: Any, box_max: Any
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-    lo = check.vec3(box_min, "box_min")
-    hi = check.vec3(box_max, "box_max")
+    lo = check.vec3(box_min, "box_min", bound=check.MAX_COORD)
+    hi = check.vec3(box_max, "box_max", bound=check.MAX_COORD)
     if not all(h > lo_ for lo_, h in zip(lo, hi, strict=True)):
         raise ValueError(f"box_max must be greater than box_min on every axis, got {lo}, {hi}")
     return lo, hi
@@ -66,9 +79,10 @@ def _float_volumes(value: Any, name: str, ndim: int) -> np.ndarray:
         raise ValueError(f"{name}: every edge must be <= {MAX_EDGE}, got shape {value.shape}")
     if int(np.prod(value.shape, dtype=np.int64)) > check.MAX_POINTS:
         raise ValueError(f"{name} has more than {check.MAX_POINTS} values, got shape {value.shape}")
-    arr = np.ascontiguousarray(value, dtype=np.float32)
+    with np.errstate(over="ignore"):  # beyond float32: inf, refused just below
+        arr = np.ascontiguousarray(value, dtype=np.float32)
     if not np.isfinite(arr).all():
-        raise ValueError(f"{name} contains NaN or infinite values")
+        raise ValueError(f"{name} contains NaN or infinite values (or values beyond float32)")
     return arr
 
 
@@ -116,10 +130,13 @@ class VolumeDatabase:
     def box(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
         return (self.box_min, self.box_max)
 
-    def similarity(self, threads: int = 0) -> np.ndarray:
-        """``D_kl = Σₙ (ρ_k − ρ_l)²``: the ``(N, N)`` float64 matrix (C++, cached, read-only)."""
+    def similarity(self, threads: int = 0, progress: bool | None = None) -> np.ndarray:
+        """``D_kl = Σₙ (ρ_k − ρ_l)²``: the ``(N, N)`` float64 matrix (C++, cached, read-only;
+        at most :data:`MAX_SIMILARITY_VOLUMES` volumes, checked before allocating)."""
         if self._similarity is None:
-            d = _core.similarity_matrix(self._volumes, check.threads(threads))
+            check_similarity_size(self.n)
+            with _progress.core("similarity", progress):
+                d = _core.similarity_matrix(self._volumes, check.threads(threads))
             d.setflags(write=False)
             self._similarity = d
         return self._similarity
@@ -138,6 +155,24 @@ class AnimationFrame:
     weight: float
     crossfade: bool
     density: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        s = object.__setattr__
+        s(self, "index", check.integer(self.index, "frame.index", 0))
+        s(self, "source", check.integer(self.source, "frame.source", 0))
+        s(self, "target", check.integer(self.target, "frame.target", 0))
+        # A weight outside [0, 1] extrapolates beyond both volumes (densities above the
+        # database's maximum, or negative); NaN would make NaN light.
+        s(self, "weight", check.real(self.weight, "frame.weight", 0.0, 1.0))
+        s(self, "crossfade", check.flag(self.crossfade, "frame.crossfade"))
+
+    def check_in(self, n: int) -> None:
+        """Refuse a frame that refers to volumes outside a database of ``n``."""
+        for name in ("source", "target"):
+            if getattr(self, name) >= n:
+                raise ValueError(
+                    f"frame.{name}={getattr(self, name)} is outside the database (n={n})"
+                )
 
 
 def evolving_cloud_volumes(
@@ -160,6 +195,7 @@ def evolving_cloud_volumes(
     lacunarity: float = 2.0,
     frequency: float = 1.0,
     threads: int = 0,
+    progress: bool | None = None,
 ) -> VolumeDatabase:
     """A database of ``n_frames`` volumes of an evolving cumulus, without a fluid solver.
 
@@ -209,9 +245,10 @@ def evolving_cloud_volumes(
         if not isinstance(box, Sequence) or len(box) != 2:
             raise TypeError("box must be (box_min, box_max)")
         lo, hi = _box(box[0], box[1])
-    vols = _core.evolving_cloud_volumes(
-        *cloud.core_args(), core_noise, const, *fbm, *evo, lo, hi, check.threads(threads)
-    )
+    with _progress.core("cloud volumes", progress):  # a bar when it takes long
+        vols = _core.evolving_cloud_volumes(
+            *cloud.core_args(), core_noise, const, *fbm, *evo, lo, hi, check.threads(threads)
+        )
     return VolumeDatabase(vols, lo, hi)
 
 
@@ -270,6 +307,8 @@ class VolumeCloud:
             light = np.array(_float_volumes(self.light, "light", 4), copy=True)
             if light.shape != (*dens.shape, 4):
                 raise ValueError(f"light must have shape {(*dens.shape, 4)}, got {light.shape}")
+            if float(np.abs(light).max()) > check.MAX_RADIANCE:
+                raise ValueError(f"light values must be within ±{check.MAX_RADIANCE:g}")
             light.setflags(write=False)
             s(self, "light", light)
             if not isinstance(self.light_sun, Sun) or not isinstance(self.light_sky, Sky):

@@ -15,16 +15,17 @@ to back per pixel by the ray's entry into each drawable's ``layer_box()``.
 
 from __future__ import annotations
 
+import os
 import threading
 from collections.abc import Callable, Sequence
 from typing import Any
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, _progress
 from cumuli import _validate as check
 from cumuli.camera import Camera
-from cumuli.gl import GLContext
+from cumuli.gl import GLContext, _thread_default, default_context
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
 from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUPED_KINDS
@@ -118,6 +119,8 @@ class Tiles:
         self._size = (0, 0)
         #: GPU time of the last draw's tiles in nanoseconds; None when a draw could not be timed.
         self.last_gpu_ns: int | None = None
+        #: The progress setting of the render in progress (a bar over the tiles).
+        self.progress: bool | None = None
 
     def _framebuffer(self, w: int, h: int) -> Any:
         if self._size != (w, h):
@@ -136,27 +139,32 @@ class Tiles:
         fbo.use()
         query = self.gl.timer_query()
         total: int | None = 0
-        for y0 in range(0, height, th):  # y0: top row of the tile
+        tiles = [(y0, x0) for y0 in range(0, height, th) for x0 in range(0, width, tw)]
+        steps = _progress.bar(
+            tiles, desc="render (gl)", unit="tile",
+            progress=self.progress if len(tiles) > 1 else False,
+        )  # fmt: skip
+        for y0, x0 in steps:  # y0: top row of the tile
             h = min(th, height - y0)
-            for x0 in range(0, width, tw):
-                w = min(tw, width - x0)
-                fbo.viewport = (0, 0, w, h)
-                set_uniform("u_tile_origin", (x0, y0))
-                set_uniform("u_tile_height", h)
-                with query:
-                    vao.render(mode=moderngl.TRIANGLES, vertices=3)
-                    # Software rasterisers (llvmpipe) defer the draw until a flush, so without
-                    # this the query would time the submission, not the work.
-                    self.gl.ctx.finish()
-                elapsed = int(query.elapsed)
-                # llvmpipe answers 2³²−1 for a query it could not time (seen on the first draw).
-                if total is not None and 0 <= elapsed < 0xFFFFFFFF:
-                    total += elapsed
-                else:
-                    total = None
-                data = fbo.read(viewport=(0, 0, w, h), components=4, dtype="f4")
-                tile = np.frombuffer(data, np.float32).reshape(h, w, 4)
-                out[y0 : y0 + h, x0 : x0 + w] = tile[::-1]
+            w = min(tw, width - x0)
+            fbo.viewport = (0, 0, w, h)
+            set_uniform("u_tile_origin", (x0, y0))
+            set_uniform("u_tile_height", h)
+            with query:
+                vao.render(mode=moderngl.TRIANGLES, vertices=3)
+                # Software rasterisers (llvmpipe) defer the draw until a flush, so without
+                # this the query would time the submission, not the work.
+                self.gl.ctx.finish()
+            elapsed = int(query.elapsed)
+            # 2³²−1: a query that could not be timed (moderngl reads 32 bits: a tile longer
+            # than 4.29 s; a context's first timed draw on llvmpipe, which GLContext warms up).
+            if total is not None and 0 <= elapsed < 0xFFFFFFFF:
+                total += elapsed
+            else:
+                total = None
+            data = fbo.read(viewport=(0, 0, w, h), components=4, dtype="f4")
+            tile = np.frombuffer(data, np.float32).reshape(h, w, 4)
+            out[y0 : y0 + h, x0 : x0 + w] = tile[::-1]
         self.last_gpu_ns = total
         return out
 
@@ -175,15 +183,17 @@ class Renderer:
     Parameters
     ----------
     context:
-        An existing :class:`cumuli.gl.GLContext` to draw with (not closed by :meth:`close`);
-        by default the renderer creates and owns one.
+        A :class:`cumuli.gl.GLContext` to draw with (never closed by :meth:`close`); by default
+        the calling thread's default context (:func:`cumuli.gl.default_context`, shared with
+        :func:`render`), so making and closing renderers opens no new EGL context. A renderer
+        belongs to the thread of its context: from another thread it raises
+        :class:`cumuli.gl.GLThreadError` (make one renderer per thread, or call :func:`render`).
     tile:
         Largest tile edge drawn per draw call (images larger than this are rendered in tiles).
     """
 
     def __init__(self, context: GLContext | None = None, tile: int = TILE) -> None:
         self.closed = False
-        self._owns_context = False
         self._drawers: dict[str, Any] = {}
         # Arguments first: a bad one must not leave a context behind.
         self.tile = check.integer(tile, "tile", 16, 4096)
@@ -194,11 +204,13 @@ class Renderer:
                 )
             if context.closed:
                 raise ValueError("context is closed")
-        self._owns_context = context is None
-        self.gl = GLContext() if context is None else context
+        self.gl = default_context() if context is None else context
+        self.gl.check_usable()
         self.tiles = Tiles(self.gl, self.tile)
         try:
-            self.drawer("cloud")  # the marcher compiles now: a broken driver fails here
+            with self.gl.activate():
+                self.drawer("cloud")  # the marcher compiles now: a broken driver fails here
+                self.gl.timer_query()
         except Exception:
             self.close()
             raise
@@ -219,28 +231,52 @@ class Renderer:
         return self._drawers[kind]
 
     def render(
-        self, scene: Scene | LitScene, camera: Camera, width: int, height: int
+        self,
+        scene: Scene | LitScene,
+        camera: Camera,
+        width: int,
+        height: int,
+        progress: bool | None = None,
     ) -> np.ndarray:
         """Render ``scene`` seen by ``camera``: ``(height, width, 4)`` float32 linear RGBA, row 0
         at the top, alpha = 1 − transmittance. A `Scene`'s light is prepared first
-        (:func:`cumuli.prepare_light`); a `LitScene` is drawn with its own."""
+        (:func:`cumuli.prepare_light`); a `LitScene` is drawn with its own. Light passes and
+        tiles that take more than a few seconds show a progress bar (``progress=False``: none).
+        """
         if self.closed:
             raise RuntimeError("this Renderer is closed")
+        with self.gl.activate("this Renderer's GL context"):
+            self.tiles.progress = progress
+            try:
+                return self._render(scene, camera, width, height, progress)
+            finally:
+                self.tiles.progress = None
+
+    def _render(
+        self, scene: Any, camera: Any, width: Any, height: Any, progress: bool | None
+    ) -> np.ndarray:
         lit, plain = _lit(scene)
         if not isinstance(camera, Camera):
             raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
         width, height = _check_size(width, height, self.max_texture_size, "GL_MAX_TEXTURE_SIZE")
         _check_kinds(plain, GL_DRAWERS, "GL")
         for kind, indices in plan(plain):  # before the light pass, which could be long
-            GL_DRAWERS[kind].check(plain, indices)
-        lit = prepare_light(plain) if lit is None else lit
+            drawer = self.drawer(kind)
+            drawer.check(plain, indices)
+            if lit is None and hasattr(drawer, "check_light"):
+                drawer.check_light(plain, indices)  # the light the light step will make
+        lit = prepare_light(plain, progress=progress) if lit is None else lit
         gpu_ns: list[int | None] = []
 
         def draw(kind: str, indices: Sequence[int], with_sky: bool) -> np.ndarray:
             drawer = self.drawer(kind)
             self.tiles.last_gpu_ns = None
             img = drawer.draw(lit, indices, camera, width, height, with_sky)
-            gpu_ns.append(self.tiles.last_gpu_ns if kind in GROUPED_KINDS else None)
+            gpu_ns.append(
+                self.tiles.last_gpu_ns
+                if kind in GROUPED_KINDS
+                else getattr(drawer, "last_gpu_ns", None)
+            )
             return img
 
         image = compose(lit, camera, width, height, draw)
@@ -252,18 +288,17 @@ class Renderer:
         """Release every GL object (and the context when this renderer created it)."""
         if self.closed:
             return
+        if hasattr(self, "gl") and not self.gl.closed and self.gl._pid == os.getpid():
+            with self.gl.activate("this Renderer's GL context"):
+                for drawer in self._drawers.values():
+                    try:
+                        drawer.release()
+                    except Exception:
+                        pass
+                if hasattr(self, "tiles"):
+                    self.tiles.release()
         self.closed = True
-        if hasattr(self, "gl") and not self.gl.closed:
-            for drawer in self._drawers.values():
-                try:
-                    drawer.release()
-                except Exception:
-                    pass
-            if hasattr(self, "tiles"):
-                self.tiles.release()
         self._drawers.clear()
-        if self._owns_context and hasattr(self, "gl"):
-            self.gl.close()
 
     def __enter__(self) -> Renderer:
         return self
@@ -279,28 +314,32 @@ class Renderer:
 
 
 # --------------------------------------------------------------------------------------------
-_shared: Renderer | None = None
-_shared_lock = threading.Lock()
+_shared = threading.local()
 
 
 def shared_renderer() -> Renderer:
-    """The process-wide renderer used by :func:`render` (created on first use)."""
-    global _shared
-    with _shared_lock:
-        if _shared is None or _shared.closed or _shared.gl.closed:
-            from cumuli.gl import default_context
-
-            # Shares the process-wide context with the other GL conveniences (one EGL context).
-            _shared = Renderer(context=default_context())
-        return _shared
+    """This thread's renderer used by :func:`render` (created on first use; drawn with the
+    thread's default context, shared with the other GL conveniences)."""
+    renderer = getattr(_shared, "renderer", None)
+    if renderer is None or renderer.closed or renderer.gl is not _thread_default():
+        renderer = Renderer(context=default_context())
+        _shared.renderer = renderer
+    return renderer
 
 
 def render_cpu(
-    scene: Scene | LitScene, camera: Camera, width: int, height: int, threads: int = 0
+    scene: Scene | LitScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    threads: int = 0,
+    progress: bool | None = None,
 ) -> np.ndarray:
     """Render ``scene`` seen by ``camera`` with the C++ twins of every drawer and the C++
     compositor; returns ``(height, width, 4)`` float32 linear RGBA, row 0 at the top, alpha
-    ``1 − T``. ``threads=0`` uses every core; the image does not depend on the thread count."""
+    ``1 − T``. ``threads=0`` uses every core; the image does not depend on the thread count.
+    Ctrl-C stops it between chunks of rows; a progress bar shows when it takes more than a few
+    seconds (``progress=False``: none)."""
     lit, plain = _lit(scene)
     if not isinstance(camera, Camera):
         raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
@@ -308,12 +347,13 @@ def render_cpu(
     width, height = _check_size(width, height, MAX_EDGE)
     threads = check.threads(threads)
     _check_kinds(plain, CPU_DRAWERS, "CPU")
-    lit = prepare_light(plain, threads=threads) if lit is None else lit
+    lit = prepare_light(plain, threads=threads, progress=progress) if lit is None else lit
 
     def draw(kind: str, indices: Sequence[int], with_sky: bool) -> np.ndarray:
         return CPU_DRAWERS[kind](lit, indices, camera, width, height, with_sky, threads)
 
-    return compose(lit, camera, width, height, draw, threads)
+    with _progress.core("render (cpu)", progress):
+        return compose(lit, camera, width, height, draw, threads)
 
 
 def render(
@@ -322,13 +362,16 @@ def render(
     width: int = 640,
     height: int = 480,
     backend: str = "gl",
+    progress: bool | None = None,
 ) -> np.ndarray:
     """Render ``scene`` (a `Scene` or a `LitScene`) to an ``(height, width, 4)`` float32 linear
     RGBA image, row 0 on top.
 
     ``backend="gl"`` runs the GLSL drawers in a process-wide headless context; ``"cpu"`` runs
     their C++ twins (same contract, for parity and for machines without EGL). ``camera``
-    defaults to :meth:`Scene.default_camera`.
+    defaults to :meth:`Scene.default_camera`. Steps that take more than a few seconds (light
+    passes, tiles, the CPU marcher) show a progress bar unless ``progress=False`` (or
+    ``CUMULI_PROGRESS=0``).
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
@@ -336,8 +379,8 @@ def render(
     if camera is None:
         camera = plain.default_camera()
     if backend == "gl":
-        return shared_renderer().render(scene, camera, width, height)
-    return render_cpu(scene, camera, width, height)
+        return shared_renderer().render(scene, camera, width, height, progress)
+    return render_cpu(scene, camera, width, height, progress=progress)
 
 
 def _as_camera(camera: Any) -> Camera:

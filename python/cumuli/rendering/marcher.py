@@ -163,6 +163,21 @@ class MarcherGL:
             raise ValueError(f"the GL renderer draws at most {MAX_CLOUDS} clouds")
         check_gl_limits(scene, indices)
 
+    def check_light(self, scene: Scene, indices: Sequence[int]) -> None:
+        """Limits of the light the light step will make for these clouds (a `Scene` not lit
+        yet): the light atlas stacks one ``light_resolution``³ grid per cloud along z, and must
+        fit ``GL_MAX_3D_TEXTURE_SIZE`` — checked here, before minutes of light passes."""
+        clouds = [k for k in indices if isinstance(scene.clouds[k], Cloud)]
+        r = scene.settings.light_resolution
+        depth = r * len(clouds)
+        if clouds and max(r, depth) > self.max_3d_texture_size:
+            raise ValueError(
+                f"the light grids of {len(clouds)} clouds at settings.light_resolution={r} need "
+                f"a {r}×{r}×{depth} atlas, larger than GL_MAX_3D_TEXTURE_SIZE="
+                f"{self.max_3d_texture_size}; use fewer clouds per scene, a smaller "
+                "settings.light_resolution, or backend='cpu'"
+            )
+
     def draw(
         self,
         lit: LitScene,

@@ -39,6 +39,8 @@ from cumuli.sky import Sun, as_sky, sky_args
 MAX_STEPS = 1 << 16
 #: Largest image edge.
 MAX_IMAGE = 1 << 14
+#: Largest image in pixels (the compositor's limit: 2²⁶ RGBA32F pixels = 1 GiB).
+MAX_PIXELS = 1 << 26
 
 
 def camera_rays(camera: Any) -> dict[str, Any]:
@@ -92,6 +94,10 @@ def _inputs(
     lo, hi = _box(box[0], box[1])
     width = check.integer(width, "width", 1, MAX_IMAGE)
     height = check.integer(height, "height", 1, MAX_IMAGE)
+    if width * height > MAX_PIXELS:
+        raise ValueError(
+            f"image of {width}x{height} pixels is larger than the limit of {MAX_PIXELS} pixels"
+        )
     diag = math.dist(lo, hi)
     if step is None:
         d, h, w = vol.shape
@@ -113,10 +119,12 @@ class VolumeRenderer:
     def __init__(self, context: GLContext | None = None) -> None:
         self.context = _resolve_context(context)
         ctx = self.context.ctx
-        self.program: moderngl.Program | None = self.context.program(
-            "volume/quad.vert.glsl", "volume/march.frag.glsl"
-        )
-        self.vao = ctx.vertex_array(self.program, [])
+        with self.context.activate():
+            self.program: moderngl.Program | None = self.context.program(
+                "volume/quad.vert.glsl", "volume/march.frag.glsl"
+            )
+            self.vao = ctx.vertex_array(self.program, [])
+            self.context.timer_query()
         self.gpu_time_ns: int | None = None
 
     def render(
@@ -141,6 +149,16 @@ class VolumeRenderer:
         ``(colour, 1 − T)`` the compositor combines."""
         if self.program is None or self.context.closed:
             raise ValueError("this VolumeRenderer has been released")
+        with self.context.activate("this VolumeRenderer's GL context"):
+            return self._render(
+                volume, light, box, camera, width, height, sun, sky, sigma_t, albedo, g, step,
+                with_sky,
+            )  # fmt: skip
+
+    def _render(
+        self, volume: Any, light: Any, box: Any, camera: Any, width: int, height: int, sun: Any,
+        sky: Any, sigma_t: float, albedo: float, g: float, step: float | None, with_sky: bool,
+    ) -> np.ndarray:  # fmt: skip
         sun = Sun() if sun is None else sun
         if not isinstance(sun, Sun):
             raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
@@ -215,8 +233,9 @@ class VolumeRenderer:
     def release(self) -> None:
         """Release the program (idempotent)."""
         if self.program is not None and not self.context.closed:
-            self.vao.release()
-            self.program.release()
+            with self.context.activate("this VolumeRenderer's GL context"):
+                self.vao.release()
+                self.program.release()
         self.program = None
 
     def __enter__(self) -> VolumeRenderer:
@@ -268,6 +287,12 @@ class VolumeGL:
 
     def __init__(self, gl: GLContext, tiles: Any = None) -> None:
         self.renderer = VolumeRenderer(gl)
+
+    @property
+    def last_gpu_ns(self) -> int | None:
+        """GL timer-query time of the last draw (None when the driver could not time it)."""
+        ns = self.renderer.gpu_time_ns
+        return ns if ns is not None and 0 <= ns < 0xFFFFFFFF else None
 
     @staticmethod
     def check(scene: Any, indices: Sequence[int]) -> None:

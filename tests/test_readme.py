@@ -1,0 +1,114 @@
+"""The README runs: every ```python block is executed on its own in an empty folder, every
+`cumuli ...` line of the ```sh blocks is run, and the size-limit table matches the code.
+
+(The `make` lines of the README are the suite's own entry points; tests/test_makefile.py and
+test_first_hour.py check them without recursing into them.)
+"""
+
+from __future__ import annotations
+
+import importlib
+import os
+import re
+import shlex
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+README = (ROOT / "README.md").read_text(encoding="utf-8")
+
+pytestmark = pytest.mark.gl  # the examples render with GL, as a reader's would
+
+
+def _blocks(language: str) -> list[tuple[str, str]]:
+    """``(id, code)`` of every fenced block of ``language``, named after its section."""
+    out = []
+    heading = "top"
+    counts: dict[str, int] = {}
+    for match in re.finditer(r"^(#{1,4} [^\n]+)$|^```(\w*)\n(.*?)^```$", README, re.M | re.S):
+        if match.group(1):
+            heading = re.sub(r"\W+", "-", match.group(1).lstrip("# ").lower()).strip("-")
+        elif match.group(2) == language:
+            counts[heading] = counts.get(heading, 0) + 1
+            out.append((f"{heading}-{counts[heading]}", match.group(3)))
+    return out
+
+
+PYTHON = _blocks("python")
+SHELL = [
+    (f"{name}-{k}", line.split("#", 1)[0].strip())
+    for name, code in _blocks("sh")
+    for k, line in enumerate(code.splitlines())
+    if line.startswith("cumuli ")
+]
+
+
+def _env() -> dict[str, str]:
+    return {**os.environ, "CUMULI_PROGRESS": "0"}
+
+
+def test_the_readme_has_code_to_run() -> None:
+    assert len(PYTHON) >= 8 and len(SHELL) >= 3
+    for name, code in PYTHON:
+        assert "import cumuli" in code, f"{name} does not import cumuli: not self-contained"
+
+
+@pytest.mark.parametrize(("name", "code"), PYTHON, ids=[n for n, _ in PYTHON])
+def test_python_block_runs_on_its_own(name: str, code: str, tmp_path: Path) -> None:
+    script = tmp_path / "example.py"
+    script.write_text(code, encoding="utf-8")
+    done = subprocess.run(
+        [sys.executable, str(script)], cwd=tmp_path, env=_env(), capture_output=True, text=True,
+        timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, f"README block {name} failed:\n{done.stderr[-3000:]}"
+
+
+@pytest.mark.parametrize(("name", "line"), SHELL, ids=[n for n, _ in SHELL])
+def test_cli_line_runs(name: str, line: str, tmp_path: Path) -> None:
+    args = shlex.split(line)[1:]
+    done = subprocess.run(
+        [sys.executable, "-m", "cumuli", *args], cwd=tmp_path, env=_env(), capture_output=True,
+        text=True, timeout=300,
+    )  # fmt: skip
+    assert done.returncode == 0, f"README line {line!r} failed:\n{done.stderr[-3000:]}"
+    if "-o" in args:
+        assert (tmp_path / args[args.index("-o") + 1]).is_file()
+
+
+def _limit_rows() -> list[tuple[str, str, str]]:
+    section = README.split("## Size limits", 1)[1].split("\n## ", 1)[0]
+    rows = []
+    for line in section.splitlines():
+        cells = [c.strip() for c in line.strip().strip("|").split("|")]
+        if len(cells) == 3 and cells[0] not in ("what", "---"):
+            rows.append((cells[0], cells[1], cells[2]))
+    return rows
+
+
+def _resolve(path: str) -> object:
+    key = None
+    if match := re.fullmatch(r"(.+)\[\"(\w+)\"\]", path):
+        path, key = match.group(1), match.group(2)
+    module, _, name = path.rpartition(".")
+    value = getattr(importlib.import_module(module), name)
+    return value[key] if key is not None else value
+
+
+def test_the_size_limit_table_matches_the_code() -> None:
+    rows = _limit_rows()
+    assert len(rows) >= 25
+    checked = 0
+    for what, limit, constant in rows:
+        number = re.match(r"`([0-9_e<< ]+)`", limit)
+        name = re.fullmatch(r"`([\w.]+(?:\[\"\w+\"\])?)`", constant)
+        if number is None or name is None:
+            assert "GL_MAX" in limit, what  # the limits the driver sets are described, not coded
+            continue
+        value = eval(number.group(1), {"__builtins__": {}})  # literals and << only
+        assert _resolve(name.group(1)) == value, (what, limit, constant)
+        checked += 1
+    assert checked >= 25
