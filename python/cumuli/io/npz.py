@@ -10,7 +10,9 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any
 
@@ -89,10 +91,16 @@ def read_npz(
                     arrays[key] = (
                         np.frombuffer(data, dtype=dtype).reshape(shape, order=order).copy()
                     )
-    except (zipfile.BadZipFile, EOFError, OSError, ValueError) as exc:
+    except (
+        zipfile.BadZipFile, EOFError, OSError, ValueError, zlib.error, struct.error,
+        NotImplementedError,  # zipfile: an unknown compression method
+        RuntimeError,  # zipfile: an encrypted member
+    ) as exc:  # fmt: skip
         if isinstance(exc, (FileFormatError, FileNotFoundError)):
             raise
-        raise FileFormatError(f"{path.name}: not a readable archive ({exc})") from None
+        raise FileFormatError(
+            f"{path.name}: not a readable archive ({type(exc).__name__}: {exc})"
+        ) from None
     return arrays
 
 

@@ -32,6 +32,7 @@ import numpy as np
 from cumuli import _validate as check
 from cumuli._atomic import atomic_target
 from cumuli.io.jsonable import jsonable
+from cumuli.io.npz import check_path, check_readable, read_npz
 
 DENSITY_MODELS = ("spheroid", "metaball")
 #: Most primitives a cloud may hold.
@@ -43,8 +44,6 @@ FILE_FORMAT = "cumuli.cloud"
 FILE_VERSION = 2
 #: Versions `load_cloud` reads (version 1 files may carry a light grid, which is ignored).
 READABLE_VERSIONS = (1, 2)
-#: Largest cloud file `load_cloud` reads.
-MAX_FILE_BYTES = 1 << 31
 #: Largest element count of each array in a saved ``.npz`` (checked before it is inflated).
 _NPZ_LIMITS = {
     "centres": 3 * MAX_PRIMITIVES,
@@ -455,19 +454,9 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
     Raises ``FileNotFoundError`` for a missing file and ``ValueError`` (naming the file) for an
     empty, truncated, foreign or inconsistent one.
     """
-    path = Path(os.fspath(path))
+    path = check_path(path, (".npz", ".json"))
+    check_readable(path, "cloud")
     suffix = path.suffix.lower()
-    if suffix not in (".npz", ".json"):
-        raise ValueError(f"path must end in .npz or .json, got {path.name!r}")
-    if not path.exists():
-        raise FileNotFoundError(f"no such cloud file: {str(path)!r}")
-    if not path.is_file():
-        raise OSError(f"not a file: {str(path)!r}")
-    size = path.stat().st_size
-    if size == 0:
-        raise ValueError(f"{path.name}: empty file")
-    if size > MAX_FILE_BYTES:
-        raise ValueError(f"{path.name}: {size} bytes, more than the limit {MAX_FILE_BYTES}")
     try:
         if suffix == ".npz":
             meta, arrays = _read_npz(path)
@@ -510,30 +499,8 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
 
 
 def _read_npz(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
-    arrays: dict[str, np.ndarray] = {}
-    with zipfile.ZipFile(path) as zf:
-        names = set(zf.namelist())
-        for key in ("centres", "radii", "rotations", "meta"):
-            member = key + ".npy"
-            if member not in names:
-                raise ValueError(f"{path.name}: missing array {key!r}")
-            with zf.open(member) as fh:
-                # Check the declared shape before numpy allocates it.
-                version = np.lib.format.read_magic(fh)
-                if version == (1, 0):
-                    shape, fortran, dtype = np.lib.format.read_array_header_1_0(fh)
-                else:
-                    shape, fortran, dtype = np.lib.format.read_array_header_2_0(fh)
-                count = int(np.prod(shape, dtype=np.int64)) if shape else 1
-                # Per-array limits: a compressed member can declare (and inflate to) far more
-                # than the file's size, so the file-size limit alone does not bound memory.
-                if dtype.hasobject or count > _NPZ_LIMITS[key]:
-                    raise ValueError(f"{path.name}: array {key!r} has unacceptable shape/dtype")
-                data = fh.read(count * dtype.itemsize)
-                if len(data) != count * dtype.itemsize:
-                    raise ValueError(f"{path.name}: array {key!r} is truncated")
-                order = "F" if fortran else "C"
-                arrays[key] = np.frombuffer(data, dtype=dtype).reshape(shape, order=order).copy()
+    # Each member's declared shape is checked against its limit before numpy allocates it.
+    arrays = read_npz(path, _NPZ_LIMITS, ("centres", "radii", "rotations", "meta"))
     meta = json.loads(arrays.pop("meta").tobytes().decode("utf-8"))
     return meta, arrays
 
