@@ -94,6 +94,7 @@ def render_frames(
     progress: bool = True,
     alpha: bool = False,
     client: Any = None,
+    impostors: Any = False,
 ) -> list[Path]:
     """Render ``scene`` from each camera and write numbered images into ``out_dir``.
 
@@ -103,10 +104,14 @@ def render_frames(
     composited over the sky) unless ``alpha=True`` keeps the clouds' coverage ``1 − T`` as alpha.
     Returns the paths written, in order. With a ``dask.distributed`` ``client`` every frame is
     a task on the cluster (see :mod:`cumuli.anim.cluster`; ``out_dir`` must be a folder the
-    workers see); the images are the same.
+    workers see); the images are the same. ``impostors=True`` draws the sequence through one
+    :class:`cumuli.ImpostorCache` (Harris 2002 §3: each cloud's image is reused while the view
+    moves less than ``scene.impostor_settings.tolerance``), or pass a cache to keep it (and its
+    ``stats``) after the call; not with ``client`` (frames there are independent tasks).
     """
     from cumuli.io.images import write_image
     from cumuli.rendering.compositor import render
+    from cumuli.rendering.impostor_cache import ImpostorCache
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
@@ -133,6 +138,16 @@ def render_frames(
         raise OSError(f"cannot create out_dir {str(folder)!r}: {exc.strerror or exc}") from exc
     if not os.access(folder, os.W_OK):
         raise OSError(f"out_dir {str(folder)!r} is not writable")
+    if isinstance(impostors, (bool, np.bool_)):
+        cache = ImpostorCache() if impostors else None
+    elif isinstance(impostors, ImpostorCache):
+        cache = impostors
+    else:
+        raise TypeError(
+            f"impostors must be a bool or a cumuli.ImpostorCache, got {type(impostors).__name__}"
+        )
+    if cache is not None and client is not None:
+        raise ValueError("impostors need the frames in order on one renderer: not with client")
     if client is not None:
         from cumuli.anim.cluster import _check_client, render_task, run
 
@@ -149,7 +164,7 @@ def render_frames(
     for cam, name in tqdm(
         list(zip(cams, names, strict=True)), desc="frames", unit="frame", disable=not progress
     ):
-        img = render(scene, cam, width=width, height=height, backend=backend)
+        img = render(scene, cam, width=width, height=height, backend=backend, impostors=cache)
         if not alpha:
             img[..., 3] = 1.0
         paths.append(write_image(folder / name, img))

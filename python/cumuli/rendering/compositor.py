@@ -28,6 +28,7 @@ from cumuli.gl import GLContext
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
 from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUPED_KINDS
+from cumuli.rendering.painters import CPUPainter, GLPainter
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
 from cumuli.sky import Sun, as_sky, sky_args
@@ -40,35 +41,58 @@ MAX_PIXELS = 1 << 26
 MAX_EDGE = 1 << 14
 BACKENDS = ("gl", "cpu")
 
-#: A draw call: ``(kind, indices, with_sky) -> (H, W, 4) image``.
-DrawFn = Callable[[str, Sequence[int], bool], np.ndarray]
-
 
 def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     """The draw calls of ``scene``: one ``(kind, indices)`` over the sky when one pass can draw
-    everything (an empty scene draws the sky with the marcher), else one per drawable."""
+    everything (an empty scene draws the sky with the marcher), else one per drawable. With
+    solids, every drawable is its own layer (each composites with the solids by its own box)."""
     kinds = scene.kinds
     if not kinds:
         return [("cloud", [])]
-    if len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS):
+    if not scene.solids and (
+        len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS)
+    ):
         return [(kinds[0], list(range(len(kinds))))]
     return [(kind, [k]) for k, kind in enumerate(kinds)]
 
 
+def _union_box(scene: Scene, indices: Sequence[int]) -> np.ndarray:
+    boxes = np.array([scene.clouds[k].layer_box() for k in indices], np.float32)
+    return np.stack([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
+
+
 def compose(
-    lit: LitScene, camera: Camera, width: int, height: int, draw: DrawFn, threads: int = 0
+    lit: LitScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    painter: Any,
+    threads: int = 0,
+    impostors: Any = None,
 ) -> np.ndarray:
-    """Draw ``lit`` with ``draw`` and composite the layers over the sky (see the module doc)."""
-    calls = plan(lit.scene)
-    if len(calls) == 1:
-        kind, indices = calls[0]
-        return draw(kind, indices, True)
+    """Draw ``lit`` with ``painter`` (:mod:`cumuli.rendering.painters`) and composite the layers
+    and the solids over the sky (see the module doc); ``impostors`` an
+    :class:`~cumuli.rendering.impostor_cache.ImpostorCache` draws every layer through it."""
     scene = lit.scene
-    layers = np.stack([draw(kind, indices, False) for kind, indices in calls])
-    boxes = np.array([scene.clouds[k].layer_box() for k in range(len(scene.clouds))], np.float32)
+    calls = plan(scene)
+    if impostors is None and not scene.solids and len(calls) == 1:
+        kind, indices = calls[0]
+        return painter.layer(lit, kind, indices, camera, width, height, True)
+    if impostors is not None:
+        layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
+    else:
+        layer_list, box_list = [], []
+        for kind, indices in calls:
+            if indices:
+                layer_list.append(painter.layer(lit, kind, indices, camera, width, height, False))
+                box_list.append(_union_box(scene, indices))
+    layers = np.stack(layer_list) if layer_list else np.zeros((0, height, width, 4), np.float32)
+    boxes = np.array(box_list, np.float32).reshape(-1, 2, 3)
+    solid = painter.solids(lit, camera, width, height) if scene.solids else None
     return _core.composite_layers(
         layers, boxes, camera.position, camera.target, camera.up, float(camera.fov),
         sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
+        solid,
     )  # fmt: skip
 
 
@@ -185,6 +209,8 @@ class Renderer:
         self.closed = False
         self._owns_context = False
         self._drawers: dict[str, Any] = {}
+        self._extras: dict[str, Any] = {}
+        self._impostors: Any = None
         # Arguments first: a bad one must not leave a context behind.
         self.tile = check.integer(tile, "tile", 16, 4096)
         if context is not None:
@@ -198,6 +224,7 @@ class Renderer:
         self.gl = GLContext() if context is None else context
         self.tiles = Tiles(self.gl, self.tile)
         try:
+            self.make_current()
             self.drawer("cloud")  # the marcher compiles now: a broken driver fails here
         except Exception:
             self.close()
@@ -212,40 +239,82 @@ class Renderer:
         """The GL_RENDERER string of the context (e.g. ``llvmpipe (LLVM 15.0.6, 256 bits)``)."""
         return self.gl.renderer
 
+    def make_current(self) -> None:
+        """Make this renderer's context the current one (and leave it so): another context made
+        since — even one already released, which EGL keeps current — would otherwise receive
+        the draws. :meth:`render` calls it."""
+        self.gl.ctx.mglo.__enter__()
+
     def drawer(self, kind: str) -> Any:
         """The GL drawer of ``kind`` (made on first use)."""
         if kind not in self._drawers:
             self._drawers[kind] = GL_DRAWERS[kind](self.gl, self.tiles)
         return self._drawers[kind]
 
+    def extra(self, name: str, make: Callable[[GLContext, Tiles], Any]) -> Any:
+        """A helper drawer of this renderer (solids, impostor display), made on first use."""
+        if name not in self._extras:
+            self._extras[name] = make(self.gl, self.tiles)
+        return self._extras[name]
+
+    @property
+    def impostor_cache(self) -> Any:
+        """This renderer's own :class:`cumuli.ImpostorCache` (``render(..., impostors=True)``)."""
+        if self._impostors is None:
+            from cumuli.rendering.impostor_cache import ImpostorCache
+
+            self._impostors = ImpostorCache(self)
+        return self._impostors
+
     def render(
-        self, scene: Scene | LitScene, camera: Camera, width: int, height: int
+        self,
+        scene: Scene | LitScene,
+        camera: Camera,
+        width: int,
+        height: int,
+        impostors: Any = None,
     ) -> np.ndarray:
         """Render ``scene`` seen by ``camera``: ``(height, width, 4)`` float32 linear RGBA, row 0
         at the top, alpha = 1 − transmittance. A `Scene`'s light is prepared first
-        (:func:`cumuli.prepare_light`); a `LitScene` is drawn with its own."""
+        (:func:`cumuli.prepare_light`); a `LitScene` is drawn with its own. ``impostors``: an
+        :class:`cumuli.ImpostorCache` kept across frames (``True``: this renderer's own) draws
+        every drawable through its impostor (Harris 2002 §3)."""
         if self.closed:
             raise RuntimeError("this Renderer is closed")
         lit, plain = _lit(scene)
         if not isinstance(camera, Camera):
             raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
         width, height = _check_size(width, height, self.max_texture_size, "GL_MAX_TEXTURE_SIZE")
+        cache = self._cache_arg(impostors)
         _check_kinds(plain, GL_DRAWERS, "GL")
         for kind, indices in plan(plain):  # before the light pass, which could be long
             GL_DRAWERS[kind].check(plain, indices)
         lit = prepare_light(plain) if lit is None else lit
-        gpu_ns: list[int | None] = []
-
-        def draw(kind: str, indices: Sequence[int], with_sky: bool) -> np.ndarray:
-            drawer = self.drawer(kind)
-            self.tiles.last_gpu_ns = None
-            img = drawer.draw(lit, indices, camera, width, height, with_sky)
-            gpu_ns.append(self.tiles.last_gpu_ns if kind in GROUPED_KINDS else None)
-            return img
-
-        image = compose(lit, camera, width, height, draw)
-        self.last_gpu_ns = sum(gpu_ns) if gpu_ns and None not in gpu_ns else None  # type: ignore
+        self.tiles.last_gpu_ns = None
+        self.make_current()
+        image = compose(lit, camera, width, height, GLPainter(self), impostors=cache)
+        calls = plan(plain)
+        single = cache is None and not plain.solids and len(calls) == 1
+        self.last_gpu_ns = self.tiles.last_gpu_ns if single and calls[0][0] == "cloud" else None
         return image
+
+    def _cache_arg(self, impostors: Any) -> Any:
+        from cumuli.rendering.impostor_cache import ImpostorCache
+
+        if impostors is None or impostors is False:
+            return None
+        if impostors is True:
+            return self.impostor_cache
+        if not isinstance(impostors, ImpostorCache):
+            raise TypeError(
+                f"impostors must be a cumuli.ImpostorCache, True or None, got "
+                f"{type(impostors).__name__}"
+            )
+        if impostors.renderer is None:
+            impostors.renderer = self
+        elif impostors.renderer is not self:
+            raise ValueError("this ImpostorCache belongs to another Renderer")
+        return impostors
 
     # --- lifetime ---------------------------------------------------------------------------
     def close(self) -> None:
@@ -254,7 +323,9 @@ class Renderer:
             return
         self.closed = True
         if hasattr(self, "gl") and not self.gl.closed:
-            for drawer in self._drawers.values():
+            if getattr(self, "_impostors", None) is not None:
+                self._impostors.clear()
+            for drawer in [*self._drawers.values(), *getattr(self, "_extras", {}).values()]:
                 try:
                     drawer.release()
                 except Exception:
@@ -262,6 +333,7 @@ class Renderer:
             if hasattr(self, "tiles"):
                 self.tiles.release()
         self._drawers.clear()
+        getattr(self, "_extras", {}).clear()
         if self._owns_context and hasattr(self, "gl"):
             self.gl.close()
 
@@ -296,24 +368,32 @@ def shared_renderer() -> Renderer:
 
 
 def render_cpu(
-    scene: Scene | LitScene, camera: Camera, width: int, height: int, threads: int = 0
+    scene: Scene | LitScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    threads: int = 0,
+    impostors: Any = None,
 ) -> np.ndarray:
     """Render ``scene`` seen by ``camera`` with the C++ twins of every drawer and the C++
     compositor; returns ``(height, width, 4)`` float32 linear RGBA, row 0 at the top, alpha
-    ``1 − T``. ``threads=0`` uses every core; the image does not depend on the thread count."""
+    ``1 − T``. ``threads=0`` uses every core; the image does not depend on the thread count.
+    ``impostors``: an :class:`cumuli.ImpostorCache` kept across frames."""
+    from cumuli.rendering.impostor_cache import ImpostorCache
+
     lit, plain = _lit(scene)
     if not isinstance(camera, Camera):
         raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
     # Arguments are checked before the (possibly long) light pass runs.
     width, height = _check_size(width, height, MAX_EDGE)
     threads = check.threads(threads)
+    if impostors is not None and not isinstance(impostors, ImpostorCache):
+        raise TypeError(
+            f"impostors must be a cumuli.ImpostorCache or None, got {type(impostors).__name__}"
+        )
     _check_kinds(plain, CPU_DRAWERS, "CPU")
     lit = prepare_light(plain, threads=threads) if lit is None else lit
-
-    def draw(kind: str, indices: Sequence[int], with_sky: bool) -> np.ndarray:
-        return CPU_DRAWERS[kind](lit, indices, camera, width, height, with_sky, threads)
-
-    return compose(lit, camera, width, height, draw, threads)
+    return compose(lit, camera, width, height, CPUPainter(threads), threads, impostors)
 
 
 def render(
@@ -322,13 +402,15 @@ def render(
     width: int = 640,
     height: int = 480,
     backend: str = "gl",
+    impostors: Any = None,
 ) -> np.ndarray:
     """Render ``scene`` (a `Scene` or a `LitScene`) to an ``(height, width, 4)`` float32 linear
     RGBA image, row 0 on top.
 
     ``backend="gl"`` runs the GLSL drawers in a process-wide headless context; ``"cpu"`` runs
     their C++ twins (same contract, for parity and for machines without EGL). ``camera``
-    defaults to :meth:`Scene.default_camera`.
+    defaults to :meth:`Scene.default_camera`. ``impostors``: an :class:`cumuli.ImpostorCache`
+    kept across frames (Harris 2002 §3).
     """
     if backend not in BACKENDS:
         raise ValueError(f"backend must be one of {BACKENDS}, got {backend!r}")
@@ -336,8 +418,8 @@ def render(
     if camera is None:
         camera = plain.default_camera()
     if backend == "gl":
-        return shared_renderer().render(scene, camera, width, height)
-    return render_cpu(scene, camera, width, height)
+        return shared_renderer().render(scene, camera, width, height, impostors=impostors)
+    return render_cpu(scene, camera, width, height, impostors=impostors)
 
 
 def _as_camera(camera: Any) -> Camera:
