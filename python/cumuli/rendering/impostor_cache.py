@@ -282,7 +282,7 @@ class ImpostorCache:
                 record["screen"] += int(entry.clamp)
                 dist = float(np.linalg.norm(entry.plane[0:3] - np.asarray(camera.position)))
                 quads.append((-dist, len(quads), entry))
-                lo_hi.append(self._box(drawable, [], entry))
+                lo_hi.append(self._box(drawable, []))
             if quads:
                 ordered = [q for _, _, q in sorted(quads, key=lambda t: (t[0], t[1]))]
                 layers.append(painter.display(ordered, camera, width, height, s.exact))
@@ -297,20 +297,15 @@ class ImpostorCache:
         return layers, boxes
 
     @staticmethod
-    def _box(drawable: Any, solids: Sequence[Any], entry: Impostor | None = None) -> np.ndarray:
-        """The box every contribution of the layer lies in: the drawable's layer box, grown by
-        the solids drawn with it and by a tight impostor's quad."""
+    def _box(drawable: Any, solids: Sequence[Any]) -> np.ndarray:
+        """The compositor's box of an impostor layer: the drawable's own ``layer_box()`` — the
+        order is then the direct rendering's — grown by the solids drawn with it. (An impostor
+        seen from a moved eye may show content up to α_trans outside it, which the compositor
+        drops: at the tolerance that is under a pixel, where splats and marched edges fade.)"""
         lo, hi = (np.asarray(v, np.float64) for v in drawable.layer_box())
         for sol in solids:
             slo, shi = sol.bounds()
             lo, hi = np.minimum(lo, slo), np.maximum(hi, shi)
-        if entry is not None and not entry.clamp:
-            p = entry.plane
-            corners = [
-                p[0:3] + a * p[12] * p[6:9] + b * p[13] * p[9:12] for a in (-1, 1) for b in (-1, 1)
-            ]
-            lo = np.minimum(lo, np.min(corners, axis=0))
-            hi = np.maximum(hi, np.max(corners, axis=0))
         return np.stack([lo, hi]).astype(np.float32)
 
     def _reason(
