@@ -224,3 +224,20 @@ def test_bad_input_names_the_field(tmp_path: Path) -> None:
     # A failed render changes nothing and says what is wrong before any light pass.
     with pytest.raises(ValueError, match="width"):
         cu.render(trio(), CAMERA, 0, 10, backend="cpu")
+
+
+def test_cumuli_demo_harris_renders_fig_13(tmp_path: Path) -> None:
+    from cumuli import cli
+    from cumuli.demo import harris_scene
+
+    path = tmp_path / "fig13.exr"
+    args = ["demo", "--harris", "-o", str(path), "--width", "48", "--height", "36"]
+    assert cli.main([*args, "--backend", "cpu"]) == 0
+    scene = harris_scene()
+    assert scene.kinds == ("particles",) * 4 and len(scene.lights) == 1
+    expect = cu.render(scene, scene.default_camera(), 48, 36, backend="cpu")
+    expect[..., 3] = 1.0
+    np.testing.assert_allclose(cu.read_image(path), expect, atol=1e-6)
+    # Orange sun and pink light: the clouds' lit parts are warm, red above blue.
+    cloud = expect[..., :3][cu.render(scene, scene.default_camera(), 48, 36, "cpu")[..., 3] > 0.5]
+    assert cloud.size and (cloud[:, 0] > cloud[:, 2]).mean() > 0.8

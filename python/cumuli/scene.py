@@ -32,7 +32,7 @@ from cumuli.model.solid import Solid, as_solids
 from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise
 from cumuli.rendering.impostors import ImpostorSettings
-from cumuli.settings import MAX_CLOUDS, RenderSettings
+from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
 
 #: Format tag written in every scene file.
@@ -55,6 +55,9 @@ SCENE_FIELDS = (
     "sprite_settings",
     "impostor_settings",
 )
+#: Most drawables one scene holds (a field of particle clouds has thousands; the GL marcher
+#: still draws at most `cumuli.settings.MAX_CLOUDS` 2018 clouds per pass).
+MAX_DRAWABLES = 1 << 16
 #: Most extra lights (`Scene.lights`).
 MAX_LIGHTS = 16
 #: Largest scene file `load_scene` reads (clouds are stored inline as JSON arrays).
@@ -156,8 +159,10 @@ class Scene:
                 raise TypeError(
                     f"scene.clouds[{k}] must be a drawable ({kinds}), got {type(c).__name__}"
                 )
-        if len(clouds) > MAX_CLOUDS:
-            raise ValueError(f"scene.clouds holds at most {MAX_CLOUDS} clouds, got {len(clouds)}")
+        if len(clouds) > MAX_DRAWABLES:
+            raise ValueError(
+                f"scene.clouds holds at most {MAX_DRAWABLES} drawables, got {len(clouds)}"
+            )
         object.__setattr__(self, "clouds", tuple(clouds))
         parts = (("sun", Sun), ("sky", Sky), ("noise", Noise), ("settings", RenderSettings))
         for name, cls in parts:

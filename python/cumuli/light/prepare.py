@@ -87,6 +87,7 @@ def clear_memo() -> None:
     with _memo_lock:
         _memo.clear()
         _particle_memo.clear()
+        _resolved.clear()
         _particle_floats = 0
 
 
@@ -185,16 +186,26 @@ def _invariants(cloud: ParticleCloud) -> tuple[str, np.ndarray, float]:
     return known
 
 
-def _particle_lookup(cloud: ParticleCloud, scene: Scene) -> tuple[Any, ParticleLight | None]:
-    dirs = light_directions([scene.sun, *scene.lights])
+# The light each cloud object was last given, by the scene part of the key: the frames of a
+# camera path find it without comparing particles again.
+_resolved: weakref.WeakKeyDictionary[ParticleCloud, tuple[Any, ParticleLight]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _particle_lookup(cloud: ParticleCloud, common: Any) -> tuple[Any, ParticleLight | None]:
     digest, rel, radius = _invariants(cloud)
-    key = (digest, dirs.tobytes(), tuple(scene.sprite_settings.light_dict().items()))
+    key = (digest, *common)
+    known = _resolved.get(cloud)
+    if known is not None and known[0] == key:
+        return key, known[1]
     with _memo_lock:
         for rel_e, radius_e, light in _particle_memo.get(key, ()):
             if rel_e.shape == rel.shape and np.abs(rel_e - rel).max() <= 1e-5 * max(
                 radius, radius_e
             ):
                 _particle_memo.move_to_end(key)
+                _resolved[cloud] = (key, light)
                 return key, light
     return key, None
 
@@ -226,6 +237,10 @@ def particles_light_many(
     """:func:`particles_light` of several clouds; those to compute share one C++ call (clouds ×
     lights over the threads)."""
     lights = [scene.sun, *scene.lights]
+    common = (
+        light_directions(lights).tobytes(),
+        tuple(scene.sprite_settings.light_dict().items()),
+    )
     out: list[Any] = [None] * len(clouds)
     todo: list[tuple[Any, int]] = []
     for i, (cloud, g) in enumerate(zip(clouds, given, strict=True)):
@@ -237,7 +252,7 @@ def particles_light_many(
             if light_is_stale(g, cloud, lights, scene.sprite_settings) is None:
                 out[i] = g
                 continue
-        key, hit = _particle_lookup(cloud, scene)
+        key, hit = _particle_lookup(cloud, common)
         if hit is not None:
             out[i] = hit
         else:
@@ -248,6 +263,7 @@ def particles_light_many(
         )
         for (key, i), light in zip(todo, made, strict=True):
             _particle_remember(key, clouds[i], light)
+            _resolved[clouds[i]] = (key, light)
             out[i] = light
     return out
 

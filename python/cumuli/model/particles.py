@@ -132,6 +132,7 @@ class ParticleCloud:
                 raise TypeError(f"{name} must be a mapping, got {type(value).__name__}")
         self.params: dict[str, Any] = dict(params or {})
         self.stats: dict[str, Any] = dict(stats or {})
+        self._sphere_cache: Any = None
 
     # --- arrays and geometry ------------------------------------------------------------------
     @property
@@ -162,9 +163,15 @@ class ParticleCloud:
         """``(centres, radii, tau, albedo)`` as the C++ core takes them."""
         return self._centres, self._radii, self._tau, self._albedo
 
+    def _sphere_data(self) -> tuple[Any, Any, Any, float]:
+        # Arrays are read-only: computed once (renderers ask for it every frame).
+        if self._sphere_cache is None:
+            self._sphere_cache = _core.particle_sphere(*self.core_args())
+        return self._sphere_cache
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """``(lo, hi)``: the AABB of centres ± radii, float32 as the core computes it."""
-        lo, hi, _, _ = _core.particle_sphere(*self.core_args())
+        lo, hi, _, _ = self._sphere_data()
         return np.array(lo, dtype=np.float32), np.array(hi, dtype=np.float32)
 
     def layer_box(self) -> tuple[np.ndarray, np.ndarray]:
@@ -174,7 +181,7 @@ class ParticleCloud:
     @property
     def sphere(self) -> tuple[np.ndarray, float]:
         """Bounding sphere ``(c, R)``: ``c`` the AABB centre, ``R = max_k(|p_k − c| + r_k)``."""
-        _, _, centre, radius = _core.particle_sphere(*self.core_args())
+        _, _, centre, radius = self._sphere_data()
         return np.array(centre, dtype=np.float32), float(radius)
 
     # --- values derived from this one ---------------------------------------------------------

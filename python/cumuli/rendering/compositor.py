@@ -37,6 +37,8 @@ from cumuli.sky import Sun, as_sky, sky_args
 TILE = 1024
 #: Largest image accepted, in pixels (2²⁶ RGBA32F pixels = 1 GiB of output).
 MAX_PIXELS = 1 << 26
+#: Most bytes the layers of one layered render may take (one (H, W, 4) float32 layer per call).
+MAX_LAYER_BYTES = 1 << 31
 #: Largest image edge of the CPU backend.
 MAX_EDGE = 1 << 14
 BACKENDS = ("gl", "cpu")
@@ -126,6 +128,20 @@ def _check_kinds(scene: Scene, drawers: dict[str, Any], backend: str) -> None:
     for k, kind in enumerate(scene.kinds):
         if kind not in drawers:
             raise TypeError(f"scene.clouds[{k}]: the {backend} backend has no drawer for {kind!r}")
+
+
+def _check_layers(scene: Scene, width: int, height: int) -> None:
+    """The layers of a layered render (one per draw call) must fit in ``MAX_LAYER_BYTES``."""
+    calls = plan(scene)
+    if len(calls) == 1 and not scene.solids:
+        return
+    need = len(calls) * width * height * 16
+    if need > MAX_LAYER_BYTES:
+        raise ValueError(
+            f"the scene's {len(calls)} layers of {width}x{height} pixels need {need >> 20} MiB, "
+            f"more than {MAX_LAYER_BYTES >> 20} MiB: render a smaller image or fewer drawables "
+            "of mixed kinds (drawables of one grouped kind share a layer)"
+        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -287,6 +303,7 @@ class Renderer:
         width, height = _check_size(width, height, self.max_texture_size, "GL_MAX_TEXTURE_SIZE")
         cache = self._cache_arg(impostors)
         _check_kinds(plain, GL_DRAWERS, "GL")
+        _check_layers(plain, width, height)
         for kind, indices in plan(plain):  # before the light pass, which could be long
             GL_DRAWERS[kind].check(plain, indices)
         lit = prepare_light(plain) if lit is None else lit
@@ -392,6 +409,7 @@ def render_cpu(
             f"impostors must be a cumuli.ImpostorCache or None, got {type(impostors).__name__}"
         )
     _check_kinds(plain, CPU_DRAWERS, "CPU")
+    _check_layers(plain, width, height)
     lit = prepare_light(plain, threads=threads) if lit is None else lit
     return compose(lit, camera, width, height, CPUPainter(threads), threads, impostors)
 

@@ -45,7 +45,7 @@ from cumuli import _core
 from cumuli.camera import Camera
 from cumuli.light.prepare import LitScene
 from cumuli.model.particles import ParticleCloud
-from cumuli.rendering.impostors import ImpostorState, needs_update
+from cumuli.rendering.impostors import ImpostorState, view_reason
 from cumuli.rendering.particle_layers import sort_key
 from cumuli.rendering.solids import composite_split, solids_inside
 from cumuli.sprites import camera_dict
@@ -133,6 +133,8 @@ class Impostor:
 
     @property
     def plane(self) -> np.ndarray:
+        if not self.offset.any():
+            return self.plane0
         p = self.plane0.copy()
         p[0:3] += self.offset
         return p
@@ -229,6 +231,7 @@ class ImpostorCache:
         }  # fmt: skip
         splats0 = painter.splats()
         cam = camera_dict(camera, width, height, s.near)
+        eye = tuple(float(v) for v in camera.position)
         seen: set[int] = set()
         layers: list[np.ndarray] = []
         boxes: list[np.ndarray] = []
@@ -257,9 +260,7 @@ class ImpostorCache:
                     reach_c, reach_r = entry.plane[0:3], max(entry.reach(), radius)
                 else:
                     reach_c, reach_r = centre, radius
-                if s.cull and _core.sphere_outside_frustum(
-                    tuple(float(v) for v in reach_c), float(reach_r), cam
-                ):
+                if s.cull and _core.sphere_outside_frustum(reach_c, reach_r, cam):
                     record["culled"] += 1
                     if entry is not None:
                         entry.culled += 1
@@ -280,13 +281,13 @@ class ImpostorCache:
                 entry.culled = 0
                 record["impostors"] += 1
                 record["screen"] += int(entry.clamp)
-                dist = float(np.linalg.norm(entry.plane[0:3] - np.asarray(camera.position)))
-                quads.append((-dist, len(quads), entry))
-                lo_hi.append(self._box(drawable, []))
+                # Back to front by the distance to the cloud's centre, as direct rendering.
+                quads.append((-math.dist(centre, eye), len(quads), entry))
+                lo_hi.append(drawable.layer_box())
             if quads:
                 ordered = [q for _, _, q in sorted(quads, key=lambda t: (t[0], t[1]))]
                 layers.append(painter.display(ordered, camera, width, height, s.exact))
-                stacked = np.stack(lo_hi)
+                stacked = np.asarray(lo_hi, np.float32)
                 boxes.append(np.stack([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)]))
         for k in [k for k in self._entries if k not in seen or k >= len(scene.clouds)]:
             painter.forget(self._entries.pop(k))
@@ -322,7 +323,8 @@ class ImpostorCache:
             return "cloud", zero
         if stale_token or not _same_light(entry.light, lit.lights[k]):
             return "light", zero
-        return needs_update(entry.state, camera, width, height, s, offset=tuple(offset)), offset
+        eye = tuple(float(v) for v in np.subtract(camera.position, offset))
+        return view_reason(entry.state, eye, camera.fov, width, height, s), offset
 
     @staticmethod
     def _view(state: ImpostorState, camera: Camera, centre: np.ndarray) -> tuple[Any, ...]:

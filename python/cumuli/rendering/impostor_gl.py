@@ -89,10 +89,13 @@ class ImpostorDisplayGL:
             raise
         self.pool = TexturePool(gl)
         self.gpu_time_ns: int | None = None
+        # Uniforms looked up once (a name lookup walks the program's members).
+        self._uniforms = {name: self.program[name] for name in self.program}
 
     def _set(self, name: str, value: Any) -> None:
-        if name in self.program:
-            self.program[name].value = value
+        uniform = self._uniforms.get(name)
+        if uniform is not None:
+            uniform.value = value
 
     def _texture(self, quad: Any) -> Any:
         """The quad's texture, (re)uploaded when its image changed."""
@@ -136,6 +139,13 @@ class ImpostorDisplayGL:
         self._set("u_image_size", (width, height))
         self._set("u_exact", bool(exact))
         self._set("u_image", 0)
+        # Per impostor: (centre, hw), (forward, hh), (right, clamp), (up, 0) as the shader reads.
+        quad = np.zeros((len(quads), 4, 4), np.float32)
+        for a in range(4):
+            quad[:, a, :3] = planes[:, 3 * a : 3 * a + 3]
+        quad[:, 0, 3], quad[:, 1, 3], quad[:, 2, 3] = planes[:, 12], planes[:, 13], clamp
+        blocks = [q.tobytes() for q in quad]
+        u_rect, u_quad = self._uniforms["u_rect"], self._uniforms["u_quad"]
         made: list[Any] = []
         tw, th = min(self.tile, width), min(self.tile, height)
         out = np.empty((height, width, 4), np.float32)
@@ -159,7 +169,7 @@ class ImpostorDisplayGL:
                     self._set("u_tile_size", (w, h))
                     self._set("u_tile_height", h)
                     with query:
-                        for q, tex, plane, rect in zip(quads, textures, planes, rects, strict=True):
+                        for tex, block, rect in zip(textures, blocks, rects, strict=True):
                             j0, j1, i0, i1 = (int(v) for v in rect)
                             # The part of the rectangle inside this tile.
                             j0, j1 = max(j0, x0), min(j1, x0 + w - 1)
@@ -167,13 +177,8 @@ class ImpostorDisplayGL:
                             if j0 > j1 or i0 > i1:
                                 continue
                             tex.use(location=0)
-                            self._set("u_rect", (j0, i0, j1, i1))
-                            self._set("u_centre", tuple(plane[0:3].tolist()))
-                            self._set("u_forward", tuple(plane[3:6].tolist()))
-                            self._set("u_right", tuple(plane[6:9].tolist()))
-                            self._set("u_up", tuple(plane[9:12].tolist()))
-                            self._set("u_half", tuple(plane[12:14].tolist()))
-                            self._set("u_clamp", bool(q.clamp))
+                            u_rect.value = (j0, i0, j1, i1)
+                            u_quad.write(block)
                             self.vao.render(moderngl.TRIANGLES, vertices=6)
                         ctx.finish()
                     self.gpu_time_ns += int(query.elapsed)

@@ -353,25 +353,44 @@ def needs_update(
     eye = tuple(
         float(v) for v in np.subtract(check.vec3(camera.position, "camera.position"), shift)
     )
-    if state.screen or needs_screen_impostor(
-        eye, state.centre, state.radius, camera, width, height, s
+    width = check.integer(width, "width", 1, 1 << 15)
+    height = check.integer(height, "height", 1, 1 << 15)
+    return view_reason(state, eye, camera.fov, width, height, s)
+
+
+def view_reason(
+    state: ImpostorState,
+    eye: tuple[float, float, float],
+    fov: float,
+    width: int,
+    height: int,
+    s: ImpostorSettings,
+) -> str | None:
+    """The view tests of :func:`needs_update` (``"screen"``, ``"backwards"``, ``"translation"``,
+    ``"resolution"``) for an eye already moved by the cloud's translation; no validation (the
+    impostor cache calls it for every cloud of every frame)."""
+    th, aspect = math.tan(math.radians(fov) / 2), width / height
+    if state.screen or _core.needs_screen_impostor(
+        eye, state.centre, state.radius, th, aspect, s.near
     ):
         return "screen"
     view = state.view
     assert view is not None
     if _core.impostor_backwards(view.near_point, view.far_point, eye):
         return "backwards"
-    if translation_error(view.near_point, view.far_point, eye) >= s.tolerance:
+    alpha = _core.impostor_translation_error(view.near_point, view.far_point, eye)
+    if math.degrees(alpha) >= s.tolerance:
         return "translation"
     d = math.dist(eye, state.centre)
-    req = float(
-        _core.impostor_required_resolution(
-            focal_length_px(camera, height), state.radius, d, s.res_scale
+    f_px = _core.impostor_focal_length_px(height, fov)
+    req = float(_core.impostor_required_resolution(f_px, state.radius, d, s.res_scale))
+    if s.resolution_rule == "paper":
+        now = int(_core.impostor_resolution(req, s.min_res, s.max_res, s.pow2))
+    else:
+        near_r = _core.impostor_near_corner_radius(s.near, th, aspect)
+        now = int(
+            _core.impostor_resolution_skyworks(width, height, state.radius, d, near_r, s.min_res)
         )
-    )
-    now = impostor_resolution(
-        req, s, camera=camera, width=width, height=height, radius=state.radius, distance=d
-    )
     if now > state.res:
         return "resolution"
     return None

@@ -28,11 +28,19 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
+from cumuli.light.particles import light_directions
 from cumuli.light.prepare import LitScene
+from cumuli.rendering.particles import _check_light as check_light
 from cumuli.rendering.particles import particle_sprites
 from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
 from cumuli.sky import sky_args
-from cumuli.sprites import MAX_SPRITES, SpriteLayerRenderer, Sprites, draw_sprites_cpu
+from cumuli.sprites import (
+    MAX_SPRITES,
+    SpriteLayerRenderer,
+    Sprites,
+    camera_dict,
+    draw_sprites_cpu,
+)
 
 #: Sprites splatted by the CPU twin since import (GL drawers count their own).
 cpu_sprites_drawn = [0]
@@ -71,10 +79,33 @@ def _concat(parts: Sequence[Sprites]) -> Sprites:
 def scene_sprites(
     lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int
 ) -> Sprites:
-    """The sprites of the clouds ``indices``, clouds and particles back to front (one batch)."""
-    return _concat(
-        [_cloud_sprites(lit, k, camera, width, height) for k in cloud_order(lit, indices, camera)]
-    )
+    """The sprites of the clouds ``indices``, clouds and particles back to front (one batch):
+    :func:`~cumuli.rendering.particles.particle_sprites` per cloud with the camera, lights and
+    settings prepared once (a field has thousands of clouds)."""
+    scene = lit.scene
+    s = scene.sprite_settings
+    lights = (scene.sun, *scene.lights)
+    dirs = light_directions(lights)
+    radiance = np.array([x.radiance for x in lights], dtype=np.float32).reshape(-1, 3)
+    cam = camera_dict(camera, width, height, s.near)
+    centres, radii, colours, alphas = [], [], [], []
+    for k in cloud_order(lit, indices, camera):
+        cloud, light = scene.clouds[k], lit.lights[k]
+        check_light(cloud, light, lights)
+        index, colour, alpha, _ = _core.particle_sprites(
+            *cloud.core_args(), light.light, dirs, radiance, cam, s.solid_angle, s.phase, s.hg_g,
+            s.ambient, s.sort, True,
+        )  # fmt: skip
+        centres.append(cloud.centres[index])
+        radii.append(cloud.radii[index])
+        colours.append(colour)
+        alphas.append(alpha)
+    if not centres:
+        return _concat([])
+    return Sprites(
+        centres=np.concatenate(centres), half_sizes=np.concatenate(radii),
+        colours=np.concatenate(colours), alpha=np.concatenate(alphas),
+    )  # fmt: skip
 
 
 def split_sprites(
