@@ -294,6 +294,7 @@ def plot(data: dict[str, Any], path: Any) -> None:
         ax2 = axes[2].twinx()
         ax2.plot(t, [p["updates"] for p in pop["tolerances"]], "s--", color="C1", label="updates")
         ax2.set_ylabel("impostor updates along the orbit")
+        ax2.legend(loc="upper center", fontsize=7)
         axes[2].set(xlabel="tolerance (deg)", ylabel="popping (max |Δ| above direct)",
                     title="popping vs tolerance")  # fmt: skip
     for ax in axes:

@@ -11,6 +11,7 @@ import pytest
 import cumuli as cu
 from cumuli.rendering.painters import CPUPainter
 from cumuli.rendering.solids import composite_split, draw_solids_cpu
+from cumuli.sky import sky_args
 
 W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
@@ -226,3 +227,93 @@ def test_bad_solid_arrays() -> None:
         _core.draw_solids(bad, np.zeros((1, 3)), np.zeros((1, 3)), *view)
     with pytest.raises(ValueError, match="one fewer"):
         composite_split(np.zeros((2, 4, 4, 4)), np.zeros((2, 4, 4, 4)))
+
+
+@pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
+def test_impostors_split_only_around_solids_inside_the_cloud(backend: str) -> None:
+    """§10.3.6: a solid inside the bounding sphere splits the cloud's impostor (every frame); one
+    outside does not. The split image keeps the solid opaque where it shows."""
+    pc = cu.particle_cumulus((0, 2, 0), 300, seed=5, radius=(2.0, 3.5))
+    base = cu.Scene([pc], sun=SUN, sprite_settings=cu.SpriteSettings(ambient=(0.1,) * 3))
+    inside = base.replace(solids=(cu.Solid((1.0, 3.0, -1.0), 2.5, (0.9, 0.9, 0.2)),))
+    outside = base.replace(solids=(cu.Solid((0.0, 3.0, -45.0), 2.5, (0.9, 0.9, 0.2)),))
+    cam = cu.Camera((6.0, 6.0, -60.0), (0.0, 2.0, 0.0), fov=35)
+    for scene, split in ((inside, 1), (outside, 0)):
+        cache = cu.ImpostorCache()
+        for _ in range(2):
+            img = cu.render(scene, cam, W, H, backend=backend, impostors=cache)
+        assert cache.history[-1]["split"] == split
+        assert cache.history[-1]["updates"] == ({"split": 1} if split else {})
+        srgb = draw_solids_cpu(scene.solids, SUN, cam, W, H)
+        hit = np.isfinite(srgb[..., 3])
+        assert hit.sum() > 5 and (img[hit][:, 3] == 1.0).all()
+    # Split impostors against direct depth-tested splats: the same picture up to the cuts.
+    direct = cu.render(inside, cam, W, H, backend=backend)
+    split_img = cu.render(inside, cam, W, H, backend=backend, impostors=cu.ImpostorCache())
+    assert np.abs(split_img - direct).mean() < 2e-2
+
+
+@pytest.mark.gl
+def test_split_impostors_gl_and_cpu_agree_in_exact_mode() -> None:
+    pc = cu.particle_cumulus((0, 2, 0), 300, seed=5, radius=(2.0, 3.5))
+    scene = cu.Scene(
+        [pc], sun=SUN, solids=(cu.Solid((1.0, 3.0, -1.0), 2.5),),
+        impostor_settings=cu.ImpostorSettings(exact=True),
+    )  # fmt: skip
+    cam = cu.Camera((6.0, 6.0, -60.0), (0.0, 2.0, 0.0), fov=35)
+    gl = cu.render(scene, cam, W, H, impostors=cu.ImpostorCache())
+    cpu = cu.render(scene, cam, W, H, backend="cpu", impostors=cu.ImpostorCache())
+    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5
+
+
+def test_solids_and_impostors_do_not_depend_on_the_thread_count() -> None:
+    pc = cu.particle_cumulus((0, 2, 0), 300, seed=5, radius=(2.0, 3.5))
+    scene = cu.Scene(
+        [pc, cu.gaussian_cumulus(centre=(20, 0, 30), seed=1)], sun=SUN, solids=(RED,),
+        noise=cu.Noise(seed=7, size=32),
+    )  # fmt: skip
+    one = cu.render_cpu(scene, CAMERA, W, H, threads=1, impostors=cu.ImpostorCache())
+    two = cu.render_cpu(scene, CAMERA, W, H, threads=2, impostors=cu.ImpostorCache())
+    np.testing.assert_array_equal(one, two)
+    np.testing.assert_array_equal(
+        cu.render_cpu(scene, CAMERA, W, H, threads=1), cu.render_cpu(scene, CAMERA, W, H, threads=3)
+    )
+
+
+def test_bad_impostor_and_composite_arrays() -> None:
+    from cumuli import _core
+
+    cam = ((0, 0, -5), (0, 0, 0), (0, 1, 0), 40.0)
+    with pytest.raises(ValueError, match="planes"):
+        _core.display_impostors([np.zeros((2, 2, 4), np.float32)], np.zeros((1, 13), np.float32),
+                                np.zeros(1, bool), *cam, 8, 8)  # fmt: skip
+    with pytest.raises(ValueError, match="one image per"):
+        _core.display_impostors([], np.zeros((1, 14), np.float32), np.zeros(1, bool), *cam, 8, 8)
+    plane = np.zeros((1, 14), np.float32)
+    plane[0, 3:6], plane[0, 6:9], plane[0, 9:12] = (0, 0, 1), (1, 0, 0), (0, 1, 0)
+    with pytest.raises(ValueError, match="half sizes"):
+        _core.display_impostors([np.zeros((2, 2, 4), np.float32)], plane, np.zeros(1, bool),
+                                *cam, 8, 8)  # fmt: skip
+    with pytest.raises(ValueError, match="solid must have shape"):
+        _core.composite_layers(np.zeros((1, 4, 4, 4), np.float32), np.zeros((1, 2, 3), np.float32),
+                               *cam, sky_args(cu.Sky()), (0, 1, 0), (1, 1, 1), 0,
+                               np.zeros((3, 3, 4), np.float32))  # fmt: skip
+
+
+def test_marched_cloud_impostors_stop_at_a_solid_inside() -> None:
+    # [H] §7.5's "better for marched clouds": through impostors a 2018 cloud holding a solid is
+    # drawn stopping at it, regenerated every frame; once the solid has left, one more update
+    # drops the clipped image and the impostor is reused again.
+    scene = scene_with(RED, absorption=0.003)
+    cache = cu.ImpostorCache()
+    for _ in range(2):
+        img = cu.render_cpu(scene, CAMERA, W, H, impostors=cache)
+        assert cache.history[-1]["updates"] in ({"missing": 1}, {"clip": 1})
+    assert cache.history[-1]["updates"] == {"clip": 1}
+    direct = cu.render_cpu(scene, CAMERA, W, H)
+    assert np.abs(img - direct).mean() < 2e-2
+    away = scene.replace(solids=(cu.Solid((0.0, 2.0, -45.0), 1.0),))
+    cu.render_cpu(away, CAMERA, W, H, impostors=cache)
+    assert cache.history[-1]["updates"] == {"clip": 1}
+    cu.render_cpu(away, CAMERA, W, H, impostors=cache)
+    assert cache.history[-1]["updates"] == {}

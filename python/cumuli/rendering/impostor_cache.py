@@ -129,6 +129,7 @@ class Impostor:
         self.clamp = False
         self.version = 0
         self.culled = 0
+        self.clipped = False  # drawn stopping at solids (valid for its eye only)
         self.gl_texture: Any = None
 
     @property
@@ -253,8 +254,11 @@ class ImpostorCache:
                 entry = self._entries.get(k)
                 reason, offset = self._reason(entry, k, kind, drawable, lit, stale_token, camera,
                                               width, height, s)  # fmt: skip
-                if inside and painter.clips_solids(kind):
-                    reason = "clip"
+                clip_now = bool(inside) and painter.clips_solids(kind)
+                if clip_now:
+                    reason = "clip"  # drawn stopping at the solids: valid for this eye only
+                elif reason is None and entry is not None and entry.clipped:
+                    reason = "clip"  # the solid left: the clipped image must go
                 # Cull with what the display can cover: a fresh impostor stays in the sphere.
                 if reason is None and entry is not None:
                     reach_c, reach_r = entry.plane[0:3], max(entry.reach(), radius)
@@ -271,7 +275,7 @@ class ImpostorCache:
                     continue
                 if reason is not None:
                     entry = self._generate(
-                        entry, k, kind, drawable, lit if reason == "clip" else plain, centre,
+                        entry, k, kind, drawable, lit if clip_now else plain, centre,
                         radius, camera, width, height, s, painter,
                     )  # fmt: skip
                     record["updates"][reason] += 1
@@ -359,6 +363,7 @@ class ImpostorCache:
         entry.drawable, entry.light, entry.state = drawable, lit.lights[k], state
         entry.anchor0, entry.offset = np.asarray(centre, np.float64), np.zeros(3)
         entry.clamp = state.screen
+        entry.clipped = bool(lit.scene.solids)
         entry.version += 1
         self._entries[k] = entry
         return entry
