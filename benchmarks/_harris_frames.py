@@ -131,7 +131,7 @@ def sweep(renderer: Any, quick: bool, software: bool) -> dict[str, Any]:
     elif software:
         counts, frames, size = [100, 200, 400, 800, 1600], 10, (160, 120)
     else:
-        counts, frames, size = [100, 200, 400, 800, 1600, 3200, 6400, 12800], 30, (640, 480)
+        counts, frames, size = [100, 200, 400, 800, 1600, 3200, 6400, 12800], 20, (640, 480)
     points = []
     for n in counts:
         scene, side = field(n)

@@ -257,3 +257,7 @@ def test_a_cache_belongs_to_one_renderer() -> None:
         b.render(scene(), CAMERA, 16, 12, impostors=True)
         b.render(scene(), CAMERA, 16, 12, impostors=True)
         assert b.impostor_cache.stats["frames"] == 2
+    # Once its renderer is closed, a cache moves on to another one and keeps its impostors.
+    with cu.Renderer() as c:
+        c.render(scene(), CAMERA, 16, 12, impostors=cache)
+        assert cache.history[-1]["updates"] == {} and cache.renderer is c

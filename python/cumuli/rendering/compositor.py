@@ -327,10 +327,11 @@ class Renderer:
                 f"impostors must be a cumuli.ImpostorCache, True or None, got "
                 f"{type(impostors).__name__}"
             )
-        if impostors.renderer is None:
-            impostors.renderer = self
-        elif impostors.renderer is not self:
-            raise ValueError("this ImpostorCache belongs to another Renderer")
+        if impostors.renderer is not None and impostors.renderer is not self:
+            if not getattr(impostors.renderer, "closed", False):
+                raise ValueError("this ImpostorCache belongs to another Renderer")
+            impostors.detach()  # its renderer is closed: keep the images, re-upload them here
+        impostors.renderer = self
         return impostors
 
     # --- lifetime ---------------------------------------------------------------------------

@@ -203,6 +203,14 @@ class ImpostorCache:
 
     release = clear
 
+    def detach(self) -> None:
+        """Forget the GL textures of a closed renderer (the images stay and are uploaded again
+        by the next GL renderer)."""
+        for e in self._entries.values():
+            e.gl_texture = None
+        self._painter = None
+        self.renderer = None
+
     # --- one frame -----------------------------------------------------------------------------
     def layers(
         self,
