@@ -19,12 +19,9 @@ uniform ivec2 u_image_size;
 uniform ivec2 u_tile_origin;
 uniform int u_tile_height;
 
-uniform vec3 u_centre;
-uniform vec3 u_forward;
-uniform vec3 u_right;
-uniform vec3 u_up;
-uniform vec2 u_half;     // hw, hh
-uniform bool u_clamp;
+// The impostor's plane in one array (one upload per impostor): (centre, hw), (forward, hh),
+// (right, clamp: 1 for a screen impostor), (up, 0).
+uniform vec4 u_quad[4];
 uniform bool u_exact;
 uniform sampler2D u_image;  // RGBA32F, row 0 = top of the impostor image
 
@@ -41,6 +38,10 @@ float lerp1(float a, float b, float t) {
 }
 
 void main() {
+    vec3 u_centre = u_quad[0].xyz, u_forward = u_quad[1].xyz;
+    vec3 u_right = u_quad[2].xyz, u_up = u_quad[3].xyz;
+    vec2 u_half = vec2(u_quad[0].w, u_quad[1].w);
+    bool u_clamp = u_quad[2].w > 0.5;
     int j = u_tile_origin.x + int(gl_FragCoord.x);
     int i = u_tile_origin.y + (u_tile_height - 1 - int(gl_FragCoord.y));
     float W = float(u_image_size.x), H = float(u_image_size.y);
