@@ -1,6 +1,9 @@
-"""Harris 2002 particle light pass (spec harris.md §12.6 part (a)): time against particle count
-and light-buffer size for the C++ reference on 1 and 2 threads, the GLSL compute twin and the
-faithful 2002 read-back path (blended quads + one glReadPixels per particle), in one run.
+"""Harris 2002 particles (spec harris.md §12.6). Part (a), the light pass: time against particle
+count and light-buffer size for the C++ reference on 1 and 2 threads, the GLSL compute twin and
+the faithful 2002 read-back path (blended quads + one glReadPixels per particle), in one run.
+Parts (b)–(d), frame times with and without impostors (``_harris_frames.py``: the Fig. 8 sweep,
+the 34-cloud / 90 000-particle fly-through, popping against tolerance), written to
+``particle_frames.json`` / ``.png``. ``--parts a,b,c,d`` (default all) picks the parts.
 
 Cloud: the default Gaussian cumulus (`cumuli.gaussian_cumulus(seed=0)`) filled with n particles
 (`particle_fill`, seed 1, default radii, τ = 8, albedo 0.9); two lights (the default sun and one
@@ -63,7 +66,51 @@ def time_method(
 
 
 def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parts = set("abcd")
+    if "--parts" in argv:
+        at = argv.index("--parts")
+        if at + 1 >= len(argv) or not set(argv[at + 1].split(",")) <= set("abcd"):
+            raise SystemExit("--parts takes a comma-separated subset of a,b,c,d")
+        parts = set(argv[at + 1].split(","))
+        del argv[at : at + 2]
     args = common.parse_args(__doc__.splitlines()[0], argv)
+    if parts & set("bcd"):
+        frames(args, parts)
+    if "a" in parts:
+        light_pass(args)
+    return 0
+
+
+def frames(args: Any, parts: set[str]) -> None:
+    """Parts (b)–(d) (see ``_harris_frames.py``): one JSON and one plot."""
+    import _harris_frames as hf
+
+    renderer_string, reason = common.gl_renderer()
+    data: dict[str, Any] = {
+        "benchmark": "particle_frames",
+        "quick": bool(args.quick),
+        "machine": common.machine_info(),
+        "gl_unavailable_reason": reason,
+    }
+    if renderer_string is not None:
+        software = not common.gl_timer_reliable(renderer_string)
+        data["software_gl"] = software
+        with cu.Renderer() as renderer:
+            if "b" in parts:
+                data["sweep"] = hf.sweep(renderer, args.quick, software)
+            if "c" in parts:
+                data["big_clouds"] = hf.fly_through_big(renderer, args.quick, software)
+            if "d" in parts:
+                data["popping"] = hf.popping(renderer, args.quick, software)
+    path = common.write_json(args.out / "particle_frames.json", data)
+    if renderer_string is not None:
+        hf.plot(data, args.out / "particle_frames.png")
+    common.log(f"wrote {path}")
+
+
+def light_pass(args: Any) -> None:
+    """Part (a): the light pass."""
     counts = [1000] if args.quick else [1000, 10_000, 100_000]
     resolutions = [32, 64] if args.quick else [32, 64, 128, 256]
     renderer, reason = common.gl_renderer()
@@ -156,7 +203,6 @@ def main(argv: list[str] | None = None) -> int:
     path = common.write_json(args.out / "particles.json", data)
     plot(data, args.out / "particles.png")
     common.log(f"wrote {path} and {args.out / 'particles.png'}")
-    return 0
 
 
 STYLES = {"cpp_1_thread": "-o", "cpp_2_threads": "--o", "glsl_compute": "-s", "readback": "-^"}

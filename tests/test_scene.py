@@ -198,8 +198,12 @@ def test_scene_validation() -> None:
     with pytest.raises(TypeError, match="scene.sun"):
         cu.Scene(sun=(0, 1, 0))
     c = two_clouds()[0]
+    from cumuli.scene import MAX_DRAWABLES
+
+    # A field of particle clouds holds thousands; the GL marcher still draws at most 64 2018
+    # clouds per pass (MarcherGL.check).
     with pytest.raises(ValueError, match="at most"):
-        cu.Scene(clouds=[c] * 65)
+        cu.Scene(clouds=[c] * (MAX_DRAWABLES + 1))
     scene = cu.Scene(clouds=[c])
     cam = scene.default_camera()
     lo, hi = scene.bounds()

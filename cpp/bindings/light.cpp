@@ -775,6 +775,31 @@ void bind_particle_light(py::module_& m) {
       "forward factor, alpha; index (L, N); patch (L, N); frames (L, 4, 3) = centre, f, r, u; R_b).");
 
   m.def(
+      "particle_shadow",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& tau,
+         const FloatArray& albedo, V3 direction, const FloatArray& buffer,
+         const FloatArray& points) {
+        const ParticleView v = particle_view(centres, radii, tau, albedo);
+        const glm::vec3 d = v3(direction);
+        if (!std::isfinite(glm::length(d)) || !(glm::length(d) > 0.0f))
+          throw py::value_error("direction must be finite and non-zero");
+        if (buffer.ndim() != 2 || buffer.shape(0) != buffer.shape(1) || buffer.shape(0) < 1)
+          throw py::value_error("buffer must be a square (N_L, N_L) light buffer");
+        require_points(points, "points");
+        const LightFrame f = light_frame(v, glm::normalize(d));
+        const auto count = static_cast<std::size_t>(points.shape(0));
+        std::vector<glm::vec3> pts(count);
+        for (std::size_t k = 0; k < count; ++k)
+          pts[k] = glm::vec3(points.data()[3 * k], points.data()[3 * k + 1], points.data()[3 * k + 2]);
+        auto out = new_array({points.shape(0)});
+        particle_shadow(f, buffer.data(), static_cast<int>(buffer.shape(0)), pts.data(), count,
+                        out.mutable_data());
+        return out;
+      },
+      "Transmittance of the light through a particle cloud at world points (M, 3), from its "
+      "final light buffer (the shadow map): (M,) float32, 1 outside the buffer or in front.");
+
+  m.def(
       "splat_kernel",
       [](const std::string& kernel, float peak, const FloatArray& d) {
         const SplatKernel k = splat_kernel_kind(kernel);

@@ -11,6 +11,7 @@
 #include "common.hpp"
 #include "cumuli/rendering/composite.hpp"
 #include "cumuli/rendering/impostor.hpp"
+#include "cumuli/rendering/solid.hpp"
 #include "cumuli/rendering/sprite_raster.hpp"
 #include "cumuli/rendering/volume_march.hpp"
 
@@ -86,10 +87,51 @@ RenderCloud cloud_from_dict(const py::handle& h, std::size_t index) {
   return rc;
 }
 
+// Solids as (n, 4) float32 rows (centre xyz, radius), or None: what the marchers clip at.
+std::vector<SolidSphere> solid_spheres(const py::object& obj) {
+  std::vector<SolidSphere> out;
+  if (obj.is_none()) return out;
+  const FloatArray a = obj.cast<FloatArray>();
+  if (a.ndim() != 2 || a.shape(1) != 4)
+    throw py::value_error("solids must have shape (n, 4): centre x, y, z and radius");
+  if (a.shape(0) > kMaxSolids) throw py::value_error("at most 16 solids");
+  for (py::ssize_t k = 0; k < a.shape(0); ++k) {
+    const float* r = a.data() + 4 * k;
+    SolidSphere sp;
+    sp.centre = glm::vec3(r[0], r[1], r[2]);
+    sp.radius = r[3];
+    try {
+      sp.validate();
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error("solids[" + std::to_string(k) + "]: " + e.what());
+    }
+    out.push_back(sp);
+  }
+  return out;
+}
+
+CameraParams camera_params(const py::handle& position, const py::handle& target,
+                           const py::handle& up, float fov);
+
 MarchMode march_mode(const std::string& s) {
   if (s == "paper") return MarchMode::Paper;
   if (s == "union") return MarchMode::Union;
   throw py::value_error("march must be 'paper' or 'union', got '" + s + "'");
+}
+
+CameraParams camera_params(const py::handle& position, const py::handle& target,
+                           const py::handle& up, float fov) {
+  CameraParams cam;
+  cam.position = vec3_arg(position, "camera position");
+  cam.target = vec3_arg(target, "camera target");
+  cam.up = vec3_arg(up, "camera up");
+  cam.fov = finite(fov, "fov");
+  try {
+    cam.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return cam;
 }
 
 }  // namespace
@@ -105,7 +147,8 @@ void bind_march(py::module_& m) {
          float lod_a, float lod_delta, float ref_step, float step_min, float step_max,
          float fixed_step, float hg_g, int max_steps, int max_candidates, const std::string& march,
          int octaves, float gain, float lacunarity, float frequency, const Noise* noise,
-         int threads, float density_constant, bool sort_candidates, bool with_sky) {
+         int threads, float density_constant, bool sort_candidates, bool with_sky,
+         const py::object& solids) {
         if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
           throw py::value_error("width and height must be in [1, " + std::to_string(kMaxEdge) +
                                 "], got " + std::to_string(width) + "x" + std::to_string(height));
@@ -148,6 +191,7 @@ void bind_march(py::module_& m) {
         scene.sky.sun_disc_intensity = sun_disc_intensity;
         scene.noise = noise;
         scene.with_sky = with_sky;
+        scene.solids = solid_spheres(solids);
         scene.clouds.reserve(clouds.size());
         for (std::size_t i = 0; i < clouds.size(); ++i)
           scene.clouds.push_back(cloud_from_dict(clouds[i], i));
@@ -178,10 +222,12 @@ void bind_march(py::module_& m) {
       py::arg("march"), py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"),
       py::arg("frequency"), py::arg("noise").none(true), py::arg("threads") = 0,
       py::arg("density_constant") = -1.0f, py::arg("sort_candidates") = true, py::arg("with_sky") = true,
+      py::arg("solids") = py::none(),
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image, row 0 at "
       "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
       "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); sort_candidates=False leaves candidates "
-      "unsorted (candidate_sort='none'); with_sky=False gives the premultiplied layer (colour, 1 − T).");
+      "unsorted (candidate_sort='none'); with_sky=False gives the premultiplied layer (colour, 1 − T); "
+      "solids (n, 4) (centre, radius) stop every ray at the nearest solid.");
 }
 
 void bind_volume_march(py::module_& m) {
@@ -189,7 +235,8 @@ void bind_volume_march(py::module_& m) {
       "render_volume_cpu",
       [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi, V3 position, V3 forward,
          V3 right, V3 up, float tan_half_fov, int width, int height, V3 sun_dir, V3 sun_radiance,
-         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads, bool with_sky) {
+         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads, bool with_sky,
+         const py::object& solids) {
         const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
         const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
         if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
@@ -206,6 +253,7 @@ void bind_volume_march(py::module_& m) {
         p.g = g;
         p.step = step;
         p.with_sky = with_sky;
+        p.solids = solid_spheres(solids);
         const float *pd = density.data(), *pl = light.data();
         std::vector<float> img;
         {
@@ -214,7 +262,13 @@ void bind_volume_march(py::module_& m) {
         }
         return to_array(img, {height, width, 4});
       },
-      "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top.");
+      py::arg("density"), py::arg("light"), py::arg("lo"), py::arg("hi"), py::arg("position"),
+      py::arg("forward"), py::arg("right"), py::arg("up"), py::arg("tan_half_fov"),
+      py::arg("width"), py::arg("height"), py::arg("sun_dir"), py::arg("sun_radiance"),
+      py::arg("sky"), py::arg("sigma_t"), py::arg("albedo"), py::arg("g"), py::arg("step"),
+      py::arg("threads"), py::arg("with_sky"), py::arg("solids") = py::none(),
+      "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top; "
+      "solids (n, 4) stop every ray at the nearest solid.");
 }
 
 void bind_composite(py::module_& m) {
@@ -223,7 +277,7 @@ void bind_composite(py::module_& m) {
       [](const FloatArray& layers, const FloatArray& boxes, const py::handle& camera_position,
          const py::handle& camera_target, const py::handle& camera_up, float fov,
          const py::tuple& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
-         int threads) {
+         int threads, const py::object& solid) {
         if (layers.ndim() != 4 || layers.shape(3) != 4)
           throw py::value_error("layers must have shape (L, H, W, 4)");
         const py::ssize_t n = layers.shape(0), height = layers.shape(1), width = layers.shape(2);
@@ -256,20 +310,102 @@ void bind_composite(py::module_& m) {
         } catch (const std::invalid_argument& e) {
           throw py::value_error(e.what());
         }
+        FloatArray solid_image;
+        const float* solid_ptr = nullptr;
+        if (!solid.is_none()) {
+          solid_image = solid.cast<FloatArray>();
+          if (solid_image.ndim() != 3 || solid_image.shape(0) != height ||
+              solid_image.shape(1) != width || solid_image.shape(2) != 4)
+            throw py::value_error("solid must have shape (H, W, 4) like the layers");
+          solid_ptr = solid_image.data();
+        }
         auto out = new_array({height, width, 4});
         float* dst = out.mutable_data();
         {
           py::gil_scoped_release release;
           composite_layers(list, cam, static_cast<int>(width), static_cast<int>(height), sk, sun,
-                           dst, threads);
+                           dst, threads, solid_ptr);
         }
         return out;
       },
       py::arg("layers"), py::arg("boxes"), py::arg("camera_position"), py::arg("camera_target"),
       py::arg("camera_up"), py::arg("fov"), py::arg("sky"), py::arg("sun_direction"),
-      py::arg("sun_radiance"), py::arg("threads") = 0,
+      py::arg("sun_radiance"), py::arg("threads") = 0, py::arg("solid") = py::none(),
       "Composite premultiplied layers (L, H, W, 4) over the sky, front to back per pixel by the "
-      "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top.");
+      "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top. "
+      "solid (H, W, 4): rgb and view depth of opaque solids (+inf where none), which hide the "
+      "layers entered behind them.");
+
+  m.def(
+      "draw_solids",
+      [](const FloatArray& spheres, const FloatArray& colours, const FloatArray& ambient,
+         const py::handle& camera_position, const py::handle& camera_target,
+         const py::handle& camera_up, float fov, int width, int height,
+         const py::handle& sun_direction, const py::handle& sun_radiance, int threads) {
+        std::vector<SolidSphere> solids = solid_spheres(spheres);
+        const auto n = static_cast<py::ssize_t>(solids.size());
+        for (const auto* a : {&colours, &ambient})
+          if (a->ndim() != 2 || a->shape(0) != n || a->shape(1) != 3)
+            throw py::value_error("colours and ambient must have shape (n, 3)");
+        for (py::ssize_t k = 0; k < n; ++k) {
+          const float* c = colours.data() + 3 * k;
+          const float* a = ambient.data() + 3 * k;
+          solids[static_cast<std::size_t>(k)].colour = glm::vec3(c[0], c[1], c[2]);
+          solids[static_cast<std::size_t>(k)].ambient = glm::vec3(a[0], a[1], a[2]);
+        }
+        if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge ||
+            py::ssize_t{width} * height > kMaxPixels)
+          throw py::value_error("width and height must be in [1, 32768] (at most 2^26 pixels)");
+        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
+        const CameraParams cam = camera_params(camera_position, camera_target, camera_up, fov);
+        SunParams sun;
+        const glm::vec3 sd = vec3_arg(sun_direction, "sun direction");
+        if (!(glm::dot(sd, sd) > 0.0f)) throw py::value_error("sun direction must not be zero");
+        sun.direction = glm::normalize(sd);
+        sun.radiance = vec3_arg(sun_radiance, "sun radiance");
+        try {
+          for (const auto& sp : solids) sp.validate();
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        auto out = new_array({height, width, 4});
+        float* dst = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          draw_solids(solids, cam, width, height, sun, dst, threads);
+        }
+        return out;
+      },
+      py::arg("spheres"), py::arg("colours"), py::arg("ambient"), py::arg("camera_position"),
+      py::arg("camera_target"), py::arg("camera_up"), py::arg("fov"), py::arg("width"),
+      py::arg("height"), py::arg("sun_direction"), py::arg("sun_radiance"), py::arg("threads") = 0,
+      "The solid image of opaque spheres (n, 4): (H, W, 4) rgb (Lambert + ambient) and the view "
+      "depth of the nearest solid (+inf where none), row 0 on top.");
+
+  m.def(
+      "composite_split",
+      [](const FloatArray& layers, const FloatArray& solids, int threads) {
+        if (layers.ndim() != 4 || layers.shape(3) != 4 || layers.shape(0) < 1)
+          throw py::value_error("layers must have shape (m + 1, H, W, 4)");
+        const py::ssize_t m = layers.shape(0) - 1, h = layers.shape(1), w = layers.shape(2);
+        if (solids.ndim() != 4 || solids.shape(0) != m || solids.shape(1) != h ||
+            solids.shape(2) != w || solids.shape(3) != 4)
+          throw py::value_error("solids must have shape (m, H, W, 4), one fewer than layers");
+        if (h < 1 || w < 1) throw py::value_error("layers must not be empty");
+        std::vector<const float*> lp, sp;
+        for (py::ssize_t k = 0; k <= m; ++k) lp.push_back(layers.data() + k * h * w * 4);
+        for (py::ssize_t k = 0; k < m; ++k) sp.push_back(solids.data() + k * h * w * 4);
+        auto out = new_array({h, w, 4});
+        float* dst = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          composite_split(lp, sp, static_cast<int>(w), static_cast<int>(h), dst, threads);
+        }
+        return out;
+      },
+      py::arg("layers"), py::arg("solids"), py::arg("threads") = 0,
+      "Harris 2002's split composite: layers farthest first, a solid image between each pair "
+      "(depth test among solids, none for layers): one premultiplied (H, W, 4) layer.");
 }
 
 namespace {
@@ -333,6 +469,55 @@ std::vector<Sprite> sprites_of(const FloatArray& centres, const FloatArray& half
   return out;
 }
 
+// Impostor quads: images (a list of (h, w, 4) float32, or None for geometry only), planes (n, 14)
+// = centre, forward, right, up, half_w, half_h, clamp (n,) booleans.
+std::vector<ImpostorQuad> impostor_quads(const py::object& images, const FloatArray& planes,
+                                         const py::handle& clamp) {
+  if (planes.ndim() != 2 || planes.shape(1) != 14)
+    throw py::value_error("planes must have shape (n, 14)");
+  const py::ssize_t n = planes.shape(0);
+  const auto flags = py::array_t<bool, py::array::c_style | py::array::forcecast>::ensure(clamp);
+  if (!flags || flags.ndim() != 1 || flags.shape(0) != n)
+    throw py::value_error("clamp must be n booleans");
+  std::vector<ImpostorQuad> quads(static_cast<std::size_t>(n));
+  const bool geometry_only = images.is_none();
+  py::list list;
+  if (!geometry_only) {
+    list = images.cast<py::list>();
+    if (static_cast<py::ssize_t>(list.size()) != n)
+      throw py::value_error("one image per impostor plane is needed");
+  }
+  for (py::ssize_t k = 0; k < n; ++k) {
+    ImpostorQuad& q = quads[static_cast<std::size_t>(k)];
+    const float* p = planes.data() + 14 * k;
+    q.centre = glm::vec3(p[0], p[1], p[2]);
+    q.forward = glm::vec3(p[3], p[4], p[5]);
+    q.right = glm::vec3(p[6], p[7], p[8]);
+    q.up = glm::vec3(p[9], p[10], p[11]);
+    q.half_w = p[12];
+    q.half_h = p[13];
+    q.clamp = flags.data()[k];
+    q.width = q.height = 1;
+    if (!geometry_only) {
+      const py::handle img = list[static_cast<std::size_t>(k)];
+      if (!py::isinstance<FloatArray>(img))
+        throw py::type_error("impostor images must be C-contiguous float32 arrays");
+      const auto a = py::reinterpret_borrow<FloatArray>(img);
+      if (a.ndim() != 3 || a.shape(2) != 4 || a.shape(0) < 1 || a.shape(1) < 1)
+        throw py::value_error("impostor images must have shape (h, w, 4)");
+      q.rgba = a.data();
+      q.height = static_cast<int>(a.shape(0));
+      q.width = static_cast<int>(a.shape(1));
+      try {
+        q.validate();
+      } catch (const std::invalid_argument& e) {
+        throw py::value_error("impostor " + std::to_string(k) + ": " + e.what());
+      }
+    }
+  }
+  return quads;
+}
+
 glm::dvec3 dvec(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[1], a[2]); }
 py::tuple dtuple(glm::dvec3 v) { return py::make_tuple(v.x, v.y, v.z); }
 
@@ -345,10 +530,19 @@ void bind_sprites(py::module_& m) {
       [](const FloatArray& centres, const FloatArray& half_sizes, const FloatArray& rotation,
          const FloatArray& colours, const FloatArray& alpha, const IntArray& texture,
          const py::dict& camera, const std::string& kernel, float peak, const py::object& atlas,
-         std::array<int, 2> grid, int threads) {
+         std::array<int, 2> grid, int threads, const py::object& depth) {
         const std::vector<Sprite> sprites =
             sprites_of(centres, half_sizes, rotation, colours, alpha, texture);
         const SpriteCamera cam = sprite_camera(camera);
+        FloatArray depth_array;
+        const float* depth_ptr = nullptr;
+        if (!depth.is_none()) {
+          depth_array = depth.cast<FloatArray>();
+          if (depth_array.ndim() != 2 || depth_array.shape(0) != cam.height ||
+              depth_array.shape(1) != cam.width)
+            throw py::value_error("depth must have shape (H, W) like the image");
+          depth_ptr = depth_array.data();
+        }
         SpriteRasterSettings st;
         st.kernel = kernel_of(kernel);
         st.peak = peak;
@@ -370,14 +564,16 @@ void bind_sprites(py::module_& m) {
         float* dst = out.mutable_data();
         {
           py::gil_scoped_release release;
-          rasterise_sprites(sprites, cam, st, atlas_ptr, dst, threads);
+          rasterise_sprites(sprites, cam, st, atlas_ptr, dst, threads, depth_ptr);
         }
         return out;
       },
       py::arg("centres"), py::arg("half_sizes"), py::arg("rotation"), py::arg("colours"),
       py::arg("alpha"), py::arg("texture"), py::arg("camera"), py::arg("kernel"), py::arg("peak"),
       py::arg("atlas").none(true), py::arg("grid"), py::arg("threads") = 0,
-      "Rasterise view-plane-parallel sprites back to front into a premultiplied (H, W, 4) layer.");
+      py::arg("depth") = py::none(),
+      "Rasterise view-plane-parallel sprites back to front into a premultiplied (H, W, 4) layer; "
+      "depth (H, W): a sprite covers only pixels where its view depth is smaller.");
 
   m.def(
       "project_sprites",
@@ -449,15 +645,18 @@ void bind_sprites(py::module_& m) {
         py::array_t<std::int64_t> index(m_);
         auto colour = new_array({m_, 3});
         auto alpha = new_array({m_});
+        auto key = new_array({m_});
         for (py::ssize_t i = 0; i < m_; ++i) {
           index.mutable_data()[i] = list.index[static_cast<std::size_t>(i)];
+          key.mutable_data()[i] = list.key[static_cast<std::size_t>(i)];
           for (int a = 0; a < 3; ++a)
             colour.mutable_data()[3 * i + a] = list.colour[static_cast<std::size_t>(i)][a];
           alpha.mutable_data()[i] = list.alpha[static_cast<std::size_t>(i)];
         }
-        return py::make_tuple(index, colour, alpha);
+        return py::make_tuple(index, colour, alpha, key);
       },
-      "Eye pass sprites of a particle cloud: (index back to front, colours (M, 3), alpha (M,)).");
+      "Eye pass sprites of a particle cloud: (index back to front, colours (M, 3), alpha (M,), "
+      "sort keys (M,)).");
 
   m.def(
       "sphere_outside_frustum",
@@ -511,6 +710,58 @@ void bind_impostors(py::module_& m) {
         },
         "Whether the sphere must be drawn through a screen impostor from the eye.");
   m.def("screen_impostor_size", &screen_impostor_size, "⌈size/factor⌉.");
+
+  m.def(
+      "display_impostors",
+      [](const py::list& images, const FloatArray& planes, const py::handle& clamp,
+         const py::handle& camera_position, const py::handle& camera_target,
+         const py::handle& camera_up, float fov, int width, int height, int threads) {
+        const std::vector<ImpostorQuad> quads = impostor_quads(images, planes, clamp);
+        if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge ||
+            py::ssize_t{width} * height > kMaxPixels)
+          throw py::value_error("width and height must be in [1, 32768] (at most 2^26 pixels)");
+        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
+        const CameraParams cam = camera_params(camera_position, camera_target, camera_up, fov);
+        auto out = new_array({height, width, 4});
+        float* dst = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          display_impostors(quads, cam, width, height, dst, threads);
+        }
+        return out;
+      },
+      py::arg("images"), py::arg("planes"), py::arg("clamp"), py::arg("camera_position"),
+      py::arg("camera_target"), py::arg("camera_up"), py::arg("fov"), py::arg("width"),
+      py::arg("height"), py::arg("threads") = 0,
+      "Impostors drawn back to front (spec harris.md §7.2, exact bilinear): images (h, w, 4) "
+      "premultiplied, planes (n, 14) = centre, forward, right, up, half_w, half_h; clamp (n,) "
+      "bool. An (H, W, 4) premultiplied layer, row 0 on top.");
+
+  m.def(
+      "impostor_rects",
+      [](const FloatArray& planes, const py::handle& clamp, const py::handle& camera_position,
+         const py::handle& camera_target, const py::handle& camera_up, float fov, int width,
+         int height) {
+        const py::ssize_t n = planes.ndim() == 2 ? planes.shape(0) : 0;
+        static const float one_texel[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+        std::vector<ImpostorQuad> quads = impostor_quads(py::none(), planes, clamp);
+        const CameraParams cam = camera_params(camera_position, camera_target, camera_up, fov);
+        if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
+          throw py::value_error("width and height must be in [1, 32768]");
+        const CameraRays rays(cam, width, height);
+        py::array_t<std::int32_t> out({n, py::ssize_t{4}});
+        for (py::ssize_t k = 0; k < n; ++k) {
+          quads[static_cast<std::size_t>(k)].rgba = one_texel;
+          const PixelRect r = impostor_rect(quads[static_cast<std::size_t>(k)], rays);
+          std::int32_t* o = out.mutable_data() + 4 * k;
+          o[0] = r.j0;
+          o[1] = r.j1;
+          o[2] = r.i0;
+          o[3] = r.i1;
+        }
+        return out;
+      },
+      "Conservative pixel rectangles (n, 4) = j0, j1, i0, i1 (inclusive) of impostor quads.");
 }
 
 }  // namespace cumuli::bind

@@ -23,12 +23,21 @@ from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light.grid import LightGrid, LightParams, load_light_grid
 from cumuli.light.ndt import LightStats, light_grid
+from cumuli.light.particles import (
+    ParticleLight,
+    ground_shadow,
+    particle_light,
+    skylight_lights,
+)
 from cumuli.light.prepare import LitScene, prepare_light
+from cumuli.light.sprite_settings import SpriteSettings
 from cumuli.light.volume import VolumeLighting
 from cumuli.model.cloud import Cloud, load_cloud, merge
 from cumuli.model.gaussian import gaussian_cumulus, metaball_cumulus
 from cumuli.model.lsystem import lsystem_cloud, lsystem_expand, lsystem_length
 from cumuli.model.mesh import ellipsoids_from_mesh, mesh_cloud
+from cumuli.model.particles import ParticleCloud, load_particles, particle_cumulus, particle_fill
+from cumuli.model.solid import Solid
 from cumuli.model.volume import (
     AnimationFrame,
     VolumeCloud,
@@ -37,6 +46,8 @@ from cumuli.model.volume import (
 )
 from cumuli.noise import Noise
 from cumuli.rendering.compositor import Renderer, render, render_cpu, render_volume
+from cumuli.rendering.impostor_cache import ImpostorCache
+from cumuli.rendering.impostors import ImpostorSettings
 from cumuli.rendering.volume import VolumeRenderer
 from cumuli.scene import Scene, load_scene
 from cumuli.settings import RenderSettings
@@ -93,4 +104,17 @@ __all__ = [
     "to_srgb8",
     "write_image",
     "__version__",
+    # Harris 2002: particle clouds, their light, impostors, solids
+    "ParticleCloud",
+    "ParticleLight",
+    "particle_cumulus",
+    "particle_fill",
+    "load_particles",
+    "SpriteSettings",
+    "particle_light",
+    "skylight_lights",
+    "ground_shadow",
+    "ImpostorSettings",
+    "ImpostorCache",
+    "Solid",
 ]

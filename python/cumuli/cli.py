@@ -121,11 +121,11 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         path = write_image(args.output, img)
         print(f"wrote {path} ({args.width}×{args.height})")
         return 0
-    from cumuli.demo import default_scene
+    from cumuli.demo import default_scene, harris_scene
     from cumuli.rendering.compositor import render
 
     _check_output(args.output)
-    scene = default_scene()
+    scene = harris_scene() if args.harris else default_scene()
     img = render(scene, scene.default_camera(), args.width, args.height, backend=args.backend)
     paths = _write_pair(args.output, img)
     print(f"wrote {' and '.join(map(str, paths))} ({args.width}×{args.height}, {args.backend})")
@@ -212,6 +212,12 @@ def build_parser() -> argparse.ArgumentParser:
         help="instead render the noise figure (lattice | fBm, paper Figs. 2-3); one file",
     )
     demo.add_argument("--seed", type=_seed, default=7, help="noise seed for --noise (default 7)")
+    demo.add_argument(
+        "--harris",
+        action="store_true",
+        help="instead render Harris 2002 Fig. 13: particle clouds at sunset under two coloured "
+        "lights (orange sun, pink light)",
+    )
     demo.set_defaults(run=_cmd_demo)
 
     rend = sub.add_parser("render", help="render a scene file written by Scene.save")

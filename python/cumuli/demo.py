@@ -1,4 +1,6 @@
-"""Ready-made scenes: the demo of ``cumuli demo`` (paper Fig. 10) and a single daylight cumulus."""
+"""Ready-made scenes: the demo of ``cumuli demo`` (paper Fig. 10), a single daylight cumulus and
+Harris 2002's Fig. 13 (``cumuli demo --harris``: particle clouds at sunset under two coloured
+lights)."""
 
 from __future__ import annotations
 
@@ -44,6 +46,30 @@ def default_scene(settings: RenderSettings | None = None) -> Scene:
         noise=Noise(seed=7),
         settings=settings or RenderSettings(),
         camera=Camera(position=(0.0, 4.0, -40.0), target=(0.0, 8.0, 30.0), fov=55.0),
+    )
+
+
+def harris_scene(n_particles: int = 2500, clouds: int = 4, seed: int = 3) -> Scene:
+    """Harris 2002 Fig. 13: particle cumuli at sunset lit by two lights, an orange sun low on the
+    right and a pink light from the left ([H] §2.3.1: "one orange and one pink"), with the
+    default [H] shading (τ = 8, albedo 0.9, Rayleigh phase, multiple forward scattering, γ = 1)
+    and a little ambient. The clouds are `particle_cumulus` shapes filled with ``n_particles``
+    each; the camera looks across them towards the low sun."""
+    from cumuli.light.sprite_settings import SpriteSettings
+    from cumuli.model.particles import particle_cumulus
+
+    spots = [(-38.0, 16.0, 60.0), (10.0, 24.0, 95.0), (42.0, 14.0, 55.0), (-4.0, 12.0, 30.0)]
+    field = [
+        particle_cumulus(spots[k % len(spots)], n_particles, seed=seed + k, radius=(1.2, 2.6))
+        for k in range(clouds)
+    ]
+    return Scene(
+        clouds=field,
+        sun=Sun(direction=(0.45, 0.1, 0.89), colour=(1.0, 0.55, 0.25), intensity=1.8),
+        lights=(Sun(direction=(-0.75, 0.45, -0.2), colour=(1.0, 0.42, 0.62), intensity=1.0),),
+        sky=Sky.sunset(),
+        sprite_settings=SpriteSettings(ambient=(0.05, 0.04, 0.07)),
+        camera=Camera(position=(0.0, 0.0, -40.0), target=(2.0, 14.0, 40.0), fov=60.0),
     )
 
 

@@ -1,5 +1,7 @@
 """The scene: drawables of every kind under a sun, extra lights and a sky, with the noise that
-fills the 2018 clouds, the render settings and an optional default camera.
+fills the 2018 clouds, the render settings and an optional default camera; opaque solids
+(Harris 2002's airplane stand-ins), the particle passes' `SpriteSettings` and the impostors'
+`ImpostorSettings`.
 
 A scene is a frozen, validated value that round-trips through JSON: ``scene.save(path)`` writes
 atomically (temporary file in the same folder, then ``os.replace``) and :func:`load_scene` reads
@@ -16,7 +18,7 @@ import math
 import os
 import stat
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, fields
+from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 from typing import Any
 
@@ -24,10 +26,14 @@ import numpy as np
 
 from cumuli._atomic import atomic_target
 from cumuli.camera import Camera
+from cumuli.light.sprite_settings import SpriteSettings
 from cumuli.model.cloud import Cloud
+from cumuli.model.particles import ParticleCloud
+from cumuli.model.solid import Solid, as_solids
 from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise
-from cumuli.settings import MAX_CLOUDS, RenderSettings
+from cumuli.rendering.impostors import ImpostorSettings
+from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
 
 #: Format tag written in every scene file.
@@ -46,7 +52,13 @@ SCENE_FIELDS = (
     "settings",
     "camera",
     "lights",
+    "solids",
+    "sprite_settings",
+    "impostor_settings",
 )
+#: Most drawables one scene holds (a field of particle clouds has thousands; the GL marcher
+#: still draws at most `cumuli.settings.MAX_CLOUDS` 2018 clouds per pass).
+MAX_DRAWABLES = 1 << 16
 #: Most extra lights (`Scene.lights`).
 MAX_LIGHTS = 16
 #: Largest scene file `load_scene` reads (clouds are stored inline as JSON arrays).
@@ -54,7 +66,11 @@ MAX_SCENE_BYTES = 1 << 30
 
 
 #: Drawable kinds a scene holds, by their scene-file tag (see ARCHITECTURE.md, "a new kind").
-KINDS: dict[str, type] = {Cloud.kind: Cloud, VolumeCloud.kind: VolumeCloud}
+KINDS: dict[str, type] = {
+    Cloud.kind: Cloud,
+    VolumeCloud.kind: VolumeCloud,
+    ParticleCloud.kind: ParticleCloud,
+}
 
 
 def register_kind(cls: type) -> type:
@@ -126,6 +142,9 @@ class Scene:
     settings: RenderSettings = field(default_factory=RenderSettings)
     camera: Camera | None = None
     lights: tuple[Sun, ...] = ()
+    solids: tuple[Solid, ...] = ()
+    sprite_settings: SpriteSettings = field(default_factory=SpriteSettings)
+    impostor_settings: ImpostorSettings = field(default_factory=ImpostorSettings)
 
     def __post_init__(self) -> None:
         clouds = self.clouds
@@ -141,8 +160,10 @@ class Scene:
                 raise TypeError(
                     f"scene.clouds[{k}] must be a drawable ({kinds}), got {type(c).__name__}"
                 )
-        if len(clouds) > MAX_CLOUDS:
-            raise ValueError(f"scene.clouds holds at most {MAX_CLOUDS} clouds, got {len(clouds)}")
+        if len(clouds) > MAX_DRAWABLES:
+            raise ValueError(
+                f"scene.clouds holds at most {MAX_DRAWABLES} drawables, got {len(clouds)}"
+            )
         object.__setattr__(self, "clouds", tuple(clouds))
         parts = (("sun", Sun), ("sky", Sky), ("noise", Noise), ("settings", RenderSettings))
         for name, cls in parts:
@@ -158,6 +179,13 @@ class Scene:
         if len(lights) > MAX_LIGHTS:
             raise ValueError(f"scene.lights holds at most {MAX_LIGHTS} lights, got {len(lights)}")
         object.__setattr__(self, "lights", tuple(lights))
+        object.__setattr__(self, "solids", as_solids(self.solids, "scene.solids"))
+        for name, cls in (
+            ("sprite_settings", SpriteSettings),
+            ("impostor_settings", ImpostorSettings),
+        ):
+            if not isinstance(getattr(self, name), cls):
+                raise TypeError(f"scene.{name} must be a cumuli.{cls.__name__}")
 
     @property
     def kinds(self) -> tuple[str, ...]:
@@ -206,6 +234,9 @@ class Scene:
             "settings": self.settings.to_dict(),
             "camera": None if self.camera is None else self.camera.to_dict(),
             "lights": [_sun_dict(x) for x in self.lights],
+            "solids": [x.to_dict() for x in self.solids],
+            "sprite_settings": self.sprite_settings.to_dict(),
+            "impostor_settings": asdict(self.impostor_settings),
         }
 
     @classmethod
@@ -217,17 +248,7 @@ class Scene:
         version = data.get("version", 1)
         if version not in READABLE_VERSIONS:
             raise ValueError(f"scene.version {version!r} is not one of {READABLE_VERSIONS}")
-        known = {
-            "format",
-            "version",
-            "clouds",
-            "sun",
-            "sky",
-            "noise",
-            "settings",
-            "camera",
-            "lights",
-        }
+        known = set(SCENE_FIELDS)
         unknown = sorted(set(data) - known)
         if unknown:
             raise ValueError(f"scene has unknown field(s): {', '.join(unknown)}")
@@ -259,9 +280,25 @@ class Scene:
         if cam is not None:
             _require(cam, ("position", "target"), "scene.camera")
             camera = Camera(**_known(Camera, cam, "scene.camera"))
+        solids = data.get("solids") or []
+        if not isinstance(solids, list):
+            raise ValueError("scene.solids must be a JSON list")
+        extras: dict[str, Any] = {
+            "solids": tuple(Solid.from_dict(x, f"scene.solids[{k}]") for k, x in enumerate(solids))
+        }
+        if data.get("sprite_settings") is not None:
+            try:
+                extras["sprite_settings"] = SpriteSettings.from_dict(data["sprite_settings"])
+            except (TypeError, ValueError) as exc:
+                raise ValueError(f"scene.sprite_settings: {exc}") from None
+        if data.get("impostor_settings") is not None:
+            _require(data["impostor_settings"], (), "scene.impostor_settings")
+            extras["impostor_settings"] = ImpostorSettings(
+                **_known(ImpostorSettings, data["impostor_settings"], "scene.impostor_settings")
+            )
         return cls(
             clouds=clouds, sun=sun, sky=sky, noise=noise, settings=settings, camera=camera,
-            lights=tuple(extra),
+            lights=tuple(extra), **extras,
         )  # fmt: skip
 
     def save(self, path: str | os.PathLike[str]) -> Path:

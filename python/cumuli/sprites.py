@@ -204,6 +204,18 @@ def _atlas_args(atlas: Any, grid: Any, sprites: Sprites) -> tuple[np.ndarray | N
     return arr, (nx, ny)
 
 
+def _depth_arg(depth: Any, width: int, height: int) -> np.ndarray | None:
+    if depth is None:
+        return None
+    arr = np.asarray(depth)
+    if arr.dtype.kind not in "fiu" or arr.shape != (height, width):
+        raise ValueError(f"depth must be a ({height}, {width}) array of view depths")
+    arr = np.ascontiguousarray(arr, dtype=np.float32)
+    if np.isnan(arr).any():
+        raise ValueError("depth contains NaN")
+    return arr
+
+
 def draw_sprites_cpu(
     sprites: Sprites,
     camera: Camera,
@@ -216,8 +228,12 @@ def draw_sprites_cpu(
     atlas_grid: tuple[int, int] = (1, 1),
     near: float = 1e-3,
     threads: int = 0,
+    depth: Any = None,
 ) -> np.ndarray:
-    """The C++ twin: the premultiplied layer ``(height, width, 4)`` (no sky) of ``sprites``."""
+    """The C++ twin: the premultiplied layer ``(height, width, 4)`` (no sky) of ``sprites``.
+
+    ``depth`` ``(height, width)``: per-pixel view depths (e.g. of opaque solids, +∞ where none);
+    a sprite then covers only the pixels where its view depth is smaller (a depth test)."""
     if not isinstance(sprites, Sprites):
         raise TypeError(f"sprites must be a Sprites batch, got {type(sprites).__name__}")
     if kernel not in KERNELS:
@@ -225,6 +241,7 @@ def draw_sprites_cpu(
     peak = check.real(peak, "peak", 0.0, 1.0, lo_open=True)
     cam = camera_dict(camera, width, height, near)
     arr, grid = _atlas_args(atlas, atlas_grid, sprites)
+    depth = _depth_arg(depth, cam["width"], cam["height"])
     return _core.rasterise_sprites(
         sprites.centres,
         sprites.half_sizes,
@@ -238,6 +255,7 @@ def draw_sprites_cpu(
         arr,
         grid,
         check.threads(threads),
+        depth,
     )
 
 
@@ -305,11 +323,13 @@ class SpriteLayerRenderer:
         atlas_grid: tuple[int, int] = (1, 1),
         exact: bool = True,
         near: float = 1e-3,
+        depth: Any = None,
     ) -> np.ndarray:
         """The premultiplied layer ``(height, width, 4)`` of ``sprites`` (no sky).
 
         ``exact=True`` samples atlas cells with texelFetch blends (the C++ twin's arithmetic);
-        ``False`` uses the hardware bilinear filter (faster, looser parity).
+        ``False`` uses the hardware bilinear filter (faster, looser parity). ``depth``: as
+        :func:`draw_sprites_cpu` (a per-pixel depth test).
         """
         self._check_open()
         if not isinstance(sprites, Sprites):
@@ -319,9 +339,21 @@ class SpriteLayerRenderer:
         peak = check.real(peak, "peak", 0.0, 1.0, lo_open=True)
         cam = camera_dict(camera, width, height, near)
         arr, grid = _atlas_args(atlas, atlas_grid, sprites)
+        depth = _depth_arg(depth, cam["width"], cam["height"])
         ctx = self.context.ctx
         made: list[Any] = []
         try:
+            depth_tex = ctx.texture(
+                (width, height) if depth is not None else (1, 1),
+                1,
+                data=(depth if depth is not None else np.zeros(1, np.float32)).tobytes(),
+                dtype="f4",
+            )
+            made.append(depth_tex)
+            depth_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            depth_tex.use(location=1)
+            self._set("u_depth", 1)
+            self._set("u_depth_test", depth is not None)
             tex = ctx.texture(
                 (arr.shape[1], arr.shape[0]) if arr is not None else (1, 1),
                 4,
@@ -437,6 +469,7 @@ class SpriteTarget:
         r._bind_camera(None, self.width, self.height)
         r._set("u_kernel", KERNELS.index(kernel))
         r._set("u_peak", float(peak))
+        r._set("u_depth_test", False)
         r._set("u_tile_origin", (0, 0))
         r._set("u_tile_size", (self.width, self.height))
         r._set("u_tile_height", self.height)

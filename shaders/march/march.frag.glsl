@@ -8,6 +8,7 @@
 #include "march/density.glsl"
 #include "march/lighting.glsl"
 #include "common/sky.glsl"
+#include "common/solid.glsl"
 
 // Compile-time caps: the settings are validated against them on the CPU (cumuli/scene.py).
 #define MAX_CANDIDATES 128
@@ -208,11 +209,16 @@ void main() {
     float leave[MAX_CLOUDS];
     int hits = 0;
     int n_clouds = min(u_cloud_count, MAX_CLOUDS);
+    // Opaque solids: the ray is marched only up to the nearest one (+∞ without solids).
+    int solid_index;
+    float t_solid = nearest_solid(o, dir, solid_index);
     for (int c = 0; c < n_clouds; ++c) {
         vec2 tb;
         if (!intersect_box(clouds[c].box_lo.xyz, clouds[c].box_hi.xyz, o, inv_d, tb)) continue;
         float t0 = max(tb.x, 0.0);
         if (tb.y < t0) continue;  // box behind the camera
+        if (!(t0 < t_solid)) continue;  // behind the solid
+        tb.y = min(tb.y, t_solid);
         int pos = hits++;
         while (pos > 0 && entry[pos - 1] > t0) {
             order[pos] = order[pos - 1];
@@ -249,8 +255,9 @@ void main() {
             }
             while (t < cand_out[k]) {
                 if (samples >= max_steps) { done = true; break; }
-                ++samples;
                 float s = t + 0.5 * step;
+                if (!(s < t_solid)) break;
+                ++samples;
                 vec3 p = o + s * dir;
                 int a = u_union && c.info.z == 0 ? attribute_sample(n, s, p, k) : k;
                 vec2 dg = cloud_density(c, cand_prim[a], p);

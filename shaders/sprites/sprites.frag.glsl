@@ -9,6 +9,8 @@
 //   texture ≥ 0 (billboard): straight-alpha atlas cell, bilinear with the texel-centre convention
 //     and clamp to the cell's edge (u_exact: texelFetch blends, the C++ twin's arithmetic; else the
 //     hardware filter), a = tex.a·alpha, output (colour·tex.rgb·a, a).
+// u_depth_test: a fragment is kept only where the sprite's view depth Z < u_depth[i][j] (the view
+// depth of the nearest opaque solid, +∞ where none; Harris 2002 §3.1.1's direct rendering).
 // Blending (ONE, ONE_MINUS_SRC_ALPHA) into an RGBA32F target cleared to 0 makes the premultiplied
 // layer (C, A); GL blends the fragments of a draw in primitive order, i.e. back to front.
 
@@ -22,6 +24,7 @@ flat in vec3 v_c0;
 flat in vec3 v_c1;
 flat in vec3 v_c2;
 flat in vec3 v_c3;
+flat in float v_depth;
 
 uniform ivec2 u_tile_origin;
 uniform int u_tile_height;
@@ -30,6 +33,8 @@ uniform float u_peak;
 uniform sampler2D u_atlas;
 uniform ivec2 u_atlas_grid;  // cells across, down
 uniform bool u_exact;
+uniform bool u_depth_test;
+uniform sampler2D u_depth;  // R32F, (W, H), row i = image row i (row 0 on top)
 
 out vec4 frag;
 
@@ -69,6 +74,7 @@ void main() {
     precise float s = (dx * v_rot.x - dy * v_rot.y) / v_screen.z;
     precise float t = (-dx * v_rot.y - dy * v_rot.x) / v_screen.w;
     if (!(abs(s) <= 1.0 && abs(t) <= 1.0)) discard;
+    if (u_depth_test && !(v_depth < texelFetch(u_depth, ivec2(j, i), 0).r)) discard;
     precise vec3 colour = v_c0;
     if (!(v_c0 == v_c1 && v_c0 == v_c2 && v_c0 == v_c3)) {
         if (s >= t) {

@@ -11,6 +11,9 @@
 // the fragment shader recomputes everything from the `flat` parameters. Sprites with Z ≤ near
 // are dropped (all six vertices outside the clip volume).
 //
+// The fragment shader may depth-test each sprite's view depth Z against a per-pixel depth image
+// (opaque solids, Harris 2002 §3.1.1: "direct particles with depth test").
+//
 // u_screen_space: the centre's x, y are already (j_c, i_c) in pixels and the half sizes are
 // pixels (the read-back light pass of particles/, which draws into the N_L² light buffer).
 
@@ -43,6 +46,7 @@ flat out vec3 v_c0;
 flat out vec3 v_c1;
 flat out vec3 v_c2;
 flat out vec3 v_c3;
+flat out float v_depth;  // view depth Z of the sprite (0 in screen space)
 
 float dot3(vec3 a, vec3 b) {
     precise float d = (a.x * b.x + a.y * b.y) + a.z * b.z;
@@ -57,6 +61,7 @@ void main() {
     v_c2 = in_c2;
     v_c3 = in_c3;
     v_rot = vec2(cos(in_rotation), sin(in_rotation));
+    v_depth = 0.0;
     precise float jc, ic, hx, hy;
     if (u_screen_space) {
         jc = in_centre.x;
@@ -71,6 +76,7 @@ void main() {
             v_screen = vec4(0.0);
             return;
         }
+        v_depth = z;
         float x = dot3(v, u_cam_r);
         float y = dot3(v, u_cam_u);
         float w = float(u_image_size.x), h = float(u_image_size.y);

@@ -8,6 +8,7 @@
 
 #include "common/sky.glsl"
 #include "common/phase.glsl"
+#include "common/solid.glsl"
 
 uniform sampler3D u_density;
 uniform sampler3D u_light;
@@ -75,7 +76,11 @@ void main() {
   float t_in = max(max(tmin.x, tmin.y), tmin.z);
   float t_out = min(min(tmax.x, tmax.y), tmax.z);
   float t0 = max(t_in, 0.0);
-  if (t_out >= t_in && t_out > t0) {
+  // Opaque solids: march only up to the nearest one (+∞ without solids; C++ the same).
+  int solid_index;
+  bool hit = t_out >= t_in;
+  if (hit) t_out = min(t_out, nearest_solid(u_cam_pos, d, solid_index));
+  if (hit && t_out > t0) {
     float len = t_out - t0;
     int n = clamp(int(ceil(len / u_step)), 1, u_max_steps);
     float h = len / float(n);

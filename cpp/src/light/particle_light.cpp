@@ -80,6 +80,33 @@ LightFrame light_frame(const ParticleView& particles, glm::vec3 sun_direction) {
   return frame;
 }
 
+void particle_shadow(const LightFrame& frame, const float* buffer, int n, const glm::vec3* points,
+                     std::size_t count, float* out) {
+  const float nl = static_cast<float>(n);
+  const float two_r = 2.0f * frame.radius;
+  for (std::size_t k = 0; k < count; ++k) {
+    const glm::vec3 v = points[k] - frame.centre;
+    const float x = (glm::dot(v, frame.right) + frame.radius) / two_r * nl;
+    const float y = (glm::dot(v, frame.up) + frame.radius) / two_r * nl;
+    if (!(glm::dot(v, frame.forward) >= -frame.radius) || !(x >= 0.0f && x <= nl) ||
+        !(y >= 0.0f && y <= nl)) {
+      out[k] = 1.0f;
+      continue;
+    }
+    const float u = x - 0.5f, w = y - 0.5f;
+    const float fu = std::floor(u), fw = std::floor(w);
+    const float wx = u - fu, wy = w - fw;
+    const int x0 = static_cast<int>(std::clamp(fu, 0.0f, nl - 1.0f));
+    const int x1 = static_cast<int>(std::clamp(fu + 1.0f, 0.0f, nl - 1.0f));
+    const int y0 = static_cast<int>(std::clamp(fw, 0.0f, nl - 1.0f));
+    const int y1 = static_cast<int>(std::clamp(fw + 1.0f, 0.0f, nl - 1.0f));
+    const auto at = [&](int xx, int yy) { return buffer[static_cast<std::size_t>(yy) * n + xx]; };
+    const float a = at(x0, y0) + wx * (at(x1, y0) - at(x0, y0));
+    const float b = at(x0, y1) + wx * (at(x1, y1) - at(x0, y1));
+    out[k] = a + wy * (b - a);
+  }
+}
+
 std::vector<LightSplat> light_splats(const ParticleView& particles, const LightFrame& frame,
                                      const ParticleLightSettings& settings) {
   const std::size_t n = particles.n;

@@ -11,7 +11,7 @@ namespace cumuli {
 
 void composite_layers(const std::vector<Layer>& layers, const CameraParams& camera, int width,
                       int height, const SkyParams& sky, const SunParams& sun, float* out,
-                      int threads) {
+                      int threads, const float* solid) {
   if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
   camera.validate();
   const CameraRays rays(camera, width, height);
@@ -33,12 +33,23 @@ void composite_layers(const std::vector<Layer>& layers, const CameraParams& came
             std::swap(hits[m], hits[m - 1]);
         }
         const std::size_t px = r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c);
+        // A solid hit at t_s hides every layer entered at or after it (solid.hpp).
+        const float* s = solid != nullptr ? solid + px * 4 : nullptr;
+        const float t_solid = s != nullptr && s[3] < kNoSolid
+                                  ? s[3] / ((dir.x * rays.forward.x + dir.y * rays.forward.y) +
+                                            dir.z * rays.forward.z)
+                                  : kNoSolid;
         glm::vec3 colour(0.0f);
         float T = 1.0f;
         for (const auto& h : hits) {
+          if (h.first >= t_solid) break;
           const float* l = layers[h.second].rgba + px * 4;
           colour += T * glm::vec3(l[0], l[1], l[2]);
           T *= 1.0f - l[3];
+        }
+        if (t_solid < kNoSolid) {
+          colour += T * glm::vec3(s[0], s[1], s[2]);
+          T = 0.0f;
         }
         const glm::vec3 rgb = colour + T * sky_radiance(sky, sun, dir);
         float* o = out + px * 4;

@@ -6,6 +6,8 @@
 
 #include <glm/geometric.hpp>
 
+#include "cumuli/parallel.hpp"
+
 namespace cumuli {
 
 namespace {
@@ -102,5 +104,110 @@ bool needs_screen_impostor(glm::dvec3 eye, glm::dvec3 centre, double radius, dou
 }
 
 int screen_impostor_size(int size, int factor) { return (size + factor - 1) / factor; }
+
+// ---------------------------------------------------------------------------------------------
+// Display (§7.2)
+
+namespace {
+
+bool finite3f(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+
+// (a.x·b.x + a.y·b.y) + a.z·b.z, the shader's order.
+float dot3(glm::vec3 a, glm::vec3 b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }
+
+float lerp(float a, float b, float t) { return a + t * (b - a); }
+
+}  // namespace
+
+void ImpostorQuad::validate() const {
+  if (rgba == nullptr || width < 1 || height < 1)
+    throw std::invalid_argument("an impostor needs a non-empty (H, W, 4) image");
+  if (!finite3f(centre) || !finite3f(forward) || !finite3f(right) || !finite3f(up))
+    throw std::invalid_argument("impostor plane must be finite");
+  if (!std::isfinite(half_w) || !std::isfinite(half_h) || !(half_w > 0.0f) || !(half_h > 0.0f))
+    throw std::invalid_argument("impostor half sizes must be > 0");
+}
+
+PixelRect impostor_rect(const ImpostorQuad& q, const CameraRays& rays) {
+  PixelRect full{0, rays.width - 1, 0, rays.height - 1};
+  if (q.clamp) return full;
+  const float w = static_cast<float>(rays.width), h = static_cast<float>(rays.height);
+  float jmin = INFINITY, jmax = -INFINITY, imin = INFINITY, imax = -INFINITY;
+  for (int k = 0; k < 4; ++k) {
+    const float sx = (k == 1 || k == 2) ? 1.0f : -1.0f;
+    const float sy = (k >= 2) ? 1.0f : -1.0f;
+    const glm::vec3 corner = q.centre + (sx * q.half_w) * q.right + (sy * q.half_h) * q.up;
+    const glm::vec3 v = corner - rays.origin;
+    const float z = dot3(v, rays.forward);
+    if (!(z > 1e-6f * (glm::length(v) + 1.0f))) return full;
+    const float zt = z * rays.tan_half;
+    const float j = (w * 0.5f) * (dot3(v, rays.right) / (zt * rays.aspect) + 1.0f);
+    const float i = (h * 0.5f) * (1.0f - dot3(v, rays.up) / zt);
+    if (!std::isfinite(i) || !std::isfinite(j)) return full;
+    jmin = std::min(jmin, j);
+    jmax = std::max(jmax, j);
+    imin = std::min(imin, i);
+    imax = std::max(imax, i);
+  }
+  PixelRect r;
+  r.j0 = static_cast<int>(std::clamp(std::floor(jmin) - 1.0f, 0.0f, w));
+  r.j1 = static_cast<int>(std::clamp(std::floor(jmax) + 1.0f, -1.0f, w - 1.0f));
+  r.i0 = static_cast<int>(std::clamp(std::floor(imin) - 1.0f, 0.0f, h));
+  r.i1 = static_cast<int>(std::clamp(std::floor(imax) + 1.0f, -1.0f, h - 1.0f));
+  return r;
+}
+
+void display_impostors(const std::vector<ImpostorQuad>& quads, const CameraParams& camera,
+                       int width, int height, float* out, int threads) {
+  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+  camera.validate();
+  for (const auto& q : quads) q.validate();
+  const CameraRays rays(camera, width, height);
+  std::vector<PixelRect> rects(quads.size());
+  for (std::size_t k = 0; k < quads.size(); ++k) rects[k] = impostor_rect(quads[k], rays);
+  parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
+    std::fill(out + r0 * width * 4, out + r1 * width * 4, 0.0f);
+    for (std::size_t k = 0; k < quads.size(); ++k) {
+      const ImpostorQuad& q = quads[k];
+      const PixelRect& rc = rects[k];
+      const glm::vec3 qo = q.centre - rays.origin;
+      const float plane = dot3(qo, q.forward);
+      const float tw = static_cast<float>(q.width), th = static_cast<float>(q.height);
+      const int i0 = std::max(rc.i0, static_cast<int>(r0));
+      const int i1 = std::min(rc.i1, static_cast<int>(r1) - 1);
+      for (int i = i0; i <= i1; ++i) {
+        for (int j = rc.j0; j <= rc.j1; ++j) {
+          const glm::vec3 d = rays.direction(i, j);
+          const float denom = dot3(d, q.forward);
+          if (!(denom > 0.0f)) continue;
+          const float t = plane / denom;
+          if (!(t > 0.0f)) continue;
+          const glm::vec3 rel = t * d - qo;
+          const float s = dot3(rel, q.right) / q.half_w;
+          const float v = dot3(rel, q.up) / q.half_h;
+          if (!q.clamp && !(std::abs(s) <= 1.0f && std::abs(v) <= 1.0f)) continue;
+          const float u = (s + 1.0f) * 0.5f * tw - 0.5f;
+          const float y = (1.0f - v) * 0.5f * th - 0.5f;
+          const float fu = std::floor(u), fv = std::floor(y);
+          const float wx = u - fu, wy = y - fv;
+          const int x0 = static_cast<int>(std::clamp(fu, 0.0f, tw - 1.0f));
+          const int x1 = static_cast<int>(std::clamp(fu + 1.0f, 0.0f, tw - 1.0f));
+          const int y0 = static_cast<int>(std::clamp(fv, 0.0f, th - 1.0f));
+          const int y1 = static_cast<int>(std::clamp(fv + 1.0f, 0.0f, th - 1.0f));
+          const auto at = [&](int x, int yy, int c) {
+            return q.rgba[(static_cast<std::size_t>(yy) * q.width + x) * 4 + c];
+          };
+          float src[4];
+          for (int c = 0; c < 4; ++c)
+            src[c] = lerp(lerp(at(x0, y0, c), at(x1, y0, c), wx),
+                          lerp(at(x0, y1, c), at(x1, y1, c), wx), wy);
+          float* px = out + (static_cast<std::size_t>(i) * width + j) * 4;
+          const float keep = 1.0f - src[3];
+          for (int c = 0; c < 4; ++c) px[c] = src[c] + keep * px[c];
+        }
+      }
+    }
+  });
+}
 
 }  // namespace cumuli

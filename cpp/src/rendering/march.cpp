@@ -129,6 +129,8 @@ void MarchScene::validate(const MarchSettings& settings) const {
     c.shape.validate();
     c.light.validate();
   }
+  require(solids.size() <= static_cast<std::size_t>(kMaxSolids), "at most 16 solids");
+  for (const auto& s : solids) s.validate();
   for (int k = 0; k < 3; ++k) {
     require(std::isfinite(sun.direction[k]) && std::isfinite(sun.radiance[k]),
             "sun direction and radiance must be finite");
@@ -184,11 +186,15 @@ class RayMarcher {
     // stable insertion sort so that ties keep the scene order.
     auto& hits = scratch.hits;
     hits.clear();
+    // Clouds stop at the nearest opaque solid (kNoSolid = +∞ without solids).
+    const float t_solid =
+        scene_.solids.empty() ? kNoSolid : nearest_solid(scene_.solids, origin, dir);
     for (std::size_t c = 0; c < prepared_.size(); ++c) {
       Interval iv;
       if (!intersect(prepared_[c].box, origin, inv_dir, iv)) continue;
       if (!(iv.t_out >= 0.0f)) continue;
-      const BoxHit h{std::max(iv.t_in, 0.0f), iv.t_out, static_cast<int>(c)};
+      if (!(std::max(iv.t_in, 0.0f) < t_solid)) continue;
+      const BoxHit h{std::max(iv.t_in, 0.0f), std::min(iv.t_out, t_solid), static_cast<int>(c)};
       hits.push_back(h);
       for (std::size_t k = hits.size() - 1; k > 0 && hits[k - 1].t_in > h.t_in; --k)
         std::swap(hits[k], hits[k - 1]);
@@ -197,6 +203,7 @@ class RayMarcher {
     State st;
     st.cos_theta = glm::dot(dir, scene_.sun.direction);
     st.phase = henyey_greenstein(settings_.hg_g, st.cos_theta);
+    st.t_limit = t_solid;
     for (const BoxHit& h : hits) {
       if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch, st))
         break;
@@ -213,6 +220,7 @@ class RayMarcher {
     int steps = 0;
     float cos_theta = 0.0f;
     float phase = 0.0f;
+    float t_limit = kNoSolid;  // the nearest solid along the ray
   };
 
   // One sample at ray parameter s attributed to primitive j (Algorithm 3). Returns false when
@@ -248,6 +256,7 @@ class RayMarcher {
       // Every candidate interval on its own: overlaps are marched twice, as in the paper.
       for (int k = 0; k < n; ++k) {
         for (float t = cand[k].t_in; t < cand[k].t_out; t += step) {
+          if (!(t + half < st.t_limit)) break;
           if (!sample(pc, cand[k].primitive, t + half, origin, dir, st)) return false;
         }
       }
@@ -261,6 +270,7 @@ class RayMarcher {
       t = std::max(t, cand[k].t_in);
       for (; t < cand[k].t_out; t += step) {
         const float s = t + half;
+        if (!(s < st.t_limit)) break;
         const int j = attribute ? union_owner(shape, cand, n, s, origin + s * dir, cand[k].primitive)
                                 : cand[k].primitive;
         if (!sample(pc, j, s, origin, dir, st)) return false;

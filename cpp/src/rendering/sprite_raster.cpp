@@ -98,7 +98,7 @@ ScreenSprite project_sprite(const Sprite& sprite, const SpriteCamera& camera) {
 
 void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& camera,
                        const SpriteRasterSettings& settings, const SpriteAtlas* atlas, float* out,
-                       int threads) {
+                       int threads, const float* depth) {
   camera.validate();
   if (!std::isfinite(settings.peak) || !(settings.peak > 0.0f) || settings.peak > 1.0f)
     throw std::invalid_argument("peak must be in (0, 1]");
@@ -134,6 +134,8 @@ void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& c
           const float s = (dx * q.cos_r - dy * q.sin_r) / q.hx;
           const float t = (-dx * q.sin_r - dy * q.cos_r) / q.hy;
           if (!(std::abs(s) <= 1.0f && std::abs(t) <= 1.0f)) continue;
+          if (depth != nullptr && !(q.depth < depth[static_cast<std::size_t>(i) * width + j]))
+            continue;
           glm::vec3 colour = sp.colour[0];
           if (!flat[k]) {
             if (s >= t) {
@@ -223,8 +225,10 @@ ParticleSpriteList particle_sprites(const ParticleView& particles, const float* 
   out.index = kept;
   out.colour.resize(kept.size());
   out.alpha.resize(kept.size());
+  out.key.resize(kept.size());
   for (std::size_t i = 0; i < kept.size(); ++i) {
     const std::size_t k = kept[i];
+    out.key[i] = key[k];
     const glm::vec3 p = particles.centre(k);
     const glm::vec3 v = p - camera.position;
     const float len2 = glm::dot(v, v);

@@ -20,6 +20,9 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
   g.validate();
   if (p.width < 1 || p.height < 1) throw std::invalid_argument("width and height must be >= 1");
   if (!(p.step > 0.0f) || !std::isfinite(p.step)) throw std::invalid_argument("step must be > 0");
+  if (p.solids.size() > static_cast<std::size_t>(kMaxSolids))
+    throw std::invalid_argument("at most 16 solids");
+  for (const auto& s : p.solids) s.validate();
   const std::size_t npix = static_cast<std::size_t>(p.width) * p.height;
   std::vector<float> img(npix * 4);
   const float aspect = static_cast<float>(p.width) / static_cast<float>(p.height);
@@ -31,7 +34,10 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
     glm::vec3 colour(0.0f);
     float T = 1.0f;
     Interval span;
-    if (intersect(g.box, cam.position, 1.0f / d, span) && span.t_out > std::max(span.t_in, 0.0f)) {
+    const float t_solid = p.solids.empty() ? kNoSolid : nearest_solid(p.solids, cam.position, d);
+    const bool hit = intersect(g.box, cam.position, 1.0f / d, span);
+    if (hit) span.t_out = std::min(span.t_out, t_solid);
+    if (hit && span.t_out > std::max(span.t_in, 0.0f)) {
       const float t0 = std::max(span.t_in, 0.0f);
       const float len = span.t_out - t0;
       const int n = std::max(1, static_cast<int>(std::ceil(len / p.step)));

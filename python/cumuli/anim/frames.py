@@ -95,6 +95,7 @@ def render_frames(
     progress: bool = True,
     alpha: str = "opaque",
     client: Any = None,
+    impostors: Any = False,
 ) -> list[Path]:
     """Render ``scene`` from each camera and write numbered images into ``out_dir``.
 
@@ -105,10 +106,14 @@ def render_frames(
     ``alpha="keep"`` keeps the clouds' coverage ``1 − T`` (``True`` / ``False`` also mean keep /
     opaque). Returns the paths written, in order. With a ``dask.distributed`` ``client`` every
     frame is a task on the cluster (see :mod:`cumuli.anim.cluster`; ``out_dir`` must be a folder
-    the workers see); the images are the same.
+    the workers see); the images are the same. ``impostors=True`` draws the sequence through one
+    :class:`cumuli.ImpostorCache` (Harris 2002 §3: each cloud's image is reused while the view
+    moves less than ``scene.impostor_settings.tolerance``), or pass a cache to keep it (and its
+    ``stats``) after the call; not with ``client`` (frames there are independent tasks).
     """
     from cumuli.io.images import ALPHA_MODES, FORMATS, write_image
     from cumuli.rendering.compositor import render
+    from cumuli.rendering.impostor_cache import ImpostorCache
 
     if not isinstance(scene, Scene):
         raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
@@ -151,6 +156,16 @@ def render_frames(
         raise OSError(f"cannot create out_dir {str(folder)!r}: {exc.strerror or exc}") from exc
     if not os.access(folder, os.W_OK):
         raise OSError(f"out_dir {str(folder)!r} is not writable")
+    if isinstance(impostors, (bool, np.bool_)):
+        cache = ImpostorCache() if impostors else None
+    elif isinstance(impostors, ImpostorCache):
+        cache = impostors
+    else:
+        raise TypeError(
+            f"impostors must be a bool or a cumuli.ImpostorCache, got {type(impostors).__name__}"
+        )
+    if cache is not None and client is not None:
+        raise ValueError("impostors need the frames in order on one renderer: not with client")
     if client is not None:
         from cumuli.anim.cluster import _check_client, render_task, run
 
@@ -167,6 +182,6 @@ def render_frames(
     for cam, name in tqdm(
         list(zip(cams, names, strict=True)), desc="frames", unit="frame", disable=not progress
     ):
-        img = render(scene, cam, width=width, height=height, backend=backend)
+        img = render(scene, cam, width=width, height=height, backend=backend, impostors=cache)
         paths.append(write_image(folder / name, img, alpha=alpha))
     return paths

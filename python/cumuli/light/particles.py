@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import math
+import weakref
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any
@@ -66,9 +67,20 @@ def light_directions(lights: Sequence[Sun]) -> np.ndarray:
     return np.array([s.direction for s in lights], dtype=np.float32).reshape(-1, 3)
 
 
+_digests: weakref.WeakKeyDictionary[ParticleCloud, str] = weakref.WeakKeyDictionary()
+
+
 def particles_digest(cloud: ParticleCloud) -> str:
     """A digest of what a cloud's light depends on: positions relative to its sphere centre (in
-    units of R, to 1e−6, so that a translated cloud keeps its digest), radii/R, τ and albedo."""
+    units of R, to 1e−6, so that a translated cloud keeps its digest), radii/R, τ and albedo.
+    Remembered per cloud object (its arrays are read-only), so frames do not rehash."""
+    known = _digests.get(cloud)
+    if known is None:
+        known = _digests[cloud] = _particles_digest(cloud)
+    return known
+
+
+def _particles_digest(cloud: ParticleCloud) -> str:
     centre, radius = cloud.sphere
     rel = (cloud.centres.astype(np.float64) - centre.astype(np.float64)) / radius
     h = hashlib.sha256()
@@ -218,6 +230,36 @@ def particle_light_many(
         params["method"] = method
         out.append(ParticleLight(light, dirs, params, buffers))
     return out
+
+
+def ground_shadow(
+    cloud: ParticleCloud,
+    sun: Sun,
+    points: Any,
+    settings: SpriteSettings | None = None,
+    light: ParticleLight | None = None,
+) -> np.ndarray:
+    """Transmittance ``(M,)`` of ``sun``'s light through ``cloud`` at world ``points`` ``(M, 3)``:
+    the light pass's final buffer — the cloud's shadow map seen from the sun (spec §4 step 6) —
+    sampled bilinearly where each point projects (1 outside it or in front of the cloud). Pass a
+    ``light`` made with ``return_buffers=True`` for this sun (first light) to reuse its buffer."""
+    if not isinstance(sun, Sun):
+        raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
+    pts = check.points3(points, "points", bound=check.MAX_COORD)
+    settings = as_settings(settings)
+    buffers = None
+    if light is not None:
+        if not isinstance(light, ParticleLight):
+            raise TypeError(f"light must be a ParticleLight or None, got {type(light).__name__}")
+        same_sun = np.allclose(light.light_dirs[0], light_directions([sun])[0], atol=1e-6)
+        if light.buffers is not None and same_sun:
+            buffers = light.buffers
+    if buffers is None:
+        buffers = particle_light(cloud, sun, settings, return_buffers=True).buffers
+    assert buffers is not None
+    return _core.particle_shadow(
+        *cloud.core_args(), sun.direction, np.ascontiguousarray(buffers[0]), pts
+    )
 
 
 def skylight_lights(

@@ -2,7 +2,10 @@
 
 `prepare_light` runs the light pass of each drawable's kind — the NDT light grid for a 2018
 `Cloud` (:func:`cumuli.light_grid` with ``settings.light_params()``), the per-voxel sun and sky
-light for a `VolumeCloud` (:class:`cumuli.VolumeLighting`) — and returns an immutable
+light for a `VolumeCloud` (:class:`cumuli.VolumeLighting`), the multiple forward scattering light
+of a `ParticleCloud` for the sun and every extra light (:func:`cumuli.particle_light` with
+``scene.sprite_settings``; one column per light, colours applied at render) — and returns an
+immutable
 :class:`LitScene` that the renderers draw. Nothing is stored on the clouds, and a failed call
 changes no object.
 
@@ -17,6 +20,7 @@ from __future__ import annotations
 
 import hashlib
 import threading
+import weakref
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
@@ -27,8 +31,15 @@ import numpy as np
 from cumuli import _progress
 from cumuli import _validate as check
 from cumuli.light.ndt import LightGrid, LightRecord, light_grid
+from cumuli.light.particles import (
+    ParticleLight,
+    light_directions,
+    light_is_stale,
+    particle_light_many,
+)
 from cumuli.light.volume import VolumeLighting
 from cumuli.model.cloud import Cloud
+from cumuli.model.particles import ParticleCloud
 from cumuli.model.volume import VolumeCloud, VolumeDatabase
 from cumuli.scene import Scene
 
@@ -42,7 +53,8 @@ _memo_lock = threading.Lock()
 class LitScene:
     """A scene with the light of every drawable: ``lights[k]`` belongs to ``scene.clouds[k]``
     (a :class:`cumuli.LightGrid` for a `Cloud`, a ``(D, H, W, 4)`` light volume for a
-    `VolumeCloud`). Made by :func:`prepare_light`; the renderers take it in place of a scene."""
+    `VolumeCloud`, a :class:`cumuli.ParticleLight` for a `ParticleCloud`). Made by
+    :func:`prepare_light`; the renderers take it in place of a scene."""
 
     scene: Scene
     lights: tuple[Any, ...]
@@ -72,8 +84,12 @@ def _remember(key: Any, make: Callable[[], Any]) -> Any:
 
 def clear_memo() -> None:
     """Forget every memoised light (they are recomputed on demand)."""
+    global _particle_floats
     with _memo_lock:
         _memo.clear()
+        _particle_memo.clear()
+        _resolved.clear()
+        _particle_floats = 0
 
 
 # --- light passes, one per kind ----------------------------------------------------------------
@@ -147,11 +163,121 @@ def volume_light(
     return _remember(key, make)
 
 
+# Particle light is small ((N, L) floats) and a field of clouds has many: its own memo, bounded
+# by the floats it holds rather than by entries. A translated cloud (wind) finds the light of the
+# original: entries are keyed by what translation leaves exactly unchanged (radii, τ, albedo,
+# directions, settings) and matched by the centres relative to the bounding sphere's centre
+# within 1e−5·R (float32 rounding of a translation moves them by ~1e−7·|coordinates|).
+PARTICLE_MEMO_FLOATS = 1 << 25
+_particle_memo: OrderedDict[Any, list[tuple[np.ndarray, float, ParticleLight]]] = OrderedDict()
+_particle_floats = 0
+_exact: weakref.WeakKeyDictionary[ParticleCloud, tuple[str, np.ndarray, float]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _invariants(cloud: ParticleCloud) -> tuple[str, np.ndarray, float]:
+    """(digest of radii, τ, albedo; centres relative to the sphere centre; R), per cloud object."""
+    known = _exact.get(cloud)
+    if known is None:
+        centre, radius = cloud.sphere
+        rel = cloud.centres.astype(np.float64) - centre.astype(np.float64)
+        known = (_digest(cloud.radii, cloud.tau, cloud.albedo), rel, radius)
+        _exact[cloud] = known
+    return known
+
+
+# The light each cloud object was last given, by the scene part of the key: the frames of a
+# camera path find it without comparing particles again.
+_resolved: weakref.WeakKeyDictionary[ParticleCloud, tuple[Any, ParticleLight]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def _particle_lookup(cloud: ParticleCloud, common: Any) -> tuple[Any, ParticleLight | None]:
+    digest, rel, radius = _invariants(cloud)
+    key = (digest, *common)
+    known = _resolved.get(cloud)
+    if known is not None and known[0] == key:
+        return key, known[1]
+    with _memo_lock:
+        for rel_e, radius_e, light in _particle_memo.get(key, ()):
+            if rel_e.shape == rel.shape and np.abs(rel_e - rel).max() <= 1e-5 * max(
+                radius, radius_e
+            ):
+                _particle_memo.move_to_end(key)
+                _resolved[cloud] = (key, light)
+                return key, light
+    return key, None
+
+
+def _particle_remember(key: Any, cloud: ParticleCloud, light: ParticleLight) -> None:
+    global _particle_floats
+    _, rel, radius = _invariants(cloud)
+    with _memo_lock:
+        _particle_memo.setdefault(key, []).append((rel, radius, light))
+        _particle_memo.move_to_end(key)
+        _particle_floats += light.light.size
+        while _particle_floats > PARTICLE_MEMO_FLOATS and len(_particle_memo) > 1:
+            _, old = _particle_memo.popitem(last=False)
+            _particle_floats -= sum(entry[2].light.size for entry in old)
+
+
+def particles_light(
+    cloud: ParticleCloud, scene: Scene, given: Any = None, threads: int = 0
+) -> ParticleLight:
+    """The light of a `ParticleCloud` for ``scene.sun`` and ``scene.lights`` (in that order) with
+    ``scene.sprite_settings``: ``given`` when it is a current :class:`ParticleLight`
+    (:func:`cumuli.light.particles.light_is_stale` says None), else memoised or computed."""
+    return particles_light_many([cloud], scene, [given], threads)[0]
+
+
+def particles_light_many(
+    clouds: Sequence[ParticleCloud], scene: Scene, given: Sequence[Any], threads: int = 0
+) -> list[ParticleLight]:
+    """:func:`particles_light` of several clouds; those to compute share one C++ call (clouds ×
+    lights over the threads)."""
+    lights = [scene.sun, *scene.lights]
+    common = (
+        light_directions(lights).tobytes(),
+        tuple(scene.sprite_settings.light_dict().items()),
+    )
+    out: list[Any] = [None] * len(clouds)
+    todo: list[tuple[Any, int]] = []
+    for i, (cloud, g) in enumerate(zip(clouds, given, strict=True)):
+        if g is not None:
+            if not isinstance(g, ParticleLight):
+                raise TypeError(
+                    f"the light of a ParticleCloud must be a ParticleLight, got {type(g).__name__}"
+                )
+            if light_is_stale(g, cloud, lights, scene.sprite_settings) is None:
+                out[i] = g
+                continue
+        key, hit = _particle_lookup(cloud, common)
+        if hit is not None:
+            out[i] = hit
+        else:
+            todo.append((key, i))
+    if todo:
+        made = particle_light_many(
+            [clouds[i] for _, i in todo], lights, scene.sprite_settings, threads=threads
+        )
+        for (key, i), light in zip(todo, made, strict=True):
+            _particle_remember(key, clouds[i], light)
+            _resolved[clouds[i]] = (key, light)
+            out[i] = light
+    return out
+
+
 #: The light pass of each kind of drawable: ``(drawable, scene, given, threads) -> light``.
 LIGHT_PASSES: dict[str, Callable[..., Any]] = {
     Cloud.kind: cloud_light,
     VolumeCloud.kind: volume_light,
+    ParticleCloud.kind: particles_light,
 }
+#: Kinds whose light pass also runs on all the scene's drawables of the kind at once:
+#: ``(drawables, scene, given, threads) -> lights`` (same results as one by one, faster).
+LIGHT_BATCHES: dict[str, Callable[..., list[Any]]] = {ParticleCloud.kind: particles_light_many}
 
 
 def prepare_light(
@@ -188,18 +314,31 @@ def prepare_light(
         if len(lights) != n:
             raise ValueError(f"lights must hold one entry per cloud ({n}), got {len(lights)}")
         given = list(lights)
-    out = []
-    for k, drawable in enumerate(scene.clouds):
+    for k, drawable in enumerate(scene.clouds):  # every kind known before any work
         if LIGHT_PASSES.get(drawable.kind) is None:
             raise TypeError(f"scene.clouds[{k}]: no light pass for kind {drawable.kind!r}")
+    out: list[Any] = [None] * n
+    for kind, batch in LIGHT_BATCHES.items():  # kinds whose light passes share one C++ call
+        idx = [k for k, d in enumerate(scene.clouds) if d.kind == kind]
+        if len(idx) > 1:
+            try:
+                made = batch(
+                    [scene.clouds[k] for k in idx], scene, [given[k] for k in idx], threads
+                )
+            except (TypeError, ValueError) as exc:
+                raise type(exc)(f"scene.clouds ({kind}): {exc}") from None
+            for k, light in zip(idx, made, strict=True):
+                out[k] = light
+    todo = [k for k in range(n) if out[k] is None]
     steps = _progress.bar(
-        scene.clouds, desc="light", total=n, unit="cloud", progress=progress if n > 1 else False
-    )
-    for k, drawable in enumerate(steps):
-        light_pass = LIGHT_PASSES[drawable.kind]
+        todo, desc="light", total=len(todo), unit="cloud",
+        progress=progress if len(todo) > 1 else False,
+    )  # fmt: skip
+    for k in steps:
+        drawable = scene.clouds[k]
         try:
             with _progress.core(f"light of cloud {k}", progress):
-                out.append(light_pass(drawable, scene, given[k], threads))
+                out[k] = LIGHT_PASSES[drawable.kind](drawable, scene, given[k], threads)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
     return LitScene(scene, tuple(out))

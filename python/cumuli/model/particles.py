@@ -27,6 +27,7 @@ import numpy as np
 from cumuli import _core
 from cumuli import _validate as check
 from cumuli._atomic import atomic_target
+from cumuli.io.jsonable import array_from_json, array_to_json
 from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise
 
@@ -131,6 +132,7 @@ class ParticleCloud:
                 raise TypeError(f"{name} must be a mapping, got {type(value).__name__}")
         self.params: dict[str, Any] = dict(params or {})
         self.stats: dict[str, Any] = dict(stats or {})
+        self._sphere_cache: Any = None
 
     # --- arrays and geometry ------------------------------------------------------------------
     @property
@@ -161,15 +163,25 @@ class ParticleCloud:
         """``(centres, radii, tau, albedo)`` as the C++ core takes them."""
         return self._centres, self._radii, self._tau, self._albedo
 
+    def _sphere_data(self) -> tuple[Any, Any, Any, float]:
+        # Arrays are read-only: computed once (renderers ask for it every frame).
+        if self._sphere_cache is None:
+            self._sphere_cache = _core.particle_sphere(*self.core_args())
+        return self._sphere_cache
+
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
         """``(lo, hi)``: the AABB of centres ± radii, float32 as the core computes it."""
-        lo, hi, _, _ = _core.particle_sphere(*self.core_args())
+        lo, hi, _, _ = self._sphere_data()
         return np.array(lo, dtype=np.float32), np.array(hi, dtype=np.float32)
+
+    def layer_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The box every splat of the cloud lies in: :meth:`bounds` (the compositor's order)."""
+        return self.bounds()
 
     @property
     def sphere(self) -> tuple[np.ndarray, float]:
         """Bounding sphere ``(c, R)``: ``c`` the AABB centre, ``R = max_k(|p_k − c| + r_k)``."""
-        _, _, centre, radius = _core.particle_sphere(*self.core_args())
+        _, _, centre, radius = self._sphere_data()
         return np.array(centre, dtype=np.float32), float(radius)
 
     # --- values derived from this one ---------------------------------------------------------
@@ -309,32 +321,40 @@ class ParticleCloud:
         }
 
     def to_dict(self) -> dict[str, Any]:
-        """A JSON-able document (arrays as lists, with ``"kind": "particles"``) for scene files."""
+        """A JSON-able document for scene files and ``.json`` saves: ``"kind": "particles"``,
+        the arrays as exact base64 float32 (:func:`cumuli.io.jsonable.array_to_json`)."""
         doc = self._meta()
         for key in _ARRAYS:
-            doc[key] = getattr(self, key).tolist()
+            doc[key] = array_to_json(getattr(self, key))
         return doc
 
     @classmethod
-    def from_dict(cls, doc: Mapping[str, Any]) -> ParticleCloud:
-        """The cloud of a :meth:`to_dict` document (ValueError naming what is wrong)."""
+    def from_dict(cls, doc: Mapping[str, Any], where: str = "particles") -> ParticleCloud:
+        """The cloud of a :meth:`to_dict` document (arrays as base64 objects or nested lists);
+        ValueError naming ``where`` and what is wrong."""
         if not isinstance(doc, Mapping):
             raise TypeError(
                 f"a particle cloud document must be a mapping, got {type(doc).__name__}"
             )
         if doc.get("kind", cls.kind) != cls.kind:
             raise ValueError(f"document kind must be {cls.kind!r}, got {doc.get('kind')!r}")
+        unknown = sorted(set(doc) - {*_ARRAYS, "format", "version", "kind", "params", "stats"})
+        if unknown:
+            raise ValueError(f"{where} has unknown field(s): {', '.join(unknown)}")
         missing = [k for k in _ARRAYS if k not in doc]
         if missing:
             raise ValueError(f"particle cloud document misses {missing}")
         arrays = {}
         for key in _ARRAYS:
-            try:
-                arrays[key] = np.asarray(doc[key], dtype=np.float32)
-            except (TypeError, ValueError) as exc:
-                raise ValueError(f"{key} is not a numeric array ({exc})") from None
-        params, stats = doc.get("params", {}), doc.get("stats", {})
-        return cls(**arrays, params=params, stats=stats)
+            value = doc[key]  # an ndarray from .npz files, else JSON
+            arrays[key] = (
+                value if isinstance(value, np.ndarray) else array_from_json(value, f"{where}.{key}")
+            )
+        params, stats = doc.get("params") or {}, doc.get("stats") or {}
+        try:
+            return cls(**arrays, params=params, stats=stats)
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(f"{where}: {exc}") from None
 
     def save(self, path: str | os.PathLike[str]) -> Path:
         """Write the cloud to ``path`` (``.npz`` or ``.json`` by extension), atomically.

@@ -29,6 +29,7 @@ from cumuli.gl import GLContext, _thread_default, default_context
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
 from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUPED_KINDS
+from cumuli.rendering.painters import CPUPainter, GLPainter
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
 from cumuli.sky import Sun, as_sky, sky_args
@@ -37,39 +38,64 @@ from cumuli.sky import Sun, as_sky, sky_args
 TILE = 1024
 #: Largest image accepted, in pixels (2²⁶ RGBA32F pixels = 1 GiB of output).
 MAX_PIXELS = 1 << 26
+#: Most bytes the layers of one layered render may take (one (H, W, 4) float32 layer per call).
+MAX_LAYER_BYTES = 1 << 31
 #: Largest image edge of the CPU backend.
 MAX_EDGE = 1 << 14
 BACKENDS = ("gl", "cpu")
 
-#: A draw call: ``(kind, indices, with_sky) -> (H, W, 4) image``.
-DrawFn = Callable[[str, Sequence[int], bool], np.ndarray]
-
 
 def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     """The draw calls of ``scene``: one ``(kind, indices)`` over the sky when one pass can draw
-    everything (an empty scene draws the sky with the marcher), else one per drawable."""
+    everything (an empty scene draws the sky with the marcher), else one per drawable. With
+    solids, every drawable is its own layer (each composites with the solids by its own box)."""
     kinds = scene.kinds
     if not kinds:
         return [("cloud", [])]
-    if len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS):
+    if not scene.solids and (
+        len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS)
+    ):
         return [(kinds[0], list(range(len(kinds))))]
     return [(kind, [k]) for k, kind in enumerate(kinds)]
 
 
+def _union_box(scene: Scene, indices: Sequence[int]) -> np.ndarray:
+    boxes = np.array([scene.clouds[k].layer_box() for k in indices], np.float32)
+    return np.stack([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
+
+
 def compose(
-    lit: LitScene, camera: Camera, width: int, height: int, draw: DrawFn, threads: int = 0
+    lit: LitScene,
+    camera: Camera,
+    width: int,
+    height: int,
+    painter: Any,
+    threads: int = 0,
+    impostors: Any = None,
 ) -> np.ndarray:
-    """Draw ``lit`` with ``draw`` and composite the layers over the sky (see the module doc)."""
-    calls = plan(lit.scene)
-    if len(calls) == 1:
-        kind, indices = calls[0]
-        return draw(kind, indices, True)
+    """Draw ``lit`` with ``painter`` (:mod:`cumuli.rendering.painters`) and composite the layers
+    and the solids over the sky (see the module doc); ``impostors`` an
+    :class:`~cumuli.rendering.impostor_cache.ImpostorCache` draws every layer through it."""
     scene = lit.scene
-    layers = np.stack([draw(kind, indices, False) for kind, indices in calls])
-    boxes = np.array([scene.clouds[k].layer_box() for k in range(len(scene.clouds))], np.float32)
+    calls = plan(scene)
+    if impostors is None and not scene.solids and len(calls) == 1:
+        kind, indices = calls[0]
+        return painter.layer(lit, kind, indices, camera, width, height, True)
+    if impostors is not None:
+        layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
+    else:
+        layer_list, box_list = [], []
+        for kind, indices in calls:
+            if indices:
+                layer_list.append(painter.layer(lit, kind, indices, camera, width, height, False))
+                box_list.append(_union_box(scene, indices))
+    layers = np.stack(layer_list) if layer_list else np.zeros((0, height, width, 4), np.float32)
+    boxes = np.array(box_list, np.float32).reshape(-1, 2, 3)
+    solid = painter.solids(lit, camera, width, height) if scene.solids else None
     return _core.composite_layers(
         layers, boxes, camera.position, camera.target, camera.up, float(camera.fov),
         sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
+        solid,
     )  # fmt: skip
 
 
@@ -103,6 +129,20 @@ def _check_kinds(scene: Scene, drawers: dict[str, Any], backend: str) -> None:
     for k, kind in enumerate(scene.kinds):
         if kind not in drawers:
             raise TypeError(f"scene.clouds[{k}]: the {backend} backend has no drawer for {kind!r}")
+
+
+def _check_layers(scene: Scene, width: int, height: int) -> None:
+    """The layers of a layered render (one per draw call) must fit in ``MAX_LAYER_BYTES``."""
+    calls = plan(scene)
+    if len(calls) == 1 and not scene.solids:
+        return
+    need = len(calls) * width * height * 16
+    if need > MAX_LAYER_BYTES:
+        raise ValueError(
+            f"the scene's {len(calls)} layers of {width}x{height} pixels need {need >> 20} MiB, "
+            f"more than {MAX_LAYER_BYTES >> 20} MiB: render a smaller image or fewer drawables "
+            "of mixed kinds (drawables of one grouped kind share a layer)"
+        )
 
 
 # --------------------------------------------------------------------------------------------
@@ -195,6 +235,8 @@ class Renderer:
     def __init__(self, context: GLContext | None = None, tile: int = TILE) -> None:
         self.closed = False
         self._drawers: dict[str, Any] = {}
+        self._extras: dict[str, Any] = {}
+        self._impostors: Any = None
         # Arguments first: a bad one must not leave a context behind.
         self.tile = check.integer(tile, "tile", 16, 4096)
         if context is not None:
@@ -224,11 +266,32 @@ class Renderer:
         """The GL_RENDERER string of the context (e.g. ``llvmpipe (LLVM 15.0.6, 256 bits)``)."""
         return self.gl.renderer
 
+    def make_current(self) -> None:
+        """Make this renderer's context current in this thread, and leave it so (for GL calls
+        made outside :meth:`render`, which does it itself)."""
+        with self.gl.activate("this Renderer's GL context"):
+            pass
+
     def drawer(self, kind: str) -> Any:
         """The GL drawer of ``kind`` (made on first use)."""
         if kind not in self._drawers:
             self._drawers[kind] = GL_DRAWERS[kind](self.gl, self.tiles)
         return self._drawers[kind]
+
+    def extra(self, name: str, make: Callable[[GLContext, Tiles], Any]) -> Any:
+        """A helper drawer of this renderer (solids, impostor display), made on first use."""
+        if name not in self._extras:
+            self._extras[name] = make(self.gl, self.tiles)
+        return self._extras[name]
+
+    @property
+    def impostor_cache(self) -> Any:
+        """This renderer's own :class:`cumuli.ImpostorCache` (``render(..., impostors=True)``)."""
+        if self._impostors is None:
+            from cumuli.rendering.impostor_cache import ImpostorCache
+
+            self._impostors = ImpostorCache(self)
+        return self._impostors
 
     def render(
         self,
@@ -236,69 +299,91 @@ class Renderer:
         camera: Camera,
         width: int,
         height: int,
+        impostors: Any = None,
         progress: bool | None = None,
     ) -> np.ndarray:
         """Render ``scene`` seen by ``camera``: ``(height, width, 4)`` float32 linear RGBA, row 0
         at the top, alpha = 1 − transmittance. A `Scene`'s light is prepared first
-        (:func:`cumuli.prepare_light`); a `LitScene` is drawn with its own. Light passes and
-        tiles that take more than a few seconds show a progress bar (``progress=False``: none).
-        """
+        (:func:`cumuli.prepare_light`); a `LitScene` is drawn with its own. ``impostors``: an
+        :class:`cumuli.ImpostorCache` kept across frames (``True``: this renderer's own) draws
+        every drawable through its impostor (Harris 2002 §3). Light passes and tiles that take
+        more than a few seconds show a progress bar (``progress=False``: none)."""
         if self.closed:
             raise RuntimeError("this Renderer is closed")
         with self.gl.activate("this Renderer's GL context"):
             self.tiles.progress = progress
             try:
-                return self._render(scene, camera, width, height, progress)
+                return self._render(scene, camera, width, height, impostors, progress)
             finally:
                 self.tiles.progress = None
 
     def _render(
-        self, scene: Any, camera: Any, width: Any, height: Any, progress: bool | None
+        self,
+        scene: Any,
+        camera: Any,
+        width: Any,
+        height: Any,
+        impostors: Any,
+        progress: bool | None,
     ) -> np.ndarray:
         lit, plain = _lit(scene)
         if not isinstance(camera, Camera):
             raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
         width, height = _check_size(width, height, self.max_texture_size, "GL_MAX_TEXTURE_SIZE")
+        cache = self._cache_arg(impostors)
         _check_kinds(plain, GL_DRAWERS, "GL")
+        _check_layers(plain, width, height)
         for kind, indices in plan(plain):  # before the light pass, which could be long
             drawer = self.drawer(kind)
             drawer.check(plain, indices)
             if lit is None and hasattr(drawer, "check_light"):
                 drawer.check_light(plain, indices)  # the light the light step will make
         lit = prepare_light(plain, progress=progress) if lit is None else lit
-        gpu_ns: list[int | None] = []
-
-        def draw(kind: str, indices: Sequence[int], with_sky: bool) -> np.ndarray:
-            drawer = self.drawer(kind)
-            self.tiles.last_gpu_ns = None
-            img = drawer.draw(lit, indices, camera, width, height, with_sky)
-            gpu_ns.append(
-                self.tiles.last_gpu_ns
-                if kind in GROUPED_KINDS
-                else getattr(drawer, "last_gpu_ns", None)
-            )
-            return img
-
-        image = compose(lit, camera, width, height, draw)
-        self.last_gpu_ns = sum(gpu_ns) if gpu_ns and None not in gpu_ns else None  # type: ignore
+        self.tiles.last_gpu_ns = None
+        image = compose(lit, camera, width, height, GLPainter(self), impostors=cache)
+        calls = plan(plain)
+        single = cache is None and not plain.solids and len(calls) == 1
+        self.last_gpu_ns = self.tiles.last_gpu_ns if single and calls[0][0] == "cloud" else None
         return image
+
+    def _cache_arg(self, impostors: Any) -> Any:
+        from cumuli.rendering.impostor_cache import ImpostorCache
+
+        if impostors is None or impostors is False:
+            return None
+        if impostors is True:
+            return self.impostor_cache
+        if not isinstance(impostors, ImpostorCache):
+            raise TypeError(
+                f"impostors must be a cumuli.ImpostorCache, True or None, got "
+                f"{type(impostors).__name__}"
+            )
+        if impostors.renderer is not None and impostors.renderer is not self:
+            if not getattr(impostors.renderer, "closed", False):
+                raise ValueError("this ImpostorCache belongs to another Renderer")
+            impostors.detach()  # its renderer is closed: keep the images, re-upload them here
+        impostors.renderer = self
+        return impostors
 
     # --- lifetime ---------------------------------------------------------------------------
     def close(self) -> None:
         """Release every GL object (and the context when this renderer created it)."""
         if self.closed:
             return
+        self.closed = True
         if hasattr(self, "gl") and not self.gl.closed and self.gl._pid == os.getpid():
             with self.gl.activate("this Renderer's GL context"):
-                for drawer in self._drawers.values():
+                if getattr(self, "_impostors", None) is not None:
+                    self._impostors.clear()
+                for drawer in [*self._drawers.values(), *getattr(self, "_extras", {}).values()]:
                     try:
                         drawer.release()
                     except Exception:
                         pass
                 if hasattr(self, "tiles"):
                     self.tiles.release()
-        self.closed = True
         self._drawers.clear()
+        getattr(self, "_extras", {}).clear()
 
     def __enter__(self) -> Renderer:
         return self
@@ -333,27 +418,32 @@ def render_cpu(
     width: int,
     height: int,
     threads: int = 0,
+    impostors: Any = None,
     progress: bool | None = None,
 ) -> np.ndarray:
     """Render ``scene`` seen by ``camera`` with the C++ twins of every drawer and the C++
     compositor; returns ``(height, width, 4)`` float32 linear RGBA, row 0 at the top, alpha
     ``1 − T``. ``threads=0`` uses every core; the image does not depend on the thread count.
-    Ctrl-C stops it between chunks of rows; a progress bar shows when it takes more than a few
-    seconds (``progress=False``: none)."""
+    ``impostors``: an :class:`cumuli.ImpostorCache` kept across frames. Ctrl-C stops it between
+    chunks of rows; a progress bar shows when it takes more than a few seconds
+    (``progress=False``: none)."""
+    from cumuli.rendering.impostor_cache import ImpostorCache
+
     lit, plain = _lit(scene)
     if not isinstance(camera, Camera):
         raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
     # Arguments are checked before the (possibly long) light pass runs.
     width, height = _check_size(width, height, MAX_EDGE)
     threads = check.threads(threads)
+    if impostors is not None and not isinstance(impostors, ImpostorCache):
+        raise TypeError(
+            f"impostors must be a cumuli.ImpostorCache or None, got {type(impostors).__name__}"
+        )
     _check_kinds(plain, CPU_DRAWERS, "CPU")
+    _check_layers(plain, width, height)
     lit = prepare_light(plain, threads=threads, progress=progress) if lit is None else lit
-
-    def draw(kind: str, indices: Sequence[int], with_sky: bool) -> np.ndarray:
-        return CPU_DRAWERS[kind](lit, indices, camera, width, height, with_sky, threads)
-
     with _progress.core("render (cpu)", progress):
-        return compose(lit, camera, width, height, draw, threads)
+        return compose(lit, camera, width, height, CPUPainter(threads), threads, impostors)
 
 
 def render(
@@ -362,6 +452,7 @@ def render(
     width: int = 640,
     height: int = 480,
     backend: str = "gl",
+    impostors: Any = None,
     progress: bool | None = None,
 ) -> np.ndarray:
     """Render ``scene`` (a `Scene` or a `LitScene`) to an ``(height, width, 4)`` float32 linear
@@ -369,8 +460,9 @@ def render(
 
     ``backend="gl"`` runs the GLSL drawers in a process-wide headless context; ``"cpu"`` runs
     their C++ twins (same contract, for parity and for machines without EGL). ``camera``
-    defaults to :meth:`Scene.default_camera`. Steps that take more than a few seconds (light
-    passes, tiles, the CPU marcher) show a progress bar unless ``progress=False`` (or
+    defaults to :meth:`Scene.default_camera`. ``impostors``: an :class:`cumuli.ImpostorCache`
+    kept across frames (Harris 2002 §3). Steps that take more than a few seconds (light passes,
+    tiles, the CPU marcher) show a progress bar unless ``progress=False`` (or
     ``CUMULI_PROGRESS=0``).
     """
     if backend not in BACKENDS:
@@ -379,8 +471,10 @@ def render(
     if camera is None:
         camera = plain.default_camera()
     if backend == "gl":
-        return shared_renderer().render(scene, camera, width, height, progress)
-    return render_cpu(scene, camera, width, height, progress=progress)
+        return shared_renderer().render(
+            scene, camera, width, height, impostors=impostors, progress=progress
+        )
+    return render_cpu(scene, camera, width, height, impostors=impostors, progress=progress)
 
 
 def _as_camera(camera: Any) -> Camera:

@@ -21,6 +21,7 @@ from cumuli.camera import Camera
 from cumuli.light.ndt import LightGrid
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.cloud import Cloud
+from cumuli.model.solid import solid_arrays
 from cumuli.scene import Scene
 
 #: Largest image edge the CPU marcher accepts.
@@ -110,6 +111,7 @@ def render_cpu_args(
         "noise": scene.noise._core,
         "threads": threads,
         "with_sky": bool(with_sky),
+        "solids": solid_arrays(scene.solids)[0] if scene.solids else None,
     }
 
 

@@ -4,8 +4,9 @@ Pure functions over the C++ core (``render/impostor.hpp``, double precision): th
 camera of a cloud's bounding sphere (:func:`impostor_view`), the translation error α_trans,
 the "backwards" test, the texture-resolution rule and the "inside" test that switches to a
 screen impostor. :class:`ImpostorState` records what an impostor was generated for and
-:func:`needs_update` says why it must be regenerated (or None). The GL impostor cache,
-splitting and solids build on these (phase 2).
+:func:`needs_update` says why it must be regenerated (or None). The impostor cache
+(:mod:`cumuli.rendering.impostor_cache`), its GL display and splitting around solids build on
+these.
 """
 
 from __future__ import annotations
@@ -23,7 +24,13 @@ from cumuli.camera import Camera
 
 RESOLUTION_RULES = ("paper", "skyworks")
 PRESETS = ("paper", "skyworks")
-REASONS = ("missing", "light", "cloud", "screen", "backwards", "translation", "resolution")
+#: Why an impostor is (re)generated: the §7.3 tests in the order :func:`needs_update` applies them,
+#: then the cache's own: ``"split"`` (a cloud split around solids inside it, [H] §3.1.1) and
+#: ``"clip"`` (a marched cloud cut at a solid inside it) regenerate every frame.
+REASONS = (
+    "missing", "light", "cloud", "screen", "backwards", "translation", "resolution", "split",
+    "clip",
+)  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -38,6 +45,10 @@ class ImpostorSettings:
     /4 and /8 near the sphere). ``inside_factor``: screen impostors are ``⌈W/f⌉ × ⌈H/f⌉`` ([H]:
     "about a factor of 4 in each dimension"), 1–8. ``near``: the view's near distance of the
     inside test. ``release_after``: frames a culled cloud keeps its textures (SkyWorks 100).
+    ``exact``: GL display by texelFetch blends with the C++ arithmetic (parity ≤ 1e−5) instead of
+    the hardware bilinear filter (the CPU display is always exact). ``cull``: skip clouds outside
+    the view frustum (never changes the image). ``split``: split impostors around solids inside
+    a cloud ([H] §3.1.1) where its kind can.
     """
 
     tolerance: float = 0.15
@@ -49,6 +60,9 @@ class ImpostorSettings:
     inside_factor: int = 4
     near: float = 1e-3
     release_after: int = 100
+    exact: bool = False
+    cull: bool = True
+    split: bool = True
 
     def __post_init__(self) -> None:
         def put(name: str, value: Any) -> None:
@@ -61,6 +75,10 @@ class ImpostorSettings:
         if not isinstance(self.pow2, (bool, np.bool_)):
             raise TypeError(f"pow2 must be a bool, got {type(self.pow2).__name__}")
         put("pow2", bool(self.pow2))
+        for name in ("exact", "cull", "split"):
+            if not isinstance(getattr(self, name), (bool, np.bool_)):
+                raise TypeError(f"{name} must be a bool, got {type(getattr(self, name)).__name__}")
+            put(name, bool(getattr(self, name)))
         if self.resolution_rule not in RESOLUTION_RULES:
             raise ValueError(
                 f"resolution_rule must be one of {RESOLUTION_RULES}, got {self.resolution_rule!r}"
@@ -335,25 +353,44 @@ def needs_update(
     eye = tuple(
         float(v) for v in np.subtract(check.vec3(camera.position, "camera.position"), shift)
     )
-    if state.screen or needs_screen_impostor(
-        eye, state.centre, state.radius, camera, width, height, s
+    width = check.integer(width, "width", 1, 1 << 15)
+    height = check.integer(height, "height", 1, 1 << 15)
+    return view_reason(state, eye, camera.fov, width, height, s)
+
+
+def view_reason(
+    state: ImpostorState,
+    eye: tuple[float, float, float],
+    fov: float,
+    width: int,
+    height: int,
+    s: ImpostorSettings,
+) -> str | None:
+    """The view tests of :func:`needs_update` (``"screen"``, ``"backwards"``, ``"translation"``,
+    ``"resolution"``) for an eye already moved by the cloud's translation; no validation (the
+    impostor cache calls it for every cloud of every frame)."""
+    th, aspect = math.tan(math.radians(fov) / 2), width / height
+    if state.screen or _core.needs_screen_impostor(
+        eye, state.centre, state.radius, th, aspect, s.near
     ):
         return "screen"
     view = state.view
     assert view is not None
     if _core.impostor_backwards(view.near_point, view.far_point, eye):
         return "backwards"
-    if translation_error(view.near_point, view.far_point, eye) >= s.tolerance:
+    alpha = _core.impostor_translation_error(view.near_point, view.far_point, eye)
+    if math.degrees(alpha) >= s.tolerance:
         return "translation"
     d = math.dist(eye, state.centre)
-    req = float(
-        _core.impostor_required_resolution(
-            focal_length_px(camera, height), state.radius, d, s.res_scale
+    f_px = _core.impostor_focal_length_px(height, fov)
+    req = float(_core.impostor_required_resolution(f_px, state.radius, d, s.res_scale))
+    if s.resolution_rule == "paper":
+        now = int(_core.impostor_resolution(req, s.min_res, s.max_res, s.pow2))
+    else:
+        near_r = _core.impostor_near_corner_radius(s.near, th, aspect)
+        now = int(
+            _core.impostor_resolution_skyworks(width, height, state.radius, d, near_r, s.min_res)
         )
-    )
-    now = impostor_resolution(
-        req, s, camera=camera, width=width, height=height, radius=state.radius, distance=d
-    )
     if now > state.res:
         return "resolution"
     return None

@@ -9,6 +9,13 @@ with_sky)`` and ``release()``; ``groups = True`` says one pass may draw several 
 kind (the 2018 marcher orders its clouds per pixel itself). CPU drawers are functions
 ``draw(lit, indices, camera, width, height, with_sky, threads)``, the C++ twins of the GL ones.
 A new kind registers both here (see ARCHITECTURE.md).
+
+Opaque solids (``Scene.solids``): drawers of the kinds in :data:`CLIPS_SOLIDS` draw only what lies
+in front of them (the marchers stop each ray at the nearest solid, particles are depth-tested),
+so their layers composite exactly with the solids. Kinds in :data:`CPU_SPLITS` (and whose GL
+drawer has ``draw_split``) can be cut into ``m + 1`` layers around ``m`` solids for impostor
+splitting (Harris 2002 §3.1.1): ``split(lit, index, camera, width, height, cuts[, threads])`` →
+``(m + 1, H, W, 4)``, farthest first, cut at the solids' sort keys.
 """
 
 from __future__ import annotations
@@ -17,25 +24,55 @@ from collections.abc import Callable
 from typing import Any
 
 from cumuli.model.cloud import Cloud
+from cumuli.model.particles import ParticleCloud
 from cumuli.model.volume import VolumeCloud
 from cumuli.rendering.cpu import draw_clouds_cpu
 from cumuli.rendering.marcher import MarcherGL
+from cumuli.rendering.particle_layers import (
+    ParticleCloudsGL,
+    draw_particle_clouds_cpu,
+    split_particle_cloud_cpu,
+)
 from cumuli.rendering.volume import VolumeGL, draw_volume_cpu
 
 #: GL drawer class of each kind.
-GL_DRAWERS: dict[str, type] = {Cloud.kind: MarcherGL, VolumeCloud.kind: VolumeGL}
+GL_DRAWERS: dict[str, type] = {
+    Cloud.kind: MarcherGL,
+    VolumeCloud.kind: VolumeGL,
+    ParticleCloud.kind: ParticleCloudsGL,
+}
 #: CPU drawer (the C++ twin) of each kind.
 CPU_DRAWERS: dict[str, Callable[..., Any]] = {
     Cloud.kind: draw_clouds_cpu,
     VolumeCloud.kind: draw_volume_cpu,
+    ParticleCloud.kind: draw_particle_clouds_cpu,
 }
-#: Kinds whose drawer marches several drawables in one pass (per-pixel order inside the pass).
-GROUPED_KINDS: set[str] = {Cloud.kind}
+#: Kinds whose drawer draws several drawables in one pass (the marcher orders its clouds per
+#: pixel; particle clouds are splatted back to front cloud by cloud, as SkyWorks does).
+GROUPED_KINDS: set[str] = {Cloud.kind, ParticleCloud.kind}
+#: Kinds whose drawers draw only what lies in front of the scene's solids.
+CLIPS_SOLIDS: set[str] = {Cloud.kind, VolumeCloud.kind, ParticleCloud.kind}
+#: CPU split drawers (the GL drawer's ``draw_split``) of the kinds impostors can split.
+CPU_SPLITS: dict[str, Callable[..., Any]] = {ParticleCloud.kind: split_particle_cloud_cpu}
 
 
-def register_drawers(kind: str, gl: type, cpu: Callable[..., Any], groups: bool = False) -> None:
-    """Register the GL drawer class and the CPU drawer function of a new kind."""
+def register_drawers(
+    kind: str,
+    gl: type,
+    cpu: Callable[..., Any],
+    groups: bool = False,
+    *,
+    clips_solids: bool = False,
+    cpu_split: Callable[..., Any] | None = None,
+) -> None:
+    """Register the GL drawer class and the CPU drawer function of a new kind (``groups``: one
+    pass may draw several; ``clips_solids``: its drawers stop at the scene's solids;
+    ``cpu_split``: the CPU twin of the GL drawer's ``draw_split``, for impostor splitting)."""
     GL_DRAWERS[kind] = gl
     CPU_DRAWERS[kind] = cpu
     if groups:
         GROUPED_KINDS.add(kind)
+    if clips_solids:
+        CLIPS_SOLIDS.add(kind)
+    if cpu_split is not None:
+        CPU_SPLITS[kind] = cpu_split

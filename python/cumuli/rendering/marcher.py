@@ -21,6 +21,7 @@ from cumuli.camera import Camera
 from cumuli.gl import GLContext
 from cumuli.light.prepare import LitScene
 from cumuli.model.cloud import Cloud
+from cumuli.rendering.solids import set_solid_uniforms
 from cumuli.scene import Scene
 from cumuli.settings import CANDIDATE_SORTS, MAX_CANDIDATES, MAX_CLOUDS
 
@@ -107,6 +108,8 @@ class MarcherGL:
 
     #: Draws several clouds of its kind in one pass (the compositor's single-pass path).
     groups = True
+    #: Stops every ray at the nearest of the scene's solids (the layer is what lies in front).
+    clips_solids = True
 
     def __init__(self, gl: GLContext, tiles: Any) -> None:
         self.gl = gl
@@ -273,6 +276,8 @@ class MarcherGL:
         set_("u_gain", s.gain)
         set_("u_lacunarity", s.lacunarity)
         set_("u_frequency", s.frequency)
+        # Opaque solids: each ray stops at the nearest (none: u_solid_count = 0).
+        set_solid_uniforms(self.program, scene.solids)
 
     def release(self) -> None:
         """Release the programs and the noise texture (idempotent)."""

@@ -13,6 +13,7 @@ compositor makes ``rgb = C + (1 − A)·sky``, ``alpha = A``.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 
@@ -62,10 +63,12 @@ def particle_sprites(
     ambient: Sequence[float] | None = None,
     *,
     cull: bool = True,
-) -> Sprites:
+    return_keys: bool = False,
+) -> Any:
     """The cloud's sprites for ``camera`` at ``width × height``, back to front (spec §5 steps
     1–4). ``lights`` are the suns ``light`` was computed for, in the same order (their colour and
-    intensity may have changed since). ``ambient`` overrides ``settings.ambient``."""
+    intensity may have changed since). ``ambient`` overrides ``settings.ambient``. With
+    ``return_keys`` also the sort keys ``(M,)`` (distance or depth, decreasing)."""
     settings = as_settings(settings)
     lights = as_lights(lights)
     _check_light(cloud, light, lights)
@@ -76,7 +79,7 @@ def particle_sprites(
         raise TypeError("cull must be a bool")
     cam = camera_dict(camera, width, height, settings.near)
     radiance = np.array([s.radiance for s in lights], dtype=np.float32).reshape(-1, 3)
-    index, colours, alpha = _core.particle_sprites(
+    index, colours, alpha, keys = _core.particle_sprites(
         *cloud.core_args(),
         light.light,
         light_directions(lights),
@@ -89,12 +92,13 @@ def particle_sprites(
         settings.sort,
         bool(cull),
     )
-    return Sprites(
+    sprites = Sprites(
         centres=cloud.centres[index],
         half_sizes=cloud.radii[index],
         colours=colours,
         alpha=alpha,
     )
+    return (sprites, keys) if return_keys else sprites
 
 
 def draw_particles_cpu(

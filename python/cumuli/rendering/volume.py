@@ -32,7 +32,9 @@ from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext, _resolve_context
 from cumuli.light.prepare import LitScene
+from cumuli.model.solid import Solid, as_solids, solid_arrays
 from cumuli.model.volume import _box, _float_volumes
+from cumuli.rendering.solids import set_solid_uniforms
 from cumuli.sky import Sun, as_sky, sky_args
 
 #: Most steps a ray may take (the shader's loop bound).
@@ -143,21 +145,24 @@ class VolumeRenderer:
         g: float = 0.2,
         step: float | None = None,
         with_sky: bool = True,
+        solids: Sequence[Solid] = (),
     ) -> np.ndarray:
         """As :func:`cumuli.render_volume` with ``backend="gl"``; ``camera`` may also be the dict
         of :func:`camera_rays`. ``with_sky=False`` gives the premultiplied layer
-        ``(colour, 1 − T)`` the compositor combines."""
+        ``(colour, 1 − T)`` the compositor combines; each ray stops at the nearest of the opaque
+        ``solids``."""
         if self.program is None or self.context.closed:
             raise ValueError("this VolumeRenderer has been released")
         with self.context.activate("this VolumeRenderer's GL context"):
             return self._render(
                 volume, light, box, camera, width, height, sun, sky, sigma_t, albedo, g, step,
-                with_sky,
+                with_sky, solids,
             )  # fmt: skip
 
     def _render(
         self, volume: Any, light: Any, box: Any, camera: Any, width: int, height: int, sun: Any,
         sky: Any, sigma_t: float, albedo: float, g: float, step: float | None, with_sky: bool,
+        solids: Sequence[Solid],
     ) -> np.ndarray:  # fmt: skip
         sun = Sun() if sun is None else sun
         if not isinstance(sun, Sun):
@@ -215,6 +220,7 @@ class VolumeRenderer:
             for name, value in values.items():
                 if name in prog:
                     prog[name].value = value
+            set_solid_uniforms(prog, as_solids(solids))
             dens.use(location=0)
             ltex.use(location=1)
             fbo.use()
@@ -261,8 +267,11 @@ def render_volume_cpu(
     step: float | None,
     threads: int = 0,
     with_sky: bool = True,
+    solids: Sequence[Solid] = (),
 ) -> np.ndarray:
     """The C++ twin of :meth:`VolumeRenderer.render` (``_core.render_volume_cpu``)."""
+    solids = as_solids(solids)
+    spheres = solid_arrays(solids)[0] if solids else None
     vol, lig, lo, hi, width, height, step = _inputs(volume, light, box, width, height, step)
     cam = camera if isinstance(camera, dict) else camera_rays(camera)
     return _core.render_volume_cpu(
@@ -270,7 +279,7 @@ def render_volume_cpu(
         cam["tan_half_fov"], width, height, sun.direction, sun.radiance, sky_args(as_sky(sky)),
         check.real(sigma_t, "sigma_t", 0.0), check.real(albedo, "albedo", 0.0, 1.0),
         check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True), step,
-        check.threads(threads), bool(with_sky),
+        check.threads(threads), bool(with_sky), spheres,
     )  # fmt: skip
 
 
@@ -284,6 +293,7 @@ class VolumeGL:
     see :mod:`cumuli.rendering.kinds`); one volume per draw."""
 
     groups = False
+    clips_solids = True
 
     def __init__(self, gl: GLContext, tiles: Any = None) -> None:
         self.renderer = VolumeRenderer(gl)
@@ -312,6 +322,7 @@ class VolumeGL:
         return self.renderer.render(
             *_volume_args(lit, k), camera, width, height, lit.scene.sun, lit.scene.sky,
             sigma_t=v.sigma_t, albedo=v.albedo, g=v.g, step=v.step, with_sky=with_sky,
+            solids=lit.scene.solids,
         )  # fmt: skip
 
     def release(self) -> None:
@@ -333,5 +344,5 @@ def draw_volume_cpu(
     return render_volume_cpu(
         *_volume_args(lit, k), camera, width, height, lit.scene.sun, lit.scene.sky,
         sigma_t=v.sigma_t, albedo=v.albedo, g=v.g, step=v.step, threads=threads,
-        with_sky=with_sky,
+        with_sky=with_sky, solids=lit.scene.solids,
     )  # fmt: skip

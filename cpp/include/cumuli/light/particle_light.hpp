@@ -100,6 +100,14 @@ void particle_light_one(const ParticleView& particles, glm::vec3 sun_direction,
                         const ParticleLightSettings& settings, float* light, std::size_t stride,
                         float* buffer);
 
+// The shadow-map by-product (spec §4 step 6, §10.3.9): the transmittance of the light through the
+// cloud at world points, the final light buffer `buffer` (n², [y][x]) of `frame` sampled bilinearly
+// (texel centres, clamp to edge) at the point's buffer coordinates x = ((p − c)·r + R)/(2R)·n,
+// y = ((p − c)·u + R)/(2R)·n. 1 (unshadowed) outside the buffer's square or in front of the cloud
+// ((p − c)·f < −R, nearer the light than every particle).
+void particle_shadow(const LightFrame& frame, const float* buffer, int n, const glm::vec3* points,
+                     std::size_t count, float* out);
+
 // Clouds × lights on `threads` threads (0 = all). light_out[c] holds n_c × L floats ([k][ℓ]);
 // buffers_out[c] (may be null) L × N_L² floats. Sun directions must be unit vectors.
 void particle_light(const std::vector<ParticleView>& clouds, const std::vector<glm::vec3>& suns,

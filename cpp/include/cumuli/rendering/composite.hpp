@@ -10,6 +10,7 @@
 #include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"
 #include "cumuli/rendering/march.hpp"
+#include "cumuli/rendering/solid.hpp"
 
 namespace cumuli {
 
@@ -23,9 +24,21 @@ struct Layer {
 // out (height·width·4): rgb = Σ_k T_k·C_k + T·sky(d), alpha = 1 − T, with T_k the product of
 // (1 − A_j) over the layers j the ray enters before k (entry max(t_in, 0), ties in layer order)
 // and T over all of them. A layer whose box the ray misses (or that lies behind the camera)
-// contributes nothing at that pixel. The result does not depend on the thread count.
+// contributes nothing at that pixel. `solid` (height·width·4: rgb, view depth) may be null.
+// The result does not depend on the thread count.
 void composite_layers(const std::vector<Layer>& layers, const CameraParams& camera, int width,
                       int height, const SkyParams& sky, const SunParams& sun, float* out,
-                      int threads);
+                      int threads, const float* solid = nullptr);
+
+// The solid image (height·width·4 floats, row 0 on top): rgb shaded (solid.hpp), alpha the view
+// depth Z = t·(d·f) of the nearest solid, +∞ where the ray meets none.
+void draw_solids(const std::vector<SolidSphere>& solids, const CameraParams& camera, int width,
+                 int height, const SunParams& sun, float* out, int threads);
+
+// The split composite of solid.hpp: `layers` m + 1 premultiplied images, farthest first, `solids`
+// m solid images (solids[j] between layers[j] and layers[j + 1]); out a premultiplied layer.
+void composite_split(const std::vector<const float*>& layers,
+                     const std::vector<const float*>& solids, int width, int height, float* out,
+                     int threads);
 
 }  // namespace cumuli

@@ -16,9 +16,25 @@
 // (d ≤ R(1 + 1e−6)), when the near plane would cut it (d − R < r_near, r_near the distance from the
 // eye to a corner of the near plane, SkyWorks' rCamRadius), or when 2β is wider than the view's
 // diagonal fov; they are the view camera at ⌈W/f⌉ × ⌈H/f⌉ pixels.
+//
+// Display (§7.2; the CPU twin of shaders/impostors/impostor.frag.glsl in exact mode): an impostor
+// is a premultiplied image on a plane through `centre` with unit normal `forward` and unit axes
+// right/up, half sizes (half_w, half_h). Per pixel, the camera ray o + t·d (RENDER_CONTRACT) meets
+// the plane at t = ((c − o)·f)/(d·f) (none unless d·f > 0 and t > 0); rel = t·d − (c − o),
+// s = rel·right/half_w, v = rel·up/half_h; outside |s|, |v| ≤ 1 a tight impostor is transparent (a
+// screen impostor — the view plane at distance 1 — clamps); texel coordinates
+// tx = (s + 1)/2·w, ty = (1 − v)/2·h (row 0 on top), bilinear with the texel-centre convention and
+// clamp to edge (lerp a + f·(b − a) along x, then y). Impostors are drawn in the given order (back
+// to front) with premultiplied over, dst = src + (1 − src.a)·dst, into a layer cleared to 0.
+// From the eye an impostor was made at, the tight quad reproduces its image exactly (each pixel
+// ray meets the plane at the image's own texel centres).
 #pragma once
 
+#include <vector>
+
 #include <glm/vec3.hpp>
+
+#include "cumuli/rendering/march.hpp"
 
 namespace cumuli {
 
@@ -62,5 +78,26 @@ bool needs_screen_impostor(glm::dvec3 eye, glm::dvec3 centre, double radius, dou
                            double aspect, double near);
 // ⌈size/factor⌉.
 int screen_impostor_size(int size, int factor);
+
+struct ImpostorQuad {
+  const float* rgba = nullptr;  // height × width × 4, premultiplied, row 0 on top
+  int width = 0, height = 0;
+  glm::vec3 centre{0.0f}, forward{0.0f, 0.0f, 1.0f}, right{1.0f, 0.0f, 0.0f}, up{0.0f, 1.0f, 0.0f};
+  float half_w = 1.0f, half_h = 1.0f;
+  bool clamp = false;  // screen impostor: clamp outside the image instead of transparent
+
+  void validate() const;  // throws std::invalid_argument
+};
+
+// Inclusive pixel rectangle the quad can cover (conservative: the corners' projections ± 1 pixel;
+// the whole image when a corner is not in front of the eye or the quad clamps). Empty: j0 > j1.
+struct PixelRect {
+  int j0 = 0, j1 = -1, i0 = 0, i1 = -1;
+};
+PixelRect impostor_rect(const ImpostorQuad& quad, const CameraRays& rays);
+
+// The premultiplied layer (height·width·4 floats) of the quads drawn in order (back to front).
+void display_impostors(const std::vector<ImpostorQuad>& quads, const CameraParams& camera,
+                       int width, int height, float* out, int threads);
 
 }  // namespace cumuli

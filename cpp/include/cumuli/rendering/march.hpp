@@ -18,6 +18,7 @@
 #include "cumuli/noise.hpp"
 #include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"
+#include "cumuli/rendering/solid.hpp"
 
 namespace cumuli {
 
@@ -96,6 +97,11 @@ struct MarchScene {
   // false: no sky behind the clouds, output (colour, 1 − T), a premultiplied layer for the
   // compositor (composite.hpp).
   bool with_sky = true;
+  // Opaque solids (solid.hpp, Harris 2002 §3.1.1): each ray is marched only up to the nearest
+  // solid it meets, t_s — intervals are clipped to t < t_s and a sample whose midpoint lies at or
+  // beyond t_s is not taken — so the layer holds exactly the cloud in front of the solid
+  // (spec harris.md §7.5, "march each ray only up to the object's depth"). Empty: no clipping.
+  std::vector<SolidSphere> solids;
 
   void validate(const MarchSettings& settings) const;
 };

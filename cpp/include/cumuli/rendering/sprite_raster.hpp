@@ -80,10 +80,12 @@ ScreenSprite project_sprite(const Sprite& sprite, const SpriteCamera& camera);
 
 // Rasterise sprites in the given order (back to front) into `out`, height × width × 4 floats,
 // which this function clears first. Rows are split over threads (result independent of threads).
-// `atlas` may be null when no sprite has texture ≥ 0.
+// `atlas` may be null when no sprite has texture ≥ 0. `depth` (height × width view depths, e.g. of
+// opaque solids, +∞ where none) may be null; when given, a sprite covers only the pixels where
+// its view depth Z < depth (Harris 2002 §3.1.1, direct rendering with the depth test).
 void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& camera,
                        const SpriteRasterSettings& settings, const SpriteAtlas* atlas, float* out,
-                       int threads);
+                       int threads, const float* depth = nullptr);
 
 // --- Harris particles as sprites (eye pass, spec §5 steps 1–4) --------------------------------
 
@@ -108,6 +110,7 @@ struct ParticleSpriteList {
   std::vector<std::uint32_t> index;  // particle indices, back to front
   std::vector<glm::vec3> colour;     // C_k = ambient + Σ_ℓ c_{k,ℓ}·p(cos θ_ℓ)
   std::vector<float> alpha;          // 1 − e^{−τ_k}
+  std::vector<float> key;            // the sort key (distance or depth), decreasing
 };
 
 // Colour, cull and sort the particles for the camera: c_{k,ℓ} = a_k τ_k γ/(4π)·i_{k,ℓ}·radiance_ℓ,

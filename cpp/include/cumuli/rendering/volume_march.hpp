@@ -17,6 +17,7 @@
 
 #include "cumuli/phase.hpp"
 #include "cumuli/light/volume_light.hpp"
+#include "cumuli/rendering/solid.hpp"
 
 namespace cumuli {
 
@@ -35,6 +36,9 @@ struct VolumeRenderParams {
   float albedo = 1.0f;
   float g = 0.2f;     // Henyey–Greenstein asymmetry
   float step = 0.1f;  // world units
+  // Opaque solids (solid.hpp): the ray is marched only up to the nearest one it meets (the box
+  // span [t0, t_out] becomes [t0, min(t_out, t_s)], still in equal steps). Empty: no clipping.
+  std::vector<SolidSphere> solids;
 };
 
 constexpr float kVolumeMinTransmittance = 1e-4f;

@@ -1,0 +1,119 @@
+"""What the compositor asks of a backend: layers, solid images, splits and impostor displays.
+
+:class:`GLPainter` draws with a :class:`cumuli.Renderer`'s GL drawers, :class:`CPUPainter` with
+their C++ twins; :func:`cumuli.rendering.compositor.compose` and the
+:class:`~cumuli.rendering.impostor_cache.ImpostorCache` only talk to this interface, so every
+feature (solids, splitting, impostors) works the same on both backends and any kind registered in
+:mod:`cumuli.rendering.kinds` takes part.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+import numpy as np
+
+from cumuli import _core
+from cumuli import _validate as check
+from cumuli.camera import Camera
+from cumuli.light.prepare import LitScene
+from cumuli.rendering import particle_layers
+from cumuli.rendering.impostor_gl import ImpostorDisplayGL, quad_planes
+from cumuli.rendering.kinds import CLIPS_SOLIDS, CPU_DRAWERS, CPU_SPLITS, GL_DRAWERS
+from cumuli.rendering.solids import SolidsGL, draw_solids_cpu
+
+
+class CPUPainter:
+    """The C++ twins, on ``threads`` threads (0: all cores)."""
+
+    backend = "cpu"
+
+    def __init__(self, threads: int = 0) -> None:
+        self.threads = check.threads(threads)
+
+    def layer(
+        self, lit: LitScene, kind: str, indices: Sequence[int], camera: Camera, width: int,
+        height: int, with_sky: bool,
+    ) -> np.ndarray:  # fmt: skip
+        return CPU_DRAWERS[kind](lit, indices, camera, width, height, with_sky, self.threads)
+
+    def solids(self, lit: LitScene, camera: Camera, width: int, height: int) -> np.ndarray:
+        scene = lit.scene
+        return draw_solids_cpu(scene.solids, scene.sun, camera, width, height, self.threads)
+
+    def can_split(self, kind: str) -> bool:
+        return kind in CPU_SPLITS
+
+    def clips_solids(self, kind: str) -> bool:
+        return kind in CLIPS_SOLIDS
+
+    def split(
+        self, lit: LitScene, k: int, camera: Camera, width: int, height: int, cuts: Sequence[float]
+    ) -> np.ndarray:
+        kind = lit.scene.clouds[k].kind
+        return CPU_SPLITS[kind](lit, k, camera, width, height, cuts, self.threads)
+
+    def display(
+        self, quads: Sequence[Any], camera: Camera, width: int, height: int, exact: bool = True
+    ) -> np.ndarray:
+        """Impostor quads back to front into a premultiplied layer (always exact on the CPU)."""
+        planes, clamp = quad_planes(quads)
+        return _core.display_impostors(
+            [q.image for q in quads], planes, clamp, camera.position, camera.target, camera.up,
+            float(camera.fov), width, height, self.threads,
+        )  # fmt: skip
+
+    def splats(self) -> int:
+        """Sprites splatted so far (a running count)."""
+        return particle_layers.cpu_sprites_drawn[0]
+
+    def forget(self, quad: Any) -> None:
+        """An impostor was dropped (nothing to release on the CPU)."""
+
+
+class GLPainter:
+    """The GL drawers of a :class:`cumuli.Renderer` (and its impostor display)."""
+
+    backend = "gl"
+
+    def __init__(self, renderer: Any) -> None:
+        self.renderer = renderer
+
+    def layer(
+        self, lit: LitScene, kind: str, indices: Sequence[int], camera: Camera, width: int,
+        height: int, with_sky: bool,
+    ) -> np.ndarray:  # fmt: skip
+        return self.renderer.drawer(kind).draw(lit, indices, camera, width, height, with_sky)
+
+    def solids(self, lit: LitScene, camera: Camera, width: int, height: int) -> np.ndarray:
+        drawer = self.renderer.extra("solids", lambda gl, tiles: SolidsGL(gl, tiles))
+        return drawer.draw(lit.scene.solids, lit.scene.sun, camera, width, height)
+
+    def can_split(self, kind: str) -> bool:
+        return hasattr(GL_DRAWERS[kind], "draw_split")
+
+    def clips_solids(self, kind: str) -> bool:
+        return kind in CLIPS_SOLIDS
+
+    def split(
+        self, lit: LitScene, k: int, camera: Camera, width: int, height: int, cuts: Sequence[float]
+    ) -> np.ndarray:
+        drawer = self.renderer.drawer(lit.scene.clouds[k].kind)
+        return drawer.draw_split(lit, k, camera, width, height, cuts)
+
+    def display(
+        self, quads: Sequence[Any], camera: Camera, width: int, height: int, exact: bool = False
+    ) -> np.ndarray:
+        display = self.renderer.extra("impostors", ImpostorDisplayGL)
+        return display.draw(quads, camera, width, height, exact)
+
+    def splats(self) -> int:
+        drawers = self.renderer._drawers.values()
+        return sum(int(getattr(d, "sprites_drawn", 0)) for d in drawers)
+
+    def forget(self, quad: Any) -> None:
+        """Return a dropped impostor's texture to the pool."""
+        display = self.renderer._extras.get("impostors")
+        if display is not None:
+            display.forget(quad)

@@ -1,0 +1,45 @@
+#version 430
+// The solid image (spec harris.md §7.5, §12.4): per pixel the nearest opaque sphere, shaded
+// Lambert by the sun plus ambient, rgb = colour ⊙ (ambient + max(0, n·s)·sun_radiance); alpha the
+// view depth Z = t·(d·f), +∞ where no solid is hit. GLSL twin of cumuli::draw_solids
+// (cpp/src/rendering/solid.cpp); the camera ray is RENDER_CONTRACT's, tiles as the marcher's.
+
+#include "common/solid.glsl"
+
+uniform vec3 u_cam_pos;
+uniform vec3 u_cam_f;
+uniform vec3 u_cam_r;
+uniform vec3 u_cam_u;
+uniform float u_th;
+uniform float u_aspect;
+uniform ivec2 u_image_size;
+uniform ivec2 u_tile_origin;
+uniform int u_tile_height;
+uniform vec3 u_sun_dir;
+uniform vec3 u_sun_radiance;
+uniform vec3 u_solid_colour[MAX_SOLIDS];
+uniform vec3 u_solid_ambient[MAX_SOLIDS];
+
+out vec4 frag;
+
+void main() {
+    int j = u_tile_origin.x + int(gl_FragCoord.x);
+    int i = u_tile_origin.y + (u_tile_height - 1 - int(gl_FragCoord.y));
+    float W = float(u_image_size.x), H = float(u_image_size.y);
+    float x = (2.0 * (float(j) + 0.5) / W - 1.0) * u_th * u_aspect;
+    float y = (1.0 - 2.0 * (float(i) + 0.5) / H) * u_th;
+    vec3 dir = normalize(u_cam_f + x * u_cam_r + y * u_cam_u);
+    int which;
+    float t = nearest_solid(u_cam_pos, dir, which);
+    if (which < 0) {
+        frag = vec4(0.0, 0.0, 0.0, NO_SOLID);
+        return;
+    }
+    vec4 sphere = u_solid_sphere[which];
+    precise vec3 p = u_cam_pos + t * dir;
+    precise vec3 n = (p - sphere.xyz) * (1.0 / sphere.w);
+    float lambert = max(solid_dot3(n, u_sun_dir), 0.0);
+    precise vec3 rgb = u_solid_colour[which] * (u_solid_ambient[which] + lambert * u_sun_radiance);
+    precise float z = t * solid_dot3(dir, u_cam_f);
+    frag = vec4(rgb, z);
+}
