@@ -23,6 +23,9 @@ import numpy as np
 
 from cumuli._atomic import atomic_target
 from cumuli.camera import Camera
+from cumuli.light.billboard_shading import BillboardShading
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
 from cumuli.model.cloud import Cloud
 from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise
@@ -45,6 +48,7 @@ SCENE_FIELDS = (
     "settings",
     "camera",
     "lights",
+    "billboard_shading",
 )
 #: Most extra lights (`Scene.lights`).
 MAX_LIGHTS = 16
@@ -53,7 +57,12 @@ MAX_SCENE_BYTES = 1 << 30
 
 
 #: Drawable kinds a scene holds, by their scene-file tag (see ARCHITECTURE.md, "a new kind").
-KINDS: dict[str, type] = {Cloud.kind: Cloud, VolumeCloud.kind: VolumeCloud}
+KINDS: dict[str, type] = {
+    Cloud.kind: Cloud,
+    VolumeCloud.kind: VolumeCloud,
+    BillboardCloud.kind: BillboardCloud,
+    BillboardField.kind: BillboardField,
+}
 
 
 def register_kind(cls: type) -> type:
@@ -116,6 +125,8 @@ class Scene:
 
     ``camera`` is optional: a default view used by ``cumuli render scene.json`` when the command
     line gives none (:meth:`default_camera` frames the clouds when it is None).
+    ``billboard_shading`` lights and draws the billboard clouds and fields (Torchelsen & Musse
+    2005; its ambient defaults to this scene's sky).
     """
 
     clouds: tuple[Any, ...] = ()
@@ -125,6 +136,7 @@ class Scene:
     settings: RenderSettings = field(default_factory=RenderSettings)
     camera: Camera | None = None
     lights: tuple[Sun, ...] = ()
+    billboard_shading: BillboardShading = field(default_factory=BillboardShading)
 
     def __post_init__(self) -> None:
         clouds = self.clouds
@@ -143,7 +155,13 @@ class Scene:
         if len(clouds) > MAX_CLOUDS:
             raise ValueError(f"scene.clouds holds at most {MAX_CLOUDS} clouds, got {len(clouds)}")
         object.__setattr__(self, "clouds", tuple(clouds))
-        parts = (("sun", Sun), ("sky", Sky), ("noise", Noise), ("settings", RenderSettings))
+        parts = (
+            ("sun", Sun),
+            ("sky", Sky),
+            ("noise", Noise),
+            ("settings", RenderSettings),
+            ("billboard_shading", BillboardShading),
+        )
         for name, cls in parts:
             if not isinstance(getattr(self, name), cls):
                 raise TypeError(f"scene.{name} must be a cumuli.{cls.__name__}")
@@ -205,6 +223,7 @@ class Scene:
             "settings": self.settings.to_dict(),
             "camera": None if self.camera is None else self.camera.to_dict(),
             "lights": [_sun_dict(x) for x in self.lights],
+            "billboard_shading": self.billboard_shading.to_dict(),
         }
 
     @classmethod
@@ -226,6 +245,7 @@ class Scene:
             "settings",
             "camera",
             "lights",
+            "billboard_shading",
         }
         unknown = sorted(set(data) - known)
         if unknown:
@@ -255,9 +275,15 @@ class Scene:
         if cam is not None:
             _require(cam, ("position", "target"), "scene.camera")
             camera = Camera(**_known(Camera, cam, "scene.camera"))
+        shading = BillboardShading()
+        if data.get("billboard_shading") is not None:
+            try:
+                shading = BillboardShading.from_dict(data["billboard_shading"])
+            except (TypeError, ValueError) as exc:
+                raise type(exc)(f"scene.billboard_shading: {exc}") from None
         return cls(
             clouds=clouds, sun=sun, sky=sky, noise=noise, settings=settings, camera=camera,
-            lights=tuple(extra),
+            lights=tuple(extra), billboard_shading=shading,
         )  # fmt: skip
 
     def save(self, path: str | os.PathLike[str]) -> Path:

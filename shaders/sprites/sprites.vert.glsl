@@ -11,6 +11,10 @@
 // the fragment shader recomputes everything from the `flat` parameters. Sprites with Z ≤ near
 // are dropped (all six vertices outside the clip volume).
 //
+// Billboard fragment shading (Torchelsen spec §4.2): in_frame (cloud centre c_C, R_C), in_yrange
+// (y_lo, y_hi) and in_row (the sprite's row in the CAF buffer) pass to the fragment shader with the
+// world centre and half sizes, where the colour is evaluated per pixel.
+//
 // u_screen_space: the centre's x, y are already (j_c, i_c) in pixels and the half sizes are
 // pixels (the read-back light pass of particles/, which draws into the N_L² light buffer).
 
@@ -23,6 +27,9 @@ in vec3 in_c0;
 in vec3 in_c1;
 in vec3 in_c2;
 in vec3 in_c3;
+in vec4 in_frame;
+in vec2 in_yrange;
+in int in_row;
 
 uniform vec3 u_cam_pos;
 uniform vec3 u_cam_f;
@@ -43,6 +50,11 @@ flat out vec3 v_c0;
 flat out vec3 v_c1;
 flat out vec3 v_c2;
 flat out vec3 v_c3;
+flat out vec3 v_centre;
+flat out vec2 v_half;
+flat out vec4 v_frame;
+flat out vec2 v_yrange;
+flat out int v_row;
 
 float dot3(vec3 a, vec3 b) {
     precise float d = (a.x * b.x + a.y * b.y) + a.z * b.z;
@@ -56,6 +68,11 @@ void main() {
     v_c1 = in_c1;
     v_c2 = in_c2;
     v_c3 = in_c3;
+    v_centre = in_centre;
+    v_half = in_half;
+    v_frame = in_frame;
+    v_yrange = in_yrange;
+    v_row = in_row;
     v_rot = vec2(cos(in_rotation), sin(in_rotation));
     precise float jc, ic, hx, hy;
     if (u_screen_space) {

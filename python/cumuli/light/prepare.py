@@ -2,7 +2,8 @@
 
 `prepare_light` runs the light pass of each drawable's kind — the NDT light grid for a 2018
 `Cloud` (:func:`cumuli.light_grid` with ``settings.light_params()``), the per-voxel sun and sky
-light for a `VolumeCloud` (:class:`cumuli.VolumeLighting`) — and returns an immutable
+light for a `VolumeCloud` (:class:`cumuli.VolumeLighting`), the CAF of billboard clouds and
+fields (:mod:`cumuli.light.billboards`) — and returns an immutable
 :class:`LitScene` that the renderers draw. Nothing is stored on the clouds, and a failed call
 changes no object.
 
@@ -25,8 +26,11 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli.light import billboards as billboard_pass
 from cumuli.light.ndt import LightGrid, LightRecord, light_grid
 from cumuli.light.volume import VolumeLighting
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
 from cumuli.model.cloud import Cloud
 from cumuli.model.volume import VolumeCloud, VolumeDatabase
 from cumuli.scene import Scene
@@ -73,6 +77,7 @@ def clear_memo() -> None:
     """Forget every memoised light (they are recomputed on demand)."""
     with _memo_lock:
         _memo.clear()
+    billboard_pass.clear_memo()
 
 
 # --- light passes, one per kind ----------------------------------------------------------------
@@ -150,6 +155,8 @@ def volume_light(
 LIGHT_PASSES: dict[str, Callable[..., Any]] = {
     Cloud.kind: cloud_light,
     VolumeCloud.kind: volume_light,
+    BillboardCloud.kind: billboard_pass.billboard_light,
+    BillboardField.kind: billboard_pass.billboard_light,
 }
 
 

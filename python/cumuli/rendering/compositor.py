@@ -44,13 +44,23 @@ BACKENDS = ("gl", "cpu")
 DrawFn = Callable[[str, Sequence[int], bool], np.ndarray]
 
 
+def _one_drawer(kinds: set[str]) -> bool:
+    """Whether grouped ``kinds`` share one drawer on both backends (one pass draws them all)."""
+    return (
+        kinds <= GROUPED_KINDS
+        and len({GL_DRAWERS.get(k) for k in kinds}) == 1
+        and len({CPU_DRAWERS.get(k) for k in kinds}) == 1
+    )
+
+
 def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     """The draw calls of ``scene``: one ``(kind, indices)`` over the sky when one pass can draw
-    everything (an empty scene draws the sky with the marcher), else one per drawable."""
+    everything (an empty scene draws the sky with the marcher; grouped kinds sharing a drawer,
+    like billboard clouds and fields, count as one), else one per drawable."""
     kinds = scene.kinds
     if not kinds:
         return [("cloud", [])]
-    if len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS):
+    if len(kinds) == 1 or _one_drawer(set(kinds)):
         return [(kinds[0], list(range(len(kinds))))]
     return [(kind, [k]) for k, kind in enumerate(kinds)]
 

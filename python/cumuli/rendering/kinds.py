@@ -16,21 +16,32 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
 from cumuli.model.cloud import Cloud
 from cumuli.model.volume import VolumeCloud
+from cumuli.rendering.billboards import BillboardGL, draw_billboards_cpu
 from cumuli.rendering.cpu import draw_clouds_cpu
 from cumuli.rendering.marcher import MarcherGL
 from cumuli.rendering.volume import VolumeGL, draw_volume_cpu
 
 #: GL drawer class of each kind.
-GL_DRAWERS: dict[str, type] = {Cloud.kind: MarcherGL, VolumeCloud.kind: VolumeGL}
+GL_DRAWERS: dict[str, type] = {
+    Cloud.kind: MarcherGL,
+    VolumeCloud.kind: VolumeGL,
+    BillboardCloud.kind: BillboardGL,
+    BillboardField.kind: BillboardGL,
+}
 #: CPU drawer (the C++ twin) of each kind.
 CPU_DRAWERS: dict[str, Callable[..., Any]] = {
     Cloud.kind: draw_clouds_cpu,
     VolumeCloud.kind: draw_volume_cpu,
+    BillboardCloud.kind: draw_billboards_cpu,
+    BillboardField.kind: draw_billboards_cpu,
 }
-#: Kinds whose drawer marches several drawables in one pass (per-pixel order inside the pass).
-GROUPED_KINDS: set[str] = {Cloud.kind}
+#: Kinds whose drawer draws several drawables in one pass (its own order inside the pass). Grouped
+#: kinds sharing one drawer (billboard clouds and fields) are drawn together in one pass too.
+GROUPED_KINDS: set[str] = {Cloud.kind, BillboardCloud.kind, BillboardField.kind}
 
 
 def register_drawers(kind: str, gl: type, cpu: Callable[..., Any], groups: bool = False) -> None:
