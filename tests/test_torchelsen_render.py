@@ -174,7 +174,7 @@ def test_gl_fast_mode_is_close_to_the_cpu(cumulus) -> None:
     scene = cu.Scene([cumulus], sun=SUN)
     assert not scene.billboard_shading.exact_textures
     gl, cpu = render(scene, "gl", cam, 320, 240), render(scene, "cpu", cam, 320, 240)
-    assert (cpu[..., 3] > 0.05).mean() > 0.15
+    assert (cpu[..., 3] > 0.05).mean() > 0.1
     diff = np.abs(gl.astype(np.float64) - cpu).mean(axis=(0, 1))
     assert diff.max() <= 2e-3 and diff.max() > 0  # close, and not the exact path
 
@@ -348,3 +348,18 @@ def test_bad_input(cumulus) -> None:
         billboard_frame(lit, [0], CAMERA, W, H, exclude=[1, 0])
     with pytest.raises(TypeError, match="BillboardShading"):
         cu.Scene([cumulus], billboard_shading={"d_min": 0.1})
+
+
+@pytest.mark.gl
+def test_another_context_made_meanwhile_does_not_break_cached_textures(cumulus) -> None:
+    # moderngl sends calls to the current context, the last one created: the shared renderer's
+    # cached atlas texture must still be its own after another renderer came and went.
+    scene = cu.Scene([cumulus], sun=SUN, billboard_shading=EXACT)
+    cpu = render(scene, "cpu")
+    np.testing.assert_allclose(render(scene, "gl"), cpu, atol=1e-4)
+    with cu.Renderer() as other:
+        np.testing.assert_allclose(other.render(scene, CAMERA, W, H), cpu, atol=1e-4)
+    np.testing.assert_allclose(render(scene, "gl"), cpu, atol=1e-4)
+    with cu.Renderer():
+        pass  # made and closed without drawing: it was left current
+    np.testing.assert_allclose(render(scene, "gl"), cpu, atol=1e-4)

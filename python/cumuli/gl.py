@@ -135,6 +135,14 @@ class GLContext:
             self._timer_query = self.ctx.query(time=True)
         return self._timer_query
 
+    def make_current(self) -> None:
+        """Make this context the current one. moderngl sends every call to the current context,
+        which is the last one created (or entered) — not necessarily the one an object belongs
+        to — so a drawer holding GL objects across calls makes its context current first."""
+        if self.closed:
+            raise ValueError("this GL context is closed")
+        self.ctx.__enter__()  # never exited: exiting would restore the previous (maybe dead) one
+
     def close(self) -> None:
         """Release the context and every GL object made with it (idempotent)."""
         if not self.closed:

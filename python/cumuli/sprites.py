@@ -386,6 +386,16 @@ class SpriteLayerRenderer:
         cam = camera_dict(camera, width, height, near)
         arr, grid = _atlas_args(atlas, atlas_grid, sprites)
         _check_shading(shading, sprites)
+        # GL calls go to the current context: make this renderer's current (its program and
+        # cached textures live there; a context made since, even if closed, may be current).
+        self.context.make_current()
+        return self._draw(sprites, width, height, cam, (arr, atlas, grid), kernel, peak, exact,
+                          shading)  # fmt: skip
+
+    def _draw(self, sprites: Sprites, width: int, height: int, cam: dict[str, Any],
+              atlas_args: tuple[Any, Any, tuple[int, int]], kernel: str, peak: float,
+              exact: bool, shading: FragmentShading | None) -> np.ndarray:  # fmt: skip
+        arr, atlas, grid = atlas_args
         ctx = self.context.ctx
         made: list[Any] = []
         try:

@@ -3,8 +3,9 @@
 All in cumuli's cloud scale (a cumulus ≈ 20 units across), centred near the origin (a weather
 layer or a `BillboardField` places them), deterministic for a seed:
 
-- `cumulus`: the spec's default seed box (half size (4, 1.5, 3), three directions, 3 levels, (1, 3)
-  boxes per level and direction), shrinking children, flat base, "sunny" atlas.
+- `cumulus`: the spec's default seed box size (4, 1.5, 3) grown along four sideways directions and
+  up (3 levels, (1, 2) boxes per level and direction, reach 3: compact), shrinking children,
+  flat base, "sunny" atlas.
 - `cirrus`: Fig. 10, **15 thin wide seed boxes and exactly 50 billboards** (10 seed boxes with
   2 billboards per box and 5 with 1, each with one child), "wispy" atlas, flat wide sprites.
 - `nimbus`: Fig. 11, dense: 2 levels, (3, 6) boxes, large billboards, "sunny" atlas.
@@ -25,12 +26,23 @@ NAMES = ("cumulus", "cirrus", "nimbus", "rain")
 
 
 def cumulus(atlas_seed: int = 0) -> BasisModel:
-    """A sunny cumulus: the spec's default seed box, 3 levels, flat base."""
+    """A sunny cumulus: the spec's default seed box size, four sideways directions and one up
+    (5 directions, 3 levels, (1, 2) boxes), reach 3 (compact: with the default reach ‖h‖ the
+    upward boxes of level 3 float apart from the cloud), flat base."""
     seed = SeedBox(
         centre=(0.0, 0.0, 0.0),
         half_size=(4.0, 1.5, 3.0),
+        directions=(
+            (1.0, 0.25, 0.0),
+            (-1.0, 0.25, 0.0),
+            (0.0, 0.25, 1.0),
+            (0.0, 0.25, -1.0),
+            (0.0, 1.0, 0.0),
+        ),
+        apertures=(60.0, 60.0, 60.0, 60.0, 50.0),
         levels=3,
-        boxes_per_level=(1, 3),
+        boxes_per_level=(1, 2),
+        reach=3.0,
         child_scale=(0.6, 1.0),
         billboards_per_box=(4, 8),
         flat_base=True,

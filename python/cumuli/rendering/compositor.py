@@ -241,6 +241,7 @@ class Renderer:
             raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
         width, height = _check_size(width, height, self.max_texture_size, "GL_MAX_TEXTURE_SIZE")
         _check_kinds(plain, GL_DRAWERS, "GL")
+        self.gl.make_current()  # its drawers' programs and textures live in this context
         for kind, indices in plan(plain):  # before the light pass, which could be long
             GL_DRAWERS[kind].check(plain, indices)
         lit = prepare_light(plain) if lit is None else lit
