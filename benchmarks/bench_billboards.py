@@ -305,15 +305,27 @@ def fps_stats(frame_s: list[float], claim: float, by_mean: bool = False) -> dict
     }
 
 
-def fly(renderer: Any, scene: Any, cameras: list[Any], size: tuple[int, int]) -> list[float]:
+def fly(renderer: Any, scene: Any, cameras: list[Any], size: tuple[int, int]) -> dict[str, Any]:
+    """Per-frame wall times along ``cameras`` of GL and of the C++ twin (light prepared once)."""
     lit = cu.prepare_light(scene)
-    renderer.render(lit, cameras[0], *size)  # warm-up
-    times = []
-    for cam in cameras:
-        t0 = time.perf_counter()
-        renderer.render(lit, cam, *size)
-        times.append(time.perf_counter() - t0)
-    return times
+    out = {}
+    for name, draw in (("gl", lambda c: renderer.render(lit, c, *size)),
+                       ("cpu", lambda c: cu.render_cpu(lit, c, *size))):  # fmt: skip
+        draw(cameras[0])  # warm-up
+        times = []
+        for cam in cameras:
+            t0 = time.perf_counter()
+            draw(cam)
+            times.append(time.perf_counter() - t0)
+        out[name] = times
+    return out
+
+
+def with_cpu(row: dict[str, Any], cpu_s: list[float]) -> dict[str, Any]:
+    cpu = fps_stats(cpu_s, row["paper_hz"])
+    row["cpu_twin"] = {k: cpu[k] for k in ("fps_median", "fps_min", "fps_max", "fps_mean",
+                                            "ratio_to_paper", "reaches_paper_rate")}  # fmt: skip
+    return row
 
 
 def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str, Any]:
@@ -326,8 +338,10 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
     cirrus = seed_box_cloud(presets.cirrus(), 2).translated((0.0, 150.0, 0.0))
     scene = cu.Scene([cirrus], sun=RENDER_SUN)
     cams = orbit((0.0, 150.0, 0.0), 80.0, frames["cirrus"], height=-35.0, fov=65.0)
-    out["cirrus"] = {"seed_boxes": len(presets.cirrus().seeds), "billboards": cirrus.n_billboards,
-                     **fps_stats(fly(renderer, scene, cams, size), PAPER_HZ["cirrus"])}  # fmt: skip
+    t = fly(renderer, scene, cams, size)
+    out["cirrus"] = with_cpu({"seed_boxes": len(presets.cirrus().seeds),
+                              "billboards": cirrus.n_billboards,
+                              **fps_stats(t["gl"], PAPER_HZ["cirrus"])}, t["cpu"])  # fmt: skip
     for name, count, area, altitude, sky in (("nimbus", 200, 600.0, 60.0, cu.Sky()),
                                              ("rain", 1000, 1000.0, 40.0, STORMY)):  # fmt: skip
         n = count if not quick else count // 10
@@ -335,8 +349,9 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
         half = 0.5 * area
         cams = fly_towards((0.0, altitude - 25.0, -half - 30.0), (0.0, altitude - 10.0, half),
                            frames[name], fov=60.0)  # fmt: skip
-        times = fly(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky), cams, size)
-        out[name] = {"models": 10, "instances": n, **fps_stats(times, PAPER_HZ[name])}
+        t = fly(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky), cams, size)
+        out[name] = with_cpu({"models": 10, "instances": n, **fps_stats(t["gl"], PAPER_HZ[name])},
+                             t["cpu"])  # fmt: skip
     weather = table1(seed=0)
     base = cu.Scene(sun=cu.Sun(direction=(0.3, 0.6, 0.6), colour=(1.0, 0.97, 0.92), intensity=1.4))
     cam = cu.Camera(position=(0.0, 2.0, -420.0), target=(0.0, 198.0, 0.0), fov=65.0)
@@ -355,10 +370,12 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
     out["table1"] = {"weather_seconds": end, "dt": dt, "clouds_min": min(clouds),
                      "clouds_max": max(clouds), **stats}  # fmt: skip
     for name, row in out.items():
-        common.log(f"{PAPER_TEXT[name]}: median {row['fps_median']:.1f} fps "
+        cpu = row.get("cpu_twin")
+        common.log(f"{PAPER_TEXT[name]}: GL median {row['fps_median']:.1f} fps "
                    f"[{row['fps_min']:.1f}–{row['fps_max']:.1f}], mean {row['fps_mean']:.1f}; "
                    f"reaches {row['paper_hz']:g} Hz: {row['reaches_paper_rate']} "
-                   f"(×{row['ratio_to_paper']:.2f})")  # fmt: skip
+                   f"(×{row['ratio_to_paper']:.2f})"
+                   + (f"; CPU twin median {cpu['fps_median']:.1f} fps" if cpu else ""))  # fmt: skip
     return out
 
 
