@@ -363,3 +363,79 @@ def test_another_context_made_meanwhile_does_not_break_cached_textures(cumulus) 
     with cu.Renderer():
         pass  # made and closed without drawing: it was left current
     np.testing.assert_allclose(render(scene, "gl"), cpu, atol=1e-4)
+
+
+def test_drifting_field_keeps_its_light_unless_clouds_shadow_each_other(field) -> None:
+    # Instances are traced in their own frames: moving them (wind) keeps the memoised CAF; with
+    # shadow_between_clouds the offsets matter and the light is recomputed.
+    moved = BillboardField(list(field.variants), field.offsets + np.float32(5.0),
+                           variant=field.variant, yaw=field.yaw)  # fmt: skip
+    for between in (False, True):
+        sh = BillboardShading(shadow_between_clouds=between, max_distance=30.0)
+        a = cu.prepare_light(cu.Scene([field], sun=SUN, billboard_shading=sh)).lights[0]
+        b = cu.prepare_light(cu.Scene([moved], sun=SUN, billboard_shading=sh)).lights[0]
+        assert (a.records is b.records) == (not between)
+        ref = field_absorption_factors(moved, SUN, max_distance=30.0,
+                                       shadow_between_clouds=between)  # fmt: skip
+        np.testing.assert_array_equal(b.records[0].caf, ref.caf)
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_clouds_with_different_atlases_share_one_pass(cumulus, backend: str) -> None:
+    # A user atlas of 8×8 cells beside the generated 64×64 one: one combined texture (the flat
+    # cell resampled stays flat), each cloud drawn as it is alone where they do not overlap.
+    flat = one_billboard((0.0, 14.0, -20.0), size=(3.0, 3.0), atlas=flat_atlas(0.9, 0.6))
+    both = cu.Scene([cumulus, flat], sun=SUN, billboard_shading=EXACT)
+    assert plan(both) == [("billboards", [0, 1])]
+    img = render(both, backend, w=96, h=72)
+    alone = render(both.replace(clouds=[flat]), backend, w=96, h=72)
+    other = render(both.replace(clouds=[cumulus]), backend, w=96, h=72)
+    only_flat = (alone[..., 3] > 0) & (other[..., 3] == 0)
+    assert only_flat.sum() > 20
+    np.testing.assert_allclose(img[only_flat], alone[only_flat], atol=1e-5)
+    if backend == "gl":
+        np.testing.assert_allclose(img, render(both, "cpu", w=96, h=72), atol=1e-4)
+
+
+def test_combined_atlas_layout_and_limit(monkeypatch) -> None:
+    from cumuli.rendering import billboards as bb
+
+    a, b = cu.sprite_atlas("sunny", n=5, size=16), flat_atlas(0.3, 0.5)
+    image, grid, bases = bb.combined_atlas((a, b))
+    assert grid == (3, 2) and bases == (0, 5) and image.shape == (32, 48, 4)
+    np.testing.assert_array_equal(image[:16, 16:32], a.sprite(1))
+    np.testing.assert_allclose(image[16:32, 32:48], 0.3 * np.ones((16, 16, 4)) * [1, 1, 1, 0]
+                               + [0, 0, 0, 0.5], atol=1e-7)  # fmt: skip
+    assert not image.flags.writeable
+    monkeypatch.setattr(bb, "MAX_ATLAS_EDGE", 40)
+    with pytest.raises(ValueError, match="do not fit"):
+        bb.combined_atlas((a, flat_atlas(0.4, 0.5)))
+
+
+def test_fragment_shading_bad_input() -> None:
+    from cumuli.sprite_shading import FragmentShading
+    from cumuli.sprites import Sprites
+
+    params = {"d_min": 0.2, "d_max": 1.0, "k_dir": 1.0, "directional": "linear",
+              "ambient": (0.1, 0.1, 0.1), "k_amb": 0.5, "height_levels": []}  # fmt: skip
+    ok = {"frame": np.zeros((2, 4)), "yrange": np.zeros((2, 2)), "caf": np.ones((2, 1)),
+          "light_dirs": [(0, 1, 0)], "light_radiance": [(1, 1, 1)], "params": params}  # fmt: skip
+    shading = FragmentShading(**ok)
+    with pytest.raises(ValueError, match="caf"):
+        FragmentShading(**{**ok, "caf": np.ones((2, 2))})
+    with pytest.raises(ValueError, match="yrange"):
+        FragmentShading(**{**ok, "yrange": np.zeros((3, 2))})
+    with pytest.raises(ValueError, match="light_dirs"):
+        FragmentShading(
+            **{**ok, "light_dirs": np.zeros((18, 3)), "light_radiance": np.zeros((18, 3))}
+        )
+    with pytest.raises(ValueError, match="directional"):
+        FragmentShading(**{**ok, "params": {**params, "directional": "cubic"}})
+    with pytest.raises(ValueError, match="missing"):
+        FragmentShading(**{**ok, "params": {"d_min": 0.1}})
+    three = Sprites(np.zeros((3, 3)) + [0, 0, 5], np.ones(3), np.ones((3, 3)), np.ones(3))
+    eye = cu.Camera((0.0, 0.0, 0.0), (0.0, 0.0, 1.0))
+    with pytest.raises(ValueError, match="rows"):
+        draw_sprites_cpu(three, eye, 8, 8, shading=shading)
+    with pytest.raises(TypeError, match="FragmentShading"):
+        draw_sprites_cpu(three, eye, 8, 8, shading={"frame": 1})

@@ -161,3 +161,13 @@ def test_public_names() -> None:
                  "load_weather", "weather_presets", "load_billboards"):  # fmt: skip
         assert name in cu.__all__ and getattr(cu, name) is not None
     assert cu.Scene().billboard_shading == cu.BillboardShading()
+
+
+def test_cli_renders_a_billboard_scene_file(tmp_path: Path, nimbus) -> None:
+    path = cu.Scene([nimbus], sun=SUN, billboard_shading=SHADING, camera=CAMERA).save(
+        tmp_path / "sky.json"
+    )
+    out = tmp_path / "sky.exr"
+    assert main(["render", str(path), "-o", str(out), "--backend", "cpu", "--size", "32x24"]) == 0
+    expect = cu.render(cu.load_scene(path), CAMERA, 32, 24, backend="cpu")
+    np.testing.assert_allclose(read_image(out)[..., :3], expect[..., :3], atol=1e-6)

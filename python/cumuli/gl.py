@@ -119,10 +119,12 @@ class GLContext:
         fragment_source = load_shader(fragment)
         if defines:
             fragment_source = with_defines(fragment_source, defines)
+        self.make_current()
         return self.ctx.program(vertex_shader=load_shader(vertex), fragment_shader=fragment_source)
 
     def compute(self, name: str) -> moderngl.ComputeShader:
         """Compile a compute shader from a file name under ``shaders/``."""
+        self.make_current()
         return self.ctx.compute_shader(load_shader(name))
 
     def timer_query(self) -> moderngl.Query:
@@ -138,7 +140,8 @@ class GLContext:
     def make_current(self) -> None:
         """Make this context the current one. moderngl sends every call to the current context,
         which is the last one created (or entered) — not necessarily the one an object belongs
-        to — so a drawer holding GL objects across calls makes its context current first."""
+        to — so every entry point that makes or uses GL objects (`_resolve_context`, `program`,
+        `compute`, the renderers' draws) makes its context current first."""
         if self.closed:
             raise ValueError("this GL context is closed")
         self.ctx.__enter__()  # never exited: exiting would restore the previous (maybe dead) one
@@ -203,14 +206,17 @@ atexit.register(close_default_context)
 
 
 def _resolve_context(context: GLContext | None) -> GLContext:
+    """``context`` (default: the process-wide one), made current: GL calls go to the current
+    context, and the last one created may be another (see `GLContext.make_current`)."""
     if context is None:
-        return default_context()
-    if not isinstance(context, GLContext):
+        context = default_context()
+    elif not isinstance(context, GLContext):
         raise TypeError(
             f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
         )
     if context.closed:
         raise ValueError("context is closed")
+    context.make_current()
     return context
 
 
@@ -278,6 +284,7 @@ class FbmProgram:
 
         if self.program is None or self.context.closed:
             raise ValueError("this FbmProgram has been released")
+        self.context.make_current()
         pts = check.points3(points, "points")
         octaves, gain, lacunarity, frequency = _fbm_params(octaves, gain, lacunarity, frequency)
         check_fbm_reach(pts, (octaves, gain, lacunarity, frequency), "points")

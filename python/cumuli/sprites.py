@@ -501,6 +501,7 @@ class SpriteTarget:
         self.height = check.integer(height, "height", 1, 4096)
         if bits not in (8, 32):
             raise ValueError(f"bits must be 8 or 32, got {bits}")
+        renderer.context.make_current()
         ctx = renderer.context.ctx
         self._objects: list[Any] = []
         self.colour = ctx.texture((self.width, self.height), 4, dtype="f1" if bits == 8 else "f4")

@@ -75,7 +75,10 @@ class BillboardLighting:
 
 
 def _digest(drawable: Any) -> str:
-    """Content hash of what the CAF depends on (cached per object: drawables are values)."""
+    """Content hash of what the CAF depends on (cached per object: drawables are values). A
+    field's instances are traced in their own frames, so their CAF does not depend on their
+    offsets (a weather's drifting clouds keep theirs); with ``shadow_between_clouds`` the
+    offsets join the key in `billboard_light`."""
     known = _digests.get(drawable)
     if known is not None:
         return known
@@ -85,7 +88,7 @@ def _digest(drawable: Any) -> str:
         h = hashlib.blake2b(digest_size=16)
         for v in drawable.variants:
             h.update(cloud_digest(v).encode())
-        for a in (drawable.variant, drawable.offsets, drawable.yaw):
+        for a in (drawable.variant, drawable.yaw):
             h.update(np.ascontiguousarray(a).tobytes())
         value = h.hexdigest()
     _digests[drawable] = value
@@ -170,7 +173,9 @@ def billboard_light(
         records = _given(drawable, given, suns, sh)
         return BillboardLighting(suns, records, sh, ambient)
     field = isinstance(drawable, BillboardField)
-    key = ("billboards", _digest(drawable), _options(sh, field))
+    key: tuple[Any, ...] = ("billboards", _digest(drawable), _options(sh, field))
+    if field and sh.shadow_between_clouds:
+        key += (hashlib.blake2b(drawable.offsets.tobytes(), digest_size=16).hexdigest(),)
     with _lock:
         known = _memo.get(key)
         if known is not None and _current(known, suns, sh.relight_tolerance):

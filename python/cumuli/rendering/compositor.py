@@ -207,6 +207,7 @@ class Renderer:
         self._owns_context = context is None
         self.gl = GLContext() if context is None else context
         self.tiles = Tiles(self.gl, self.tile)
+        self.gl.make_current()
         try:
             self.drawer("cloud")  # the marcher compiles now: a broken driver fails here
         except Exception:

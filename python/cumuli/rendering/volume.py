@@ -141,6 +141,7 @@ class VolumeRenderer:
         ``(colour, 1 − T)`` the compositor combines."""
         if self.program is None or self.context.closed:
             raise ValueError("this VolumeRenderer has been released")
+        self.context.make_current()
         sun = Sun() if sun is None else sun
         if not isinstance(sun, Sun):
             raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
