@@ -439,3 +439,12 @@ def test_fragment_shading_bad_input() -> None:
         draw_sprites_cpu(three, eye, 8, 8, shading=shading)
     with pytest.raises(TypeError, match="FragmentShading"):
         draw_sprites_cpu(three, eye, 8, 8, shading={"frame": 1})
+
+
+@pytest.mark.parametrize("backend", BACKENDS)
+def test_too_many_billboards_are_refused_before_drawing(cumulus, monkeypatch, backend) -> None:
+    from cumuli.rendering import billboards as bb
+
+    monkeypatch.setattr(bb, "MAX_SPRITES", cumulus.n_billboards - 1)
+    with pytest.raises(ValueError, match="billboards"):
+        render(cu.Scene([cumulus], sun=SUN), backend)

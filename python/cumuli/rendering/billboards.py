@@ -312,6 +312,7 @@ class BillboardGL:
 def draw_billboards_cpu(lit: LitScene, indices: Sequence[int], camera: Camera, width: int,
                         height: int, with_sky: bool, threads: int = 0) -> np.ndarray:  # fmt: skip
     """The CPU twin of :meth:`BillboardGL.draw` (C++ sprite rasteriser, exact atlas sampling)."""
+    check_pass(lit.scene, indices)  # the sprite-count and atlas limits, before any allocation
     frame = billboard_frame(lit, indices, camera, width, height, threads)
     layer = draw_sprites_cpu(
         frame.sprites, camera, width, height, atlas=frame.atlas, atlas_grid=frame.grid,
