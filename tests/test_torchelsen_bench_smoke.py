@@ -41,3 +41,23 @@ def test_bench_billboards_quick(tmp_path: Path) -> None:
         )
     spearman = data["caf_vs_ndt"]["cumulus"]["spearman"]
     assert all(-1 <= v["sum"] <= 1 and -1 <= v["union"] <= 1 for v in spearman.values())
+    render = data["render"]
+    if data["machine"]["gl_renderer"] is None:
+        assert render is None  # no GL here: the render parts say so and are skipped
+        return
+    assert render["size"] == ([160, 120] if render["software_gl"] else [640, 480])
+    for row in render["render_vs_clouds"].values():
+        assert row["gl"]["median"] > 0 and row["sprites_drawn"] > 0
+        assert row["billboards"] >= row["sprites_drawn"]
+    per_cloud = [
+        r["billboards_per_cloud"] for r in render["render_vs_billboards_per_cloud"].values()
+    ]
+    assert per_cloud == sorted(per_cloud) and per_cloud[0] < per_cloud[-1]
+    assert render["impostors"]["status"] == "pending"
+    scenes = render["paper_scenes"]
+    assert set(scenes) == {"cirrus", "nimbus", "rain", "table1"}
+    assert scenes["cirrus"]["seed_boxes"] == 15 and scenes["cirrus"]["billboards"] == 50
+    for name, row in scenes.items():
+        measured = row["fps_mean"] if name == "table1" else row["fps_median"]
+        assert row["reaches_paper_rate"] == (measured >= row["paper_hz"])
+        assert row["ratio_to_paper"] == measured / row["paper_hz"]

@@ -49,6 +49,7 @@ void bind_composite(py::module_& m);
 void bind_particles(py::module_& m);
 void bind_particle_light(py::module_& m);
 void bind_sprites(py::module_& m);
+void bind_billboards(py::module_& m);
 void bind_impostors(py::module_& m);
 void bind_anim(py::module_& m);
 void bind_seedbox(py::module_& m);
@@ -91,6 +92,7 @@ PYBIND11_MODULE(_core, m) {
   cumuli::bind::bind_particles(m);
   cumuli::bind::bind_particle_light(m);
   cumuli::bind::bind_sprites(m);
+  cumuli::bind::bind_billboards(m);
   cumuli::bind::bind_impostors(m);
   cumuli::bind::bind_light(m);
   cumuli::bind::bind_volume_light(m);

@@ -4,11 +4,15 @@
 // of Harris 2002 (impostor.hpp).
 #include "cumuli/rendering/march.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+#include <tuple>
+#include <utility>
 
 #include "common.hpp"
+#include "cumuli/rendering/billboards.hpp"
 #include "cumuli/rendering/composite.hpp"
 #include "cumuli/rendering/impostor.hpp"
 #include "cumuli/rendering/solid.hpp"
@@ -518,6 +522,59 @@ std::vector<ImpostorQuad> impostor_quads(const py::object& images, const FloatAr
   return quads;
 }
 
+// --- billboard shading (Torchelsen spec §4.2) ---------------------------------------------------
+
+std::vector<glm::vec3> rows3(const FloatArray& a, const char* name) {
+  if (a.ndim() != 2 || a.shape(1) != 3) throw py::value_error(std::string(name) + " must have shape (N, 3)");
+  std::vector<glm::vec3> out(static_cast<std::size_t>(a.shape(0)));
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    out[i] = glm::vec3(a.data()[3 * i], a.data()[3 * i + 1], a.data()[3 * i + 2]);
+    if (!std::isfinite(out[i].x) || !std::isfinite(out[i].y) || !std::isfinite(out[i].z))
+      throw py::value_error(std::string(name) + " must be finite");
+  }
+  return out;
+}
+
+// Lights and shading parameters from a dict: light_dirs (L, 3), light_radiance (L, 3),
+// d_min, d_max, k_dir, directional, ambient, k_amb, height_levels [(f, h), ...].
+std::pair<std::vector<ShadeLight>, ShadeParams> shade_of(const py::dict& d) {
+  const std::vector<glm::vec3> dirs = rows3(d["light_dirs"].cast<FloatArray>(), "light_dirs");
+  const std::vector<glm::vec3> rad = rows3(d["light_radiance"].cast<FloatArray>(), "light_radiance");
+  if (dirs.size() != rad.size()) throw py::value_error("one radiance per light direction");
+  std::vector<ShadeLight> lights(dirs.size());
+  for (std::size_t l = 0; l < dirs.size(); ++l) {
+    // Normalised as light.cpp's shade_inputs does, so the colours match billboard_vertex_colours.
+    const float len = glm::length(dirs[l]);
+    if (!(len > 0.0f)) throw py::value_error("light directions must be non-zero");
+    lights[l] = ShadeLight{dirs[l] / len, rad[l]};
+  }
+  ShadeParams p;
+  p.d_min = d["d_min"].cast<float>();
+  p.d_max = d["d_max"].cast<float>();
+  p.k_dir = d["k_dir"].cast<float>();
+  const std::string dir = d["directional"].cast<std::string>();
+  if (dir == "linear") p.directional = Directional::Linear;
+  else if (dir == "smoothstep") p.directional = Directional::Smoothstep;
+  else throw py::value_error("directional must be 'linear' or 'smoothstep'");
+  const auto amb = d["ambient"].cast<std::array<float, 3>>();
+  p.ambient = glm::vec3(amb[0], amb[1], amb[2]);
+  p.k_amb = d["k_amb"].cast<float>();
+  for (const auto& h : d["height_levels"].cast<std::vector<std::array<float, 2>>>())
+    p.height_levels.emplace_back(h[0], h[1]);
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return {lights, p};
+}
+
+// Keeps the numpy arrays a BillboardVariant borrows alive.
+struct VariantArrays {
+  FloatArray centres, sizes, rotation;
+  IntArray texture, box;
+};
+
 glm::dvec3 dvec(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[1], a[2]); }
 py::tuple dtuple(glm::dvec3 v) { return py::make_tuple(v.x, v.y, v.z); }
 
@@ -530,9 +587,32 @@ void bind_sprites(py::module_& m) {
       [](const FloatArray& centres, const FloatArray& half_sizes, const FloatArray& rotation,
          const FloatArray& colours, const FloatArray& alpha, const IntArray& texture,
          const py::dict& camera, const std::string& kernel, float peak, const py::object& atlas,
-         std::array<int, 2> grid, int threads, const py::object& depth) {
+         std::array<int, 2> grid, int threads, const py::object& shading,
+         const py::object& depth) {
         const std::vector<Sprite> sprites =
             sprites_of(centres, half_sizes, rotation, colours, alpha, texture);
+        // Fragment shading (billboards, spec §4.2): per sprite frame (N, 4), yrange (N, 2),
+        // caf (N, L), plus the lights and parameters of shade_of.
+        SpriteShading sh;
+        FloatArray sh_frame, sh_yrange, sh_caf;
+        const SpriteShading* sh_ptr = nullptr;
+        if (!shading.is_none()) {
+          const py::dict d = shading.cast<py::dict>();
+          std::tie(sh.lights, sh.params) = shade_of(d);
+          sh_frame = d["frame"].cast<FloatArray>();
+          sh_yrange = d["yrange"].cast<FloatArray>();
+          sh_caf = d["caf"].cast<FloatArray>();
+          const auto n = static_cast<py::ssize_t>(sprites.size());
+          const auto nl = static_cast<py::ssize_t>(sh.lights.size());
+          if (sh_frame.ndim() != 2 || sh_frame.shape(0) != n || sh_frame.shape(1) != 4 ||
+              sh_yrange.ndim() != 2 || sh_yrange.shape(0) != n || sh_yrange.shape(1) != 2 ||
+              sh_caf.ndim() != 2 || sh_caf.shape(0) != n || sh_caf.shape(1) != nl)
+            throw py::value_error("shading needs frame (N, 4), yrange (N, 2) and caf (N, L)");
+          sh.frame = reinterpret_cast<const glm::vec4*>(sh_frame.data());
+          sh.yrange = reinterpret_cast<const glm::vec2*>(sh_yrange.data());
+          sh.caf = sh_caf.data();
+          sh_ptr = &sh;
+        }
         const SpriteCamera cam = sprite_camera(camera);
         FloatArray depth_array;
         const float* depth_ptr = nullptr;
@@ -564,16 +644,17 @@ void bind_sprites(py::module_& m) {
         float* dst = out.mutable_data();
         {
           py::gil_scoped_release release;
-          rasterise_sprites(sprites, cam, st, atlas_ptr, dst, threads, depth_ptr);
+          rasterise_sprites(sprites, cam, st, atlas_ptr, dst, threads, sh_ptr, depth_ptr);
         }
         return out;
       },
       py::arg("centres"), py::arg("half_sizes"), py::arg("rotation"), py::arg("colours"),
       py::arg("alpha"), py::arg("texture"), py::arg("camera"), py::arg("kernel"), py::arg("peak"),
       py::arg("atlas").none(true), py::arg("grid"), py::arg("threads") = 0,
-      py::arg("depth") = py::none(),
+      py::arg("shading") = py::none(), py::arg("depth") = py::none(),
       "Rasterise view-plane-parallel sprites back to front into a premultiplied (H, W, 4) layer; "
-      "depth (H, W): a sprite covers only pixels where its view depth is smaller.");
+      "shading: per-pixel billboard shading; depth (H, W): a sprite covers only pixels where its "
+      "view depth is smaller.");
 
   m.def(
       "project_sprites",
@@ -762,6 +843,144 @@ void bind_impostors(py::module_& m) {
         return out;
       },
       "Conservative pixel rectangles (n, 4) = j0, j1, i0, i1 (inclusive) of impostor quads.");
+}
+
+// Billboard clouds as sprites (Torchelsen & Musse 2005; rendering/billboards.hpp).
+void bind_billboards(py::module_& m) {
+  m.def(
+      "billboard_sprites",
+      [](const py::list& variants, const IntArray& variant, const FloatArray& offsets,
+         const FloatArray& yaw, const FloatArray& alpha,
+         const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& caf_first,
+         const FloatArray& caf, const py::dict& shade, const py::dict& camera,
+         const py::dict& draw, int threads) {
+        const auto [lights, params] = shade_of(shade);
+        const SpriteCamera cam = sprite_camera(camera);
+        std::vector<VariantArrays> keep(variants.size());
+        std::vector<BillboardVariant> vs(variants.size());
+        for (std::size_t v = 0; v < vs.size(); ++v) {
+          const py::dict d = variants[v].cast<py::dict>();
+          VariantArrays& a = keep[v];
+          a.centres = d["centres"].cast<FloatArray>();
+          a.sizes = d["sizes"].cast<FloatArray>();
+          a.rotation = d["rotation"].cast<FloatArray>();
+          a.texture = d["texture"].cast<IntArray>();
+          a.box = d["box"].cast<IntArray>();
+          const FloatArray boxes = d["boxes"].cast<FloatArray>();
+          require_points(a.centres, "variant centres");
+          const py::ssize_t k = a.centres.shape(0);
+          if (a.sizes.ndim() != 2 || a.sizes.shape(0) != k || a.sizes.shape(1) != 2 ||
+              a.rotation.ndim() != 1 || a.rotation.shape(0) != k || a.texture.ndim() != 1 ||
+              a.texture.shape(0) != k || a.box.ndim() != 1 || a.box.shape(0) != k)
+            throw py::value_error("variant arrays must have K rows");
+          if (boxes.ndim() != 3 || boxes.shape(0) < 1 || boxes.shape(1) != 2 || boxes.shape(2) != 3)
+            throw py::value_error("variant boxes must have shape (M, 2, 3)");
+          std::vector<Box> b(static_cast<std::size_t>(boxes.shape(0)));
+          for (std::size_t i = 0; i < b.size(); ++i) {
+            const float* r = boxes.data() + 6 * i;
+            b[i].lo = glm::vec3(r[0], r[1], r[2]);
+            b[i].hi = glm::vec3(r[3], r[4], r[5]);
+          }
+          BillboardVariant& bv = vs[v];
+          bv.centres = reinterpret_cast<const glm::vec3*>(a.centres.data());
+          bv.sizes = reinterpret_cast<const glm::vec2*>(a.sizes.data());
+          bv.rotation = a.rotation.data();
+          bv.texture = a.texture.data();
+          bv.box = a.box.data();
+          bv.billboards = static_cast<std::size_t>(k);
+          bv.boxes = b.size();
+          bv.frame = shade_frame(b);
+          const auto sc = d["sphere_centre"].cast<std::array<float, 3>>();
+          bv.sphere_centre = glm::vec3(sc[0], sc[1], sc[2]);
+          bv.sphere_radius = d["sphere_radius"].cast<float>();
+          bv.opacity = d["opacity"].cast<float>();
+          bv.texture_base = d["texture_base"].cast<std::int32_t>();
+        }
+        require_points(offsets, "offsets");
+        const py::ssize_t ni = offsets.shape(0);
+        for (const py::array* a : {static_cast<const py::array*>(&variant),
+                                   static_cast<const py::array*>(&yaw),
+                                   static_cast<const py::array*>(&alpha),
+                                   static_cast<const py::array*>(&caf_first)})
+          if (a->ndim() != 1 || a->shape(0) != ni)
+            throw py::value_error("variant, yaw, alpha and caf_first must have shape (N,)");
+        if (caf.ndim() != 2 || caf.shape(0) != static_cast<py::ssize_t>(lights.size()))
+          throw py::value_error("caf must have shape (lights, columns)");
+        std::vector<BillboardInstance> inst(static_cast<std::size_t>(ni));
+        for (py::ssize_t i = 0; i < ni; ++i) {
+          BillboardInstance& in = inst[static_cast<std::size_t>(i)];
+          in.variant = variant.data()[i];
+          const float* o = offsets.data() + 3 * i;
+          in.offset = glm::vec3(o[0], o[1], o[2]);
+          in.yaw = yaw.data()[i];
+          in.alpha = alpha.data()[i];
+          if (caf_first.data()[i] < 0) throw py::value_error("caf_first must be >= 0");
+          in.caf_first = static_cast<std::size_t>(caf_first.data()[i]);
+        }
+        BillboardDrawSettings st;
+        st.caf_per_box = draw["caf_per_box"].cast<bool>();
+        st.global_sort = draw["global_sort"].cast<bool>();
+        const std::string sort = draw["sort"].cast<std::string>();
+        if (sort == "distance") st.sort = SpriteSort::Distance;
+        else if (sort == "depth") st.sort = SpriteSort::Depth;
+        else throw py::value_error("sort must be 'distance' or 'depth'");
+        st.cull = draw["cull"].cast<bool>();
+        if (!draw["fade_near"].is_none()) {
+          const auto z = draw["fade_near"].cast<std::array<float, 2>>();
+          st.fade_near = true;
+          st.near_start = z[0];
+          st.near_end = z[1];
+        }
+        if (!draw["fade_far"].is_none()) {
+          st.fade_far = true;
+          st.range = draw["fade_far"].cast<float>();
+        }
+        st.fragment = draw["fragment"].cast<bool>();
+        BillboardSpriteList list;
+        {
+          py::gil_scoped_release release;
+          try {
+            list = billboard_sprites(vs, inst, caf.data(), static_cast<std::size_t>(caf.shape(1)),
+                                     lights, params, cam, st, threads);
+          } catch (const std::invalid_argument& e) {
+            py::gil_scoped_acquire acquire;
+            throw py::value_error(e.what());
+          }
+        }
+        const auto n = static_cast<py::ssize_t>(list.centre.size());
+        const auto nl = static_cast<py::ssize_t>(lights.size());
+        auto as_floats = [](const float* p, std::vector<py::ssize_t> shape) {
+          py::array_t<float> a(shape);
+          std::copy(p, p + a.size(), a.mutable_data());
+          return a;
+        };
+        py::dict out;
+        out["centres"] = as_floats(reinterpret_cast<const float*>(list.centre.data()), {n, 3});
+        out["half_sizes"] = as_floats(reinterpret_cast<const float*>(list.half.data()), {n, 2});
+        out["rotation"] = as_floats(list.rotation.data(), {n});
+        out["alpha"] = as_floats(list.alpha.data(), {n});
+        out["colours"] = as_floats(list.colour.data(), {n, 4, 3});
+        py::array_t<std::int32_t> tex(n), inst_out(n), bb(n);
+        for (py::ssize_t i = 0; i < n; ++i) {
+          tex.mutable_data()[i] = list.texture[static_cast<std::size_t>(i)];
+          inst_out.mutable_data()[i] = static_cast<std::int32_t>(list.instance[static_cast<std::size_t>(i)]);
+          bb.mutable_data()[i] = static_cast<std::int32_t>(list.billboard[static_cast<std::size_t>(i)]);
+        }
+        out["texture"] = tex;
+        out["instance"] = inst_out;
+        out["billboard"] = bb;
+        if (st.fragment) {
+          out["frame"] = as_floats(reinterpret_cast<const float*>(list.frame.data()), {n, 4});
+          out["yrange"] = as_floats(reinterpret_cast<const float*>(list.yrange.data()), {n, 2});
+          out["caf"] = as_floats(list.caf.data(), {n, nl});
+        }
+        return out;
+      },
+      py::arg("variants"), py::arg("variant"), py::arg("offsets"), py::arg("yaw"),
+      py::arg("alpha"), py::arg("caf_first"), py::arg("caf"), py::arg("shade"), py::arg("camera"),
+      py::arg("draw"), py::arg("threads") = 0,
+      "The sprites of billboard clouds for a camera: culled, faded, sorted back to front and "
+      "shaded (vertex colours, or per-sprite fragment-shading data): a dict of arrays.");
 }
 
 }  // namespace cumuli::bind

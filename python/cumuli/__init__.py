@@ -8,7 +8,7 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 from __future__ import annotations
 
 from cumuli._version import __version__
-from cumuli.anim import frames
+from cumuli.anim import frames, weather_presets
 from cumuli.anim.cluster import sweep
 from cumuli.anim.endless import (
     EndlessAnimation,
@@ -18,9 +18,12 @@ from cumuli.anim.endless import (
     transition_matrix,
 )
 from cumuli.anim.frames import fly_towards, orbit, render_frames
+from cumuli.anim.weather import CloudLayer, Schedule, SkyState, Weather, load_weather
 from cumuli.camera import Camera
 from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
+from cumuli.light.billboard_shading import BillboardShading
+from cumuli.light.caf import absorption_factors
 from cumuli.light.grid import LightGrid, LightParams, load_light_grid
 from cumuli.light.ndt import LightStats, light_grid
 from cumuli.light.particles import (
@@ -32,6 +35,17 @@ from cumuli.light.particles import (
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.light.sprite_settings import SpriteSettings
 from cumuli.light.volume import VolumeLighting
+from cumuli.model import seedbox_presets
+from cumuli.model.atlas import sprite_atlas
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import (
+    BasisModel,
+    BillboardCloud,
+    SeedBox,
+    cloud_variants,
+    load_billboards,
+    seed_box_cloud,
+)
 from cumuli.model.cloud import Cloud, load_cloud, merge
 from cumuli.model.gaussian import gaussian_cumulus, metaball_cumulus
 from cumuli.model.lsystem import lsystem_cloud, lsystem_expand, lsystem_length
@@ -54,6 +68,23 @@ from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
 
 __all__ = [
+    "BasisModel",
+    "BillboardCloud",
+    "BillboardField",
+    "BillboardShading",
+    "CloudLayer",
+    "Schedule",
+    "SeedBox",
+    "SkyState",
+    "Weather",
+    "absorption_factors",
+    "cloud_variants",
+    "load_billboards",
+    "load_weather",
+    "seed_box_cloud",
+    "seedbox_presets",
+    "sprite_atlas",
+    "weather_presets",
     "AnimationFrame",
     "EndlessAnimation",
     "VolumeDatabase",

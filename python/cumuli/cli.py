@@ -121,6 +121,14 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         path = write_image(args.output, img)
         print(f"wrote {path} ({args.width}×{args.height})")
         return 0
+    if args.torchelsen:
+        from cumuli.demo import torchelsen_sequence
+
+        _check_output(args.output)
+        img = torchelsen_sequence(args.width, args.height, args.backend, args.seed)
+        paths = _write_pair(args.output, img)
+        print(f"wrote {' and '.join(map(str, paths))} (Torchelsen & Musse Fig. 14, CV 0 → 1)")
+        return 0
     from cumuli.demo import default_scene, harris_scene
     from cumuli.rendering.compositor import render
 
@@ -211,7 +219,18 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="instead render the noise figure (lattice | fBm, paper Figs. 2-3); one file",
     )
-    demo.add_argument("--seed", type=_seed, default=7, help="noise seed for --noise (default 7)")
+    demo.add_argument(
+        "--seed",
+        type=_seed,
+        default=7,
+        help="noise seed for --noise, weather seed for --torchelsen (default 7)",
+    )
+    demo.add_argument(
+        "--torchelsen",
+        action="store_true",
+        help="instead render Torchelsen & Musse Fig. 14: the Table 1 billboard sky at CV 0, 1/3, "
+        "2/3, 1 (2x2 frames)",
+    )
     demo.add_argument(
         "--harris",
         action="store_true",

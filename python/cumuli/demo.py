@@ -1,8 +1,13 @@
-"""Ready-made scenes: the demo of ``cumuli demo`` (paper Fig. 10), a single daylight cumulus and
+"""Ready-made scenes: the demo of ``cumuli demo`` (paper Fig. 10), a single daylight cumulus,
 Harris 2002's Fig. 13 (``cumuli demo --harris``: particle clouds at sunset under two coloured
-lights)."""
+lights) and the climatic-variation sequence of ``cumuli demo --torchelsen`` (Torchelsen & Musse
+2005, Fig. 14)."""
 
 from __future__ import annotations
+
+import math
+
+import numpy as np
 
 from cumuli.camera import Camera
 from cumuli.model.gaussian import gaussian_cumulus
@@ -138,3 +143,36 @@ def distance_camera(scene: Scene, distance: float, fov: float = 45.0) -> Camera:
     position = (float(centre[0]), float(centre[1]), float(centre[2]) - float(distance))
     target = (position[0], position[1], position[2] + 1.0)
     return Camera(position=position, target=target, fov=fov)
+
+
+#: The ground camera of :func:`torchelsen_sequence`: in the Table 1 sky square, looking up 25°.
+TORCHELSEN_CAMERA = Camera(position=(0.0, 2.0, -420.0), target=(0.0, 198.0, 0.0), fov=65.0)
+
+
+def torchelsen_sequence(
+    width: int = 640, height: int = 480, backend: str = "gl", seed: int = 0, panels: int = 4
+) -> np.ndarray:
+    """[TM] Fig. 14: the Table 1 weather (two layers, CV 0 → 1 over 600 s) seen from the ground
+    at CV = 0, 1/3, 2/3, 1 (``panels`` frames evenly over the schedule), as a 2-column grid of
+    ``width/2 × height/2`` frames (one row when ``panels`` is 2). Returns ``(H, W, 4)`` linear
+    RGBA, opaque."""
+    from cumuli import _validate as check
+    from cumuli.anim.weather_presets import table1
+    from cumuli.rendering.compositor import render
+
+    panels = check.integer(panels, "panels", 2, 16)
+    w, h = check.integer(width, "width", 2, 8192) // 2, check.integer(height, "height", 2, 8192)
+    rows = math.ceil(panels / 2)
+    h //= rows
+    weather = table1(seed=seed)
+    end = weather.schedule.keys[-1][0]
+    base = Scene(sun=Sun(direction=(0.3, 0.6, 0.6), colour=(1.0, 0.97, 0.92), intensity=1.4))
+    out = np.ones((rows * h, 2 * w, 4), np.float32)
+    for k in range(panels):
+        t = end * k / (panels - 1)
+        while weather.t < t - 1e-9:
+            weather.step(min(1.0, t - weather.t))
+        img = render(weather.scene_at(base), TORCHELSEN_CAMERA, w, h, backend=backend)
+        r, c = divmod(k, 2)
+        out[r * h : (r + 1) * h, c * w : (c + 1) * w, :3] = img[..., :3]
+    return out

@@ -264,6 +264,13 @@ class GLContext:
             for obj in reversed(made):
                 obj.release()
 
+    def make_current(self) -> None:
+        """Make this context current in this thread and leave it so (:meth:`activate` without
+        the ``with``): moderngl sends every call to the current context, the last one created or
+        entered, which need not be the one an object belongs to."""
+        with self.activate():
+            pass
+
     def close(self) -> None:
         """Release the context and every GL object made with it (idempotent). In a process
         forked from its owner it is only marked closed: the parent's context is never touched.
@@ -341,9 +348,11 @@ atexit.register(close_default_context)
 
 
 def _resolve_context(context: GLContext | None) -> GLContext:
+    """``context`` (default: the process-wide one), made current: GL calls go to the current
+    context, and the last one created may be another (see `GLContext.make_current`)."""
     if context is None:
-        return default_context()
-    if not isinstance(context, GLContext):
+        context = default_context()
+    elif not isinstance(context, GLContext):
         raise TypeError(
             f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
         )

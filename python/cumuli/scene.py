@@ -26,7 +26,10 @@ import numpy as np
 
 from cumuli._atomic import atomic_target
 from cumuli.camera import Camera
+from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.sprite_settings import SpriteSettings
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
 from cumuli.model.cloud import Cloud
 from cumuli.model.particles import ParticleCloud
 from cumuli.model.solid import Solid, as_solids
@@ -55,6 +58,7 @@ SCENE_FIELDS = (
     "solids",
     "sprite_settings",
     "impostor_settings",
+    "billboard_shading",
 )
 #: Most drawables one scene holds (a field of particle clouds has thousands; the GL marcher
 #: still draws at most `cumuli.settings.MAX_CLOUDS` 2018 clouds per pass).
@@ -70,6 +74,8 @@ KINDS: dict[str, type] = {
     Cloud.kind: Cloud,
     VolumeCloud.kind: VolumeCloud,
     ParticleCloud.kind: ParticleCloud,
+    BillboardCloud.kind: BillboardCloud,
+    BillboardField.kind: BillboardField,
 }
 
 
@@ -133,6 +139,8 @@ class Scene:
 
     ``camera`` is optional: a default view used by ``cumuli render scene.json`` when the command
     line gives none (:meth:`default_camera` frames the clouds when it is None).
+    ``billboard_shading`` lights and draws the billboard clouds and fields (Torchelsen & Musse
+    2005; its ambient defaults to this scene's sky).
     """
 
     clouds: tuple[Any, ...] = ()
@@ -145,6 +153,7 @@ class Scene:
     solids: tuple[Solid, ...] = ()
     sprite_settings: SpriteSettings = field(default_factory=SpriteSettings)
     impostor_settings: ImpostorSettings = field(default_factory=ImpostorSettings)
+    billboard_shading: BillboardShading = field(default_factory=BillboardShading)
 
     def __post_init__(self) -> None:
         clouds = self.clouds
@@ -165,7 +174,13 @@ class Scene:
                 f"scene.clouds holds at most {MAX_DRAWABLES} drawables, got {len(clouds)}"
             )
         object.__setattr__(self, "clouds", tuple(clouds))
-        parts = (("sun", Sun), ("sky", Sky), ("noise", Noise), ("settings", RenderSettings))
+        parts = (
+            ("sun", Sun),
+            ("sky", Sky),
+            ("noise", Noise),
+            ("settings", RenderSettings),
+            ("billboard_shading", BillboardShading),
+        )
         for name, cls in parts:
             if not isinstance(getattr(self, name), cls):
                 raise TypeError(f"scene.{name} must be a cumuli.{cls.__name__}")
@@ -237,6 +252,7 @@ class Scene:
             "solids": [x.to_dict() for x in self.solids],
             "sprite_settings": self.sprite_settings.to_dict(),
             "impostor_settings": asdict(self.impostor_settings),
+            "billboard_shading": self.billboard_shading.to_dict(),
         }
 
     @classmethod
@@ -296,6 +312,11 @@ class Scene:
             extras["impostor_settings"] = ImpostorSettings(
                 **_known(ImpostorSettings, data["impostor_settings"], "scene.impostor_settings")
             )
+        if data.get("billboard_shading") is not None:
+            try:
+                extras["billboard_shading"] = BillboardShading.from_dict(data["billboard_shading"])
+            except (TypeError, ValueError) as exc:
+                raise type(exc)(f"scene.billboard_shading: {exc}") from None
         return cls(
             clouds=clouds, sun=sun, sky=sky, noise=noise, settings=settings, camera=camera,
             lights=tuple(extra), **extras,

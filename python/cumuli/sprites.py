@@ -15,6 +15,7 @@ exact per-pixel formulas.
 from __future__ import annotations
 
 import math
+import weakref
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,6 +26,7 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext, _resolve_context
+from cumuli.sprite_shading import _SHADE_ATTRS, _SHADE_FORMAT, FragmentShading
 
 KERNELS = ("gaussian", "hermite")
 #: Largest tile drawn per GL draw (like the marcher) and most sprites per draw call.
@@ -228,20 +230,22 @@ def draw_sprites_cpu(
     atlas_grid: tuple[int, int] = (1, 1),
     near: float = 1e-3,
     threads: int = 0,
+    shading: FragmentShading | None = None,
     depth: Any = None,
 ) -> np.ndarray:
-    """The C++ twin: the premultiplied layer ``(height, width, 4)`` (no sky) of ``sprites``.
-
-    ``depth`` ``(height, width)``: per-pixel view depths (e.g. of opaque solids, +∞ where none);
-    a sprite then covers only the pixels where its view depth is smaller (a depth test)."""
+    """The C++ twin: the premultiplied layer ``(height, width, 4)`` (no sky) of ``sprites``;
+    ``shading`` switches to per-pixel billboard shading (:class:`FragmentShading`). ``depth``
+    ``(height, width)``: per-pixel view depths (e.g. of opaque solids, +∞ where none); a sprite
+    then covers only the pixels where its view depth is smaller (a depth test)."""
     if not isinstance(sprites, Sprites):
         raise TypeError(f"sprites must be a Sprites batch, got {type(sprites).__name__}")
     if kernel not in KERNELS:
         raise ValueError(f"kernel must be one of {KERNELS}, got {kernel!r}")
     peak = check.real(peak, "peak", 0.0, 1.0, lo_open=True)
     cam = camera_dict(camera, width, height, near)
-    arr, grid = _atlas_args(atlas, atlas_grid, sprites)
     depth = _depth_arg(depth, cam["width"], cam["height"])
+    arr, grid = _atlas_args(atlas, atlas_grid, sprites)
+    _check_shading(shading, sprites)
     return _core.rasterise_sprites(
         sprites.centres,
         sprites.half_sizes,
@@ -255,8 +259,25 @@ def draw_sprites_cpu(
         arr,
         grid,
         check.threads(threads),
+        None if shading is None else shading.core_dict(),
         depth,
     )
+
+
+def _check_shading(shading: Any, sprites: Sprites) -> None:
+    if shading is None:
+        return
+    if not isinstance(shading, FragmentShading):
+        raise TypeError(f"shading must be a FragmentShading, got {type(shading).__name__}")
+    if len(shading) != len(sprites):
+        raise ValueError(f"shading has {len(shading)} rows, the batch {len(sprites)} sprites")
+
+
+def _mip_levels(arr: np.ndarray, grid: tuple[int, int]) -> int:
+    """Mipmap levels of an atlas in fast mode: cells keep at least 8 texels a side, so that a
+    level's texels never average two cells (cells are aligned to 2^level)."""
+    cell = min(arr.shape[1] // grid[0], arr.shape[0] // grid[1])
+    return max(0, int(math.floor(math.log2(max(cell, 1)))) - 3)
 
 
 class SpriteLayerRenderer:
@@ -274,6 +295,8 @@ class SpriteLayerRenderer:
         )
         self.gpu_time_ns: int | None = None
         self.sprites_drawn = 0
+        # Atlas textures of read-only float32 arrays, by id (dropped when the array dies).
+        self._atlases: dict[int, tuple[Any, Any, int]] = {}
 
     def _check_open(self) -> None:
         if self.program is None or self.context.closed:
@@ -284,20 +307,59 @@ class SpriteLayerRenderer:
         if name in self.program:
             self.program[name].value = value
 
-    def _instances(self, sprites: Sprites, made: list[Any]) -> list[tuple[Any, int]]:
+    def _instances(
+        self, sprites: Sprites, made: list[Any], shading: FragmentShading | None = None
+    ) -> list[tuple[Any, int]]:
         """A buffer and a VAO per chunk of at most MAX_SPRITES_PER_DRAW sprites (appended to
         ``made`` for release); returns ``[(vao, count), ...]`` in drawing order."""
         ctx = self.context.ctx
         rec = sprites.records()
+        shade = None
+        if shading is not None:
+            shade = np.empty(len(rec), dtype=[("frame", "<f4", 4), ("y", "<f4", 2), ("row", "<i4")])
+            shade["frame"], shade["y"] = shading.frame, shading.yrange
+            shade["row"] = np.arange(len(rec), dtype=np.int32)
         chunks = []
         for start in range(0, max(len(rec), 1), MAX_SPRITES_PER_DRAW):
             part = rec[start : start + MAX_SPRITES_PER_DRAW]
             buf = ctx.buffer(part.tobytes() if len(part) else bytes(_RECORD.itemsize))
             made.append(buf)
-            vao = ctx.vertex_array(self.program, [(buf, _FORMAT, *_ATTRS)])
+            content = [(buf, _FORMAT, *_ATTRS)]
+            if shade is not None:
+                sp = shade[start : start + MAX_SPRITES_PER_DRAW]
+                sbuf = ctx.buffer(sp.tobytes() if len(sp) else bytes(shade.itemsize))
+                made.append(sbuf)
+                content.append((sbuf, _SHADE_FORMAT, *_SHADE_ATTRS))
+            vao = ctx.vertex_array(self.program, content)
             made.append(vao)
             chunks.append((vao, len(part)))
         return chunks
+
+    def _atlas_texture(self, arr: np.ndarray | None, source: Any, levels: int, made: list[Any]):
+        """The atlas texture (a 1×1 dummy without atlas): cached for a read-only float32 array
+        passed as it is (its id, while it lives), else made for this draw. ``levels`` > 0 builds
+        mipmaps up to that level (fast mode)."""
+        ctx = self.context.ctx
+        for key in [k for k, (ref, _, _) in self._atlases.items() if ref() is None]:
+            self._atlases.pop(key)[1].release()
+        cacheable = arr is not None and arr is source and not arr.flags.writeable
+        if cacheable and id(arr) in self._atlases:
+            ref, tex, built = self._atlases[id(arr)]
+            if ref() is arr:
+                if levels > built:
+                    tex.build_mipmaps(0, levels)
+                    self._atlases[id(arr)] = (ref, tex, levels)
+                return tex
+        size = (arr.shape[1], arr.shape[0]) if arr is not None else (1, 1)
+        data = arr.tobytes() if arr is not None else np.zeros(4, np.float32).tobytes()
+        tex = ctx.texture(size, 4, data=data, dtype="f4")
+        if levels > 0:
+            tex.build_mipmaps(0, levels)
+        if cacheable:
+            self._atlases[id(arr)] = (weakref.ref(arr), tex, levels)
+        else:
+            made.append(tex)
+        return tex
 
     def _bind_camera(self, cam: dict[str, Any] | None, width: int, height: int) -> None:
         self._set("u_screen_space", cam is None)
@@ -323,13 +385,16 @@ class SpriteLayerRenderer:
         atlas_grid: tuple[int, int] = (1, 1),
         exact: bool = True,
         near: float = 1e-3,
+        shading: FragmentShading | None = None,
         depth: Any = None,
     ) -> np.ndarray:
         """The premultiplied layer ``(height, width, 4)`` of ``sprites`` (no sky).
 
         ``exact=True`` samples atlas cells with texelFetch blends (the C++ twin's arithmetic);
-        ``False`` uses the hardware bilinear filter (faster, looser parity). ``depth``: as
-        :func:`draw_sprites_cpu` (a per-pixel depth test).
+        ``False`` uses the hardware filter, trilinear over mipmaps whose coarsest level keeps 8
+        texels per cell (faster, smoother when sprites are small; looser parity). ``shading``:
+        per-pixel billboard shading (:class:`FragmentShading`) in place of the vertex colours.
+        ``depth``: as :func:`draw_sprites_cpu` (a per-pixel depth test).
         """
         self._check_open()
         if not isinstance(sprites, Sprites):
@@ -339,7 +404,19 @@ class SpriteLayerRenderer:
         peak = check.real(peak, "peak", 0.0, 1.0, lo_open=True)
         cam = camera_dict(camera, width, height, near)
         arr, grid = _atlas_args(atlas, atlas_grid, sprites)
+        _check_shading(shading, sprites)
         depth = _depth_arg(depth, cam["width"], cam["height"])
+        # GL calls go to the current context: make this renderer's current (its program and
+        # cached textures live there; a context made since, even if closed, may be current).
+        with self.context.activate("this SpriteLayerRenderer's GL context"):
+            return self._draw(sprites, width, height, cam, (arr, atlas, grid), kernel, peak,
+                              exact, shading, depth)  # fmt: skip
+
+    def _draw(self, sprites: Sprites, width: int, height: int, cam: dict[str, Any],
+              atlas_args: tuple[Any, Any, tuple[int, int]], kernel: str, peak: float,
+              exact: bool, shading: FragmentShading | None,
+              depth: np.ndarray | None) -> np.ndarray:  # fmt: skip
+        arr, atlas, grid = atlas_args
         ctx = self.context.ctx
         made: list[Any] = []
         try:
@@ -354,17 +431,23 @@ class SpriteLayerRenderer:
             depth_tex.use(location=1)
             self._set("u_depth", 1)
             self._set("u_depth_test", depth is not None)
-            tex = ctx.texture(
-                (arr.shape[1], arr.shape[0]) if arr is not None else (1, 1),
-                4,
-                data=arr.tobytes() if arr is not None else np.zeros(4, np.float32).tobytes(),
-                dtype="f4",
+            levels = 0 if exact or arr is None else _mip_levels(arr, grid)
+            tex = self._atlas_texture(arr, atlas, levels, made)
+            tex.filter = (
+                (moderngl.LINEAR_MIPMAP_LINEAR if levels else moderngl.LINEAR),
+                moderngl.LINEAR,
             )
-            made.append(tex)
-            tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
             tex.repeat_x = tex.repeat_y = False
-            chunks = self._instances(sprites, made)
+            chunks = self._instances(sprites, made, shading)
             self._bind_camera(cam, width, height)
+            self._set("u_fragment_shading", shading is not None)
+            if shading is not None:
+                for name, value in shading.uniforms().items():
+                    self._set(name, value)
+                caf = shading.caf if shading.caf.size else np.zeros(1, np.float32)
+                ssbo = ctx.buffer(np.ascontiguousarray(caf, np.float32).tobytes())
+                made.append(ssbo)
+                ssbo.bind_to_storage_buffer(0)
             self._set("u_kernel", KERNELS.index(kernel))
             self._set("u_peak", peak)
             self._set("u_atlas", 0)
@@ -421,9 +504,12 @@ class SpriteLayerRenderer:
         return SpriteTarget(self, width, height, clear, bits)
 
     def release(self) -> None:
-        """Release the program (idempotent)."""
+        """Release the program and the cached atlas textures (idempotent)."""
         if self.program is not None and not self.context.closed:
             self.program.release()
+            for _, tex, _ in self._atlases.values():
+                tex.release()
+        self._atlases.clear()
         self.program = None
 
     def __enter__(self) -> SpriteLayerRenderer:
@@ -447,6 +533,7 @@ class SpriteTarget:
         self.height = check.integer(height, "height", 1, 4096)
         if bits not in (8, 32):
             raise ValueError(f"bits must be 8 or 32, got {bits}")
+        renderer.context.make_current()
         ctx = renderer.context.ctx
         self._objects: list[Any] = []
         self.colour = ctx.texture((self.width, self.height), 4, dtype="f1" if bits == 8 else "f4")

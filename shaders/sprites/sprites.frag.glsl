@@ -11,10 +11,15 @@
 //     hardware filter), a = tex.a·alpha, output (colour·tex.rgb·a, a).
 // u_depth_test: a fragment is kept only where the sprite's view depth Z < u_depth[i][j] (the view
 // depth of the nearest opaque solid, +∞ where none; Harris 2002 §3.1.1's direct rendering).
+// u_fragment_shading (billboards, spec §4.2): the colour is billboard_shade (common/billboard_shade.glsl,
+// twin of cumuli::shade_point) at the pixel's point on the billboard
+//   p = centre + (s·half.x)·r′ + (t·half.y)·u′,  r′ = cos ψ·r + sin ψ·u,  u′ = −sin ψ·r + cos ψ·u,
+// with the sprite's cloud frame and its CAF row (buffer binding 0, u_bb_lights floats per sprite).
 // Blending (ONE, ONE_MINUS_SRC_ALPHA) into an RGBA32F target cleared to 0 makes the premultiplied
 // layer (C, A); GL blends the fragments of a draw in primitive order, i.e. back to front.
 
 #include "common/splat.glsl"
+#include "common/billboard_shade.glsl"
 
 flat in vec4 v_screen;
 flat in vec2 v_rot;
@@ -25,6 +30,11 @@ flat in vec3 v_c1;
 flat in vec3 v_c2;
 flat in vec3 v_c3;
 flat in float v_depth;
+flat in vec3 v_centre;
+flat in vec2 v_half;
+flat in vec4 v_frame;
+flat in vec2 v_yrange;
+flat in int v_row;
 
 uniform ivec2 u_tile_origin;
 uniform int u_tile_height;
@@ -35,6 +45,13 @@ uniform ivec2 u_atlas_grid;  // cells across, down
 uniform bool u_exact;
 uniform bool u_depth_test;
 uniform sampler2D u_depth;  // R32F, (W, H), row i = image row i (row 0 on top)
+uniform bool u_fragment_shading;
+uniform vec3 u_cam_r;
+uniform vec3 u_cam_u;
+
+layout(std430, binding = 0) readonly buffer BillboardCaf { float bb_caf_data[]; };
+
+float bb_caf(int l) { return bb_caf_data[v_row * u_bb_lights + l]; }
 
 out vec4 frag;
 
@@ -76,7 +93,12 @@ void main() {
     if (!(abs(s) <= 1.0 && abs(t) <= 1.0)) discard;
     if (u_depth_test && !(v_depth < texelFetch(u_depth, ivec2(j, i), 0).r)) discard;
     precise vec3 colour = v_c0;
-    if (!(v_c0 == v_c1 && v_c0 == v_c2 && v_c0 == v_c3)) {
+    if (u_fragment_shading) {
+        precise vec3 r2 = v_rot.x * u_cam_r + v_rot.y * u_cam_u;
+        precise vec3 u2 = (-v_rot.y) * u_cam_r + v_rot.x * u_cam_u;
+        precise vec3 p = v_centre + (s * v_half.x) * r2 + (t * v_half.y) * u2;
+        colour = billboard_shade(p, v_frame, v_yrange);
+    } else if (!(v_c0 == v_c1 && v_c0 == v_c2 && v_c0 == v_c3)) {
         if (s >= t) {
             colour = v_c0 * ((1.0 - s) * 0.5) + v_c1 * ((s - t) * 0.5) + v_c2 * ((t + 1.0) * 0.5);
         } else {

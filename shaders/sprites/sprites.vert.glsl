@@ -13,6 +13,9 @@
 //
 // The fragment shader may depth-test each sprite's view depth Z against a per-pixel depth image
 // (opaque solids, Harris 2002 §3.1.1: "direct particles with depth test").
+// Billboard fragment shading (Torchelsen spec §4.2): in_frame (cloud centre c_C, R_C), in_yrange
+// (y_lo, y_hi) and in_row (the sprite's row in the CAF buffer) pass to the fragment shader with the
+// world centre and half sizes, where the colour is evaluated per pixel.
 //
 // u_screen_space: the centre's x, y are already (j_c, i_c) in pixels and the half sizes are
 // pixels (the read-back light pass of particles/, which draws into the N_L² light buffer).
@@ -26,6 +29,9 @@ in vec3 in_c0;
 in vec3 in_c1;
 in vec3 in_c2;
 in vec3 in_c3;
+in vec4 in_frame;
+in vec2 in_yrange;
+in int in_row;
 
 uniform vec3 u_cam_pos;
 uniform vec3 u_cam_f;
@@ -47,6 +53,11 @@ flat out vec3 v_c1;
 flat out vec3 v_c2;
 flat out vec3 v_c3;
 flat out float v_depth;  // view depth Z of the sprite (0 in screen space)
+flat out vec3 v_centre;
+flat out vec2 v_half;
+flat out vec4 v_frame;
+flat out vec2 v_yrange;
+flat out int v_row;
 
 float dot3(vec3 a, vec3 b) {
     precise float d = (a.x * b.x + a.y * b.y) + a.z * b.z;
@@ -60,6 +71,11 @@ void main() {
     v_c1 = in_c1;
     v_c2 = in_c2;
     v_c3 = in_c3;
+    v_centre = in_centre;
+    v_half = in_half;
+    v_frame = in_frame;
+    v_yrange = in_yrange;
+    v_row = in_row;
     v_rot = vec2(cos(in_rotation), sin(in_rotation));
     v_depth = 0.0;
     precise float jc, ic, hx, hy;

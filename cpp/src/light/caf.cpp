@@ -345,8 +345,6 @@ float directional_term(glm::vec3 v, const ShadeFrame& frame, glm::vec3 light,
   return params.d_min + (params.d_max - params.d_min) * x;
 }
 
-namespace {
-
 float height_factor(float y, const ShadeFrame& frame, const ShadeParams& params) {
   const auto& lv = params.height_levels;
   if (lv.empty()) return 1.0f;
@@ -363,22 +361,24 @@ float height_factor(float y, const ShadeFrame& frame, const ShadeParams& params)
   return lv.back().second;
 }
 
-}  // namespace
+glm::vec3 shade_point(glm::vec3 v, const ShadeFrame& frame, const float* caf, std::size_t stride,
+                      const std::vector<ShadeLight>& lights, const ShadeParams& params) {
+  const glm::vec3 ambient = params.k_amb * params.ambient;
+  glm::vec3 direct(0.0f);
+  for (std::size_t l = 0; l < lights.size(); ++l) {
+    const float d = directional_term(v, frame, lights[l].direction, params);
+    direct += (caf[l * stride] * d) * lights[l].radiance;
+  }
+  return ambient + height_factor(v.y, frame, params) * direct;
+}
 
 void billboard_shade(const glm::vec3* points, const int* index, std::size_t n, const float* caf,
                      std::size_t q, const ShadeFrame& frame,
                      const std::vector<ShadeLight>& lights, const ShadeParams& params, float* out,
                      int threads) {
-  const glm::vec3 ambient = params.k_amb * params.ambient;
   parallel_for(n, threads, [&](std::size_t i) {
-    const glm::vec3 v = points[i];
     const auto b = static_cast<std::size_t>(index[i]);
-    glm::vec3 direct(0.0f);
-    for (std::size_t l = 0; l < lights.size(); ++l) {
-      const float d = directional_term(v, frame, lights[l].direction, params);
-      direct += (caf[l * q + b] * d) * lights[l].radiance;
-    }
-    const glm::vec3 c = ambient + height_factor(v.y, frame, params) * direct;
+    const glm::vec3 c = shade_point(points[i], frame, caf + b, q, lights, params);
     out[3 * i] = c.x;
     out[3 * i + 1] = c.y;
     out[3 * i + 2] = c.z;

@@ -98,8 +98,14 @@ ScreenSprite project_sprite(const Sprite& sprite, const SpriteCamera& camera) {
 
 void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& camera,
                        const SpriteRasterSettings& settings, const SpriteAtlas* atlas, float* out,
-                       int threads, const float* depth) {
+                       int threads, const SpriteShading* shading, const float* depth) {
   camera.validate();
+  if (shading != nullptr) {
+    shading->params.validate();
+    if (!sprites.empty() && (shading->frame == nullptr || shading->yrange == nullptr ||
+                             (shading->caf == nullptr && !shading->lights.empty())))
+      throw std::invalid_argument("fragment shading needs a frame, y range and CAF per sprite");
+  }
   if (!std::isfinite(settings.peak) || !(settings.peak > 0.0f) || settings.peak > 1.0f)
     throw std::invalid_argument("peak must be in (0, 1]");
   for (const Sprite& s : sprites) {
@@ -112,8 +118,15 @@ void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& c
   const int width = camera.width, height = camera.height;
   std::vector<ScreenSprite> screen(sprites.size());
   std::vector<char> flat(sprites.size());
+  // Fragment shading: the rotated right and up of each sprite in world space.
+  std::vector<glm::vec3> right2(shading ? sprites.size() : 0), up2(shading ? sprites.size() : 0);
   for (std::size_t k = 0; k < sprites.size(); ++k) {
     screen[k] = project_sprite(sprites[k], camera);
+    if (shading != nullptr) {
+      const float c = screen[k].cos_r, s = screen[k].sin_r;
+      right2[k] = c * camera.right + s * camera.up;
+      up2[k] = -s * camera.right + c * camera.up;
+    }
     const auto& c = sprites[k].colour;
     flat[k] = c[0] == c[1] && c[0] == c[2] && c[0] == c[3];
   }
@@ -137,7 +150,18 @@ void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& c
           if (depth != nullptr && !(q.depth < depth[static_cast<std::size_t>(i) * width + j]))
             continue;
           glm::vec3 colour = sp.colour[0];
-          if (!flat[k]) {
+          if (shading != nullptr) {
+            const glm::vec3 p = sp.centre + (s * sp.half_size.x) * right2[k] +
+                                (t * sp.half_size.y) * up2[k];
+            const glm::vec4 fr = shading->frame[k];
+            ShadeFrame frame;
+            frame.centre = glm::vec3(fr.x, fr.y, fr.z);
+            frame.radius = fr.w;
+            frame.y_lo = shading->yrange[k].x;
+            frame.y_hi = shading->yrange[k].y;
+            colour = shade_point(p, frame, shading->caf + k * shading->lights.size(), 1,
+                                 shading->lights, shading->params);
+          } else if (!flat[k]) {
             if (s >= t) {
               colour = sp.colour[0] * ((1.0f - s) * 0.5f) + sp.colour[1] * ((s - t) * 0.5f) +
                        sp.colour[2] * ((t + 1.0f) * 0.5f);

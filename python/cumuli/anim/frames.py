@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli.anim.weather import Weather
 from cumuli.camera import Camera
 from cumuli.scene import Scene
 
@@ -85,8 +86,8 @@ def orbit(
 
 
 def render_frames(
-    scene: Scene,
-    cameras: Sequence[Camera],
+    scene: Scene | Weather,
+    cameras: Sequence[Camera] | Camera,
     out_dir: str | os.PathLike[str],
     width: int = 320,
     height: int = 240,
@@ -96,8 +97,18 @@ def render_frames(
     alpha: str = "opaque",
     client: Any = None,
     impostors: Any = False,
+    *,
+    dt: float | None = None,
+    frames: int | None = None,
+    base: Scene | None = None,
 ) -> list[Path]:
     """Render ``scene`` from each camera and write numbered images into ``out_dir``.
+
+    ``scene`` may be a `cumuli.Weather` (a scene sequence, Torchelsen & Musse 2005): frame 0
+    renders ``weather.scene_at(base)`` as the weather is, and before each later frame the
+    weather steps ``dt`` seconds (required), so n frames leave it ``(n − 1)·dt`` later.
+    ``cameras`` is then a list (one per frame) or one camera with ``frames`` the number of
+    frames. Weathers are filmed locally (no client).
 
     ``pattern`` is a ``str.format`` pattern taking the frame number; its extension picks the
     format (``.png`` sRGB8 or ``.exr`` float32). ``out_dir`` is created if missing. A tqdm bar
@@ -115,8 +126,23 @@ def render_frames(
     from cumuli.rendering.compositor import render
     from cumuli.rendering.impostor_cache import ImpostorCache
 
-    if not isinstance(scene, Scene):
-        raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
+    weather = scene if isinstance(scene, Weather) else None
+    if weather is not None:
+        if dt is None:
+            raise ValueError("dt (seconds between frames) is required to film a Weather")
+        dt = check.real(dt, "dt", 0.0, 1e9)
+        if client is not None:
+            raise ValueError("a Weather is filmed locally: client must be None")
+        if base is not None and not isinstance(base, Scene):
+            raise TypeError(f"base must be a cumuli.Scene, got {type(base).__name__}")
+        if isinstance(cameras, Camera):
+            if frames is None:
+                raise ValueError("frames is required with a single camera")
+            cameras = [cameras] * _count(frames)
+    elif not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a cumuli.Scene or a Weather, got {type(scene).__name__}")
+    elif dt is not None or frames is not None or base is not None:
+        raise ValueError("dt, frames and base apply to a Weather only")
     if isinstance(cameras, Camera):
         raise TypeError("cameras must be a sequence of cumuli.Camera; wrap one camera in a list")
     try:
@@ -179,9 +205,15 @@ def render_frames(
     from tqdm.auto import tqdm
 
     paths = []
-    for cam, name in tqdm(
-        list(zip(cams, names, strict=True)), desc="frames", unit="frame", disable=not progress
+    for k, (cam, name) in enumerate(
+        tqdm(list(zip(cams, names, strict=True)), desc="frames", unit="frame", disable=not progress)
     ):
-        img = render(scene, cam, width=width, height=height, backend=backend, impostors=cache)
+        if weather is not None:
+            if k:
+                weather.step(dt)  # type: ignore[arg-type]
+            frame_scene = weather.scene_at(base)
+        else:
+            frame_scene = scene
+        img = render(frame_scene, cam, width=width, height=height, backend=backend, impostors=cache)
         paths.append(write_image(folder / name, img, alpha=alpha))
     return paths

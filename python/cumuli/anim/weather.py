@@ -394,6 +394,26 @@ class Weather:
                 chosen = True
         return sky, scale
 
+    def scene_at(self, base: Any = None) -> Any:
+        """The sky now as a `cumuli.Scene`: ``base``'s drawables (a hero cloud, ...) followed by
+        one `BillboardField` per layer that holds clouds, ``base``'s sun scaled and its sky
+        interpolated with CV where the states ask for it (`sky`), the rest of ``base`` (lights,
+        settings, billboard shading, camera) as it is. ``base`` defaults to ``cumuli.Scene()``.
+        The time is the weather's: `step` between calls films it."""
+        from cumuli.scene import Scene
+        from cumuli.sky import Sun
+
+        if base is None:
+            base = Scene()
+        if not isinstance(base, Scene):
+            raise TypeError(f"base must be a cumuli.Scene, got {type(base).__name__}")
+        sky, scale = self.sky(base.sky)
+        sun = base.sun
+        if scale != 1.0:
+            sun = Sun(sun.direction, sun.colour, sun.intensity * scale)
+        fields = [f for f in self.fields() if f.n > 0]
+        return base.replace(clouds=(*base.clouds, *fields), sky=sky, sun=sun)
+
     def to_dict(self) -> dict[str, Any]:
         """The configuration (JSON-able): area, layers, schedule, seed."""
         return {

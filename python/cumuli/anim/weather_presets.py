@@ -2,8 +2,10 @@
 
 [TM] gives the counts of Table 1 but not heights, winds, area, billboard counts or textures; this
 preset states its own in cumuli's cloud scale: a 1000-unit square; the higher layer at altitude
-150 (thin wispy clouds, wind 10 units/s along +x), the lower at 40 (sunny cumulus → nimbus → rain,
-wind 6 units/s along +z); CV from 0 to 1 over 600 s.
+150 (thin wispy clouds 25–35 units long, wind 10 units/s along +x), the lower at 40 (sunny
+cumulus → nimbus → rain, wind 6 units/s along +z); CV from 0 to 1 over 600 s; the background
+darkens from the scene's sky to a hazy (CV 0.5) and a stormy grey sky (CV 1), and the sun dims
+to 0.8 and 0.5 (beyond [TM]).
 
 Winds: the spec suggests 2 and 1 units/s, but new clouds only enter with the wind (the inflow
 quota is the steady-state flux), so the count can follow N*(CV) no faster than one transit time
@@ -27,6 +29,7 @@ from cumuli.anim.weather import CloudLayer, Schedule, SkyState, Weather
 from cumuli.model.atlas import sprite_atlas
 from cumuli.model.billboards import BasisModel, SeedBox
 from cumuli.model.seedbox_presets import cirrus, cumulus, nimbus, rain
+from cumuli.sky import Sky
 
 #: Table 1 of [TM]: (layer, sky, cv, NBM, NM, NC).
 TABLE1 = (
@@ -36,6 +39,12 @@ TABLE1 = (
     ("lower", "Sky 2", 0.5, 3, 10, 200),
     ("lower", "Sky 3", 1.0, 3, 10, 400),
 )
+
+
+#: Background skies of the lower layer's grey and stormy states (beyond [TM]: the sky darkens with
+#: CV; the sunny state keeps the scene's own sky).
+HAZY = Sky(zenith=(0.3, 0.42, 0.66), horizon=(0.62, 0.68, 0.76), ground=(0.28, 0.28, 0.3))
+STORMY = Sky(zenith=(0.3, 0.32, 0.37), horizon=(0.5, 0.52, 0.56), ground=(0.22, 0.22, 0.23))
 
 
 def _wisp(scale: float, atlas_seed: int) -> BasisModel:
@@ -77,8 +86,8 @@ def table1(
         thickness=10.0,
         wind=winds[0],
         states=(
-            SkyState(0.0, (_wisp(1.0, 0),), variants=10, count=50, name="Sky 1"),
-            SkyState(0.5, (_wisp(1.5, 1),), variants=10, count=100, name="Sky 2"),
+            SkyState(0.0, (_wisp(3.0, 0),), variants=10, count=50, name="Sky 1"),
+            SkyState(0.5, (_wisp(4.0, 1),), variants=10, count=100, name="Sky 2"),
         ),
         name="higher",
     )
@@ -99,8 +108,12 @@ def table1(
         wind=winds[1],
         states=(
             SkyState(0.0, sunny, variants=10, count=100, name="Sky 1"),
-            SkyState(0.5, grey, variants=10, count=200, sun_scale=0.8, name="Sky 2"),
-            SkyState(1.0, dark, variants=10, count=400, sun_scale=0.5, name="Sky 3"),
+            SkyState(
+                0.5, grey, variants=10, count=200, sun_scale=0.8, background=HAZY, name="Sky 2"
+            ),
+            SkyState(
+                1.0, dark, variants=10, count=400, sun_scale=0.5, background=STORMY, name="Sky 3"
+            ),
         ),
         name="lower",
     )

@@ -4,8 +4,8 @@
 `Cloud` (:func:`cumuli.light_grid` with ``settings.light_params()``), the per-voxel sun and sky
 light for a `VolumeCloud` (:class:`cumuli.VolumeLighting`), the multiple forward scattering light
 of a `ParticleCloud` for the sun and every extra light (:func:`cumuli.particle_light` with
-``scene.sprite_settings``; one column per light, colours applied at render) — and returns an
-immutable
+``scene.sprite_settings``; one column per light, colours applied at render), the CAF of
+billboard clouds and fields (:mod:`cumuli.light.billboards`) — and returns an immutable
 :class:`LitScene` that the renderers draw. Nothing is stored on the clouds, and a failed call
 changes no object.
 
@@ -30,6 +30,7 @@ import numpy as np
 
 from cumuli import _progress
 from cumuli import _validate as check
+from cumuli.light import billboards as billboard_pass
 from cumuli.light.ndt import LightGrid, LightRecord, light_grid
 from cumuli.light.particles import (
     ParticleLight,
@@ -38,6 +39,8 @@ from cumuli.light.particles import (
     particle_light_many,
 )
 from cumuli.light.volume import VolumeLighting
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
 from cumuli.model.cloud import Cloud
 from cumuli.model.particles import ParticleCloud
 from cumuli.model.volume import VolumeCloud, VolumeDatabase
@@ -90,6 +93,7 @@ def clear_memo() -> None:
         _particle_memo.clear()
         _resolved.clear()
         _particle_floats = 0
+    billboard_pass.clear_memo()
 
 
 # --- light passes, one per kind ----------------------------------------------------------------
@@ -274,6 +278,8 @@ LIGHT_PASSES: dict[str, Callable[..., Any]] = {
     Cloud.kind: cloud_light,
     VolumeCloud.kind: volume_light,
     ParticleCloud.kind: particles_light,
+    BillboardCloud.kind: billboard_pass.billboard_light,
+    BillboardField.kind: billboard_pass.billboard_light,
 }
 #: Kinds whose light pass also runs on all the scene's drawables of the kind at once:
 #: ``(drawables, scene, given, threads) -> lights`` (same results as one by one, faster).

@@ -158,6 +158,14 @@ class BillboardField:
         b = self.instance_bounds()
         return b[:, 0].min(axis=0), b[:, 1].max(axis=0)
 
+    def layer_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The compositor's box (float32): `bounds` (every instance's quads at any view
+        orientation); a point at the origin for an empty field (which draws nothing)."""
+        if self.n == 0:
+            return np.zeros(3, np.float32), np.zeros(3, np.float32)
+        lo, hi = self.bounds()
+        return lo.astype(np.float32), hi.astype(np.float32)
+
     def world_billboards(self, index: int) -> dict[str, np.ndarray]:
         """Instance ``index``'s billboards in world space: ``centres (K, 3)``, ``sizes``,
         ``texture``, ``rotation``, ``box`` (the variant's arrays) and ``alpha`` (scalar array)."""
@@ -188,8 +196,17 @@ class BillboardField:
         }
 
     @classmethod
-    def from_dict(cls, data: Any) -> BillboardField:
-        """Inverse of :meth:`to_dict` (validated)."""
+    def from_dict(cls, data: Any, where: str | None = None) -> BillboardField:
+        """Inverse of :meth:`to_dict` (validated); errors name ``where`` (scene files)."""
+        if where is None:
+            return cls._from_dict(data)
+        try:
+            return cls._from_dict(data)
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(f"{where}: {exc}") from None
+
+    @classmethod
+    def _from_dict(cls, data: Any) -> BillboardField:
         if not isinstance(data, dict):
             raise TypeError(f"billboard field must be an object, got {type(data).__name__}")
         if data.get("kind", cls.kind) != cls.kind:

@@ -304,9 +304,20 @@ class BillboardCloud:
         return _cloud_to_dict(self)
 
     @classmethod
-    def from_dict(cls, data: Any) -> BillboardCloud:
-        """Inverse of :meth:`to_dict` (validated)."""
-        return _cloud_from_dict(data)
+    def from_dict(cls, data: Any, where: str | None = None) -> BillboardCloud:
+        """Inverse of :meth:`to_dict` (validated); errors name ``where`` (scene files)."""
+        if where is None:
+            return _cloud_from_dict(data)
+        try:
+            return _cloud_from_dict(data)
+        except (TypeError, ValueError) as exc:
+            raise type(exc)(f"{where}: {exc}") from None
+
+    def layer_box(self) -> tuple[np.ndarray, np.ndarray]:
+        """The compositor's box (float32): `bounds`, which holds every quad at any view
+        orientation and rotation, so every pixel the cloud draws lies on a ray through it."""
+        lo, hi = self.bounds()
+        return lo.astype(np.float32), hi.astype(np.float32)
 
     def save(self, path: Any) -> Any:
         """Write ``.npz`` or ``.json`` atomically (a generated atlas is stored as its recipe, a

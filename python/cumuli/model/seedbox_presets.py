@@ -3,8 +3,9 @@
 All in cumuli's cloud scale (a cumulus ≈ 20 units across), centred near the origin (a weather
 layer or a `BillboardField` places them), deterministic for a seed:
 
-- `cumulus`: the spec's default seed box (half size (4, 1.5, 3), three directions, 3 levels, (1, 3)
-  boxes per level and direction), shrinking children, flat base, "sunny" atlas.
+- `cumulus`: the spec's default seed box size (4, 1.5, 3) grown along four sideways directions and
+  up (3 levels, (1, 2) boxes per level and direction, reach 3: compact), shrinking children,
+  flat base, 8–12 large faint billboards per box, "sunny" atlas.
 - `cirrus`: Fig. 10, **15 thin wide seed boxes and exactly 50 billboards** (10 seed boxes with
   2 billboards per box and 5 with 1, each with one child), "wispy" atlas, flat wide sprites.
 - `nimbus`: Fig. 11, dense: 2 levels, (3, 6) boxes, large billboards, "sunny" atlas.
@@ -25,21 +26,38 @@ NAMES = ("cumulus", "cirrus", "nimbus", "rain")
 
 
 def cumulus(atlas_seed: int = 0) -> BasisModel:
-    """A sunny cumulus: the spec's default seed box, 3 levels, flat base."""
+    """A sunny cumulus: the spec's default seed box size, four sideways directions and one up
+    (5 directions, 3 levels, (1, 2) boxes), reach 3 (compact: with the default reach ‖h‖ the
+    upward boxes of level 3 float apart from the cloud), flat base; 8–12 large (1.2–2 × the
+    box's mean half size), faint (opacity 0.55) billboards per box, which blend into a soft
+    cloud where the defaults' fewer, smaller ones show as separate puffs."""
     seed = SeedBox(
         centre=(0.0, 0.0, 0.0),
         half_size=(4.0, 1.5, 3.0),
+        directions=(
+            (1.0, 0.25, 0.0),
+            (-1.0, 0.25, 0.0),
+            (0.0, 0.25, 1.0),
+            (0.0, 0.25, -1.0),
+            (0.0, 1.0, 0.0),
+        ),
+        apertures=(60.0, 60.0, 60.0, 60.0, 50.0),
         levels=3,
-        boxes_per_level=(1, 3),
+        boxes_per_level=(1, 2),
+        reach=3.0,
         child_scale=(0.6, 1.0),
-        billboards_per_box=(4, 8),
+        billboards_per_box=(8, 12),
         flat_base=True,
     )
-    return BasisModel((seed,), atlas=sprite_atlas("sunny", seed=atlas_seed), name="cumulus")
+    return BasisModel(
+        (seed,), atlas=sprite_atlas("sunny", seed=atlas_seed), billboard_size=(1.2, 2.0),
+        opacity=0.55, name="cumulus",
+    )  # fmt: skip
 
 
 def cirrus(atlas_seed: int = 0) -> BasisModel:
-    """Fig. 10: 15 thin wide seed boxes, 50 billboards in all, wispy sprites."""
+    """Fig. 10: 15 thin wide seed boxes, 50 billboards in all: large (4–7 × the box's mean half
+    size), flat, faint wispy sprites, so that few billboards make visible streaks."""
     seeds = []
     for j in range(15):
         # A loose diagonal band of streaks, fixed (the variation comes from the RNG seed).
@@ -60,10 +78,10 @@ def cirrus(atlas_seed: int = 0) -> BasisModel:
     return BasisModel(
         tuple(seeds),
         atlas=sprite_atlas("wispy", seed=atlas_seed),
-        billboard_size=(1.5, 2.5),
+        billboard_size=(4.0, 7.0),
         aspect_min=0.35,
         rotate=False,
-        opacity=0.6,
+        opacity=0.5,
         name="cirrus",
     )
 

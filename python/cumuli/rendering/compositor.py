@@ -45,16 +45,24 @@ MAX_EDGE = 1 << 14
 BACKENDS = ("gl", "cpu")
 
 
+def _one_drawer(kinds: set[str]) -> bool:
+    """Whether grouped ``kinds`` share one drawer on both backends (one pass draws them all)."""
+    return (
+        kinds <= GROUPED_KINDS
+        and len({GL_DRAWERS.get(k) for k in kinds}) == 1
+        and len({CPU_DRAWERS.get(k) for k in kinds}) == 1
+    )
+
+
 def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     """The draw calls of ``scene``: one ``(kind, indices)`` over the sky when one pass can draw
-    everything (an empty scene draws the sky with the marcher), else one per drawable. With
-    solids, every drawable is its own layer (each composites with the solids by its own box)."""
+    everything (an empty scene draws the sky with the marcher; grouped kinds sharing a drawer,
+    like billboard clouds and fields, count as one), else one per drawable. With solids, every
+    drawable is its own layer (each composites with the solids by its own box)."""
     kinds = scene.kinds
     if not kinds:
         return [("cloud", [])]
-    if not scene.solids and (
-        len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS)
-    ):
+    if not scene.solids and (len(kinds) == 1 or _one_drawer(set(kinds))):
         return [(kinds[0], list(range(len(kinds))))]
     return [(kind, [k]) for k, kind in enumerate(kinds)]
 
@@ -249,6 +257,7 @@ class Renderer:
         self.gl = default_context() if context is None else context
         self.gl.check_usable()
         self.tiles = Tiles(self.gl, self.tile)
+        self.gl.make_current()
         try:
             with self.gl.activate():
                 self.drawer("cloud")  # the marcher compiles now: a broken driver fails here

@@ -23,9 +23,12 @@ from __future__ import annotations
 from collections.abc import Callable
 from typing import Any
 
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
 from cumuli.model.cloud import Cloud
 from cumuli.model.particles import ParticleCloud
 from cumuli.model.volume import VolumeCloud
+from cumuli.rendering.billboards import BillboardGL, draw_billboards_cpu
 from cumuli.rendering.cpu import draw_clouds_cpu
 from cumuli.rendering.marcher import MarcherGL
 from cumuli.rendering.particle_layers import (
@@ -40,16 +43,22 @@ GL_DRAWERS: dict[str, type] = {
     Cloud.kind: MarcherGL,
     VolumeCloud.kind: VolumeGL,
     ParticleCloud.kind: ParticleCloudsGL,
+    BillboardCloud.kind: BillboardGL,
+    BillboardField.kind: BillboardGL,
 }
 #: CPU drawer (the C++ twin) of each kind.
 CPU_DRAWERS: dict[str, Callable[..., Any]] = {
     Cloud.kind: draw_clouds_cpu,
     VolumeCloud.kind: draw_volume_cpu,
     ParticleCloud.kind: draw_particle_clouds_cpu,
+    BillboardCloud.kind: draw_billboards_cpu,
+    BillboardField.kind: draw_billboards_cpu,
 }
-#: Kinds whose drawer draws several drawables in one pass (the marcher orders its clouds per
-#: pixel; particle clouds are splatted back to front cloud by cloud, as SkyWorks does).
-GROUPED_KINDS: set[str] = {Cloud.kind, ParticleCloud.kind}
+#: Kinds whose drawer draws several drawables in one pass (its own order inside the pass: the
+#: marcher orders its clouds per pixel; particle clouds are splatted back to front cloud by
+#: cloud, as SkyWorks does). Grouped kinds sharing one drawer (billboard clouds and fields) are
+#: drawn together in one pass too.
+GROUPED_KINDS: set[str] = {Cloud.kind, ParticleCloud.kind, BillboardCloud.kind, BillboardField.kind}
 #: Kinds whose drawers draw only what lies in front of the scene's solids.
 CLIPS_SOLIDS: set[str] = {Cloud.kind, VolumeCloud.kind, ParticleCloud.kind}
 #: CPU split drawers (the GL drawer's ``draw_split``) of the kinds impostors can split.

@@ -148,6 +148,14 @@ ShadeFrame shade_frame(const std::vector<Box>& boxes);
 float directional_term(glm::vec3 v, const ShadeFrame& frame, glm::vec3 light,
                        const ShadeParams& params);
 
+// H: 1 without height levels, else piecewise linear through them at y's fraction of the frame.
+float height_factor(float y, const ShadeFrame& frame, const ShadeParams& params);
+
+// The colour k_amb·ambient + H·Σ_ℓ caf[ℓ·stride]·D_ℓ(v)·radiance_ℓ of one point (what
+// billboard_shade does per point, and the sprite rasteriser per pixel in fragment mode).
+glm::vec3 shade_point(glm::vec3 v, const ShadeFrame& frame, const float* caf, std::size_t stride,
+                      const std::vector<ShadeLight>& lights, const ShadeParams& params);
+
 // Colours (n, 3) at points; caf is (lights × q) row-major and point i uses column index[i] (its
 // box, or its billboard with per-billboard CAFs).
 void billboard_shade(const glm::vec3* points, const int* index, std::size_t n, const float* caf,

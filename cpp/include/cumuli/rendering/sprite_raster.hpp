@@ -19,6 +19,11 @@
 //     convention, clamp to the cell's edge, lerp a + f·(b − a) along x then y) at
 //     tx = cell_x0 + (s + 1)/2·cell_w, ty = cell_y0 + (1 − t)/2·cell_h (atlas row 0 on top);
 //     a = tex.a·alpha, source (colour·tex.rgb·a, a).
+// Billboard fragment shading (Torchelsen spec §4.2, shading = "fragment"; optional SpriteShading):
+// the colour is evaluated per pixel at the pixel's point on the billboard,
+//   p = centre + (s·half.x)·r′ + (t·half.y)·u′,  r′ = cos ψ·r + sin ψ·u,  u′ = −sin ψ·r + cos ψ·u,
+// with shade_point (light/caf.hpp) for the sprite's cloud frame and CAF row, in place of the
+// interpolated vertex colours (GLSL twin: shaders/common/billboard_shade.glsl).
 // Blending is premultiplied "over" in the given order (back to front): C ← src.rgb + (1 − src.a)·C,
 // A ← src.a + (1 − src.a)·A, into a layer cleared to 0 — GL's (ONE, ONE_MINUS_SRC_ALPHA). The layer
 // has no sky: the compositor adds it (rgb = C + (1 − A)·sky, alpha = A).
@@ -32,6 +37,7 @@
 #include <glm/vec2.hpp>
 #include <glm/vec3.hpp>
 
+#include "cumuli/light/caf.hpp"
 #include "cumuli/light/particle_light.hpp"
 
 namespace cumuli {
@@ -78,14 +84,27 @@ struct ScreenSprite {
 };
 ScreenSprite project_sprite(const Sprite& sprite, const SpriteCamera& camera);
 
+// Per-pixel billboard shading of every sprite (fragment mode): lights in world space, and per
+// sprite k its cloud frame (frame[k] = (c_C, R_C), yrange[k] = (y_lo, y_hi), world) and its CAF
+// per light, caf[k·lights.size() + ℓ].
+struct SpriteShading {
+  std::vector<ShadeLight> lights;
+  ShadeParams params;
+  const glm::vec4* frame = nullptr;
+  const glm::vec2* yrange = nullptr;
+  const float* caf = nullptr;
+};
+
 // Rasterise sprites in the given order (back to front) into `out`, height × width × 4 floats,
 // which this function clears first. Rows are split over threads (result independent of threads).
-// `atlas` may be null when no sprite has texture ≥ 0. `depth` (height × width view depths, e.g. of
-// opaque solids, +∞ where none) may be null; when given, a sprite covers only the pixels where
-// its view depth Z < depth (Harris 2002 §3.1.1, direct rendering with the depth test).
+// `atlas` may be null when no sprite has texture ≥ 0; `shading` (optional) switches every
+// sprite to per-pixel billboard shading. `depth` (height × width view depths, e.g. of opaque
+// solids, +∞ where none) may be null; when given, a sprite covers only the pixels where its view
+// depth Z < depth (Harris 2002 §3.1.1, direct rendering with the depth test).
 void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& camera,
                        const SpriteRasterSettings& settings, const SpriteAtlas* atlas, float* out,
-                       int threads, const float* depth = nullptr);
+                       int threads, const SpriteShading* shading = nullptr,
+                       const float* depth = nullptr);
 
 // --- Harris particles as sprites (eye pass, spec §5 steps 1–4) --------------------------------
 
