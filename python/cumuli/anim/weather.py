@@ -350,7 +350,8 @@ class Weather:
 
     def fields(self) -> list[BillboardField]:
         """One `BillboardField` per layer: the layer's variants (state-major: state, model,
-        variant) and its instances (offset = variant centre position, yaw, alpha, state)."""
+        variant) and its instances (offset = variant centre position, yaw, alpha, state, and the
+        instance's id, which it keeps from spawn to destruction: impostors follow it)."""
         out = []
         for i, layer in enumerate(self.layers):
             d = self._sim.instances(i)
@@ -363,6 +364,7 @@ class Weather:
                     yaw=d["yaw"],
                     alpha=d["alpha"],
                     state=d["state"],
+                    ids=d["id"],
                     params={"layer": i, "name": layer.name, "t": self.t, "cv": self.cv},
                 )  # fmt: skip
             )

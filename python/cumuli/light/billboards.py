@@ -73,6 +73,39 @@ class BillboardLighting:
         """``(lights, columns)`` float32: each light's CAF values (a field's are flat)."""
         return np.stack([r.caf for r in self.records]).astype(np.float32, copy=False)
 
+    def part(self, index: int) -> BillboardLighting:
+        """The light of a field's instance ``index`` alone (`BillboardField.part`): each record
+        cut to the instance's CAF block (the parts protocol, `cumuli.model.parts`)."""
+        if not isinstance(self.records[0], FieldLight):
+            raise TypeError("only the light of a BillboardField has parts")
+        i = int(index)
+        records = []
+        for r in self.records:
+            a, b = int(r.first[i]), int(r.first[i + 1])
+            first = np.array([0, b - a], dtype=r.first.dtype)
+            records.append(FieldLight(r.caf[a:b], r.length[a:b], first, r.sun, r.at, r.params))
+        return replace(self, records=tuple(records))
+
+    def same_as(self, other: Any, atol: float = 1e-6) -> bool:
+        """Whether ``other`` shades exactly as this light: the same lights, ambient and
+        shading, and CAFs within ``atol`` (a translated cloud's CAF, traced again, may differ in
+        the last bit)."""
+        if other is self:
+            return True
+        if not isinstance(other, BillboardLighting) or len(other.records) != len(self.records):
+            return False
+        if (other.lights, other.ambient, other.shading) != (self.lights, self.ambient,
+                                                              self.shading):  # fmt: skip
+            return False
+        for a, b in zip(self.records, other.records, strict=True):
+            if a is b:
+                continue
+            if a.caf.shape != b.caf.shape or a.at != b.at:
+                return False
+            if not np.array_equal(a.caf, b.caf) and np.abs(a.caf - b.caf).max() > atol:
+                return False
+        return True
+
 
 def _digest(drawable: Any) -> str:
     """Content hash of what the CAF depends on (cached per object: drawables are values). A

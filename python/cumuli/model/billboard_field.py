@@ -11,6 +11,8 @@ their size and view-axis rotation (they face the camera). Renderers draw instanc
 
 from __future__ import annotations
 
+import hashlib
+import weakref
 from collections.abc import Sequence
 from typing import Any, ClassVar
 
@@ -18,10 +20,37 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
-from cumuli.model.billboards import BillboardCloud, rotate_y
+from cumuli.model.billboards import ARRAY_FIELDS, BillboardCloud, rotate_y
+from cumuli.model.parts import DrawableParts
 
 #: Most instances a field holds (spec §10: ≤ 2²⁰ instances per layer).
 MAX_INSTANCES = 1 << 20
+_variant_digests: weakref.WeakKeyDictionary[BillboardCloud, str] = weakref.WeakKeyDictionary()
+_variant_spheres: weakref.WeakKeyDictionary[BillboardCloud, tuple[np.ndarray, float]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def variant_sphere(cloud: BillboardCloud) -> tuple[np.ndarray, float]:
+    """`BillboardCloud.sphere` of a variant, cached (clouds are values)."""
+    known = _variant_spheres.get(cloud)
+    if known is None:
+        known = cloud.sphere()
+        _variant_spheres[cloud] = known
+    return known
+
+
+def variant_digest(cloud: BillboardCloud) -> str:
+    """A hash of what a variant draws in its own frame (arrays and opacity; cached)."""
+    known = _variant_digests.get(cloud)
+    if known is None:
+        h = hashlib.blake2b(digest_size=16)
+        for name in ARRAY_FIELDS:
+            h.update(np.ascontiguousarray(getattr(cloud, name)).tobytes())
+        h.update(np.float64(cloud.opacity).tobytes())
+        known = h.hexdigest()
+        _variant_digests[cloud] = known
+    return known
 
 
 def _column(value: Any, n: int, name: str, dtype: Any, default: float) -> np.ndarray:
@@ -59,6 +88,9 @@ class BillboardField:
         ``(NC,)`` in [0, 1] multiplying the variant's opacity (default 1).
     state:
         ``(NC,)`` source sky-state ids (default 0).
+    ids:
+        ``(NC,)`` distinct instance ids, an instance's identity across frames (a `Weather`'s;
+        default ``0 … NC − 1``): impostors are kept per instance id.
     """
 
     kind: ClassVar[str] = "billboard_field"
@@ -72,6 +104,7 @@ class BillboardField:
         alpha: Any = None,
         state: Any = None,
         params: dict[str, Any] | None = None,
+        ids: Any = None,
     ) -> None:
         if isinstance(variants, BillboardCloud) or not isinstance(variants, (list, tuple)):
             raise TypeError("variants must be a sequence of BillboardCloud")
@@ -99,6 +132,16 @@ class BillboardField:
         state_a = _column(state, n, "state", np.int32, 0)
         if n and state_a.min() < 0:
             raise ValueError("state must be >= 0")
+        if ids is None:
+            ids_a = np.arange(n, dtype=np.int64)
+            ids_a.setflags(write=False)
+        else:
+            raw = np.asarray(ids)
+            if raw.dtype.kind in "iu" and raw.size and (raw.max() >= 1 << 63):
+                raise ValueError("ids must be integers in [0, 2**63)")
+            ids_a = _column(ids, n, "ids", np.int64, 0)
+            if n and (ids_a.min() < 0 or np.unique(ids_a).size != n):
+                raise ValueError("ids must be distinct integers >= 0")
         off.setflags(write=False)
         self.variants: tuple[BillboardCloud, ...] = tuple(variants)
         self.offsets = off
@@ -106,7 +149,10 @@ class BillboardField:
         self.yaw = yaw_a
         self.alpha = alpha_a
         self.state = state_a
+        self.ids = ids_a
         self.params: dict[str, Any] = dict(params or {})
+        self._parts: DrawableParts | None = None
+        self._box: tuple[np.ndarray, np.ndarray] | None = None
 
     @property
     def n(self) -> int:
@@ -163,8 +209,55 @@ class BillboardField:
         orientation); a point at the origin for an empty field (which draws nothing)."""
         if self.n == 0:
             return np.zeros(3, np.float32), np.zeros(3, np.float32)
-        lo, hi = self.bounds()
-        return lo.astype(np.float32), hi.astype(np.float32)
+        if self._box is None:  # fields are values: computed once
+            lo, hi = self.bounds()
+            self._box = (lo.astype(np.float32), hi.astype(np.float32))
+        return self._box[0].copy(), self._box[1].copy()
+
+    def instance_spheres(self) -> tuple[np.ndarray, np.ndarray]:
+        """Per instance, the bounding sphere of its quads at any orientation: ``centres (NC, 3)``
+        float64 (the variant's `BillboardCloud.sphere` centre turned by yaw and moved by the
+        offset) and ``radii (NC,)``."""
+        sph = [variant_sphere(v) for v in self.variants]
+        local = np.array([c for c, _ in sph], np.float64)[self.variant].reshape(-1, 3)
+        radii = np.array([r for _, r in sph], np.float64)[self.variant]
+        return self._to_world(local), radii
+
+    def _to_world(self, local: np.ndarray) -> np.ndarray:
+        c, s = self._cos_sin()
+        world = np.stack([c * local[:, 0] + s * local[:, 2], local[:, 1],
+                          -s * local[:, 0] + c * local[:, 2]], axis=1)  # fmt: skip
+        return world.reshape(-1, 3) + self.offsets.astype(np.float64)
+
+    def impostor_parts(self) -> DrawableParts:
+        """The instances as independent parts (`cumuli.model.parts`): keyed by `ids`, bounded by
+        `instance_spheres`, sorted by their variant's box centre ``c_C`` (as the drawers sort
+        them), moved by their offset, and drawing the same image when variant, yaw and alpha
+        agree. Made once per field (fields are values)."""
+        if self._parts is None:
+            centres, radii = self.instance_spheres()
+            box_centres = np.array([v.centre for v in self.variants], np.float64)
+            order = self._to_world(box_centres[self.variant].reshape(-1, 3))
+            digests = [(variant_digest(v), v.atlas) for v in self.variants]
+            signatures = tuple(
+                (*digests[v], float(y), float(a))
+                for v, y, a in zip(self.variant.tolist(), self.yaw.tolist(),
+                                   self.alpha.tolist(), strict=True)
+            )  # fmt: skip
+            self._parts = DrawableParts(self.ids, centres, radii, order,
+                                        self.offsets.astype(np.float64), signatures)  # fmt: skip
+        return self._parts
+
+    def part(self, index: int) -> BillboardField:
+        """Instance ``index`` alone: a one-instance field of its variant (same offset, yaw,
+        alpha, state and id), drawn exactly as the instance is in this field."""
+        i = check.integer(index, "index", 0, self.n - 1)
+        v = int(self.variant[i])
+        return BillboardField(
+            [self.variants[v]], self.offsets[i : i + 1], variant=[0], yaw=self.yaw[i : i + 1],
+            alpha=self.alpha[i : i + 1], state=self.state[i : i + 1], ids=self.ids[i : i + 1],
+            params=self.params,
+        )  # fmt: skip
 
     def world_billboards(self, index: int) -> dict[str, np.ndarray]:
         """Instance ``index``'s billboards in world space: ``centres (K, 3)``, ``sizes``,
@@ -192,6 +285,7 @@ class BillboardField:
             "yaw": self.yaw.tolist(),
             "alpha": self.alpha.tolist(),
             "state": self.state.tolist(),
+            "ids": self.ids.tolist(),
             "params": self.params,
         }
 
@@ -227,6 +321,7 @@ class BillboardField:
             alpha=data.get("alpha"),
             state=data.get("state"),
             params=data.get("params"),
+            ids=data.get("ids"),
         )
 
     def __repr__(self) -> str:

@@ -14,10 +14,15 @@ over the sky, the layer goes through the C++ compositor with the pass's box, so 
 add the same sky. Billboard clouds and fields group (``groups = True``): a scene of only
 billboards is one pass, one sort.
 
-Impostor hook: an impostor cache (Harris 2002 §3, built for every kind) takes the clouds of a
-pass from :func:`cloud_spheres` (one bounding sphere per cloud or field instance, in the order
-:func:`billboard_frame` numbers them), draws the ones it serves from its textures, and passes
-the rest as ``billboard_frame(..., exclude=mask)`` (True = left to the impostor).
+Solids (``Scene.solids``, Harris 2002 §3.1.1): drawn directly, every billboard is depth-tested
+against the solids' view depth (``clips_solids``: the hard cuts of [H] Fig. 7 left);
+:meth:`BillboardGL.draw_split` / :func:`split_billboards_cpu` cut a cloud's sorted billboards at
+the solids' sort keys into ``m + 1`` layers for impostor splitting (Fig. 7 right).
+
+Impostors (`cumuli.ImpostorCache`) keep one impostor per `BillboardCloud` and one per field
+*instance* (`BillboardField.impostor_parts`, `BillboardField.part`): each is this drawer's image
+of the cloud alone. :func:`cloud_spheres` gives every cloud's bounding sphere and
+``billboard_frame(..., exclude=mask)`` leaves clouds out of a pass.
 """
 
 from __future__ import annotations
@@ -38,6 +43,7 @@ from cumuli.light.prepare import LitScene
 from cumuli.model.atlas import SpriteAtlas
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
+from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
 from cumuli.sky import sky_args
 from cumuli.sprite_shading import MAX_SHADE_LIGHTS, FragmentShading
 from cumuli.sprites import MAX_SPRITES, SpriteLayerRenderer, Sprites, camera_dict, draw_sprites_cpu
@@ -138,8 +144,8 @@ def _sphere(v: BillboardCloud) -> tuple[tuple[float, ...], float]:
 
 
 def cloud_spheres(lit: LitScene, indices: Sequence[int]) -> tuple[np.ndarray, np.ndarray]:
-    """Impostor hook: the bounding sphere ``(centres (N, 3), radii (N,))`` of every cloud of the
-    pass (a cloud, or a field's instance, in scene order), world space, holding all its quads."""
+    """The bounding sphere ``(centres (N, 3), radii (N,))`` of every cloud of the pass (a cloud,
+    or a field's instance, in scene order), world space, holding all its quads."""
     centres, radii = [], []
     for d, _ in _parts(lit, indices):
         if isinstance(d, BillboardCloud):
@@ -147,13 +153,9 @@ def cloud_spheres(lit: LitScene, indices: Sequence[int]) -> tuple[np.ndarray, np
             centres.append(np.array([c]))
             radii.append([r])
             continue
-        sph = [_sphere(v) for v in d.variants]
-        local = np.array([s[0] for s in sph], np.float64)[d.variant]
-        cs = np.array([_core.yaw_cos_sin(float(a)) for a in d.yaw]).reshape(-1, 2)
-        world = np.stack([cs[:, 0] * local[:, 0] + cs[:, 1] * local[:, 2], local[:, 1],
-                          -cs[:, 1] * local[:, 0] + cs[:, 0] * local[:, 2]], 1)  # fmt: skip
-        centres.append(world + d.offsets)
-        radii.append(np.array([s[1] for s in sph])[d.variant])
+        c, r = d.instance_spheres()
+        centres.append(c)
+        radii.append(r)
     if not centres:
         return np.zeros((0, 3), np.float32), np.zeros(0, np.float32)
     return (np.concatenate(centres).astype(np.float32),
@@ -278,35 +280,102 @@ def check_pass(scene: Any, indices: Sequence[int]) -> None:
         combined_atlas(tuple(atlases))
 
 
+# --- solids and splitting ----------------------------------------------------------------------
+def sort_key(lit: LitScene, point: Sequence[float], camera: Camera) -> float:
+    """The billboard sort key of a point (``BillboardShading.sort``: ``"distance"`` |p − eye| or
+    ``"depth"`` (p − eye)·f): where impostor splitting cuts a cloud around a solid."""
+    v = np.subtract(point, camera.position, dtype=np.float64)
+    if lit.scene.billboard_shading.sort == "depth":
+        return float(v @ camera.basis()[0].astype(np.float64))
+    return float(np.linalg.norm(v))
+
+
+def split_frames(
+    lit: LitScene, k: int, camera: Camera, width: int, height: int, cuts: Sequence[float],
+    threads: int = 0,
+) -> tuple[BillboardFrame, list[tuple[Sprites, FragmentShading | None]]]:  # fmt: skip
+    """Drawable ``k``'s frame and its billboards, in drawing order, cut at the sort keys
+    ``cuts`` ([H] §3.1.1): ``m + 1`` batches, farthest first — batch j holds the billboards whose
+    key lies between the (m − j)-th and the (m − j + 1)-th smallest cut (lower bound
+    inclusive)."""
+    frame = billboard_frame(lit, [k], camera, width, height, threads)
+    sp, shading = frame.sprites, frame.shading
+    v = sp.centres.astype(np.float64) - np.asarray(camera.position, np.float64)
+    if lit.scene.billboard_shading.sort == "depth":
+        keys = v @ camera.basis()[0].astype(np.float64)
+    else:
+        keys = np.linalg.norm(v, axis=1)
+    z = np.sort(np.asarray(cuts, dtype=np.float64))
+    bins = len(z) - np.searchsorted(z, keys, side="right")
+    out = []
+    for j in range(len(z) + 1):
+        sel = np.flatnonzero(bins == j)
+        part = Sprites(sp.centres[sel], sp.half_sizes[sel], sp.colours[sel], sp.alpha[sel],
+                       sp.rotation[sel] if sp.rotation is not None else None,
+                       sp.texture[sel] if sp.texture is not None else None)  # fmt: skip
+        rows = None
+        if shading is not None:
+            rows = FragmentShading(shading.frame[sel], shading.yrange[sel], shading.caf[sel],
+                                   shading.light_dirs, shading.light_radiance,
+                                   shading.params)  # fmt: skip
+        out.append((part, rows))
+    return frame, out
+
+
 # --- drawers ------------------------------------------------------------------------------------
 class BillboardGL:
     """GL drawer of billboard clouds and fields: the shared sprite pipeline (see the module
     docstring). One `SpriteLayerRenderer` per `cumuli.Renderer`; atlas textures are cached."""
 
     groups = True
+    #: Draws only what lies in front of the scene's solids (depth test): exact with solids.
+    clips_solids = True
 
     def __init__(self, gl: Any, tiles: Any) -> None:
+        self.gl = gl
         self.tiles = tiles
         self.sprites = SpriteLayerRenderer(gl, tile=tiles.tile)
+        self._solids: SolidsGL | None = None
 
     @staticmethod
     def check(scene: Any, indices: Sequence[int]) -> None:
         check_pass(scene, indices)
 
-    def draw(self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int,
-             height: int, with_sky: bool) -> np.ndarray:  # fmt: skip
-        frame = billboard_frame(lit, indices, camera, width, height)
-        shading = lit.scene.billboard_shading
+    def _splat(self, lit: LitScene, frame: Any, sprites: Sprites, shading: Any, camera: Camera,
+               width: int, height: int, depth: Any = None) -> np.ndarray:  # fmt: skip
+        sh = lit.scene.billboard_shading
         layer = self.sprites.draw(
-            frame.sprites, camera, width, height, atlas=frame.atlas, atlas_grid=frame.grid,
-            exact=shading.exact_textures, near=shading.near, shading=frame.shading,
+            sprites, camera, width, height, atlas=frame.atlas, atlas_grid=frame.grid,
+            exact=sh.exact_textures, near=sh.near, shading=shading, depth=depth,
         )  # fmt: skip
         gpu = self.sprites.gpu_time_ns
         self.tiles.last_gpu_ns = gpu if gpu is not None and 0 <= gpu < (1 << 62) else None
+        return layer
+
+    def draw(self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int,
+             height: int, with_sky: bool) -> np.ndarray:  # fmt: skip
+        frame = billboard_frame(lit, indices, camera, width, height)
+        depth = None
+        if lit.scene.solids:
+            if self._solids is None:
+                self._solids = SolidsGL(self.gl, self.tiles)
+            scene = lit.scene
+            depth = solid_depth(self._solids.draw(scene.solids, scene.sun, camera, width, height))
+        layer = self._splat(lit, frame, frame.sprites, frame.shading, camera, width, height, depth)
         return finish(layer, lit, camera) if with_sky else layer
+
+    def draw_split(self, lit: LitScene, k: int, camera: Camera, width: int, height: int,
+                   cuts: Sequence[float]) -> np.ndarray:  # fmt: skip
+        """Drawable ``k`` as ``m + 1`` premultiplied layers ``(m + 1, H, W, 4)``, farthest
+        first, cut at the sort keys ``cuts`` (:func:`split_frames`; no depth test)."""
+        frame, batches = split_frames(lit, k, camera, width, height, cuts)
+        return np.stack([self._splat(lit, frame, sp, sh, camera, width, height)
+                         for sp, sh in batches])  # fmt: skip
 
     def release(self) -> None:
         self.sprites.release()
+        if self._solids is not None:
+            self._solids.release()
 
 
 def draw_billboards_cpu(lit: LitScene, indices: Sequence[int], camera: Camera, width: int,
@@ -314,8 +383,27 @@ def draw_billboards_cpu(lit: LitScene, indices: Sequence[int], camera: Camera, w
     """The CPU twin of :meth:`BillboardGL.draw` (C++ sprite rasteriser, exact atlas sampling)."""
     check_pass(lit.scene, indices)  # the sprite-count and atlas limits, before any allocation
     frame = billboard_frame(lit, indices, camera, width, height, threads)
+    scene = lit.scene
+    depth = None
+    if scene.solids:
+        depth = solid_depth(
+            draw_solids_cpu(scene.solids, scene.sun, camera, width, height, threads)
+        )
     layer = draw_sprites_cpu(
         frame.sprites, camera, width, height, atlas=frame.atlas, atlas_grid=frame.grid,
-        near=lit.scene.billboard_shading.near, threads=threads, shading=frame.shading,
+        near=scene.billboard_shading.near, threads=threads, shading=frame.shading, depth=depth,
     )  # fmt: skip
     return finish(layer, lit, camera, threads) if with_sky else layer
+
+
+def split_billboards_cpu(lit: LitScene, k: int, camera: Camera, width: int, height: int,
+                         cuts: Sequence[float], threads: int = 0) -> np.ndarray:  # fmt: skip
+    """The CPU twin of :meth:`BillboardGL.draw_split`."""
+    check_pass(lit.scene, [k])
+    frame, batches = split_frames(lit, k, camera, width, height, cuts, threads)
+    near = lit.scene.billboard_shading.near
+    return np.stack([
+        draw_sprites_cpu(sp, camera, width, height, atlas=frame.atlas, atlas_grid=frame.grid,
+                         near=near, threads=threads, shading=sh)
+        for sp, sh in batches
+    ])  # fmt: skip

@@ -3,13 +3,18 @@ spec harris.md §7, §12.4).
 
 An :class:`ImpostorCache` lives across frames. Each frame, for every drawable of the scene:
 
+0. **Units**: one impostor per drawable, or per *part* of a drawable that has parts (the
+   ``impostor_parts()`` protocol of :mod:`cumuli.model.parts`: every instance of a
+   `BillboardField` — a sky of a thousand clouds drifting with the wind keeps each cloud's
+   image); see :mod:`cumuli.rendering.impostor_units`.
 1. **Cull** it when the sphere its display can cover lies outside the view frustum (its bounding
    sphere, or the quad of a kept impostor): culling never changes the image. A drawable culled
    for more than ``release_after`` frames drops its impostor (GL: the texture returns to the
    pool), as SkyWorks does.
 2. **Update test** (§7.3): ``"missing"``, ``"cloud"`` (its content changed — a pure translation
-   does not count: a translated `ParticleCloud` keeps its impostor, displayed moved), ``"light"``
-   (its light, the sun/lights' colours or the settings changed), then
+   does not count: a translated `ParticleCloud` or `BillboardCloud`, a field instance moved by
+   the wind, keeps its impostor, displayed moved), ``"light"`` (its light, the sun/lights'
+   colours or the settings changed), then
    :func:`~cumuli.rendering.impostors.needs_update` (``"screen"``, ``"backwards"``,
    ``"translation"`` at ``tolerance`` degrees, ``"resolution"``).
 3. **Generate** when needed: the drawable's own layer, drawn **alone** by its kind's drawer
@@ -17,7 +22,8 @@ An :class:`ImpostorCache` lives across frames. Each frame, for every drawable of
    the view camera at ``⌈W/f⌉ × ⌈H/f⌉`` (a screen impostor, regenerated every frame). This is the
    same call for marched 2018 clouds, volumes, particles and any kind registered later.
 4. **Solids inside** (§7.5): a cloud whose bounding sphere holds ``m`` solids' centres is split
-   into ``m + 1`` impostor layers at the solids' sort keys when its kind can split (particles),
+   into ``m + 1`` impostor layers at the solids' sort keys when its kind can split (particles,
+   billboard clouds and field instances),
    displayed and combined with the solids back to front (``composite_split``); a marched kind is
    instead drawn stopping every ray at the solids (exact) — both regenerate every frame.
 5. **Display**: the impostors of one draw call (a group of one kind, e.g. all particle clouds)
@@ -31,10 +37,7 @@ drawn, culled clouds and impostors.
 
 from __future__ import annotations
 
-import hashlib
-import json
 import math
-import weakref
 from collections import Counter
 from collections.abc import Sequence
 from typing import Any
@@ -44,81 +47,33 @@ import numpy as np
 from cumuli import _core
 from cumuli.camera import Camera
 from cumuli.light.prepare import LitScene
-from cumuli.model.particles import ParticleCloud
+from cumuli.rendering.impostor_units import (
+    Unit,
+    drawable_sphere,
+    same_content,
+    same_light,
+    unit_content,
+    units,
+)
 from cumuli.rendering.impostors import ImpostorState, view_reason
-from cumuli.rendering.particle_layers import sort_key
+from cumuli.rendering.kinds import SPLIT_KEYS
 from cumuli.rendering.solids import composite_split, solids_inside
 from cumuli.sprites import camera_dict
 
-_digests: weakref.WeakKeyDictionary[Any, str] = weakref.WeakKeyDictionary()
-
-
-def drawable_sphere(drawable: Any) -> tuple[np.ndarray, float]:
-    """A drawable's bounding sphere: its ``sphere`` when it has one, else the sphere around its
-    ``layer_box()``."""
-    sphere = getattr(drawable, "sphere", None)
-    if sphere is not None and not callable(sphere):
-        c, r = sphere
-        return np.asarray(c, np.float64), float(r)
-    lo, hi = (np.asarray(v, np.float64) for v in drawable.layer_box())
-    return (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
-
-
-def _digest(drawable: Any) -> str:
-    known = _digests.get(drawable)
-    if known is None:
-        text = json.dumps(drawable.to_dict(), sort_keys=True, default=repr)
-        known = hashlib.blake2b(text.encode(), digest_size=16).hexdigest()
-        _digests[drawable] = known
-    return known
-
-
-def same_content(old: Any, new: Any) -> tuple[bool, np.ndarray]:
-    """Whether ``new`` is ``old`` up to a translation, and that translation (the change of the
-    bounding-sphere centre). Particle clouds compare their arrays (centres relative to the sphere
-    within 1e−5·R); other kinds compare a digest of their scene-file dict (a translated 2018
-    cloud samples other noise: a change)."""
-    zero = np.zeros(3)
-    if new is old:
-        return True, zero
-    if type(new) is not type(old):
-        return False, zero
-    if isinstance(new, ParticleCloud):
-        if new.n != old.n or not all(
-            np.array_equal(getattr(new, a), getattr(old, a)) for a in ("radii", "tau", "albedo")
-        ):
-            return False, zero
-        (c0, r0), (c1, r1) = drawable_sphere(old), drawable_sphere(new)
-        rel0 = old.centres.astype(np.float64) - c0
-        rel1 = new.centres.astype(np.float64) - c1
-        if np.abs(rel0 - rel1).max() > 1e-5 * max(r0, r1):
-            return False, zero
-        return True, c1 - c0
-    return _digest(new) == _digest(old), zero
-
-
-def _same_light(a: Any, b: Any) -> bool:
-    if a is b:
-        return True
-    if type(a) is not type(b):
-        return False
-    arrays = [(getattr(a, n), getattr(b, n)) for n in ("light", "light_dirs") if hasattr(a, n)]
-    if not arrays:
-        arrays = [(a, b)]
-    return all(
-        np.shape(x) == np.shape(y) and np.array_equal(np.asarray(x), np.asarray(y))
-        for x, y in arrays
-    )
+__all__ = ["Impostor", "ImpostorCache", "drawable_sphere", "same_content"]
 
 
 class Impostor:
     """One cached impostor: its image (premultiplied, row 0 on top) on a plane, and what it was
     made from. ``plane`` is the display quad now: centre (moved with the cloud), forward, right,
-    up, half width, half height."""
+    up, half width, half height. ``index`` is the drawable's index in the scene, ``part`` the
+    part's index in it (None for a whole drawable)."""
 
-    def __init__(self, kind: str, index: int) -> None:
+    def __init__(self, kind: str, index: int, part: int | None = None) -> None:
         self.kind = kind
         self.index = index
+        self.part = part
+        self.signature: Any = None
         self.drawable: Any = None
         self.light: Any = None
         self.state: ImpostorState | None = None
@@ -160,7 +115,7 @@ class ImpostorCache:
 
     def __init__(self, renderer: Any = None) -> None:
         self.renderer = renderer
-        self._entries: dict[int, Impostor] = {}
+        self._entries: dict[Any, Impostor] = {}
         self._token: Any = None
         self._painter: Any = None
         #: One dict per frame: updates by reason, impostors, screen, split, culled, texels,
@@ -189,8 +144,9 @@ class ImpostorCache:
         }
 
     @property
-    def entries(self) -> dict[int, Impostor]:
-        """The impostors held, by drawable index."""
+    def entries(self) -> dict[Any, Impostor]:
+        """The impostors held: by drawable index, or ``(index, part key)`` for a part (a
+        field's instance: ``(index, instance id)``)."""
         return dict(self._entries)
 
     def clear(self) -> None:
@@ -241,73 +197,87 @@ class ImpostorCache:
         splats0 = painter.splats()
         cam = camera_dict(camera, width, height, s.near)
         eye = tuple(float(v) for v in camera.position)
-        seen: set[int] = set()
+        seen: set[Any] = set()
         layers: list[np.ndarray] = []
         boxes: list[np.ndarray] = []
-        for kind, indices in calls:
+        for _kind, indices in calls:
             quads: list[tuple[float, int, Impostor]] = []
             lo_hi: list[np.ndarray] = []
             for k in indices:
-                seen.add(k)
-                drawable = scene.clouds[k]
-                centre, radius = drawable_sphere(drawable)
-                inside = solids_inside(scene.solids, centre, radius) if scene.solids else []
-                if inside and s.split and painter.can_split(kind):
-                    layer = self._split(lit, k, inside, camera, width, height, painter)
-                    record["updates"]["split"] += 1
-                    record["split"] += 1
-                    layers.append(layer)
-                    boxes.append(self._box(drawable, [scene.solids[j] for j in inside]))
-                    continue
-                entry = self._entries.get(k)
-                reason, offset = self._reason(entry, k, kind, drawable, lit, stale_token, camera,
-                                              width, height, s)  # fmt: skip
-                clip_now = bool(inside) and painter.clips_solids(kind)
-                if clip_now:
-                    reason = "clip"  # drawn stopping at the solids: valid for this eye only
-                elif reason is None and entry is not None and entry.clipped:
-                    reason = "clip"  # the solid left: the clipped image must go
-                # Cull with what the display can cover: a fresh impostor stays in the sphere.
-                if reason is None and entry is not None:
-                    reach_c, reach_r = entry.plane[0:3], max(entry.reach(), radius)
-                else:
-                    reach_c, reach_r = centre, radius
-                if s.cull and _core.sphere_outside_frustum(reach_c, reach_r, cam):
-                    record["culled"] += 1
-                    if entry is not None:
-                        entry.culled += 1
-                        if entry.culled > s.release_after:
-                            painter.forget(entry)
-                            del self._entries[k]
-                            record["released"] += 1
-                    continue
-                if reason is not None:
-                    entry = self._generate(
-                        entry, k, kind, drawable, lit if clip_now else plain, centre,
-                        radius, camera, width, height, s, painter,
+                queued = False
+                for unit in units(lit, k):
+                    seen.add(unit.key)
+                    queued |= self._unit(
+                        lit, plain, unit, stale_token, camera, width, height, s, painter, record,
+                        eye, cam, quads, layers, boxes,
                     )  # fmt: skip
-                    record["updates"][reason] += 1
-                else:
-                    assert entry is not None
-                    entry.offset = offset
-                entry.culled = 0
-                record["impostors"] += 1
-                record["screen"] += int(entry.clamp)
-                # Back to front by the distance to the cloud's centre, as direct rendering.
-                quads.append((-math.dist(centre, eye), len(quads), entry))
-                lo_hi.append(drawable.layer_box())
+                if queued:
+                    lo_hi.append(scene.clouds[k].layer_box())
             if quads:
                 ordered = [q for _, _, q in sorted(quads, key=lambda t: (t[0], t[1]))]
                 layers.append(painter.display(ordered, camera, width, height, s.exact))
                 stacked = np.asarray(lo_hi, np.float32)
                 boxes.append(np.stack([stacked[:, 0].min(axis=0), stacked[:, 1].max(axis=0)]))
-        for k in [k for k in self._entries if k not in seen or k >= len(scene.clouds)]:
-            painter.forget(self._entries.pop(k))
+        for key in [key for key in self._entries if key not in seen]:
+            painter.forget(self._entries.pop(key))
         record["texels"] = sum(e.texels for e in self._entries.values())
         record["splats"] = painter.splats() - splats0
         record["updates"] = dict(record["updates"])
         self.history.append(record)
         return layers, boxes
+
+    def _unit(
+        self, lit: LitScene, plain: LitScene, unit: Unit, stale_token: bool, camera: Camera,
+        width: int, height: int, s: Any, painter: Any, record: dict[str, Any],
+        eye: tuple[float, float, float], cam: dict[str, Any], quads: list[Any],
+        layers: list[np.ndarray], boxes: list[np.ndarray],
+    ) -> bool:  # fmt: skip
+        """One unit's impostor this frame: split (its own layer, appended to ``layers``),
+        culled, or kept/regenerated and queued in ``quads``. True when it joins the quads."""
+        scene = lit.scene
+        kind, centre, radius = unit.kind, unit.centre, unit.radius
+        inside = solids_inside(scene.solids, centre, radius) if scene.solids else []
+        if inside and s.split and painter.can_split(kind):
+            sub, j = unit.lit(lit)
+            layers.append(self._split(sub, j, unit, inside, camera, width, height, painter))
+            record["updates"]["split"] += 1
+            record["split"] += 1
+            boxes.append(self._box(sub.scene.clouds[j], [scene.solids[i] for i in inside]))
+            return False
+        entry = self._entries.get(unit.key)
+        reason, offset = self._reason(entry, unit, lit, stale_token, camera, width, height, s)
+        clip_now = bool(inside) and painter.clips_solids(kind)
+        if clip_now:
+            reason = "clip"  # drawn stopping at the solids: valid for this eye only
+        elif reason is None and entry is not None and entry.clipped:
+            reason = "clip"  # the solid left: the clipped image must go
+        # Cull with what the display can cover: a fresh impostor stays in the sphere.
+        if reason is None and entry is not None:
+            reach_c, reach_r = entry.plane[0:3], max(entry.reach(), radius)
+        else:
+            reach_c, reach_r = centre, radius
+        if s.cull and _core.sphere_outside_frustum(reach_c, reach_r, cam):
+            record["culled"] += 1
+            if entry is not None:
+                entry.culled += 1
+                if entry.culled > s.release_after:
+                    painter.forget(entry)
+                    del self._entries[unit.key]
+                    record["released"] += 1
+            return False
+        if reason is not None:
+            entry = self._generate(entry, unit, lit if clip_now else plain, camera, width, height,
+                                   s, painter)  # fmt: skip
+            record["updates"][reason] += 1
+        else:
+            assert entry is not None
+            entry.offset = offset
+        entry.culled = 0
+        record["impostors"] += 1
+        record["screen"] += int(entry.clamp)
+        # Back to front by the distance to the point the direct drawer sorts by.
+        quads.append((-math.dist(unit.order, eye), len(quads), entry))
+        return True
 
     @staticmethod
     def _box(drawable: Any, solids: Sequence[Any]) -> np.ndarray:
@@ -322,18 +292,18 @@ class ImpostorCache:
         return np.stack([lo, hi]).astype(np.float32)
 
     def _reason(
-        self, entry: Impostor | None, k: int, kind: str, drawable: Any, lit: LitScene,
-        stale_token: bool, camera: Camera, width: int, height: int, s: Any,
+        self, entry: Impostor | None, unit: Unit, lit: LitScene, stale_token: bool,
+        camera: Camera, width: int, height: int, s: Any,
     ) -> tuple[str | None, np.ndarray]:  # fmt: skip
         zero = np.zeros(3)
         if entry is None or entry.state is None:
             return "missing", zero
-        if entry.kind != kind:
+        if entry.kind != unit.kind:
             return "cloud", zero
-        same, offset = same_content(entry.drawable, drawable)
+        same, offset = unit_content(entry, unit, lit)
         if not same:
             return "cloud", zero
-        if stale_token or not _same_light(entry.light, lit.lights[k]):
+        if stale_token or not same_light(entry.light, unit.light(lit)):
             return "light", zero
         eye = tuple(float(v) for v in np.subtract(camera.position, offset))
         return view_reason(entry.state, eye, camera.fov, width, height, s), offset
@@ -358,44 +328,48 @@ class ImpostorCache:
         return cam, state.size, np.concatenate([plane_c, f, r, u, (hs, hs)])
 
     def _generate(
-        self, entry: Impostor | None, k: int, kind: str, drawable: Any, lit: LitScene,
-        centre: np.ndarray, radius: float, camera: Camera, width: int, height: int, s: Any,
-        painter: Any,
+        self, entry: Impostor | None, unit: Unit, lit: LitScene, camera: Camera, width: int,
+        height: int, s: Any, painter: Any,
     ) -> Impostor:  # fmt: skip
-        entry = entry if entry is not None else Impostor(kind, k)
+        entry = entry if entry is not None else Impostor(unit.kind, unit.k, unit.part)
+        centre, radius = unit.centre, unit.radius
         state = ImpostorState.generate(tuple(centre), radius, camera, width, height, s)
         cam, (w, h), plane = self._view(state, camera, centre)
-        entry.image = np.ascontiguousarray(painter.layer(lit, kind, [k], cam, w, h, False))
+        sub, j = unit.lit(lit)
+        entry.image = np.ascontiguousarray(painter.layer(sub, unit.kind, [j], cam, w, h, False))
         entry.plane0 = plane
-        entry.kind, entry.index = kind, k
-        entry.drawable, entry.light, entry.state = drawable, lit.lights[k], state
-        entry.anchor0, entry.offset = np.asarray(centre, np.float64), np.zeros(3)
+        entry.kind, entry.index, entry.part = unit.kind, unit.k, unit.part
+        entry.drawable, entry.light, entry.state = sub.scene.clouds[j], sub.lights[j], state
+        entry.signature = unit.signature
+        anchor = centre if unit.anchor is None else unit.anchor
+        entry.anchor0, entry.offset = np.asarray(anchor, np.float64), np.zeros(3)
         entry.clamp = state.screen
         entry.clipped = bool(lit.scene.solids)
         entry.version += 1
-        self._entries[k] = entry
+        self._entries[unit.key] = entry
         return entry
 
     def _split(
-        self, lit: LitScene, k: int, inside: list[int], camera: Camera, width: int, height: int,
-        painter: Any,
+        self, lit: LitScene, k: int, unit: Unit, inside: list[int], camera: Camera, width: int,
+        height: int, painter: Any,
     ) -> np.ndarray:  # fmt: skip
-        """[H] §3.1.1: the cloud cut at its solids' sort keys into m + 1 impostor layers through
-        the impostor camera (tight, or the screen's), displayed and combined with the solids
-        back to front (the solids depth-tested among themselves)."""
+        """[H] §3.1.1: drawable ``k`` of ``lit`` (the unit, alone when it is a part) cut at its
+        solids' sort keys into m + 1 impostor layers through the impostor camera (tight, or the
+        screen's), displayed and combined with the solids back to front (the solids
+        depth-tested among themselves)."""
         scene = lit.scene
-        drawable = scene.clouds[k]
-        centre, radius = drawable_sphere(drawable)
+        centre, radius = unit.centre, unit.radius
         s = scene.impostor_settings
         state = ImpostorState.generate(tuple(centre), radius, camera, width, height, s)
         cam, (w, h), plane = self._view(state, camera, centre)
-        # Keys as the impostor camera sorts the particles (same eye as the view).
+        # Keys as the impostor camera sorts the kind's sprites (same eye as the view).
+        key = SPLIT_KEYS[unit.kind]
         keyed = sorted(
-            ((sort_key(lit, scene.solids[j].centre, cam), j) for j in inside), reverse=True
+            ((key(lit, scene.solids[j].centre, cam), j) for j in inside), reverse=True
         )  # fmt: skip  (farthest first)
         plain = LitScene(scene.replace(solids=()), lit.lights)
-        parts = painter.split(plain, k, cam, w, h, [key for key, _ in keyed])
-        helper = Impostor(drawable.kind, k)
+        parts = painter.split(plain, k, cam, w, h, [z for z, _ in keyed])
+        helper = Impostor(unit.kind, unit.k, unit.part)
         helper.plane0, helper.clamp = plane, state.screen
         shown = []
         for part in parts:
@@ -403,7 +377,7 @@ class ImpostorCache:
             helper.version += 1
             shown.append(painter.display([helper], camera, width, height, s.exact))
         painter.forget(helper)
-        old = self._entries.pop(k, None)
+        old = self._entries.pop(unit.key, None)
         if old is not None:
             painter.forget(old)
         solid_images = np.stack(
