@@ -249,12 +249,13 @@ class BillboardField:
         return self._parts
 
     def part(self, index: int) -> BillboardField:
-        """Instance ``index`` alone: a one-instance field of its variant (same offset, yaw,
-        alpha, state and id), drawn exactly as the instance is in this field."""
+        """Instance ``index`` alone: a one-instance field over the same variants (same
+        variant, offset, yaw, alpha, state and id), drawn — and lit by the light pass, whose
+        default CAF distance depends on the variants — exactly as the instance is here."""
         i = check.integer(index, "index", 0, self.n - 1)
-        v = int(self.variant[i])
         return BillboardField(
-            [self.variants[v]], self.offsets[i : i + 1], variant=[0], yaw=self.yaw[i : i + 1],
+            self.variants, self.offsets[i : i + 1], variant=self.variant[i : i + 1],
+            yaw=self.yaw[i : i + 1],
             alpha=self.alpha[i : i + 1], state=self.state[i : i + 1], ids=self.ids[i : i + 1],
             params=self.params,
         )  # fmt: skip

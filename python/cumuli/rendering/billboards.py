@@ -297,7 +297,10 @@ def split_frames(
     """Drawable ``k``'s frame and its billboards, in drawing order, cut at the sort keys
     ``cuts`` ([H] §3.1.1): ``m + 1`` batches, farthest first — batch j holds the billboards whose
     key lies between the (m − j)-th and the (m − j + 1)-th smallest cut (lower bound
-    inclusive)."""
+    inclusive), in drawing order. A cloud's (or one instance's) billboards are drawn by
+    decreasing key, so the batches are consecutive runs of the unsplit drawing; several
+    instances' billboards regroup by key across instances (the impostor cache splits instance
+    by instance)."""
     frame = billboard_frame(lit, [k], camera, width, height, threads)
     sp, shading = frame.sprites, frame.shading
     v = sp.centres.astype(np.float64) - np.asarray(camera.position, np.float64)
