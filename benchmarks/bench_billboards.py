@@ -19,15 +19,17 @@
   frame's sprite list — cull, fades, sort, vertex colours — plus the draw) against the number of
   clouds N (a `BillboardField` of 10 cumulus variants at constant density, 10…10³ on llvmpipe,
   10⁴ where a GPU runs it) and against the billboards per cloud (100 clouds, 1…16 billboards per
-  box). Impostor rows: `impostor_rows` is the hook the impostor cache (built for every kind by
-  another engineer) fills; until it lands the JSON says they are pending.
+  box); **with and without impostors** (one per field instance; orbit and fly-through at 1 unit
+  per frame, GL and the C++ twin: ``_billboard_impostors.py``).
 - **The paper's four scenes** ([TM] §5): the cirrus of 15 seeds / 50 billboards (25 Hz), a nimbus
   sky of 10 models × 200 instances (20 Hz), raining clouds of 10 models × 1000 (10 Hz), both
   flown through, and the Table 1 day (two layers, CV 0 → 1 over 600 s, the weather stepped, lit
   and drawn every frame: 27 Hz mean, 20–35). GL at 160×120 on llvmpipe, 640×480 on a GPU; each
   as frames per second (median, min, max, mean), the ratio to the paper's rate and whether it
   "reaches at least" that rate (2005 GeForce 6800 vs this machine: only that statement and the
-  ratios between scenes mean anything).
+  ratios between scenes mean anything). The same frames through impostors (per backend, a fresh
+  cache), and the Table 1 day also under a steady light (the day relights every frame, which
+  regenerates every impostor).
 
 Medians of repeats; nothing passes or fails on time.
 """
@@ -42,6 +44,7 @@ from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
+import _billboard_impostors as imp  # noqa: E402
 import _common as common  # noqa: E402
 import numpy as np  # noqa: E402
 
@@ -232,19 +235,6 @@ def time_backends(renderer: Any, lit: Any, cameras: list[Any], size: tuple[int, 
     return out
 
 
-def impostor_rows(*_: Any) -> dict[str, Any]:
-    """IMPOSTOR HOOK. The impostor cache (Harris 2002 §3, built for every drawable kind by another
-    engineer) adds the "with impostors" rows of the render-vs-clouds sweep here: it takes each
-    cloud's sphere from `cumuli.rendering.billboards.cloud_spheres`, draws the clouds it serves
-    from its textures and the rest through ``billboard_frame(..., exclude=mask)``. This build has
-    no impostor cache, so the rows are recorded as pending."""
-    return {
-        "status": "pending",
-        "reason": "no impostor cache in this build (cu.ImpostorCache)",
-        "hook": "cumuli.rendering.billboards.cloud_spheres, billboard_frame(exclude=)",
-    }
-
-
 def render_vs_clouds(renderer: Any, ns: list[int], size: tuple[int, int], repeats: int,
                      cpu_max: int) -> dict[str, Any]:  # fmt: skip
     out: dict[str, Any] = {}
@@ -305,32 +295,23 @@ def fps_stats(frame_s: list[float], claim: float, by_mean: bool = False) -> dict
     }
 
 
-def fly(renderer: Any, scene: Any, cameras: list[Any], size: tuple[int, int]) -> dict[str, Any]:
-    """Per-frame wall times along ``cameras`` of GL and of the C++ twin (light prepared once)."""
-    lit = cu.prepare_light(scene)
-    out = {}
-    for name, draw in (("gl", lambda c: renderer.render(lit, c, *size)),
-                       ("cpu", lambda c: cu.render_cpu(lit, c, *size))):  # fmt: skip
-        draw(cameras[0])  # warm-up
-        times = []
-        for cam in cameras:
-            t0 = time.perf_counter()
-            draw(cam)
-            times.append(time.perf_counter() - t0)
-        out[name] = times
-    return out
-
-
-def with_cpu(row: dict[str, Any], cpu_s: list[float]) -> dict[str, Any]:
-    cpu = fps_stats(cpu_s, row["paper_hz"])
-    row["cpu_twin"] = {k: cpu[k] for k in ("fps_median", "fps_min", "fps_max", "fps_mean",
-                                            "ratio_to_paper", "reaches_paper_rate")}  # fmt: skip
+def with_runs(row: dict[str, Any], t: dict[str, Any]) -> dict[str, Any]:
+    """The CPU twin's rates and both backends' rates through impostors beside the GL row."""
+    keys = ("fps_median", "fps_min", "fps_max", "fps_mean", "ratio_to_paper", "reaches_paper_rate")
+    for name, label in (("cpu", "cpu_twin"), ("gl_impostors", "gl_impostors"),
+                        ("cpu_impostors", "cpu_impostors")):  # fmt: skip
+        if name in t:
+            stats = fps_stats(t[name], row["paper_hz"])
+            row[label] = {k: stats[k] for k in keys}
+            backend = name.split("_")[0]
+            if name.endswith("impostors") and backend in t["caches"]:
+                row[label].update(imp.cache_summary(t["caches"][backend]))
     return row
 
 
 def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str, Any]:
     from cumuli.anim.frames import fly_towards, orbit
-    from cumuli.anim.weather_presets import STORMY, table1
+    from cumuli.anim.weather_presets import STORMY
 
     frames = {"cirrus": 3, "nimbus": 3, "rain": 3, "table1": 3} if quick else {
         "cirrus": 60, "nimbus": 30, "rain": 20, "table1": 61}  # fmt: skip
@@ -338,10 +319,10 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
     cirrus = seed_box_cloud(presets.cirrus(), 2).translated((0.0, 150.0, 0.0))
     scene = cu.Scene([cirrus], sun=RENDER_SUN)
     cams = orbit((0.0, 150.0, 0.0), 80.0, frames["cirrus"], height=-35.0, fov=65.0)
-    t = fly(renderer, scene, cams, size)
-    out["cirrus"] = with_cpu({"seed_boxes": len(presets.cirrus().seeds),
-                              "billboards": cirrus.n_billboards,
-                              **fps_stats(t["gl"], PAPER_HZ["cirrus"])}, t["cpu"])  # fmt: skip
+    t = imp.path_with_impostors(renderer, scene, cams, size)
+    out["cirrus"] = with_runs({"seed_boxes": len(presets.cirrus().seeds),
+                               "billboards": cirrus.n_billboards,
+                               **fps_stats(t["gl"], PAPER_HZ["cirrus"])}, t)  # fmt: skip
     for name, count, area, altitude, sky in (("nimbus", 200, 600.0, 60.0, cu.Sky()),
                                              ("rain", 1000, 1000.0, 40.0, STORMY)):  # fmt: skip
         n = count if not quick else count // 10
@@ -349,33 +330,34 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
         half = 0.5 * area
         cams = fly_towards((0.0, altitude - 25.0, -half - 30.0), (0.0, altitude - 10.0, half),
                            frames[name], fov=60.0)  # fmt: skip
-        t = fly(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky), cams, size)
-        out[name] = with_cpu({"models": 10, "instances": n, **fps_stats(t["gl"], PAPER_HZ[name])},
-                             t["cpu"])  # fmt: skip
-    weather = table1(seed=0)
-    base = cu.Scene(sun=cu.Sun(direction=(0.3, 0.6, 0.6), colour=(1.0, 0.97, 0.92), intensity=1.4))
-    cam = cu.Camera(position=(0.0, 2.0, -420.0), target=(0.0, 198.0, 0.0), fov=65.0)
-    end = weather.schedule.keys[-1][0]
-    dt = end / (frames["table1"] - 1)
-    renderer.render(weather.scene_at(base), cam, *size)  # warm-up
-    times, clouds = [], []
-    for k in range(frames["table1"]):
-        t0 = time.perf_counter()
-        if k:
-            weather.step(dt)
-        renderer.render(weather.scene_at(base), cam, *size)  # step, light, sprites, draw
-        times.append(time.perf_counter() - t0)
-        clouds.append(sum(map(sum, weather.counts())))
+        step = float(np.linalg.norm(np.subtract(cams[1].position, cams[0].position)))
+        t = imp.path_with_impostors(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky), cams,
+                                    size)  # fmt: skip
+        out[name] = with_runs({"models": 10, "instances": n, "units_per_frame": step,
+                               **fps_stats(t["gl"], PAPER_HZ[name])}, t)  # fmt: skip
+    times, clouds, _, end = imp.table1_day(renderer, size, frames["table1"], False, False)
     stats = fps_stats(times, PAPER_HZ["table1"], by_mean=True)
-    out["table1"] = {"weather_seconds": end, "dt": dt, "clouds_min": min(clouds),
-                     "clouds_max": max(clouds), **stats}  # fmt: skip
+    out["table1"] = {"weather_seconds": end, "dt": end / (frames["table1"] - 1),
+                     "clouds_min": min(clouds), "clouds_max": max(clouds), **stats}  # fmt: skip
+    keys = ("fps_median", "fps_min", "fps_max", "fps_mean", "ratio_to_paper", "reaches_paper_rate")
+    for label, impostors, steady in (("gl_impostors", True, False),
+                                     ("gl_steady_light", False, True),
+                                     ("gl_steady_light_impostors", True, True)):  # fmt: skip
+        times, _, cache, _ = imp.table1_day(renderer, size, frames["table1"], impostors, steady)
+        stats = fps_stats(times, PAPER_HZ["table1"], by_mean=True)
+        out["table1"][label] = {k: stats[k] for k in keys}
+        if cache is not None:
+            out["table1"][label].update(imp.cache_summary(cache))
     for name, row in out.items():
-        cpu = row.get("cpu_twin")
+        extra = "".join(
+            f"; {label} {row[label]['fps_mean' if name == 'table1' else 'fps_median']:.1f} fps"
+            for label in ("cpu_twin", "gl_impostors", "cpu_impostors", "gl_steady_light",
+                          "gl_steady_light_impostors") if label in row
+        )  # fmt: skip
         common.log(f"{PAPER_TEXT[name]}: GL median {row['fps_median']:.1f} fps "
                    f"[{row['fps_min']:.1f}–{row['fps_max']:.1f}], mean {row['fps_mean']:.1f}; "
                    f"reaches {row['paper_hz']:g} Hz: {row['reaches_paper_rate']} "
-                   f"(×{row['ratio_to_paper']:.2f})"
-                   + (f"; CPU twin median {cpu['fps_median']:.1f} fps" if cpu else ""))  # fmt: skip
+                   f"(×{row['ratio_to_paper']:.2f}){extra}")  # fmt: skip
     return out
 
 
@@ -396,7 +378,7 @@ def rendering(quick: bool) -> dict[str, Any] | None:
             "software_gl": software,
             "render_vs_clouds": render_vs_clouds(renderer, ns, size, repeats, cpu_max=1000),
             "render_vs_billboards_per_cloud": render_vs_billboards(renderer, ks, size, repeats),
-            "impostors": impostor_rows(),
+            "impostors": imp.sweep(renderer, cloud_field, RENDER_SUN, size, quick, software),
             "paper_scenes": paper_scenes(renderer, size, quick),
         }
     return data
@@ -471,8 +453,8 @@ def main(argv: list[str] | None = None) -> int:
 def plot(data: dict[str, Any], path: Path) -> None:
     plt = common.pyplot()
     render = data.get("render")
-    fig, grid = plt.subplots(2 if render else 1, 3, figsize=(15, 8 if render else 4),
-                             squeeze=False)  # fmt: skip
+    rows_ = 1 + (render is not None) + bool(render and render["impostors"].get("points"))
+    fig, grid = plt.subplots(rows_, 3, figsize=(15, 4 * rows_), squeeze=False)
     axes = grid[0]
     for key, label in (("generation_vs_levels", "vs levels L"),
                        ("generation_vs_boxes_per_level", "vs boxes per level")):  # fmt: skip
@@ -494,6 +476,8 @@ def plot(data: dict[str, Any], path: Path) -> None:
                 yscale="log", title="Weather.step (dt = 0.1 s)")  # fmt: skip
     if render:
         plot_render(render, grid[1])
+    if rows_ == 3:
+        imp.plot_sweep(render, grid[2])
     for ax in grid.flat:
         ax.grid(True, which="both", alpha=0.3)
         if ax.get_legend_handles_labels()[0]:
@@ -529,10 +513,12 @@ def plot_render(render: dict[str, Any], axes: Any) -> None:
     scenes = render["paper_scenes"]
     names = list(scenes)
     x = np.arange(len(names))
-    measured = [scenes[n]["fps_mean" if scenes[n]["compared"] == "mean" else "fps_median"]
-                for n in names]  # fmt: skip
-    axes[2].bar(x - 0.2, measured, 0.4, label=f"cumuli GL {w}×{h}")
-    axes[2].bar(x + 0.2, [scenes[n]["paper_hz"] for n in names], 0.4, label="[TM] 2005")
+    key = {n: "fps_mean" if scenes[n]["compared"] == "mean" else "fps_median" for n in names}
+    measured = [scenes[n][key[n]] for n in names]
+    through = [scenes[n].get("gl_impostors", {}).get(key[n], 0.0) for n in names]
+    axes[2].bar(x - 0.27, measured, 0.27, label=f"cumuli GL {w}×{h}")
+    axes[2].bar(x, through, 0.27, label="cumuli GL, impostors")
+    axes[2].bar(x + 0.27, [scenes[n]["paper_hz"] for n in names], 0.27, label="[TM] 2005")
     axes[2].set_xticks(x, names)
     axes[2].set(ylabel="frames per second", yscale="log", title="[TM]'s four scenes")
 
