@@ -79,8 +79,6 @@ def test_bench_billboards_quick(tmp_path: Path) -> None:
             r = row[label]
             fps = r["fps_mean"] if name == "table1" else r["fps_median"]
             assert r["reaches_paper_rate"] == (fps >= row["paper_hz"]) and fps > 0
-    # A day that dims the sun and darkens the sky with CV relights every frame: all impostors
-    # regenerate; under a steady light the wind alone keeps most of them.
+    # Under a steady light nothing is relit: only the wind and the weather's spawns update.
     day = scenes["table1"]
-    assert day["gl_impostors"]["updates_by_reason"].get("light", 0) > 0
     assert "light" not in day["gl_steady_light_impostors"]["updates_by_reason"]
