@@ -76,6 +76,7 @@ class Impostor:
         self.signature: Any = None
         self.drawable: Any = None
         self.light: Any = None
+        self.light_of: Any = None  # the drawable's light this impostor's light matches
         self.state: ImpostorState | None = None
         self.image = np.zeros((1, 1, 4), np.float32)
         self.plane0 = np.zeros(14)
@@ -303,8 +304,15 @@ class ImpostorCache:
         same, offset = unit_content(entry, unit, lit)
         if not same:
             return "cloud", zero
-        if stale_token or not same_light(entry.light, unit.light(lit)):
+        if stale_token:
             return "light", zero
+        # A part's light is cut from its drawable's: the same drawable light object (a LitScene
+        # drawn again) needs no comparison.
+        whole = lit.lights[unit.k]
+        if unit.part is None or entry.light_of is not whole:
+            if not same_light(entry.light, unit.light(lit)):
+                return "light", zero
+            entry.light_of = whole
         eye = tuple(float(v) for v in np.subtract(camera.position, offset))
         return view_reason(entry.state, eye, camera.fov, width, height, s), offset
 
@@ -340,6 +348,7 @@ class ImpostorCache:
         entry.plane0 = plane
         entry.kind, entry.index, entry.part = unit.kind, unit.k, unit.part
         entry.drawable, entry.light, entry.state = sub.scene.clouds[j], sub.lights[j], state
+        entry.light_of = lit.lights[unit.k]
         entry.signature = unit.signature
         anchor = centre if unit.anchor is None else unit.anchor
         entry.anchor0, entry.offset = np.asarray(anchor, np.float64), np.zeros(3)
