@@ -335,6 +335,16 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
                                     size)  # fmt: skip
         out[name] = with_runs({"models": 10, "instances": n, "units_per_frame": step,
                                **fps_stats(t["gl"], PAPER_HZ[name])}, t)  # fmt: skip
+        slow = imp.steps_path(cams[0].position, cams[-1].target, frames[name], imp.SPEED)
+        t = imp.path_with_impostors(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky), slow,
+                                    size)  # fmt: skip
+        out[name]["slow"] = with_runs({"units_per_frame": imp.SPEED,
+                                       **fps_stats(t["gl"], PAPER_HZ[name])}, t)  # fmt: skip
+        row = out[name]["slow"]
+        common.log(f"{name} at {imp.SPEED:g} unit/frame: GL {row['fps_median']:.1f} fps, "
+                   f"impostors {row['gl_impostors']['fps_median']:.1f}; CPU twin "
+                   f"{row['cpu_twin']['fps_median']:.1f}, impostors "
+                   f"{row['cpu_impostors']['fps_median']:.1f}")  # fmt: skip
     times, clouds, _, end = imp.table1_day(renderer, size, frames["table1"], False, False)
     stats = fps_stats(times, PAPER_HZ["table1"], by_mean=True)
     out["table1"] = {"weather_seconds": end, "dt": end / (frames["table1"] - 1),
@@ -348,6 +358,9 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
         out["table1"][label] = {k: stats[k] for k in keys}
         if cache is not None:
             out["table1"][label].update(imp.cache_summary(cache))
+    out["table1"]["paper_rate"] = imp.table1_at_paper_rate(
+        renderer, size, 3 if quick else 20, fps_stats
+    )
     for name, row in out.items():
         extra = "".join(
             f"; {label} {row[label]['fps_mean' if name == 'table1' else 'fps_median']:.1f} fps"

@@ -436,65 +436,6 @@ def harris_lines(data: dict[str, dict[str, Any]]) -> list[str]:
     return lines
 
 
-def billboards_lines(b: dict[str, Any]) -> list[str]:
-    """Torchelsen & Musse 2005 (bench_billboards): which of [TM] §5's frame rates reproduce,
-    directly and through impostors."""
-    lines = ["### Billboard skies (bench_billboards, Torchelsen & Musse 2005)", ""]
-    render = b.get("render")
-    if not render:
-        return lines + ["No GL here: the render parts did not run.", ""]
-    w, h = render["size"]
-    lines.append(
-        f"GL at {w}×{h} ({'llvmpipe: software GL' if render['software_gl'] else 'GPU'}); [TM] ran "
-        "on a 2005 GeForce 6800 at an unstated size, so only 'reaches at least' and the ratios "
-        "between its scenes compare. Each frame: the sprite list (cull, sort, vertex colours) "
-        "and the draw; the Table 1 day also steps the weather and relights every frame. "
-        "'imp.': the same frames through impostors (one per cloud and field instance)."
-    )
-    lines.append("")
-
-    def rate(r: dict[str, Any] | None, key: str) -> str:
-        if r is None:
-            return "—"
-        return f"{r[key]:.1f} ({verdict(r['reaches_paper_rate'])})"
-
-    rows = []
-    for name, r in render["paper_scenes"].items():
-        key = "fps_mean" if r["compared"] == "mean" else "fps_median"
-        steady = r.get("gl_steady_light_impostors")
-        rows.append([name, f"{r['paper_hz']:g} Hz ({r['compared']})", rate(r, key),
-                     f"{r['fps_min']:.1f}–{r['fps_max']:.1f}", rate(r.get("gl_impostors"), key),
-                     rate(r.get("cpu_twin"), key), rate(r.get("cpu_impostors"), key),
-                     rate(steady, key)])  # fmt: skip
-    lines += table(["[TM] scene", "paper", "GL fps (reaches)", "GL min–max", "GL imp.",
-                    "CPU twin", "CPU imp.", "GL imp., steady light"], rows)  # fmt: skip
-    scenes = render["paper_scenes"]
-    if "nimbus" in scenes and "rain" in scenes:
-        paper = 20.0 / 10.0
-        ours = scenes["nimbus"]["fps_median"] / scenes["rain"]["fps_median"]
-        lines.append(
-            f"Nimbus (200 clouds) over rain (1000 clouds): [TM] ×{paper:.1f}, cumuli ×{ours:.1f}."
-        )
-        lines.append("")
-    rows = []
-    for r in render["render_vs_clouds"].values():
-        cpu = ms(r["cpu"]) if "cpu" in r else "—"
-        rows.append([r["clouds"], r["sprites_drawn"], ms(r["gl"]), cpu])
-    lines += table(["clouds", "billboards drawn", "GL ms", "CPU twin ms"], rows)
-    imp = render.get("impostors", {})
-    if imp.get("points"):
-        speed = imp["speed_units_per_frame"]
-        lines += [f"With and without impostors ({imp['frames_per_path']} frames per path at "
-                  f"{speed:g} unit/frame, first frame apart):", ""]  # fmt: skip
-        rows = [[p["clouds"], p["path"], *(f"{ms(p[x]['direct_s'])} / {ms(p[x]['impostors_s'])}"
-                 f" (×{p[x]['ratio']:.2f})" for x in ("gl", "cpu")),
-                 f"{p['gl']['updates_per_frame']:.1f} / {p['gl']['impostors_per_frame']:.0f}"]
-                for p in imp["points"]]  # fmt: skip
-        lines += table(["clouds", "path", "GL direct / impostors ms", "CPU direct / impostors ms",
-                        "updates / shown"], rows)  # fmt: skip
-    return lines
-
-
 def section(name: str, data: dict[str, dict[str, Any]], folder: Path | None = None) -> list[str]:
     lines = [f"## {name}", ""] + machine_lines(data)
     if folder is not None:
@@ -508,6 +449,8 @@ def section(name: str, data: dict[str, dict[str, Any]], folder: Path | None = No
         lines += scaling_lines(data["scaling"])
     lines += other_lines(data) + harris_lines(data)
     if "billboards" in data:
+        from _report_billboards import billboards_lines
+
         lines += billboards_lines(data["billboards"])
     return lines
 

@@ -79,6 +79,14 @@ def test_bench_billboards_quick(tmp_path: Path) -> None:
             r = row[label]
             fps = r["fps_mean"] if name == "table1" else r["fps_median"]
             assert r["reaches_paper_rate"] == (fps >= row["paper_hz"]) and fps > 0
+    for name in ("nimbus", "rain"):
+        slow = scenes[name]["slow"]
+        assert slow["units_per_frame"] == 1.0
+        assert slow["gl_impostors"]["fps_median"] > 0 and slow["cpu_impostors"]["fps_median"] > 0
+    paper_rate = scenes["table1"]["paper_rate"]
+    assert abs(paper_rate["dt"] - 1 / 27) < 1e-12
+    for label in ("gl", "gl_impostors", "gl_steady_light", "gl_steady_light_impostors"):
+        assert paper_rate[label]["reaches_paper_rate"] == (paper_rate[label]["fps_mean"] >= 27)
     # Under a steady light nothing is relit: only the wind and the weather's spawns update.
     day = scenes["table1"]
     assert "light" not in day["gl_steady_light_impostors"]["updates_by_reason"]
