@@ -31,6 +31,27 @@ _variant_spheres: weakref.WeakKeyDictionary[BillboardCloud, tuple[np.ndarray, fl
 )
 
 
+_variant_points: weakref.WeakKeyDictionary[BillboardCloud, tuple[np.ndarray, np.ndarray]] = (
+    weakref.WeakKeyDictionary()
+)
+
+
+def variant_points(cloud: BillboardCloud) -> tuple[np.ndarray, np.ndarray]:
+    """What bounds a variant's quads at any orientation (cached, float64): its billboard centres
+    and half-diagonals, or its boxes' centres and half-diagonals when it has no billboards."""
+    known = _variant_points.get(cloud)
+    if known is None:
+        if cloud.n_billboards:
+            known = (cloud.centres.astype(np.float64), cloud.half_diagonals().astype(np.float64))
+        else:
+            known = (
+                cloud.box_centres.astype(np.float64),
+                np.linalg.norm(cloud.box_half_sizes.astype(np.float64), axis=1),
+            )
+        _variant_points[cloud] = known
+    return known
+
+
 def variant_sphere(cloud: BillboardCloud) -> tuple[np.ndarray, float]:
     """`BillboardCloud.sphere` of a variant, cached (clouds are values)."""
     known = _variant_spheres.get(cloud)
@@ -168,33 +189,48 @@ class BillboardField:
         return cs[:, 0], cs[:, 1]
 
     def instance_bounds(self) -> np.ndarray:
-        """``(NC, 2, 3)`` world AABB of each instance's quads at any view orientation."""
+        """``(NC, 2, 3)`` world AABB of each instance's quads at any view orientation (its
+        billboard centres turned and moved, ± their half-diagonals; its boxes' centres ± their
+        half-diagonals when the variant has no billboards)."""
         out = np.empty((self.n, 2, 3), dtype=np.float32)
+        if self.n == 0:
+            return out
         c, s = self._cos_sin()
+        used = np.zeros(len(self.variants), bool)
+        used[self.variant] = True
+        pts, rad = [], []
         for v, cloud in enumerate(self.variants):
-            idx = np.flatnonzero(self.variant == v)
-            if idx.size == 0:
-                continue
-            if cloud.n_billboards:
-                pts, r = cloud.centres.astype(np.float64), cloud.half_diagonals().astype(np.float64)
-            else:
-                pts, r = (
-                    cloud.box_centres.astype(np.float64),
-                    np.linalg.norm(cloud.box_half_sizes.astype(np.float64), axis=1),
-                )
-            # Instances in chunks of about 10⁶ points: (instances, points, 3) float64 at a time.
-            step = max(1, (1 << 20) // max(pts.shape[0], 1))
-            for k in range(0, idx.size, step):
-                ii = idx[k : k + step]
-                ci, si = c[ii][:, None], s[ii][:, None]
-                x = ci * pts[None, :, 0] + si * pts[None, :, 2]
-                z = -si * pts[None, :, 0] + ci * pts[None, :, 2]
-                y = np.broadcast_to(pts[None, :, 1], x.shape)
-                w = np.stack([x, y, z], axis=-1) + self.offsets[ii].astype(np.float64)[:, None]
-                lo = (w - r[None, :, None]).min(axis=1).astype(np.float32)
-                hi = (w + r[None, :, None]).max(axis=1).astype(np.float32)
-                out[ii, 0] = np.nextafter(lo, -np.inf)
-                out[ii, 1] = np.nextafter(hi, np.inf)
+            p, r = variant_points(cloud) if used[v] else (np.zeros((0, 3)), np.zeros(0))
+            pts.append(p)
+            rad.append(r)
+        sizes = np.array([p.shape[0] for p in pts], np.int64)
+        first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+        points, radii = np.concatenate(pts), np.concatenate(rad)
+        count = sizes[self.variant]
+        offsets = self.offsets.astype(np.float64)
+        # All (instance, point) pairs at once, in chunks of about 10⁶ points.
+        ends = np.cumsum(count)
+        begin = 0
+        while begin < self.n:
+            base = ends[begin - 1] if begin else 0
+            stop = int(np.searchsorted(ends, base + (1 << 20), side="right"))
+            stop = max(stop, begin + 1)
+            ii = np.arange(begin, stop)
+            k = count[ii]
+            rep = np.repeat(ii, k)
+            local = np.arange(int(k.sum())) - np.repeat(np.cumsum(k) - k, k)
+            p = points[first[self.variant[rep]] + local]
+            r = radii[first[self.variant[rep]] + local][:, None]
+            ci, si = c[rep], s[rep]
+            x = ci * p[:, 0] + si * p[:, 2]
+            z = -si * p[:, 0] + ci * p[:, 2]
+            w = np.stack([x, p[:, 1], z], axis=-1) + offsets[rep]
+            cuts = np.cumsum(k) - k
+            lo = np.minimum.reduceat(w - r, cuts, axis=0).astype(np.float32)
+            hi = np.maximum.reduceat(w + r, cuts, axis=0).astype(np.float32)
+            out[ii, 0] = np.nextafter(lo, -np.inf)
+            out[ii, 1] = np.nextafter(hi, np.inf)
+            begin = stop
         return out
 
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:

@@ -173,7 +173,7 @@ def billboard_frame(
 ) -> BillboardFrame:
     """The sprites one pass draws of the billboard clouds/fields ``indices`` of ``lit`` (see the
     module docstring). ``exclude``: a bool mask over :func:`cloud_spheres`' clouds to leave out
-    (the impostor hook)."""
+    (clouds left to another drawing, e.g. their impostors)."""
     parts = _parts(lit, indices)
     shading = lit.scene.billboard_shading
     atlases: list[SpriteAtlas] = []
