@@ -111,12 +111,13 @@ def _check_output(output: Path) -> None:
         raise PermissionError(f"output folder {str(folder)!r} is not writable")
 
 
-def _write_pair(output: Path, img: np.ndarray) -> list[Path]:
-    """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR)."""
+def _write_pair(output: Path, img: np.ndarray, exposure: float, tonemap: str) -> list[Path]:
+    """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR); the PNG
+    with ``exposure`` and ``tonemap``, the EXR linear."""
     from cumuli.io.images import write_image
 
     other = output.with_suffix(".exr" if output.suffix.lower() == ".png" else ".png")
-    return [write_image(output, img), write_image(other, img)]
+    return [write_image(p, img, exposure, tonemap) for p in (output, other)]
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -127,13 +128,15 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         path = write_image(args.output, img)
         print(f"wrote {path} ({args.width}×{args.height})")
         return 0
-    from cumuli.demo import default_scene
+    from cumuli.demo import DEMO_EXPOSURE, DEMO_TONEMAP, sunset_scene
     from cumuli.rendering.compositor import render
 
     _check_output(args.output)
-    scene = default_scene()
+    scene = sunset_scene()
     img = render(scene, scene.default_camera(), args.width, args.height, backend=args.backend)
-    paths = _write_pair(args.output, _opaque(img))
+    exposure = DEMO_EXPOSURE if args.exposure is None else args.exposure
+    tonemap = DEMO_TONEMAP if args.tonemap is None else args.tonemap
+    paths = _write_pair(args.output, _opaque(img), exposure, tonemap)
     print(f"wrote {' and '.join(map(str, paths))} ({args.width}×{args.height}, {args.backend})")
     return 0
 
@@ -158,7 +161,9 @@ def _cmd_render(args: argparse.Namespace) -> int:
     output = Path(args.output)
     _check_output(output)
     img = render(scene, scene.default_camera(), w, h, backend=args.backend)
-    path = write_image(output, img if args.alpha else _opaque(img))
+    exposure = 1.0 if args.exposure is None else args.exposure
+    tonemap = "none" if args.tonemap is None else args.tonemap
+    path = write_image(output, img if args.alpha else _opaque(img), exposure, tonemap)
     print(f"wrote {path} ({w}×{h}, {args.backend})")
     return 0
 
@@ -186,6 +191,30 @@ def _seed(text: str) -> int:
     return value
 
 
+def _exposure(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (value >= 0 and np.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be finite and >= 0, got {text!r}")
+    return value
+
+
+def _display_args(parser: argparse.ArgumentParser, exposure: str, tonemap: str) -> None:
+    from cumuli.io.images import TONEMAPS
+
+    parser.add_argument(
+        "--exposure", type=_exposure, default=None,
+        help=f"multiplies the linear image before the PNG's tone mapping (default {exposure})",
+    )  # fmt: skip
+    parser.add_argument(
+        "--tonemap", choices=TONEMAPS, default=None,
+        help=f"tone curve of the PNG: none clips, aces/reinhard roll highlights off "
+        f"(default {tonemap}); .exr files stay linear",
+    )  # fmt: skip
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="cumuli", description="Volumetric clouds: information, demos and rendering."
@@ -197,7 +226,7 @@ def build_parser() -> argparse.ArgumentParser:
     info.set_defaults(run=_cmd_info)
 
     demo = sub.add_parser(
-        "demo", help="render the demo: three cumuli in a sunset sky (paper Fig. 10)"
+        "demo", help="render the demo: three cumuli at sunset, physically lit, with ground shadows"
     )
     demo.add_argument(
         "-o",
@@ -215,6 +244,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="instead render the noise figure (lattice | fBm, paper Figs. 2-3); one file",
     )
     demo.add_argument("--seed", type=_seed, default=7, help="noise seed for --noise (default 7)")
+    _display_args(demo, "0.7", "aces")
     demo.set_defaults(run=_cmd_demo)
 
     rend = sub.add_parser("render", help="render a scene file written by Scene.save")
@@ -229,6 +259,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="keep the clouds' coverage (1 - T) as alpha instead of writing an opaque image",
     )
+    _display_args(rend, "1", "none")
     rend.set_defaults(run=_cmd_render)
     return parser
 

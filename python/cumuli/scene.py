@@ -23,6 +23,7 @@ import numpy as np
 
 from cumuli._atomic import atomic_target
 from cumuli.camera import Camera
+from cumuli.ground import Ground
 from cumuli.model.cloud import Cloud
 from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise
@@ -45,6 +46,7 @@ SCENE_FIELDS = (
     "settings",
     "camera",
     "lights",
+    "ground",
 )
 #: Most extra lights (`Scene.lights`).
 MAX_LIGHTS = 16
@@ -115,7 +117,8 @@ class Scene:
     """Clouds under a sun and a sky, with the noise that fills them and the render settings.
 
     ``camera`` is optional: a default view used by ``cumuli render scene.json`` when the command
-    line gives none (:meth:`default_camera` frames the clouds when it is None).
+    line gives none (:meth:`default_camera` frames the clouds when it is None). ``ground`` is an
+    optional :class:`cumuli.Ground` plane under the clouds (RENDER_CONTRACT, "Ground").
     """
 
     clouds: tuple[Any, ...] = ()
@@ -125,6 +128,7 @@ class Scene:
     settings: RenderSettings = field(default_factory=RenderSettings)
     camera: Camera | None = None
     lights: tuple[Sun, ...] = ()
+    ground: Ground | None = None
 
     def __post_init__(self) -> None:
         clouds = self.clouds
@@ -157,6 +161,8 @@ class Scene:
         if len(lights) > MAX_LIGHTS:
             raise ValueError(f"scene.lights holds at most {MAX_LIGHTS} lights, got {len(lights)}")
         object.__setattr__(self, "lights", tuple(lights))
+        if self.ground is not None and not isinstance(self.ground, Ground):
+            raise TypeError("scene.ground must be a cumuli.Ground or None")
 
     @property
     def kinds(self) -> tuple[str, ...]:
@@ -205,6 +211,7 @@ class Scene:
             "settings": self.settings.to_dict(),
             "camera": None if self.camera is None else self.camera.to_dict(),
             "lights": [_sun_dict(x) for x in self.lights],
+            "ground": None if self.ground is None else self.ground.to_dict(),
         }
 
     @classmethod
@@ -226,6 +233,7 @@ class Scene:
             "settings",
             "camera",
             "lights",
+            "ground",
         }
         unknown = sorted(set(data) - known)
         if unknown:
@@ -255,9 +263,11 @@ class Scene:
         if cam is not None:
             _require(cam, ("position", "target"), "scene.camera")
             camera = Camera(**_known(Camera, cam, "scene.camera"))
+        ground = data.get("ground")
+        ground = None if ground is None else Ground.from_dict(ground, "scene.ground")
         return cls(
             clouds=clouds, sun=sun, sky=sky, noise=noise, settings=settings, camera=camera,
-            lights=tuple(extra),
+            lights=tuple(extra), ground=ground,
         )  # fmt: skip
 
     def save(self, path: str | os.PathLike[str]) -> Path:

@@ -10,8 +10,8 @@
 namespace cumuli {
 
 void composite_layers(const std::vector<Layer>& layers, const CameraParams& camera, int width,
-                      int height, const SkyParams& sky, const SunParams& sun, float* out,
-                      int threads) {
+                      int height, const SkyParams& sky, const SunParams& sun,
+                      const GroundParams& ground, float* out, int threads) {
   if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
   camera.validate();
   const CameraRays rays(camera, width, height);
@@ -40,7 +40,7 @@ void composite_layers(const std::vector<Layer>& layers, const CameraParams& came
           colour += T * glm::vec3(l[0], l[1], l[2]);
           T *= 1.0f - l[3];
         }
-        const glm::vec3 rgb = colour + T * sky_radiance(sky, sun, dir);
+        const glm::vec3 rgb = colour + T * background(sky, sun, ground, rays.origin, dir);
         float* o = out + px * 4;
         o[0] = rgb.x;
         o[1] = rgb.y;

@@ -25,11 +25,13 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
+from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
-from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUPED_KINDS
+from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUND_KINDS, GROUPED_KINDS
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
+from cumuli.settings import RenderSettings
 from cumuli.sky import Sun, as_sky, sky_args
 
 #: Largest tile drawn in one call (keeps each draw short on software GL and under driver timeouts).
@@ -46,11 +48,13 @@ DrawFn = Callable[[str, Sequence[int], bool], np.ndarray]
 
 def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     """The draw calls of ``scene``: one ``(kind, indices)`` over the sky when one pass can draw
-    everything (an empty scene draws the sky with the marcher), else one per drawable."""
+    everything (an empty scene draws the sky with the marcher; a scene with a ground needs a
+    drawer that draws the ground), else one per drawable."""
     kinds = scene.kinds
     if not kinds:
         return [("cloud", [])]
-    if len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS):
+    one = len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS)
+    if one and (scene.ground is None or kinds[0] in GROUND_KINDS):
         return [(kinds[0], list(range(len(kinds))))]
     return [(kind, [k]) for k, kind in enumerate(kinds)]
 
@@ -69,6 +73,7 @@ def compose(
     return _core.composite_layers(
         layers, boxes, camera.position, camera.target, camera.up, float(camera.fov),
         sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
+        ground_args(scene.ground, scene.sky, lit.shadow),
     )  # fmt: skip
 
 
@@ -367,12 +372,15 @@ def render_volume(
     step: float | None = None,
     threads: int = 0,
     context: GLContext | None = None,
+    settings: RenderSettings | None = None,
 ) -> np.ndarray:
     """Render one lit density volume: ``(height, width, 4)`` float32 linear RGBA, row 0 on top.
 
     ``volume`` ``(D, H, W)`` densities over ``box = (box_min, box_max)``; ``light`` ``(D, H, W, 4)``
     from :meth:`cumuli.VolumeLighting.light` (made with the same ``sigma_t``). ``step`` defaults
     to half the smallest voxel edge. ``g`` is the Henyey–Greenstein asymmetry of sun scattering.
+    With ``settings=RenderSettings(lighting="physical")`` the physical mode lights the volume
+    (``σt = sigma_t·volume``; ``light`` may be None, the light step computes its own).
     A thin wrapper: a scene holding one :class:`cumuli.VolumeCloud` through :func:`render`.
     """
     if backend not in BACKENDS:
@@ -384,11 +392,16 @@ def render_volume(
     width = check.integer(width, "width", 1, MAX_IMAGE)
     height = check.integer(height, "height", 1, MAX_IMAGE)
     cam = _as_camera(camera)
+    settings = RenderSettings() if settings is None else settings
+    if not isinstance(settings, RenderSettings):
+        raise TypeError(f"settings must be a cumuli.RenderSettings, got {type(settings).__name__}")
+    if light is None and not settings.physical:
+        raise ValueError("light is required unless settings.lighting == 'physical'")
+    lit = {} if light is None else {"light": light, "light_sun": sun, "light_sky": sky}
     vc = VolumeCloud(
-        density=volume, box=box, sigma_t=sigma_t, albedo=albedo, g=g, step=step, light=light,
-        light_sun=sun, light_sky=sky,
+        density=volume, box=box, sigma_t=sigma_t, albedo=albedo, g=g, step=step, **lit
     )  # fmt: skip
-    scene = Scene([vc], sun=sun, sky=sky)
+    scene = Scene([vc], sun=sun, sky=sky, settings=settings)
     if backend == "cpu":
         return render_cpu(scene, cam, width, height, threads=threads)
     if context is None:

@@ -31,6 +31,8 @@ CPU_DRAWERS: dict[str, Callable[..., Any]] = {
 }
 #: Kinds whose drawer marches several drawables in one pass (per-pixel order inside the pass).
 GROUPED_KINDS: set[str] = {Cloud.kind}
+#: Kinds whose drawer draws the scene's ground itself (others are composited over it).
+GROUND_KINDS: set[str] = {Cloud.kind}
 
 
 def register_drawers(kind: str, gl: type, cpu: Callable[..., Any], groups: bool = False) -> None:

@@ -18,6 +18,8 @@
 #include "cumuli/noise.hpp"
 #include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"
+#include "cumuli/rendering/ground.hpp"
+#include "cumuli/rendering/physical.hpp"
 
 namespace cumuli {
 
@@ -36,7 +38,8 @@ struct LightGrid {
 
 struct RenderCloud {
   CloudShape shape;
-  LightGrid light;
+  LightGrid light;         // the paper mode's light
+  PhysicalGrids physical;  // the physical mode's light
 };
 
 enum class MarchMode { Paper, Union };
@@ -78,6 +81,11 @@ struct MarchSettings {
   bool sort_candidates = true;
   FbmParams fbm;
   float density_constant = -1.0f;  // ≥ 0: constant density instead of fBm (analytic tests)
+  // The physical lighting mode (RENDER_CONTRACT "Physical lighting"): union marching with a
+  // jittered start, σ = extinction_scale·ρ, physical.hpp's shading; `absorption`, `hg_g` and
+  // `march` are then not used.
+  bool physical = false;
+  PhysicalParams phys;
 
   static constexpr int kMaxStepsLimit = 1 << 24;
   static constexpr int kMaxCandidatesLimit = 4096;
@@ -96,6 +104,7 @@ struct MarchScene {
   // false: no sky behind the clouds, output (colour, 1 − T), a premultiplied layer for the
   // compositor (composite.hpp).
   bool with_sky = true;
+  GroundParams ground;  // the background below the horizon when enabled
 
   void validate(const MarchSettings& settings) const;
 };

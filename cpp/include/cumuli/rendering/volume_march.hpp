@@ -17,6 +17,7 @@
 
 #include "cumuli/phase.hpp"
 #include "cumuli/light/volume_light.hpp"
+#include "cumuli/rendering/physical.hpp"
 
 namespace cumuli {
 
@@ -35,6 +36,11 @@ struct VolumeRenderParams {
   float albedo = 1.0f;
   float g = 0.2f;     // Henyey–Greenstein asymmetry
   float step = 0.1f;  // world units
+  // The physical lighting mode (RENDER_CONTRACT "Physical lighting"): σ = sigma_t·ρ, samples at
+  // (k + ξ)·h, physical.hpp's shading with `grids` (the light argument is then not read).
+  bool physical = false;
+  PhysicalParams phys;
+  const PhysicalGrids* grids = nullptr;
 };
 
 constexpr float kVolumeMinTransmittance = 1e-4f;
