@@ -150,16 +150,14 @@ def _oiio_error(what: str, path: Path, obj: Any = None) -> OSError:
     return OSError(f"{what} {str(path)!r} failed: {msg}")
 
 
-def _write_with_oiio(
-    tmp: Path, ext: str, rgba: np.ndarray, exposure: float = 1.0, tonemap: str = "none"
-) -> None:
+def _write_with_oiio(tmp: Path, ext: str, rgba: np.ndarray) -> None:
     h, w = rgba.shape[:2]
     if ext == ".exr":
         data: np.ndarray = rgba
         spec = oiio.ImageSpec(w, h, 4, oiio.FLOAT)
         spec.attribute("compression", "zip")
     else:
-        data = to_srgb8(rgba, exposure, tonemap)
+        data = to_srgb8(rgba)
         spec = oiio.ImageSpec(w, h, 4, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
     spec.channelnames = ("R", "G", "B", "A")
@@ -195,6 +193,11 @@ def write_image(
     ext = _extension(target)
     rgba = _as_rgba(img)
     to_srgb8(rgba[:1, :1], exposure, tonemap)  # checks both before anything is written
+    if ext == ".png" and (exposure != 1.0 or tonemap != "none"):
+        # The display values (in [0, 1], float64: to_srgb8 of them gives the same bytes).
+        shown = rgba.astype(np.float64)
+        shown[..., :3] = tone_map(shown[..., :3] * float(exposure), tonemap)
+        rgba = shown
     folder = target.parent
     if not folder.is_dir():
         raise FileNotFoundError(f"path's folder {str(folder)!r} does not exist")
@@ -202,7 +205,7 @@ def write_image(
         raise IsADirectoryError(f"path {str(target)!r} is a directory")
     # The temporary keeps the extension: OpenImageIO picks the format from it.
     with atomic_target(target, suffix=f".tmp{ext}") as tmp:
-        _write_with_oiio(tmp, ext, rgba, exposure, tonemap)
+        _write_with_oiio(tmp, ext, rgba)
     return target
 
 

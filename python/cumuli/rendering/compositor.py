@@ -53,10 +53,18 @@ def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     kinds = scene.kinds
     if not kinds:
         return [("cloud", [])]
-    one = len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS)
-    if one and (scene.ground is None or kinds[0] in GROUND_KINDS):
+    if single_pass(scene):
         return [(kinds[0], list(range(len(kinds))))]
     return [(kind, [k]) for k, kind in enumerate(kinds)]
+
+
+def single_pass(scene: Scene) -> bool:
+    """Whether one drawer draws the whole scene over its background (see :func:`plan`)."""
+    kinds = scene.kinds
+    if not kinds:
+        return True
+    one = len(kinds) == 1 or (len(set(kinds)) == 1 and kinds[0] in GROUPED_KINDS)
+    return one and (scene.ground is None or kinds[0] in GROUND_KINDS)
 
 
 def compose(
@@ -64,7 +72,7 @@ def compose(
 ) -> np.ndarray:
     """Draw ``lit`` with ``draw`` and composite the layers over the sky (see the module doc)."""
     calls = plan(lit.scene)
-    if len(calls) == 1:
+    if single_pass(lit.scene):
         kind, indices = calls[0]
         return draw(kind, indices, True)
     scene = lit.scene
