@@ -7,10 +7,12 @@ at 160×120. Mitsuba gets the same medium: ``cumuli.density_volume`` (the extinc
 ``σt = extinction_scale·ρ`` on a texel-centre lattice of 0.1-unit voxels, Mitsuba's
 ``gridvolume`` over the same box), albedo ϖ and Henyey–Greenstein ``g`` from the settings, the sun
 as a ``directional`` emitter (its ``direction`` is the way light travels, ``−Sun.direction``;
-``irradiance = Sun.radiance``) and ``Sky.radiance`` as a lat-long ``envmap``. Three images:
+``irradiance = Sun.radiance``) and ``Sky.radiance`` as a lat-long ``envmap``. Four images:
 
 - ``physical_ms.exr``: ``volpath`` with every scattering order (``max_depth = rr_depth = 512``:
   Russian roulette gives fireflies in this thick medium);
+- ``physical_ms_sun.exr``: the same with the sun alone (the sky's share is the difference, light
+  being additive);
 - ``physical_ss.exr``: one scattering event (``max_depth = 2``), sun and sky;
 - ``physical_transmittance.exr``: ``T`` along the camera rays (albedo 0 under a uniform
   environment of radiance 1).
@@ -44,6 +46,7 @@ COVERED = 0.5
 BLOCK = 4
 FILES = {
     "ms": "physical_ms.exr",
+    "ms_sun": "physical_ms_sun.exr",
     "ss": "physical_ss.exr",
     "transmittance": "physical_transmittance.exr",
 }
@@ -122,8 +125,9 @@ def mitsuba_scene(kind: str, scene: cu.Scene, camera: cu.Camera, field, spp: int
             "direction": d.tolist(),
             "irradiance": {"type": "rgb", "value": list(scene.sun.radiance)},
         }
-        emitters["sky"] = {"type": "envmap", "bitmap": mi.Bitmap(environment(scene))}
-    depth = {"ms": 512, "ss": 2, "transmittance": 1}[kind]
+        if kind != "ms_sun":
+            emitters["sky"] = {"type": "envmap", "bitmap": mi.Bitmap(environment(scene))}
+    depth = {"ms": 512, "ms_sun": 512, "ss": 2, "transmittance": 1}[kind]
     return mi.load_dict({
         "type": "scene",
         "integrator": {"type": "volpath", "max_depth": depth, "rr_depth": 512},
@@ -169,8 +173,8 @@ def render_kind(kind: str, args: argparse.Namespace, field, mask: np.ndarray | N
         sums = [st["a"], st["b"]]
         counts = [int(st["na"]), int(st["nb"])]
         seconds, chunk_index = float(st["seconds"]), int(st["chunks"])
-    chunk = {"ms": args.chunk, "ss": 4 * args.chunk, "transmittance": 4 * args.chunk}[kind]
-    limit = {"ms": args.max_spp, "ss": 8 * args.max_spp, "transmittance": 2 * args.max_spp}[kind]
+    chunk = {"ss": 4 * args.chunk, "transmittance": 4 * args.chunk}.get(kind, args.chunk)
+    limit = {"ss": 8 * args.max_spp, "transmittance": 2 * args.max_spp}.get(kind, args.max_spp)
     noise = math.inf
     while True:
         if min(counts) > 0:
@@ -201,7 +205,7 @@ def render_kind(kind: str, args: argparse.Namespace, field, mask: np.ndarray | N
 
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--kinds", default="transmittance,ss,ms")
+    parser.add_argument("--kinds", default="transmittance,ss,ms,ms_sun")
     parser.add_argument("--noise", type=float, default=0.025, help="target median block noise")
     parser.add_argument("--chunk", type=int, default=32, help="spp per multiple-scattering chunk")
     parser.add_argument("--max-spp", type=int, default=2048)
