@@ -401,3 +401,51 @@ def test_volume_renderer_draws_the_same_medium(gl_context) -> None:
         settings=scene.settings,
     )
     np.testing.assert_allclose(img, cpu, atol=1e-5)
+
+
+def test_light_step_does_not_depend_on_the_thread_count() -> None:
+    scene = small_scene()
+    a = physical_light(scene.clouds[0], scene, threads=1)
+    b = physical_light(scene.clouds[0], scene, threads=2)
+    np.testing.assert_array_equal(a.sun_depth, b.sun_depth)
+    np.testing.assert_array_equal(a.grid, b.grid)
+
+
+@pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
+def test_an_empty_physical_scene_is_its_background(backend: str) -> None:
+    empty = cu.Scene([], sun=SUN, settings=PHYS)
+    cam = cu.Camera(position=(0, 2, -10), target=(0, 0, 0), fov=50)
+    img = cu.render(empty, cam, 16, 12, backend=backend)
+    ref = cu.render(empty.replace(settings=cu.RenderSettings()), cam, 16, 12, backend="cpu")
+    np.testing.assert_allclose(img, ref, atol=1e-6)
+    assert (img[..., 3] == 0).all()
+
+
+def test_render_volume_bad_input() -> None:
+    dens = np.ones((4, 4, 4), F)
+    cam = cu.Camera(position=(0, 0, -10), target=(0, 0, 0), fov=40)
+    box = ((-1, -1, -1), (1, 1, 1))
+    with pytest.raises(ValueError, match="light is required"):
+        cu.render_volume(dens, None, box, cam, 8, 6)
+    with pytest.raises(TypeError, match="settings"):
+        cu.render_volume(dens, None, box, cam, 8, 6, settings="physical")
+    img = cu.render_volume(dens, None, box, cam, 8, 6, settings=PHYS)
+    # σt = sigma_t·density = 1 through the 2-unit cube: alpha = 1 − e^{−2} at the centre.
+    assert img.shape == (6, 8, 4) and img[3, 4, 3] == pytest.approx(1 - math.exp(-2), rel=0.01)
+
+
+def test_clouds_shade_each_other() -> None:
+    """A second cloud between the sun and the first darkens the first's sun lattice."""
+    first = small_cloud()
+    lo, hi = first.layer_box()
+    sun = np.asarray(SUN.direction)
+    upstream = first.translated(tuple(float(v) for v in sun * 1.2 * float(np.max(hi - lo))))
+    alone = small_scene()
+    both = alone.replace(clouds=[first, upstream])
+    a = cu.prepare_light(alone).lights[0]
+    b = cu.prepare_light(both).lights[0]
+    assert a.sun_depth.shape == b.sun_depth.shape
+    extra = b.sun_depth - a.sun_depth
+    assert (extra >= -1e-4).all() and extra.max() > 5  # some columns pass through the other cloud
+    # The same all along each column (up to float32 rounding of the sums).
+    np.testing.assert_allclose(extra.min(axis=0), extra.max(axis=0), atol=1e-3, rtol=1e-5)

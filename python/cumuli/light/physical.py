@@ -7,7 +7,8 @@ maths):
 
 - **Sun, single scattering and low orders**: ``τ_sun`` on a lattice whose third axis runs along
   the light, :data:`ALONG` × finer than across it, marched through the drawable's own extinction
-  (the procedural density of a 2018 cloud, not a voxelisation). The drawers add the first
+  (the procedural density of a 2018 cloud, not a voxelisation), plus the optical depth of the
+  scene's other drawables upstream of each column (clouds shade each other). The drawers add the first
   :data:`OCTAVES` scattering orders as Wrenninge, Kulla & Lundqvist's octaves ("Oz: the great
   and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky, atmosphere and
   cloud rendering in Frostbite"): order ``i`` scatters ``aⁱ`` of the light with the phase
@@ -129,6 +130,9 @@ def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight
     depth = _core.light_space_depth(
         clouds, volumes, scene.noise._core, *fbm_args(s), frame, step, threads
     )
+    others = [d for d in scene.clouds if d is not drawable]
+    if others:  # the other drawables' shadow: their optical depth upstream of every column
+        depth += _upstream_depth(others, scene, frame, step, threads)[None]
     ext = field.values
     d, h, w = ext.shape
     centres = _lattice_centres(lo, hi, (w, h, d))
@@ -151,6 +155,23 @@ def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight
     depth.setflags(write=False)
     grid.setflags(write=False)
     return PhysicalLight(frame, depth, grid, (lo, hi), octaves)
+
+
+def _upstream_depth(others: Any, scene: Any, frame: tuple, step: float, threads: int) -> np.ndarray:
+    """``(nv, nu)``: the optical depth of ``others`` towards the sun from the sun-side face of
+    every column of ``frame``."""
+    u, v, w, lo, hi, (nu, nv, nw) = frame
+    fu = lo[0] + (np.arange(nu) + 0.5) * (hi[0] - lo[0]) / nu
+    fv = lo[1] + (np.arange(nv) + 0.5) * (hi[1] - lo[1]) / nv
+    gv, gu = np.meshgrid(fv, fu, indexing="ij")
+    pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
+           + lo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
+    clouds, volumes = medium_args(others, scene.settings)
+    tau = _core.medium_optical_depth(
+        clouds, volumes, scene.noise._core, *fbm_args(scene.settings), pts, scene.sun.direction,
+        step, threads,
+    )  # fmt: skip
+    return tau.reshape(nv, nu)
 
 
 def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarray:

@@ -192,7 +192,8 @@ def physical_pass(drawable: Any, scene: Scene, given: Any = None, threads: int =
             )
         return given
     sky = light_sky(scene)
-    key = ("physical", drawable_digest(drawable), scene.noise.seed, scene.noise.size,
+    others = tuple(drawable_digest(d) for d in scene.clouds if d is not drawable)
+    key = ("physical", drawable_digest(drawable), others, scene.noise.seed, scene.noise.size,
            scene.settings, scene.sun, sky)  # fmt: skip
     return _remember(key, lambda: physical_light(drawable, replace(scene, sky=sky), threads))
 
