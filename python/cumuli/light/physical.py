@@ -9,9 +9,9 @@ maths):
   the light, :data:`ALONG` × finer than across it, marched through the drawable's own extinction
   (the procedural density of a 2018 cloud, not a voxelisation), plus the optical depth of the
   scene's other drawables upstream of each column (clouds shade each other). The drawers add
-  the first :data:`OCTAVES` scattering orders as Wrenninge, Kulla & Lundqvist's octaves ("Oz: the great
-  and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky, atmosphere and
-  cloud rendering in Frostbite"): order ``i`` scatters ``aⁱ`` of the light with the phase
+  the first :data:`OCTAVES` scattering orders as Wrenninge, Kulla & Lundqvist's octaves ("Oz:
+  the great and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky,
+  atmosphere and cloud rendering in Frostbite"): order ``i`` scatters ``aⁱ`` of the light with the phase
   function's ``g`` scaled by ``bⁱ`` and the sun's optical depth scaled by ``cⁱ``, with their
   ``a = b = c = ½`` (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`); order 0 is exact
   single scattering.
