@@ -11,9 +11,9 @@ maths):
   scene's other drawables upstream of each column (clouds shade each other). The drawers add
   the first :data:`OCTAVES` scattering orders as Wrenninge, Kulla & Lundqvist's octaves ("Oz:
   the great and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky,
-  atmosphere and cloud rendering in Frostbite"): order ``i`` scatters ``aⁱ`` of the light with the phase
-  function's ``g`` scaled by ``bⁱ`` and the sun's optical depth scaled by ``cⁱ``, with their
-  ``a = b = c = ½`` (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`); order 0 is exact
+  atmosphere and cloud rendering in Frostbite"): order ``i`` scatters ``aⁱ`` of the light with
+  the phase function's ``g`` scaled by ``bⁱ`` and the sun's optical depth scaled by ``cⁱ``, with
+  their ``a = b = c = ½`` (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`); order 0 is exact
   single scattering.
 - **Multiple scattering through the cloud**: the diffusion approximation (Stam 1995) on the
   world lattice, fed by the sun's and the sky's first scattering, with Marshak's vacuum
