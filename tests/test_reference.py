@@ -54,7 +54,10 @@ def test_reference_images_are_small_and_converged(reference) -> None:
     mask = ref.covered_blocks(reference["T"])
     assert mask.sum() > 200  # a cloud fills a good part of the frame
     scene, _ = ref.reference_scene()
-    assert record["scene"]["settings"] == scene.settings.to_dict()
+    medium = ("extinction_scale", "albedo", "phase", "hg_g", "octaves", "gain", "lacunarity",
+              "frequency", "kappa")  # fmt: skip
+    for key in medium:  # the references were made for today's medium
+        assert record["scene"]["settings"][key] == getattr(scene.settings, key), key
 
 
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
