@@ -63,6 +63,8 @@ GROUPED_KINDS: set[str] = {Cloud.kind, ParticleCloud.kind, BillboardCloud.kind, 
 CLIPS_SOLIDS: set[str] = {Cloud.kind, VolumeCloud.kind, ParticleCloud.kind}
 #: CPU split drawers (the GL drawer's ``draw_split``) of the kinds impostors can split.
 CPU_SPLITS: dict[str, Callable[..., Any]] = {ParticleCloud.kind: split_particle_cloud_cpu}
+#: Kinds whose drawer draws the scene's ground itself (others are composited over it).
+GROUND_KINDS: set[str] = {Cloud.kind}
 
 
 def register_drawers(
