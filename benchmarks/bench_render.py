@@ -3,7 +3,10 @@
 The default cumulus (``cumuli.demo.cumulus_scene``: 35-sphere Gaussian cumulus, 20³ light grid)
 is rendered at 320×240 and 640×480 on llvmpipe, at 640×480, 800×600 and 1920×1080 on a GPU
 (``--quick``: 160×120 and 320×240, fewer repeats) with
-``march="paper"`` and ``march="union"`` on both backends. GL time per frame is the sum of the
+``march="paper"`` and ``march="union"`` on both backends, and the physical lighting mode against
+the paper mode (``lighting_ratio``: the issue's limit of 1.5× the paper mode's frame time, as
+``{limit, comparison, reached, met}``; GL and CPU, interleaved repeats of the same run; light
+steps excluded). GL time per frame is the sum of the
 tiles' GL_TIME_ELAPSED queries (the draw only: no upload, no read-back); wall time of the whole
 ``render`` call is recorded too. Ratios (union/paper, GL/CPU) come from the same run; on
 llvmpipe, whose timer queries miss the deferred rasteriser threads, they use wall time.
@@ -22,6 +25,58 @@ import _common as common  # noqa: E402
 
 import cumuli as cu  # noqa: E402
 from cumuli.demo import cumulus_scene  # noqa: E402
+
+#: The issue's limit on the physical mode's frame time, in paper-mode frame times.
+PHYSICAL_LIMIT = 1.5
+
+
+def target(limit: float, reached: float) -> dict:
+    """An issue target: its limit, what this run reached and whether it is met."""
+    return {"limit": limit, "comparison": "<=", "reached": reached, "met": bool(reached <= limit)}
+
+
+def lighting_ratios(base: cu.Scene, camera: cu.Camera, sizes, repeats: int, timer_ok: bool) -> dict:
+    """Physical against paper lighting, GL and CPU, per image size (light steps done first)."""
+    scenes = {
+        m: base.replace(settings=base.settings.replace(lighting=m)) for m in ("paper", "physical")
+    }
+    lit = {m: cu.prepare_light(s) for m, s in scenes.items()}
+    out: dict[str, dict] = {}
+    with cu.Renderer() as renderer:
+        for w, h in sizes:
+            gpu: dict[str, list[float]] = {m: [] for m in lit}
+
+            def gl(m: str, w: int = w, h: int = h, gpu: dict = gpu) -> None:
+                renderer.render(lit[m], camera, w, h)
+                if renderer.last_gpu_ns is not None:
+                    gpu[m].append(renderer.last_gpu_ns * 1e-9)
+
+            fns = {f"gl_{m}": (lambda m=m: gl(m)) for m in lit}
+            fns.update({f"cpu_{m}": (lambda m=m, w=w, h=h: cu.render_cpu(lit[m], camera, w, h))
+                        for m in lit})  # fmt: skip
+            times = common.interleaved_repeats(fns, repeats)
+            entry: dict = {k: {"wall_s": common.spread(v[0])} for k, v in times.items()}
+            for m in lit:
+                if len(gpu[m]) > 1:
+                    entry[f"gl_{m}"]["gl_time_s"] = common.spread(gpu[m][1:])
+            gl_stat = "gl_time_s" if timer_ok and "gl_time_s" in entry["gl_paper"] else "wall_s"
+
+            def med(name: str, stat: str = "wall_s", entry=entry) -> float:
+                return entry[name][stat]["median"]
+
+            entry["gl_physical_over_paper"] = target(
+                PHYSICAL_LIMIT, med("gl_physical", gl_stat) / med("gl_paper", gl_stat)
+            )
+            entry["cpu_physical_over_paper"] = target(
+                PHYSICAL_LIMIT, med("cpu_physical") / med("cpu_paper")
+            )
+            key = f"{w}x{h}"
+            out[key] = entry
+            common.log(
+                f"{key} physical/paper: GL {entry['gl_physical_over_paper']['reached']:.2f}, "
+                f"CPU {entry['cpu_physical_over_paper']['reached']:.2f}"
+            )
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -89,6 +144,7 @@ def main(argv: list[str] | None = None) -> int:
             "gl_wall_over_cpu_wall_paper": med("gl_paper", "wall_s") / med("cpu_paper", "wall_s"),
             "gl_wall_over_cpu_wall_union": med("gl_union", "wall_s") / med("cpu_union", "wall_s"),
         }
+    lighting = lighting_ratios(base, camera, sizes, repeats, timer_ok)
     data = {
         "benchmark": "render",
         "quick": args.quick,
@@ -99,6 +155,7 @@ def main(argv: list[str] | None = None) -> int:
         "machine": machine,
         "methods": results,
         "ratios": ratios,
+        "lighting": lighting,
         "gl_ratio_time": "gl_time_s (GL timer queries)" if timer_ok else "wall_s",
         "gl_timer_note": None
         if timer_ok

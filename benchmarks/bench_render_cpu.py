@@ -4,9 +4,12 @@
 looks at the C++ marcher itself: one thread against every core (the image is the same bit for
 bit), ``march="paper"`` against ``"union"``, on the four cloud kinds of the paper (Gaussian
 cumulus, metaball cumulus, L-system castellanus, mesh → ellipsoids), with the GLSL marcher of the
-same run (GL timer queries of the draws, and wall time) for the CPU/GL ratios. Light grids are
-computed once, outside the timings. Writes ``render_cpu.json`` and ``render_cpu.png`` under
-``benchmarks/out/`` (or ``--out``); ``--quick`` renders 96×72 with fewer repeats.
+same run (GL timer queries of the draws, and wall time) for the CPU/GL ratios, and the physical
+lighting mode against the paper mode on every scene (``lighting``: the issue's limit of 1.5×, as
+``{limit, comparison, reached, met}``, CPU on every core and GL wall time, interleaved repeats).
+Light grids are computed once, outside the timings. Writes ``render_cpu.json`` and
+``render_cpu.png`` under ``benchmarks/out/`` (or ``--out``); ``--quick`` renders 96×72 with fewer
+repeats.
 """
 
 from __future__ import annotations
@@ -34,6 +37,53 @@ def scenes() -> dict[str, cu.Scene]:
             clouds=[rabbit], settings=cu.RenderSettings(fixed_step=0.03, absorption=3.0)
         ),
     }
+
+
+#: The issue's limit on the physical mode's frame time, in paper-mode frame times.
+PHYSICAL_LIMIT = 1.5
+
+
+def physical_ratios(renderer_ok: bool, width: int, height: int, repeats: int) -> dict[str, Any]:
+    """Physical over paper lighting per scene: CPU (every core) and GL wall time."""
+    out: dict[str, Any] = {}
+    renderer = cu.Renderer() if renderer_ok else None
+    try:
+        for name, base in scenes().items():
+            camera = base.default_camera()
+            lit = {
+                m: cu.prepare_light(base.replace(settings=base.settings.replace(lighting=m)))
+                for m in ("paper", "physical")
+            }
+            fns = {
+                f"cpu_{m}": (lambda m=m, lit=lit, c=camera: cu.render_cpu(lit[m], c, width, height))
+                for m in lit
+            }
+            if renderer is not None:
+                fns.update({
+                    f"gl_{m}": (lambda m=m, lit=lit, c=camera, r=renderer:
+                                r.render(lit[m], c, width, height))
+                    for m in lit
+                })  # fmt: skip
+            times = common.interleaved_repeats(fns, repeats)
+            entry: dict[str, Any] = {k: {"wall_s": common.spread(v[0])} for k, v in times.items()}
+            for backend in ("cpu", "gl"):
+                if f"{backend}_paper" not in entry:
+                    continue
+                reached = (entry[f"{backend}_physical"]["wall_s"]["median"]
+                           / entry[f"{backend}_paper"]["wall_s"]["median"])  # fmt: skip
+                entry[f"{backend}_physical_over_paper"] = {
+                    "limit": PHYSICAL_LIMIT, "comparison": "<=", "reached": reached,
+                    "met": bool(reached <= PHYSICAL_LIMIT),
+                }  # fmt: skip
+            out[name] = entry
+            common.log(
+                f"{name} physical/paper: "
+                + ", ".join(f"{k} {v['reached']:.2f}" for k, v in entry.items() if "over" in k)
+            )
+    finally:
+        if renderer is not None:
+            renderer.close()
+    return out
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -101,6 +151,8 @@ def main(argv: list[str] | None = None) -> int:
             "value": union[f"cpu_{cores}t_wall_s"]["median"]
             / paper[f"cpu_{cores}t_wall_s"]["median"]
         }
+    lighting = physical_ratios(renderer_ok=bool(machine["gl_renderer"]), width=width,
+                               height=height, repeats=repeats)  # fmt: skip
     data = {
         "benchmark": "render_cpu",
         "quick": args.quick,
@@ -114,6 +166,7 @@ def main(argv: list[str] | None = None) -> int:
         ),
         "methods": results,
         "ratios": ratios,
+        "lighting": lighting,
     }
     path = common.write_json(args.out / "render_cpu.json", data)
     common.log(f"wrote {path}")

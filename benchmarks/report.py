@@ -316,6 +316,13 @@ def other_lines(data: dict[str, dict[str, Any]]) -> list[str]:
             rows.append([size] + [ms(methods[k]["wall_s"]) for k in sorted(methods)])
         first = next(iter(render["methods"].values()))
         lines += table(["size"] + [f"{k} wall ms" for k in sorted(first)], rows)
+        lighting = render.get("lighting")
+        if lighting:  # issue 11: the physical mode costs at most 1.5× the paper mode
+            lines += ["Physical lighting against the paper mode, frame-time ratio (limit 1.5):", ""]
+            rows = [[size] + [f"{e[k]['reached']:.2f} ({verdict(e[k]['met'])})"
+                              for k in ("gl_physical_over_paper", "cpu_physical_over_paper")]
+                    for size, e in lighting.items()]  # fmt: skip
+            lines += table(["size", "GL physical / paper", "CPU physical / paper"], rows)
     return lines
 
 

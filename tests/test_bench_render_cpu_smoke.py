@@ -37,3 +37,6 @@ def test_bench_render_cpu_quick_writes_json_and_plot(tmp_path: Path) -> None:
             assert stat["n"] == data["repeats"] and 0 < stat["min"] <= stat["median"] <= stat["max"]
         assert ("gl_wall_s" in entry) == bool(gl)
         assert data["ratios"][key]["cpu_1t_over_all"] > 0
+    for shape in shapes:  # the physical mode against the paper mode, per scene
+        t = data["lighting"][shape]["cpu_physical_over_paper"]
+        assert t["limit"] == 1.5 and t["reached"] > 0 and t["met"] == (t["reached"] <= 1.5)

@@ -43,3 +43,8 @@ def test_bench_render_quick_writes_json(tmp_path: Path) -> None:
         ratios = data["ratios"][size]
         for key in ("gl_union_over_paper", "cpu_union_over_paper", "gl_wall_over_cpu_wall_paper"):
             assert ratios[key] > 0
+        # The physical mode against the paper mode, as the target (speed not checked).
+        light = data["lighting"][size]
+        for key in ("gl_physical_over_paper", "cpu_physical_over_paper"):
+            t = light[key]
+            assert t["limit"] == 1.5 and t["reached"] > 0 and t["met"] == (t["reached"] <= 1.5)

@@ -132,8 +132,12 @@ def test_cli_demo_writes_png_and_exr(tmp_path: Path, capsys: pytest.CaptureFixtu
     assert main(["demo", "-o", str(out), "--width", "48", "--height", "36"]) == 0
     png, exr = cu.read_image(out), cu.read_image(tmp_path / "demo.exr")
     assert png.shape == exr.shape == (36, 48, 4)
-    # The EXR holds linear float values beyond the PNG's 8 bits; the two agree after encoding.
-    np.testing.assert_allclose(cu.to_srgb8(exr), cu.to_srgb8(png), atol=1)
+    # The EXR holds the linear radiance; the PNG is it with the demo's exposure and tone curve.
+    from cumuli.demo import DEMO_EXPOSURE, DEMO_TONEMAP
+
+    np.testing.assert_allclose(
+        cu.to_srgb8(exr, DEMO_EXPOSURE, DEMO_TONEMAP), cu.to_srgb8(png), atol=1
+    )
     assert "demo.exr" in capsys.readouterr().out
 
 

@@ -103,4 +103,91 @@ SkyParams sky_of(const py::tuple& t) {
   return s;
 }
 
+namespace {
+template <class T>
+T get(const py::dict& d, const char* key, const char* what) {
+  if (!d.contains(key)) throw py::value_error(std::string(what) + " is missing '" + key + "'");
+  return d[key].cast<T>();
+}
+}  // namespace
+
+GroundParams ground_of(const py::object& obj) {
+  GroundParams g;
+  if (obj.is_none()) return g;
+  const py::dict d = obj.cast<py::dict>();
+  g.enabled = true;
+  g.height = get<float>(d, "height", "ground");
+  g.albedo = v3(get<V3>(d, "albedo", "ground"));
+  g.sky_irradiance = v3(get<V3>(d, "sky_irradiance", "ground"));
+  if (d.contains("shadow") && !d["shadow"].is_none()) {
+    const FloatArray sh = d["shadow"].cast<FloatArray>();
+    if (sh.ndim() != 2 || sh.shape(0) < 1 || sh.shape(1) < 1)
+      throw py::value_error("ground shadow must be a non-empty (nz, nx) array");
+    g.nz = static_cast<int>(sh.shape(0));
+    g.nx = static_cast<int>(sh.shape(1));
+    g.shadow.assign(sh.data(), sh.data() + sh.size());
+    const auto e = get<std::array<float, 4>>(d, "extent", "ground");
+    g.x0 = e[0];
+    g.z0 = e[1];
+    g.x1 = e[2];
+    g.z1 = e[3];
+  }
+  try {
+    g.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return g;
+}
+
+PhysicalParams physical_of(const py::dict& d) {
+  PhysicalParams p;
+  const char* w = "physical";
+  p.extinction_scale = get<float>(d, "extinction_scale", w);
+  p.albedo = get<float>(d, "albedo", w);
+  p.dual_hg = get<bool>(d, "dual_hg", w);
+  p.g1 = get<float>(d, "g1", w);
+  p.g2 = get<float>(d, "g2", w);
+  p.blend = get<float>(d, "blend", w);
+  p.octaves = get<int>(d, "octaves", w);
+  p.oct_a = get<float>(d, "a", w);
+  p.oct_b = get<float>(d, "b", w);
+  p.oct_c = get<float>(d, "c", w);
+  p.jitter_seed = get<int>(d, "jitter_seed", w);
+  p.min_transmittance = get<float>(d, "min_transmittance", w);
+  try {
+    p.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return p;
+}
+
+PhysicalGrids physical_grids_of(const py::object& obj) {
+  const py::tuple t = obj.cast<py::tuple>();
+  if (t.size() != 5) throw py::value_error("physical light must be (frame, depth, grid_lo, grid_hi, rgba)");
+  PhysicalGrids g;
+  const py::tuple f = t[0].cast<py::tuple>();
+  if (f.size() != 6) throw py::value_error("frame must be (u, v, w, lo, hi, res)");
+  g.frame.u = v3(f[0].cast<V3>());
+  g.frame.v = v3(f[1].cast<V3>());
+  g.frame.w = v3(f[2].cast<V3>());
+  g.frame.lo = v3(f[3].cast<V3>());
+  g.frame.hi = v3(f[4].cast<V3>());
+  const auto res = f[5].cast<std::array<int, 3>>();
+  for (int a = 0; a < 3; ++a) g.frame.res[a] = res[a];
+  const FloatArray depth = t[1].cast<FloatArray>();
+  g.depth.assign(depth.data(), depth.data() + depth.size());
+  const FloatArray rgba = t[4].cast<FloatArray>();
+  g.grid = grid_of(rgba, 0, t[2].cast<V3>(), t[3].cast<V3>(), "physical light", 1);
+  if (rgba.shape(3) != 4) throw py::value_error("physical light lattice must be (D, H, W, 4)");
+  g.rgba.assign(rgba.data(), rgba.data() + rgba.size());
+  try {
+    g.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return g;
+}
+
 }  // namespace cumuli::bind

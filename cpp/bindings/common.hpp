@@ -12,6 +12,8 @@
 #include "cumuli/light/volume_light.hpp"
 #include "cumuli/model/cloud.hpp"
 #include "cumuli/model/particles.hpp"
+#include "cumuli/rendering/ground.hpp"
+#include "cumuli/rendering/physical.hpp"
 #include "cumuli/rendering/volume_march.hpp"
 
 namespace cumuli::bind {
@@ -65,5 +67,14 @@ py::array_t<double> to_array_d(const std::vector<double>& v, py::ssize_t n);
 
 // The sky as Python passes it: (zenith, horizon, ground, exponent, disc radius, disc intensity).
 SkyParams sky_of(const py::tuple& t);
+
+// The ground as Python passes it: None, or a dict with height, albedo, sky_irradiance and
+// optionally shadow ((nz, nx) float32) with extent (x0, z0, x1, z1).
+GroundParams ground_of(const py::object& g);
+// The physical shading parameters (dict with extinction_scale, albedo, dual_hg, g1, g2, blend,
+// octaves, a, b, c, jitter_seed, min_transmittance).
+PhysicalParams physical_of(const py::dict& d);
+// A drawable's physical light: (frame, depth (nw, nv, nu), grid_lo, grid_hi, rgba (D, H, W, 4)).
+PhysicalGrids physical_grids_of(const py::object& t);
 
 }  // namespace cumuli::bind

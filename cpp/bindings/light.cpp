@@ -14,8 +14,10 @@
 
 #include "common.hpp"
 #include "cumuli/light/caf.hpp"
-#include "cumuli/light/volume_light.hpp"
 #include "cumuli/light/particle_light.hpp"
+#include "cumuli/light/physical.hpp"
+#include "cumuli/light/volume_light.hpp"
+#include "cumuli/parallel.hpp"
 
 namespace cumuli::bind {
 
@@ -117,6 +119,26 @@ ShExpTable table_of(const py::array_t<float>& a, const py::array_t<float>& b, fl
 }  // namespace
 
 void bind_volume_light(py::module_& m) {
+  m.def(
+      "sample_volume",
+      [](const FloatArray& vol, V3 lo, V3 hi, const FloatArray& points, int threads) {
+        const VolumeGrid g = grid_of(vol, 0, lo, hi, "volume");
+        require_points(points, "points");
+        const std::size_t n = static_cast<std::size_t>(points.shape(0));
+        auto out = new_array({static_cast<py::ssize_t>(n)});
+        const float *v = vol.data(), *p = points.data();
+        float* o = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          parallel_for(n, threads, [&](std::size_t i) {
+            o[i] = sample_trilinear(v, g, glm::vec3(p[3 * i], p[3 * i + 1], p[3 * i + 2]));
+          });
+        }
+        return out;
+      },
+      py::arg("volume"), py::arg("lo"), py::arg("hi"), py::arg("points"), py::arg("threads") = 0,
+      "Trilinear values (texel centres, clamp to edge) of a (D, H, W) volume at (N, 3) points.");
+
   m.def(
       "sun_optical_depth",
       [](const FloatArray& vols, V3 lo, V3 hi, V3 to_sun, float step, int threads,
@@ -824,6 +846,225 @@ void bind_particle_light(py::module_& m) {
         return out;
       },
       "Harris 2002 phase functions normalised to 4π at cosines c: rayleigh, isotropic or hg.");
+}
+
+}  // namespace cumuli::bind
+
+// --- the physical mode's light step (light/physical.hpp) ------------------------------------
+namespace cumuli::bind {
+
+namespace {
+
+struct MediumArgs {
+  std::vector<CloudShape> shapes;
+  std::vector<FloatArray> volumes;  // keeps the arrays alive
+  Medium medium;
+};
+
+// clouds: [(centres, radii, rotations, model, kappa, phi, scale)], volumes: [(density, lo, hi,
+// scale)], noise + fBm for the clouds.
+void medium_of(MediumArgs& m, const py::list& clouds, const py::list& volumes, const Noise* noise,
+               int octaves, float gain, float lacunarity, float frequency) {
+  DensitySource src;
+  src.noise = noise;
+  src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+  if (!clouds.empty()) {
+    if (noise == nullptr) throw py::value_error("noise is required for clouds");
+    try {
+      src.fbm.validate();
+    } catch (const std::invalid_argument& e) {
+      throw py::value_error(e.what());
+    }
+  }
+  m.shapes.reserve(clouds.size());
+  for (const auto& h : clouds) {
+    const py::tuple t = h.cast<py::tuple>();
+    if (t.size() != 7) throw py::value_error("a cloud is (centres, radii, rotations, model, kappa, phi, scale)");
+    m.shapes.push_back(cloud_from_arrays(t[0].cast<FloatArray>(), t[1].cast<FloatArray>(),
+                                         t[2].cast<FloatArray>(), t[3].cast<std::string>(),
+                                         t[4].cast<float>(), t[5].cast<float>()));
+  }
+  for (std::size_t k = 0; k < clouds.size(); ++k) {
+    const float scale = clouds[k].cast<py::tuple>()[6].cast<float>();
+    if (!(scale >= 0.0f) || !std::isfinite(scale)) throw py::value_error("extinction scale must be >= 0");
+    m.medium.clouds.push_back(CloudMedium{&m.shapes[k], src, scale});
+  }
+  for (const auto& h : volumes) {
+    const py::tuple t = h.cast<py::tuple>();
+    if (t.size() != 4) throw py::value_error("a volume is (density, lo, hi, scale)");
+    m.volumes.push_back(t[0].cast<FloatArray>());
+    const VolumeGrid g = grid_of(m.volumes.back(), 0, t[1].cast<V3>(), t[2].cast<V3>(), "volume");
+    const float scale = t[3].cast<float>();
+    if (!(scale >= 0.0f) || !std::isfinite(scale)) throw py::value_error("sigma_t must be >= 0");
+    m.medium.volumes.push_back(VolumeMedium{m.volumes.back().data(), g, scale});
+  }
+}
+
+SunFrame frame_of(const py::tuple& t) {
+  if (t.size() != 6) throw py::value_error("frame must be (u, v, w, lo, hi, res)");
+  SunFrame f;
+  f.u = v3(t[0].cast<V3>());
+  f.v = v3(t[1].cast<V3>());
+  f.w = v3(t[2].cast<V3>());
+  f.lo = v3(t[3].cast<V3>());
+  f.hi = v3(t[4].cast<V3>());
+  const auto res = t[5].cast<std::array<int, 3>>();
+  for (int a = 0; a < 3; ++a) f.res[a] = res[a];
+  try {
+    f.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return f;
+}
+
+py::tuple frame_tuple(const SunFrame& f) {
+  auto vec = [](glm::vec3 a) { return py::make_tuple(a.x, a.y, a.z); };
+  return py::make_tuple(vec(f.u), vec(f.v), vec(f.w), vec(f.lo), vec(f.hi),
+                        py::make_tuple(f.res[0], f.res[1], f.res[2]));
+}
+
+}  // namespace
+
+void bind_physical_light(py::module_& m) {
+  m.def(
+      "light_frame",
+      [](V3 lo, V3 hi, V3 to_sun, std::array<int, 3> res) {
+        try {
+          return frame_tuple(make_sun_frame(Box{v3(lo), v3(hi)}, v3(to_sun), res.data()));
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+      },
+      "The sun's lattice enclosing a box: (u, v, w, lo, hi, res) with w the way light travels.");
+
+  m.def(
+      "light_space_depth",
+      [](const py::list& clouds, const py::list& volumes, const Noise* noise, int octaves,
+         float gain, float lacunarity, float frequency, const py::tuple& frame, float step,
+         int threads) {
+        MediumArgs args;
+        medium_of(args, clouds, volumes, noise, octaves, gain, lacunarity, frequency);
+        const SunFrame f = frame_of(frame);
+        if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");
+        if (static_cast<double>(f.hi.z - f.lo.z) / step > (1 << 22))
+          throw py::value_error("step is too small for the frame's depth");
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          out = light_space_depth(args.medium, f, step, threads);
+        }
+        return to_array(out, {f.res[2], f.res[1], f.res[0]});
+      },
+      py::arg("clouds"), py::arg("volumes"), py::arg("noise").none(true), py::arg("octaves"),
+      py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"), py::arg("frame"),
+      py::arg("step"), py::arg("threads") = 0,
+      "Optical depth from the sun-side face of a light frame to each node: (nw, nv, nu).");
+
+  m.def(
+      "medium_optical_depth",
+      [](const py::list& clouds, const py::list& volumes, const Noise* noise, int octaves,
+         float gain, float lacunarity, float frequency, const FloatArray& points, V3 direction,
+         float step, int threads) {
+        MediumArgs args;
+        medium_of(args, clouds, volumes, noise, octaves, gain, lacunarity, frequency);
+        require_points(points, "points");
+        glm::vec3 d = v3(direction);
+        if (!(glm::length(d) > 0.0f)) throw py::value_error("direction must be non-zero");
+        d = glm::normalize(d);
+        if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");
+        const std::size_t n = static_cast<std::size_t>(points.shape(0));
+        auto out = new_array({static_cast<py::ssize_t>(n)});
+        const float* p = points.data();
+        float* o = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          parallel_for(n, threads, [&](std::size_t i) {
+            o[i] = args.medium.optical_depth(glm::vec3(p[3 * i], p[3 * i + 1], p[3 * i + 2]), d, step);
+          });
+        }
+        return out;
+      },
+      py::arg("clouds"), py::arg("volumes"), py::arg("noise").none(true), py::arg("octaves"),
+      py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"), py::arg("points"),
+      py::arg("direction"), py::arg("step"), py::arg("threads") = 0,
+      "Optical depth of every cloud and volume along points + t·direction, t >= 0: (N,).");
+
+  m.def(
+      "sample_frame",
+      [](const FloatArray& values, const py::tuple& frame, const FloatArray& points) {
+        const SunFrame f = frame_of(frame);
+        if (values.ndim() != 3 || values.shape(0) != f.res[2] || values.shape(1) != f.res[1] ||
+            values.shape(2) != f.res[0])
+          throw py::value_error("values must have the frame's shape (nw, nv, nu)");
+        require_points(points, "points");
+        const py::ssize_t n = points.shape(0);
+        auto out = new_array({n});
+        for (py::ssize_t i = 0; i < n; ++i) {
+          const float* p = points.data() + 3 * i;
+          out.mutable_data()[i] = sample_frame(values.data(), f, glm::vec3(p[0], p[1], p[2]));
+        }
+        return out;
+      },
+      "Trilinear values of a light-frame lattice at (N, 3) world points.");
+
+  m.def(
+      "sky_irradiance",
+      [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sky_coeffs, int order,
+         int n_theta, float step, int threads) {
+        const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
+        if (order < 1 || order > kMaxShOrder) throw py::value_error("sh_order must be in [1, 4]");
+        if (n_theta < 1 || n_theta > 64) throw py::value_error("sh_samples must be in [1, 64]");
+        if (sky_coeffs.size() != 3 * order * order)
+          throw py::value_error("sky_coeffs must hold 3·order² values");
+        if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");
+        const float *e = ext.data(), *s = sky_coeffs.data();
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          out = sky_irradiance(e, g, s, order, n_theta, step, threads);
+        }
+        return to_array(out, {g.d, g.h, g.w, 3});
+      },
+      py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sky_coeffs"),
+      py::arg("order"), py::arg("n_theta"), py::arg("step"), py::arg("threads") = 0,
+      "Sky irradiance reaching each voxel unscattered (SH visibility × sky SH): (D, H, W, 3).");
+
+  m.def(
+      "diffusion_light",
+      [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sun_t, V3 to_sun,
+         const py::object& sky_e, float albedo, float mean_cosine, int max_iterations,
+         float tolerance, int threads) {
+        const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
+        if (sun_t.size() != static_cast<py::ssize_t>(g.voxels()))
+          throw py::value_error("sun_t must have the extinction's shape");
+        FloatArray sky;
+        if (!sky_e.is_none()) {
+          sky = sky_e.cast<FloatArray>();
+          if (sky.size() != static_cast<py::ssize_t>(g.voxels()) * 3)
+            throw py::value_error("sky_e must have shape (D, H, W, 3)");
+        }
+        if (!(albedo >= 0.0f && albedo <= 1.0f)) throw py::value_error("albedo must be in [0, 1]");
+        if (!(mean_cosine > -1.0f && mean_cosine < 1.0f))
+          throw py::value_error("mean_cosine must be in (-1, 1)");
+        if (max_iterations < 1 || max_iterations > 100000)
+          throw py::value_error("max_iterations must be in [1, 100000]");
+        DiffusionParams p{albedo, mean_cosine, max_iterations, tolerance};
+        const int channels = sky ? 4 : 1;
+        const float *e = ext.data(), *st = sun_t.data(), *se = sky ? sky.data() : nullptr;
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          const std::vector<float> q = diffusion_sources(e, g, st, v3(to_sun), se, albedo);
+          out = diffusion_fluence(e, g, q.data(), channels, p, threads);
+        }
+        return to_array(out, {g.d, g.h, g.w, channels});
+      },
+      py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sun_t"), py::arg("to_sun"),
+      py::arg("sky_e").none(true), py::arg("albedo"), py::arg("mean_cosine"),
+      py::arg("max_iterations") = 2000, py::arg("tolerance") = 1e-5f, py::arg("threads") = 0,
+      "Collided fluence of the diffusion approximation: (D, H, W, 1 | 4) (sun per unit "
+      "irradiance, then the sky's RGB).");
 }
 
 }  // namespace cumuli::bind

@@ -270,6 +270,48 @@ void bind_shapes(py::module_& m) {
       "Density (rho, gamma) of a cloud at points (eq. 2 or eqs. 19-21).");
 
   m.def(
+      "density_grid",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+         const std::string& model, float kappa, float phi, const Noise* noise, float constant,
+         int octaves, float gain, float lacunarity, float frequency, std::array<float, 3> lo,
+         std::array<float, 3> hi, std::array<int, 3> res, int supersample, int threads) {
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+        DensitySource src;
+        src.noise = noise;
+        src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+        src.constant = constant;
+        try {
+          src.fbm.validate();
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        if (constant < 0.0f && noise == nullptr)
+          throw py::value_error("give a noise or a constant density >= 0");
+        Box box{glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])};
+        for (int a = 0; a < 3; ++a) {
+          if (!(box.hi[a] > box.lo[a]) || !std::isfinite(box.lo[a]) || !std::isfinite(box.hi[a]))
+            throw py::value_error("box hi must be greater than lo on every axis (finite)");
+          if (res[a] < 1 || res[a] > 4096) throw py::value_error("resolution must be in [1, 4096]");
+        }
+        if (supersample < 1 || supersample > 8) throw py::value_error("supersample must be in [1, 8]");
+        if (py::ssize_t{res[0]} * res[1] * res[2] > (py::ssize_t{1} << 30))
+          throw py::value_error("resolution has more than 2^30 voxels");
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          out = density_grid(cloud, src, box, res.data(), supersample, threads);
+        }
+        return to_array(out, {res[2], res[1], res[0]});
+      },
+      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
+      py::arg("kappa"), py::arg("phi"), py::arg("noise").none(true), py::arg("constant"),
+      py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"),
+      py::arg("lo"), py::arg("hi"), py::arg("res"), py::arg("supersample") = 1,
+      py::arg("threads") = 0,
+      "The density field (union attribution) on a lattice over a box: (D, H, W) float32, the "
+      "mean of supersample³ points per voxel (1: texel centres).");
+
+  m.def(
       "ellipsoids_from_mesh",
       [](const FloatArray& vertices, const py::array& faces_in, float scale, bool rotate,
          float min_radius, int threads) {

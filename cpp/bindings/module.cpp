@@ -43,6 +43,7 @@ void bind_shapes(py::module_& m);
 void bind_volumes(py::module_& m);
 void bind_light(py::module_& m);
 void bind_volume_light(py::module_& m);
+void bind_physical_light(py::module_& m);
 void bind_march(py::module_& m);
 void bind_volume_march(py::module_& m);
 void bind_composite(py::module_& m);
@@ -96,6 +97,7 @@ PYBIND11_MODULE(_core, m) {
   cumuli::bind::bind_impostors(m);
   cumuli::bind::bind_light(m);
   cumuli::bind::bind_volume_light(m);
+  cumuli::bind::bind_physical_light(m);
   cumuli::bind::bind_march(m);
   cumuli::bind::bind_volume_march(m);
   cumuli::bind::bind_composite(m);

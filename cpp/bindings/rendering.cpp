@@ -72,6 +72,14 @@ RenderCloud cloud_from_dict(const py::handle& h, std::size_t index) {
   } catch (const std::invalid_argument& e) {
     throw py::value_error(at + e.what());
   }
+  if (d.contains("physical") && !d["physical"].is_none()) {
+    try {
+      rc.physical = physical_grids_of(d["physical"]);
+    } catch (const py::value_error& e) {
+      throw py::value_error(at + e.what());
+    }
+    return rc;
+  }
   const FloatArray light = item(d, "light", index).cast<FloatArray>();
   if (light.ndim() != 3 || light.shape(0) < 1 || light.shape(1) < 1 || light.shape(2) < 1)
     throw py::value_error(at + "light must be a non-empty (D, H, W) array indexed [z, y, x]");
@@ -152,7 +160,7 @@ void bind_march(py::module_& m) {
          float fixed_step, float hg_g, int max_steps, int max_candidates, const std::string& march,
          int octaves, float gain, float lacunarity, float frequency, const Noise* noise,
          int threads, float density_constant, bool sort_candidates, bool with_sky,
-         const py::object& solids) {
+         const py::object& solids, const py::object& physical, const py::object& ground) {
         if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
           throw py::value_error("width and height must be in [1, " + std::to_string(kMaxEdge) +
                                 "], got " + std::to_string(width) + "x" + std::to_string(height));
@@ -181,6 +189,10 @@ void bind_march(py::module_& m) {
         s.sort_candidates = sort_candidates;
         s.fbm = FbmParams{octaves, gain, lacunarity, frequency};
         s.density_constant = density_constant;
+        if (!physical.is_none()) {
+          s.physical = true;
+          s.phys = physical_of(physical.cast<py::dict>());
+        }
 
         MarchScene scene;
         const glm::vec3 sd = vec3_arg(sun_direction, "sun direction");
@@ -196,6 +208,7 @@ void bind_march(py::module_& m) {
         scene.noise = noise;
         scene.with_sky = with_sky;
         scene.solids = solid_spheres(solids);
+        scene.ground = ground_of(ground);
         scene.clouds.reserve(clouds.size());
         for (std::size_t i = 0; i < clouds.size(); ++i)
           scene.clouds.push_back(cloud_from_dict(clouds[i], i));
@@ -226,7 +239,8 @@ void bind_march(py::module_& m) {
       py::arg("march"), py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"),
       py::arg("frequency"), py::arg("noise").none(true), py::arg("threads") = 0,
       py::arg("density_constant") = -1.0f, py::arg("sort_candidates") = true, py::arg("with_sky") = true,
-      py::arg("solids") = py::none(),
+      py::arg("solids") = py::none(), py::arg("physical") = py::none(),
+      py::arg("ground") = py::none(),
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image, row 0 at "
       "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
       "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); sort_candidates=False leaves candidates "
@@ -240,7 +254,7 @@ void bind_volume_march(py::module_& m) {
       [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi, V3 position, V3 forward,
          V3 right, V3 up, float tan_half_fov, int width, int height, V3 sun_dir, V3 sun_radiance,
          const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads, bool with_sky,
-         const py::object& solids) {
+         const py::object& solids, const py::object& physical, const py::object& physical_light) {
         const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
         const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
         if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
@@ -258,6 +272,13 @@ void bind_volume_march(py::module_& m) {
         p.step = step;
         p.with_sky = with_sky;
         p.solids = solid_spheres(solids);
+        PhysicalGrids grids;
+        if (!physical.is_none()) {
+          p.physical = true;
+          p.phys = physical_of(physical.cast<py::dict>());
+          grids = physical_grids_of(physical_light);
+          p.grids = &grids;
+        }
         const float *pd = density.data(), *pl = light.data();
         std::vector<float> img;
         {
@@ -271,6 +292,7 @@ void bind_volume_march(py::module_& m) {
       py::arg("width"), py::arg("height"), py::arg("sun_dir"), py::arg("sun_radiance"),
       py::arg("sky"), py::arg("sigma_t"), py::arg("albedo"), py::arg("g"), py::arg("step"),
       py::arg("threads"), py::arg("with_sky"), py::arg("solids") = py::none(),
+      py::arg("physical") = py::none(), py::arg("physical_light") = py::none(),
       "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top; "
       "solids (n, 4) stop every ray at the nearest solid.");
 }
@@ -281,7 +303,7 @@ void bind_composite(py::module_& m) {
       [](const FloatArray& layers, const FloatArray& boxes, const py::handle& camera_position,
          const py::handle& camera_target, const py::handle& camera_up, float fov,
          const py::tuple& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
-         int threads, const py::object& solid) {
+         int threads, const py::object& solid, const py::object& ground) {
         if (layers.ndim() != 4 || layers.shape(3) != 4)
           throw py::value_error("layers must have shape (L, H, W, 4)");
         const py::ssize_t n = layers.shape(0), height = layers.shape(1), width = layers.shape(2);
@@ -301,6 +323,7 @@ void bind_composite(py::module_& m) {
         sun.direction = glm::normalize(sd);
         sun.radiance = vec3_arg(sun_radiance, "sun radiance");
         const SkyParams sk = sky_of(sky);
+        const GroundParams gp = ground_of(ground);
         std::vector<Layer> list(static_cast<std::size_t>(n));
         const float* b = boxes.data();
         for (py::ssize_t k = 0; k < n; ++k) {
@@ -328,13 +351,14 @@ void bind_composite(py::module_& m) {
         {
           py::gil_scoped_release release;
           composite_layers(list, cam, static_cast<int>(width), static_cast<int>(height), sk, sun,
-                           dst, threads, solid_ptr);
+                           gp, dst, threads, solid_ptr);
         }
         return out;
       },
       py::arg("layers"), py::arg("boxes"), py::arg("camera_position"), py::arg("camera_target"),
       py::arg("camera_up"), py::arg("fov"), py::arg("sky"), py::arg("sun_direction"),
       py::arg("sun_radiance"), py::arg("threads") = 0, py::arg("solid") = py::none(),
+      py::arg("ground") = py::none(),
       "Composite premultiplied layers (L, H, W, 4) over the sky, front to back per pixel by the "
       "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top. "
       "solid (H, W, 4): rgb and view depth of opaque solids (+inf where none), which hide the "

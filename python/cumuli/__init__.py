@@ -20,11 +20,13 @@ from cumuli.anim.endless import (
 from cumuli.anim.frames import fly_towards, orbit, render_frames
 from cumuli.anim.weather import CloudLayer, Schedule, SkyState, Weather, load_weather
 from cumuli.camera import Camera
+from cumuli.ground import Ground
 from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.caf import absorption_factors
 from cumuli.light.grid import LightGrid, LightParams, load_light_grid
+from cumuli.light.medium import ExtinctionField, density_volume
 from cumuli.light.ndt import LightStats, light_grid
 from cumuli.light.particles import (
     ParticleLight,
@@ -32,7 +34,9 @@ from cumuli.light.particles import (
     particle_light,
     skylight_lights,
 )
+from cumuli.light.physical import PhysicalLight
 from cumuli.light.prepare import LitScene, prepare_light
+from cumuli.light.shadow import ShadowMap, shadow_map
 from cumuli.light.sprite_settings import SpriteSettings
 from cumuli.light.volume import VolumeLighting
 from cumuli.model import seedbox_presets
@@ -98,11 +102,14 @@ __all__ = [
     "transition_matrix",
     "Camera",
     "Cloud",
+    "density_volume",
     "ellipsoids_from_mesh",
+    "ExtinctionField",
     "fly_towards",
     "frames",
     "from_srgb8",
     "gaussian_cumulus",
+    "Ground",
     "light_grid",
     "LightGrid",
     "LightParams",
@@ -121,6 +128,7 @@ __all__ = [
     "metaball_cumulus",
     "Noise",
     "orbit",
+    "PhysicalLight",
     "prepare_light",
     "read_image",
     "render",
@@ -130,6 +138,8 @@ __all__ = [
     "Renderer",
     "RenderSettings",
     "Scene",
+    "ShadowMap",
+    "shadow_map",
     "Sky",
     "Sun",
     "to_srgb8",

@@ -104,13 +104,14 @@ def _check_output(output: Path) -> None:
         raise PermissionError(f"output folder {str(folder)!r} is not writable")
 
 
-def _write_pair(output: Path, img: np.ndarray) -> list[Path]:
-    """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR), opaque:
-    the render is already composited over the sky (its alpha is the clouds' coverage)."""
+def _write_pair(output: Path, img: np.ndarray, exposure: float, tonemap: str) -> list[Path]:
+    """Write ``output`` and, beside it, the same image in the other format (PNG ↔ EXR), opaque
+    (the render is already composited over the sky; its alpha is the clouds' coverage); the PNG
+    with ``exposure`` and ``tonemap``, the EXR linear."""
     from cumuli.io.images import write_image
 
     other = output.with_suffix(".exr" if output.suffix.lower() == ".png" else ".png")
-    return [write_image(output, img), write_image(other, img)]
+    return [write_image(p, img, exposure=exposure, tonemap=tonemap) for p in (output, other)]
 
 
 def _cmd_demo(args: argparse.Namespace) -> int:
@@ -126,16 +127,19 @@ def _cmd_demo(args: argparse.Namespace) -> int:
 
         _check_output(args.output)
         img = torchelsen_sequence(args.width, args.height, args.backend, args.seed)
-        paths = _write_pair(args.output, img)
+        paths = _write_pair(args.output, img, *_display(args, 1.0, "none"))
         print(f"wrote {' and '.join(map(str, paths))} (Torchelsen & Musse Fig. 14, CV 0 → 1)")
         return 0
-    from cumuli.demo import default_scene, harris_scene
+    from cumuli.demo import DEMO_EXPOSURE, DEMO_TONEMAP, harris_scene, sunset_scene
     from cumuli.rendering.compositor import render
 
     _check_output(args.output)
-    scene = harris_scene() if args.harris else default_scene()
+    if args.harris:
+        scene, display = harris_scene(), _display(args, 1.0, "none")
+    else:
+        scene, display = sunset_scene(), _display(args, DEMO_EXPOSURE, DEMO_TONEMAP)
     img = render(scene, scene.default_camera(), args.width, args.height, backend=args.backend)
-    paths = _write_pair(args.output, img)
+    paths = _write_pair(args.output, img, *display)
     print(f"wrote {' and '.join(map(str, paths))} ({args.width}×{args.height}, {args.backend})")
     return 0
 
@@ -160,7 +164,9 @@ def _cmd_render(args: argparse.Namespace) -> int:
     output = Path(args.output)
     _check_output(output)
     img = render(scene, scene.default_camera(), w, h, backend=args.backend)
-    path = write_image(output, img, alpha="keep" if args.alpha else "opaque")
+    exposure, tonemap = _display(args, 1.0, "none")
+    alpha = "keep" if args.alpha else "opaque"
+    path = write_image(output, img, alpha, exposure=exposure, tonemap=tonemap)
     print(f"wrote {path} ({w}×{h}, {args.backend})")
     return 0
 
@@ -188,6 +194,38 @@ def _seed(text: str) -> int:
     return value
 
 
+def _display(args: argparse.Namespace, exposure: float, tonemap: str) -> tuple[float, str]:
+    """The ``--exposure`` and ``--tonemap`` given, else the defaults passed."""
+    return (
+        exposure if args.exposure is None else args.exposure,
+        tonemap if args.tonemap is None else args.tonemap,
+    )
+
+
+def _exposure(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not (value >= 0 and np.isfinite(value)):
+        raise argparse.ArgumentTypeError(f"must be finite and >= 0, got {text!r}")
+    return value
+
+
+def _display_args(parser: argparse.ArgumentParser, exposure: str, tonemap: str) -> None:
+    from cumuli.io.images import TONEMAPS
+
+    parser.add_argument(
+        "--exposure", type=_exposure, default=None,
+        help=f"multiplies the linear image before the PNG's tone mapping (default {exposure})",
+    )  # fmt: skip
+    parser.add_argument(
+        "--tonemap", choices=TONEMAPS, default=None,
+        help=f"tone curve of the PNG: none clips, aces/reinhard roll highlights off "
+        f"(default {tonemap}); .exr files stay linear",
+    )  # fmt: skip
+
+
 def build_parser() -> argparse.ArgumentParser:
     from cumuli._version import __version__
 
@@ -202,7 +240,7 @@ def build_parser() -> argparse.ArgumentParser:
     info.set_defaults(run=_cmd_info)
 
     demo = sub.add_parser(
-        "demo", help="render the demo: three cumuli in a sunset sky (paper Fig. 10)"
+        "demo", help="render the demo: three cumuli at sunset, physically lit, with ground shadows"
     )
     demo.add_argument(
         "-o",
@@ -237,6 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="instead render Harris 2002 Fig. 13: particle clouds at sunset under two coloured "
         "lights (orange sun, pink light)",
     )
+    _display_args(
+        demo, "0.7; 1 with --harris, --torchelsen", "aces; none with --harris, --torchelsen"
+    )
     demo.set_defaults(run=_cmd_demo)
 
     rend = sub.add_parser("render", help="render a scene file written by Scene.save")
@@ -251,6 +292,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="keep the clouds' coverage (1 - T) as alpha instead of writing an opaque image",
     )
+    _display_args(rend, "1", "none")
     rend.set_defaults(run=_cmd_render)
     return parser
 

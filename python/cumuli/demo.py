@@ -1,7 +1,7 @@
-"""Ready-made scenes: the demo of ``cumuli demo`` (paper Fig. 10), a single daylight cumulus,
-Harris 2002's Fig. 13 (``cumuli demo --harris``: particle clouds at sunset under two coloured
-lights) and the climatic-variation sequence of ``cumuli demo --torchelsen`` (Torchelsen & Musse
-2005, Fig. 14)."""
+"""Ready-made scenes: the demo of ``cumuli demo`` (cumuli at sunset in the physical lighting mode,
+with their shadows on the ground), the paper's Fig. 10, a single daylight cumulus, Harris 2002's
+Fig. 13 (``cumuli demo --harris``: particle clouds at sunset under two coloured lights) and the
+climatic-variation sequence of ``cumuli demo --torchelsen`` (Torchelsen & Musse 2005, Fig. 14)."""
 
 from __future__ import annotations
 
@@ -10,6 +10,7 @@ import math
 import numpy as np
 
 from cumuli.camera import Camera
+from cumuli.ground import Ground
 from cumuli.model.gaussian import gaussian_cumulus
 from cumuli.noise import Noise
 from cumuli.scene import Scene
@@ -75,6 +76,29 @@ def harris_scene(n_particles: int = 2500, clouds: int = 4, seed: int = 3) -> Sce
         sky=Sky.sunset(),
         sprite_settings=SpriteSettings(ambient=(0.05, 0.04, 0.07)),
         camera=Camera(position=(0.0, 0.0, -40.0), target=(2.0, 14.0, 40.0), fov=60.0),
+    )
+
+
+#: Display settings of the demo (``cumuli demo``): exposure and tone mapping of the 8-bit image.
+DEMO_EXPOSURE = 0.7
+DEMO_TONEMAP = "aces"
+
+
+def sunset_scene(settings: RenderSettings | None = None) -> Scene:
+    """The demo: the three cumuli of :func:`default_scene` at sunset in the physical lighting
+    mode (RENDER_CONTRACT), over a ground they shade.
+
+    A low orange sun (17° up, from the right and slightly behind the camera, irradiance 9)
+    lights their sides; the sunset sky lights the rest, so undersides and the far sides stay
+    soft and blue-grey rather than black. Display with :data:`DEMO_EXPOSURE` and the ACES tone
+    curve (``cu.write_image(path, img, exposure=0.7, tonemap="aces")``).
+    """
+    base = default_scene()
+    return base.replace(
+        sun=Sun(direction=(0.8, 0.3, -0.15), colour=(1.0, 0.62, 0.36), intensity=9.0),
+        settings=settings or RenderSettings(lighting="physical"),
+        camera=Camera(position=(0.0, 4.0, -40.0), target=(0.0, 12.0, 30.0), fov=55.0),
+        ground=Ground(height=-20.0, albedo=(0.22, 0.2, 0.17)),
     )
 
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from cumuli._atomic import atomic_target
 from cumuli.camera import Camera
+from cumuli.ground import Ground
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.sprite_settings import SpriteSettings
 from cumuli.model.billboard_field import BillboardField
@@ -59,6 +60,7 @@ SCENE_FIELDS = (
     "sprite_settings",
     "impostor_settings",
     "billboard_shading",
+    "ground",
 )
 #: Most drawables one scene holds (a field of particle clouds has thousands; the GL marcher
 #: still draws at most `cumuli.settings.MAX_CLOUDS` 2018 clouds per pass).
@@ -140,7 +142,8 @@ class Scene:
     ``camera`` is optional: a default view used by ``cumuli render scene.json`` when the command
     line gives none (:meth:`default_camera` frames the clouds when it is None).
     ``billboard_shading`` lights and draws the billboard clouds and fields (Torchelsen & Musse
-    2005; its ambient defaults to this scene's sky).
+    2005; its ambient defaults to this scene's sky). ``ground`` is an optional
+    :class:`cumuli.Ground` plane under the clouds (RENDER_CONTRACT, "Ground").
     """
 
     clouds: tuple[Any, ...] = ()
@@ -154,6 +157,7 @@ class Scene:
     sprite_settings: SpriteSettings = field(default_factory=SpriteSettings)
     impostor_settings: ImpostorSettings = field(default_factory=ImpostorSettings)
     billboard_shading: BillboardShading = field(default_factory=BillboardShading)
+    ground: Ground | None = None
 
     def __post_init__(self) -> None:
         clouds = self.clouds
@@ -201,6 +205,8 @@ class Scene:
         ):
             if not isinstance(getattr(self, name), cls):
                 raise TypeError(f"scene.{name} must be a cumuli.{cls.__name__}")
+        if self.ground is not None and not isinstance(self.ground, Ground):
+            raise TypeError("scene.ground must be a cumuli.Ground or None")
 
     @property
     def kinds(self) -> tuple[str, ...]:
@@ -253,6 +259,7 @@ class Scene:
             "sprite_settings": self.sprite_settings.to_dict(),
             "impostor_settings": asdict(self.impostor_settings),
             "billboard_shading": self.billboard_shading.to_dict(),
+            "ground": None if self.ground is None else self.ground.to_dict(),
         }
 
     @classmethod
@@ -317,6 +324,8 @@ class Scene:
                 extras["billboard_shading"] = BillboardShading.from_dict(data["billboard_shading"])
             except (TypeError, ValueError) as exc:
                 raise type(exc)(f"scene.billboard_shading: {exc}") from None
+        ground = data.get("ground")
+        extras["ground"] = None if ground is None else Ground.from_dict(ground, "scene.ground")
         return cls(
             clouds=clouds, sun=sun, sky=sky, noise=noise, settings=settings, camera=camera,
             lights=tuple(extra), **extras,

@@ -21,6 +21,10 @@ MARCH_MODES = ("paper", "union")
 CANDIDATE_SORTS = ("insertion", "quicksort", "oddeven", "none")
 #: Light-grid methods the renderer may use (`cumuli.light_grid`).
 LIGHT_METHODS = ("ndt", "naive", "shared")
+#: Lighting models: the 2018 paper's render pass, or the physically based mode (RENDER_CONTRACT).
+LIGHTING_MODES = ("paper", "physical")
+#: Phase functions of the physical mode: one Henyey–Greenstein lobe or a blend of two.
+PHASE_FUNCTIONS = ("hg", "dual_hg")
 
 
 @dataclass(frozen=True)
@@ -67,6 +71,29 @@ class RenderSettings:
     light_method, light_step, light_extinction:
         How that grid is computed (:func:`cumuli.light_grid`): ``"ndt"`` (Algorithm 2) or
         ``"naive"``, its march step and the extinction ``A`` of eq. (3) per world unit.
+    lighting:
+        ``"paper"`` (the 2018 render pass above, the default) or ``"physical"``: the volume
+        rendering equation in physical units with the approximations RENDER_CONTRACT states
+        (single scattering, multiple scattering, sky light). The fields below are the physical
+        mode's; the paper mode ignores them (except ``shadow_resolution`` with a ground).
+    extinction_scale:
+        σt = extinction_scale · ρ per world unit (ρ the cloud density as in the paper mode; the
+        default 12 = absorption / step_ref gives the paper mode's opacity).
+    albedo:
+        Single-scattering albedo ϖ = σs / σt, in [0, 1].
+    phase, hg_g2, hg_blend:
+        ``"hg"``: Henyey–Greenstein with ``hg_g``; ``"dual_hg"``:
+        ``(1 − hg_blend)·HG(hg_g) + hg_blend·HG(hg_g2)``.
+    physical_resolution:
+        Longest edge of the physical mode's light grids (optical depth towards the sun, sky
+        visibility, multiple scattering); the other edges follow the cloud's box.
+    multiple_scattering, sky_light:
+        Switch the multiple-scattering approximation and the sky light off (to study each
+        approximation alone).
+    jitter_seed:
+        Seed of the interleaved-gradient pattern that jitters the camera rays' first sample.
+    shadow_resolution:
+        Edge of the ground's sun shadow map (texels), when the scene has a ground.
     """
 
     kappa: float | None = None
@@ -91,6 +118,17 @@ class RenderSettings:
     light_method: str = "ndt"
     light_step: float = 0.1
     light_extinction: float = 1.0
+    lighting: str = "paper"
+    extinction_scale: float = 12.0
+    albedo: float = 0.99
+    phase: str = "hg"
+    hg_g2: float = -0.3
+    hg_blend: float = 0.2
+    physical_resolution: int = 48
+    multiple_scattering: bool = True
+    sky_light: bool = True
+    jitter_seed: int = 0
+    shadow_resolution: int = 256
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -154,6 +192,24 @@ class RenderSettings:
             "light_extinction",
             check.real(self.light_extinction, "settings.light_extinction", 0.0),
         )
+        check.choice(self.lighting, "settings.lighting", LIGHTING_MODES)
+        scale = check.real(self.extinction_scale, "settings.extinction_scale", 0.0, 1e6)
+        s(self, "extinction_scale", scale)
+        s(self, "albedo", check.real(self.albedo, "settings.albedo", 0.0, 1.0))
+        check.choice(self.phase, "settings.phase", PHASE_FUNCTIONS)
+        g2 = check.real(self.hg_g2, "settings.hg_g2", -1.0, 1.0, lo_open=True, hi_open=True)
+        s(self, "hg_g2", g2)
+        s(self, "hg_blend", check.real(self.hg_blend, "settings.hg_blend", 0.0, 1.0))
+        res = check.integer(self.physical_resolution, "settings.physical_resolution", 4, 256)
+        s(self, "physical_resolution", res)
+        for name in ("multiple_scattering", "sky_light"):
+            value = getattr(self, name)
+            if not isinstance(value, (bool, np.bool_)):
+                raise TypeError(f"settings.{name} must be a bool, got {value!r}")
+            s(self, name, bool(value))
+        s(self, "jitter_seed", check.integer(self.jitter_seed, "settings.jitter_seed", 0, 1023))
+        shadow = check.integer(self.shadow_resolution, "settings.shadow_resolution", 2, 4096)
+        s(self, "shadow_resolution", shadow)
 
     def step_for(self, distance: float) -> float:
         """The march step Δ for a cloud whose centre is ``distance`` from the camera."""
@@ -197,6 +253,18 @@ class RenderSettings:
             kappa=self.kappa,
             **self.fbm_params(),
         )
+
+    @property
+    def physical(self) -> bool:
+        """Whether these settings select the physically based lighting."""
+        return self.lighting == "physical"
+
+    @property
+    def mean_cosine(self) -> float:
+        """The phase function's mean cosine ḡ (``hg_g``, or the blend of the two lobes)."""
+        if self.phase == "dual_hg":
+            return (1.0 - self.hg_blend) * self.hg_g + self.hg_blend * self.hg_g2
+        return self.hg_g
 
     def replace(self, **changes: Any) -> RenderSettings:
         """A copy with some fields changed (validated again)."""

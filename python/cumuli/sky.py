@@ -106,6 +106,18 @@ class Sky:
         disc = (t * t * (3 - 2 * t))[..., None] * np.float32(self.sun_disc_intensity)
         return (base + disc * np.asarray(sun.radiance, dtype=np.float32)).astype(np.float32)
 
+    def radiance(self, directions: Any, sun: Sun | None = None) -> np.ndarray:
+        """The sky's radiance (linear RGB) towards unit ``directions`` ``(N, 3)`` → ``(N, 3)``
+        float32: the gradient of :meth:`colour` without the sun disc (the sun's own light is
+        the directional :class:`Sun`). This is the environment the physical mode lights clouds
+        with and what a reference renderer takes as its environment map; ``sun`` is accepted
+        for skies whose radiance depends on it (the gradient does not)."""
+        if sun is not None and not isinstance(sun, Sun):
+            raise TypeError(f"sun must be a cumuli.Sun or None, got {type(sun).__name__}")
+        d = check.points3(directions, "directions")
+        return Sky(self.zenith, self.horizon, self.ground, self.exponent, self.sun_disc_radius,
+                   0.0).colour(d, Sun())  # fmt: skip
+
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
 

@@ -9,6 +9,14 @@
 #include "march/lighting.glsl"
 #include "common/sky.glsl"
 #include "common/solid.glsl"
+#include "common/ground.glsl"
+#ifdef PHYSICAL
+// The physical lighting mode (RENDER_CONTRACT "Physical lighting"): union marching with a
+// jittered start, σ = extinction·ρ, physical.glsl's shading; u_absorption, u_g and u_union are
+// not used.
+#include "common/physical.glsl"
+layout(std430, binding = 2) readonly buffer Physical { PhysicalCloud phys[]; };
+#endif
 
 // Compile-time caps: the settings are validated against them on the CPU (cumuli/scene.py).
 #define MAX_CANDIDATES 128
@@ -232,7 +240,14 @@ void main() {
     }
 
     float cos_theta = dot(dir, u_sun_dir);
+#ifdef PHYSICAL
+    float ow[MAX_OCTAVES];
+    float ok[MAX_OCTAVES];
+    int no = octave_terms(cos_theta, ow, ok);
+    float xi = phys_jitter(i, j);
+#else
     float phase = hg_phase(u_g, cos_theta);
+#endif
     int cap = clamp(u_max_candidates, 1, MAX_CANDIDATES);
     int max_steps = max(u_max_steps, 1);
 
@@ -247,6 +262,33 @@ void main() {
             ? u_fixed_step
             : clamp(u_lod_a * exp(-u_lod_delta * length(o - c.centre.xyz)), u_step_min, u_step_max);
         float t_union = -HUGE;
+#ifdef PHYSICAL
+        PhysicalCloud pc = phys[order[h]];
+        float offset = xi * step;
+        for (int k = 0; k < n && !done; ++k) {
+            if (cand_out[k] <= t_union) continue;
+            float t = max(t_union, cand_in[k]);
+            while (t < cand_out[k]) {
+                if (samples >= max_steps) { done = true; break; }
+                float s = t + offset;
+                if (!(s < t_solid)) break;  // a solid hides the rest of the ray
+                ++samples;
+                vec3 p = o + s * dir;
+                int a = c.info.z == 0 ? attribute_sample(n, s, p, k) : k;
+                float rho = cloud_density(c, cand_prim[a], p).x;
+                if (rho > 0.0) {
+                    float sigma = u_phys_extinction * rho;
+                    float at = exp(-sigma * step);
+                    vec3 S = phys_source(pc, p, ow, ok, no, u_sun_radiance, u_exact);
+                    colour += T * (1.0 - at) * S;
+                    T *= at;
+                    if (T < u_phys_min_t) { done = true; break; }
+                }
+                t += step;
+            }
+            t_union = t;
+        }
+#else
         for (int k = 0; k < n && !done; ++k) {
             float t = cand_in[k];
             if (u_union) {
@@ -274,7 +316,8 @@ void main() {
             }
             t_union = t;
         }
+#endif
     }
-    vec3 rgb = u_with_sky ? colour + T * sky(dir, u_sun_dir, u_sun_radiance) : colour;
+    vec3 rgb = u_with_sky ? colour + T * background(o, dir, u_sun_dir, u_sun_radiance) : colour;
     frag = vec4(rgb, 1.0 - T);
 }

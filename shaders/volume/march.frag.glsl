@@ -9,6 +9,13 @@
 #include "common/sky.glsl"
 #include "common/phase.glsl"
 #include "common/solid.glsl"
+#ifdef PHYSICAL
+// The physical lighting mode (RENDER_CONTRACT "Physical lighting"): σ = σ_t·ρ, samples at
+// (k + ξ)·h, physical.glsl's shading; u_light is not read.
+#include "common/physical.glsl"
+layout(std430, binding = 2) readonly buffer Physical { PhysicalCloud phys[]; };
+uniform bool u_exact_light;
+#endif
 
 uniform sampler3D u_density;
 uniform sampler3D u_light;
@@ -84,6 +91,21 @@ void main() {
     float len = t_out - t0;
     int n = clamp(int(ceil(len / u_step)), 1, u_max_steps);
     float h = len / float(n);
+#ifdef PHYSICAL
+    float ow[MAX_OCTAVES];
+    float ok[MAX_OCTAVES];
+    int no = octave_terms(dot(d, u_sun_dir), ow, ok);
+    int row = int(u_resolution.y) - 1 - int(gl_FragCoord.y);
+    float xi = phys_jitter(row, int(gl_FragCoord.x));
+    for (int k = 0; k < n && T >= u_phys_min_t; ++k) {
+      vec3 x = u_cam_pos + (t0 + (float(k) + xi) * h) * d;
+      float rho = trilinear(u_density, x).r;
+      if (rho <= 0.0) continue;
+      float dtau = exp(-u_sigma_t * rho * h);
+      colour += T * (1.0 - dtau) * phys_source(phys[0], x, ow, ok, no, u_sun_radiance, u_exact_light);
+      T *= dtau;
+    }
+#else
     float phase = hg_phase(u_g, dot(d, u_sun_dir));
     for (int k = 0; k < n && T >= MIN_TRANSMITTANCE; ++k) {
       vec3 x = u_cam_pos + (t0 + (float(k) + 0.5) * h) * d;
@@ -95,6 +117,7 @@ void main() {
       colour += T * (1.0 - dtau) * S;
       T *= dtau;
     }
+#endif
   }
   vec3 rgb = u_with_sky ? colour + T * sky(d, u_sun_dir, u_sun_radiance) : colour;
   frag_colour = vec4(rgb, 1.0 - T);

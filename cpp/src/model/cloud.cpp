@@ -1,10 +1,13 @@
 #include "cumuli/model/cloud.hpp"
 
 #include <cmath>
+#include <cstddef>
 #include <stdexcept>
 
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
+
+#include "cumuli/parallel.hpp"
 
 namespace cumuli {
 
@@ -85,6 +88,47 @@ DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const Densi
 DensitySample cloud_density(const CloudShape& cloud, int j, glm::vec3 p, const DensitySource& src) {
   return cloud.density.model == DensityModel::Metaball ? metaball_density(cloud, p, src)
                                                        : spheroid_density(cloud, j, p, src);
+}
+
+DensitySample field_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src) {
+  if (cloud.density.model == DensityModel::Metaball) return metaball_density(cloud, p, src);
+  int best = 0;
+  float best_q = INFINITY;
+  for (std::size_t k = 0; k < cloud.primitives.size(); ++k) {
+    const float q = cloud.primitives[k].normalised_distance(p);
+    if (q < best_q) {
+      best_q = q;
+      best = static_cast<int>(k);
+    }
+  }
+  return spheroid_density(cloud, best, p, src);
+}
+
+std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& src, const Box& box,
+                                const int res[3], int ss, int threads) {
+  const std::size_t nx = static_cast<std::size_t>(res[0]), ny = static_cast<std::size_t>(res[1]),
+                    nz = static_cast<std::size_t>(res[2]);
+  std::vector<float> out(nx * ny * nz);
+  const glm::vec3 cell = (box.hi - box.lo) / glm::vec3(static_cast<float>(res[0]),
+                                                        static_cast<float>(res[1]),
+                                                        static_cast<float>(res[2]));
+  const float inv_n = 1.0f / static_cast<float>(ss * ss * ss);
+  parallel_for(nz * ny, threads, [&](std::size_t row) {
+    const std::size_t z = row / ny, y = row % ny;
+    for (std::size_t x = 0; x < nx; ++x) {
+      double sum = 0.0;
+      for (int c = 0; c < ss; ++c)
+        for (int b = 0; b < ss; ++b)
+          for (int a = 0; a < ss; ++a) {
+            const glm::vec3 f((static_cast<float>(x) + (static_cast<float>(a) + 0.5f) / ss),
+                              (static_cast<float>(y) + (static_cast<float>(b) + 0.5f) / ss),
+                              (static_cast<float>(z) + (static_cast<float>(c) + 0.5f) / ss));
+            sum += field_density(cloud, box.lo + f * cell, src).rho;
+          }
+      out[row * nx + x] = ss == 1 ? static_cast<float>(sum) : static_cast<float>(sum) * inv_n;
+    }
+  });
+  return out;
 }
 
 }  // namespace cumuli

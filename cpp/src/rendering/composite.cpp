@@ -10,8 +10,8 @@
 namespace cumuli {
 
 void composite_layers(const std::vector<Layer>& layers, const CameraParams& camera, int width,
-                      int height, const SkyParams& sky, const SunParams& sun, float* out,
-                      int threads, const float* solid) {
+                      int height, const SkyParams& sky, const SunParams& sun,
+                      const GroundParams& ground, float* out, int threads, const float* solid) {
   if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
   camera.validate();
   const CameraRays rays(camera, width, height);
@@ -51,7 +51,7 @@ void composite_layers(const std::vector<Layer>& layers, const CameraParams& came
           colour += T * glm::vec3(s[0], s[1], s[2]);
           T = 0.0f;
         }
-        const glm::vec3 rgb = colour + T * sky_radiance(sky, sun, dir);
+        const glm::vec3 rgb = colour + T * background(sky, sun, ground, rays.origin, dir);
         float* o = out + px * 4;
         o[0] = rgb.x;
         o[1] = rgb.y;

@@ -114,6 +114,7 @@ void MarchSettings::validate() const {
           "max_candidates must be in [1, " + std::to_string(kMaxCandidatesLimit) + "]");
   require(std::isfinite(density_constant), "density_constant must be finite");
   fbm.validate();
+  if (physical) phys.validate();
 }
 
 float MarchSettings::step_for(glm::vec3 eye, glm::vec3 centre) const {
@@ -127,10 +128,15 @@ void MarchScene::validate(const MarchSettings& settings) const {
     throw std::invalid_argument("noise is required unless density_constant >= 0");
   for (const auto& c : clouds) {
     c.shape.validate();
-    c.light.validate();
+    if (settings.physical) {
+      c.physical.validate();
+    } else {
+      c.light.validate();
+    }
   }
   require(solids.size() <= static_cast<std::size_t>(kMaxSolids), "at most 16 solids");
   for (const auto& s : solids) s.validate();
+  ground.validate();
   for (int k = 0; k < 3; ++k) {
     require(std::isfinite(sun.direction[k]) && std::isfinite(sun.radiance[k]),
             "sun direction and radiance must be finite");
@@ -180,7 +186,7 @@ class RayMarcher {
     src_.constant = settings.density_constant;
   }
 
-  glm::vec4 march(glm::vec3 origin, glm::vec3 dir, Scratch& scratch) const {
+  glm::vec4 march(glm::vec3 origin, glm::vec3 dir, Scratch& scratch, float xi) const {
     const glm::vec3 inv_dir = 1.0f / dir;
     // Clouds whose box the ray meets in front of the camera, sorted by entry (t ≥ 0) with a
     // stable insertion sort so that ties keep the scene order.
@@ -202,14 +208,25 @@ class RayMarcher {
 
     State st;
     st.cos_theta = glm::dot(dir, scene_.sun.direction);
-    st.phase = henyey_greenstein(settings_.hg_g, st.cos_theta);
     st.t_limit = t_solid;
-    for (const BoxHit& h : hits) {
-      if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch, st))
-        break;
+    if (settings_.physical) {
+      const OctaveTerms terms(settings_.phys, st.cos_theta);
+      for (const BoxHit& h : hits) {
+        if (!march_physical(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch,
+                            st, terms, xi))
+          break;
+      }
+    } else {
+      st.phase = henyey_greenstein(settings_.hg_g, st.cos_theta);
+      for (const BoxHit& h : hits) {
+        if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch, st))
+          break;
+      }
     }
     const glm::vec3 rgb =
-        scene_.with_sky ? st.colour + st.T * sky_radiance(scene_.sky, scene_.sun, dir) : st.colour;
+        scene_.with_sky
+            ? st.colour + st.T * background(scene_.sky, scene_.sun, scene_.ground, origin, dir)
+            : st.colour;
     return glm::vec4(rgb, 1.0f - st.T);
   }
 
@@ -279,6 +296,44 @@ class RayMarcher {
     return true;
   }
 
+  // The physical mode (RENDER_CONTRACT "Physical lighting"): the union of the candidate
+  // intervals, each sample at ξ·Δ into its step, σ = extinction_scale·ρ. False when done.
+  bool march_physical(const PreparedCloud& pc, const BoxHit& h, glm::vec3 origin, glm::vec3 dir,
+                      Scratch& scratch, State& st, const OctaveTerms& terms, float xi) const {
+    const RenderCloud& rc = *pc.cloud;
+    const CloudShape& shape = rc.shape;
+    const PhysicalParams& ph = settings_.phys;
+    Candidate* cand = scratch.candidates.data();
+    const int n = collect_candidates(shape, origin, dir, h.t_in, h.t_out, cand,
+                                     settings_.max_candidates, settings_.sort_candidates);
+    const float step = pc.step;
+    const float offset = xi * step;
+    const bool attribute = shape.density.model == DensityModel::Spheroid;
+    float t = -INFINITY;
+    for (int k = 0; k < n; ++k) {
+      if (cand[k].t_out <= t) continue;
+      t = std::max(t, cand[k].t_in);
+      for (; t < cand[k].t_out; t += step) {
+        if (st.steps >= settings_.max_steps) return false;
+        const float s = t + offset;
+        if (!(s < st.t_limit)) return true;  // a solid hides the rest of the ray
+        ++st.steps;
+        const glm::vec3 p = origin + s * dir;
+        const int j = attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive)
+                                : cand[k].primitive;
+        const DensitySample d = cloud_density(shape, j, p, src_);
+        if (!(d.rho > 0.0f)) continue;
+        const float sigma = ph.extinction_scale * d.rho;
+        const float a = std::exp(-sigma * step);
+        const glm::vec3 S = rc.physical.source(p, terms, scene_.sun.radiance, ph.albedo);
+        st.colour += st.T * (1.0f - a) * S;
+        st.T *= a;
+        if (st.T < ph.min_transmittance) return false;
+      }
+    }
+    return true;
+  }
+
   const MarchScene& scene_;
   const MarchSettings& settings_;
   const std::vector<PreparedCloud>& prepared_;
@@ -309,7 +364,9 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
     for (std::size_t r = r0; r < r1; ++r) {
       for (int c = 0; c < width; ++c) {
         const glm::vec3 dir = rays.direction(static_cast<int>(r), c);
-        const glm::vec4 px = marcher.march(rays.origin, dir, scratch);
+        const float xi = settings.physical ? jitter(static_cast<int>(r), c, settings.phys.jitter_seed)
+                                           : 0.5f;
+        const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi);
         float* o = out + (r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c)) * 4;
         o[0] = px.x;
         o[1] = px.y;

@@ -23,6 +23,11 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
   if (p.solids.size() > static_cast<std::size_t>(kMaxSolids))
     throw std::invalid_argument("at most 16 solids");
   for (const auto& s : p.solids) s.validate();
+  if (p.physical) {
+    p.phys.validate();
+    if (p.grids == nullptr) throw std::invalid_argument("the physical mode needs the physical light");
+    p.grids->validate();
+  }
   const std::size_t npix = static_cast<std::size_t>(p.width) * p.height;
   std::vector<float> img(npix * 4);
   const float aspect = static_cast<float>(p.width) / static_cast<float>(p.height);
@@ -42,8 +47,20 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
       const float len = span.t_out - t0;
       const int n = std::max(1, static_cast<int>(std::ceil(len / p.step)));
       const float h = len / static_cast<float>(n);
+      if (p.physical) {
+        const OctaveTerms terms(p.phys, glm::dot(d, p.sun.direction));
+        const float xi = jitter(row, col, p.phys.jitter_seed);
+        for (int k = 0; k < n && T >= p.phys.min_transmittance; ++k) {
+          const glm::vec3 x = cam.position + (t0 + (static_cast<float>(k) + xi) * h) * d;
+          const float rho = sample_trilinear(density, g, x);
+          if (!(rho > 0.0f)) continue;
+          const float dtau = std::exp(-p.sigma_t * rho * h);
+          colour += T * (1.0f - dtau) * p.grids->source(x, terms, p.sun.radiance, p.phys.albedo);
+          T *= dtau;
+        }
+      }
       const float phase = henyey_greenstein(p.g, glm::dot(d, p.sun.direction));
-      for (int k = 0; k < n && T >= kVolumeMinTransmittance; ++k) {
+      for (int k = 0; k < n && T >= kVolumeMinTransmittance && !p.physical; ++k) {
         const glm::vec3 x = cam.position + (t0 + (k + 0.5f) * h) * d;
         const float rho = sample_trilinear(density, g, x);
         if (rho <= 0.0f) continue;

@@ -103,12 +103,44 @@ def srgb_to_linear(encoded: np.ndarray) -> np.ndarray:
     return np.where(e <= 0.04045, e / 12.92, np.power((e + 0.055) / 1.055, 2.4))
 
 
-def to_srgb8(img: np.ndarray) -> np.ndarray:
+#: Tone-mapping operators of :func:`to_srgb8` (applied to ``exposure · RGB``, linear in and out).
+TONEMAPS = ("none", "aces", "reinhard")
+
+
+def tone_map(rgb: np.ndarray, operator: str = "none") -> np.ndarray:
+    """Linear radiance → linear display values in [0, 1] (float64).
+
+    ``"none"`` clips; ``"aces"`` is Narkowicz's fit of the ACES filmic curve (2015),
+    ``x(2.51x + 0.03) / (x(2.43x + 0.59) + 0.14)``; ``"reinhard"`` is ``x / (1 + x)`` (Reinhard et
+    al. 2002), per channel.
+    """
+    if operator not in TONEMAPS:
+        raise ValueError(f"tonemap must be one of {TONEMAPS}, got {operator!r}")
+    x = np.maximum(np.asarray(rgb, dtype=np.float64), 0.0)
+    if operator == "aces":
+        x = x * (2.51 * x + 0.03) / (x * (2.43 * x + 0.59) + 0.14)
+    elif operator == "reinhard":
+        x = x / (1.0 + x)
+    return np.clip(x, 0.0, 1.0)
+
+
+def to_srgb8(img: np.ndarray, exposure: float = 1.0, tonemap: str = "none") -> np.ndarray:
     """Display bytes of a linear image: ``(H, W, 3|4)`` float → ``uint8`` of the same shape.
 
-    RGB goes through the sRGB transfer function; alpha is scaled linearly and stays unassociated
-    (colours are not multiplied by it). Values are clipped to [0, 1] and rounded to nearest.
+    RGB is multiplied by ``exposure``, tone mapped (:data:`TONEMAPS`: ``"none"`` clips to
+    [0, 1], ``"aces"`` and ``"reinhard"`` roll highlights off instead) and goes through the sRGB
+    transfer function; alpha is scaled linearly and stays unassociated (colours are not
+    multiplied by it). Values are rounded to nearest.
     """
+    if isinstance(exposure, bool) or not isinstance(
+        exposure, (int, float, np.integer, np.floating)
+    ):
+        raise TypeError(f"exposure must be a number, got {type(exposure).__name__}")
+    if not (np.isfinite(exposure) and exposure >= 0):
+        raise ValueError(f"exposure must be finite and >= 0, got {exposure}")
+    if tonemap not in TONEMAPS:
+        raise ValueError(f"tonemap must be one of {TONEMAPS}, got {tonemap!r}")
+    operator = tonemap
     if not isinstance(img, np.ndarray):
         raise TypeError(f"img must be a numpy array, got {type(img).__name__}")
     if img.dtype.kind != "f":
@@ -118,7 +150,10 @@ def to_srgb8(img: np.ndarray) -> np.ndarray:
     if not np.isfinite(img).all():
         raise ValueError("img contains NaN or infinite values")
     out = np.empty(img.shape, dtype=np.float64)
-    out[..., :3] = linear_to_srgb(img[..., :3])
+    rgb = img[..., :3]
+    if exposure != 1.0 or operator != "none":
+        rgb = tone_map(rgb.astype(np.float64) * float(exposure), operator)
+    out[..., :3] = linear_to_srgb(rgb)
     if img.shape[2] == 4:
         out[..., 3] = np.clip(img[..., 3], 0.0, 1.0)
     return np.floor(out * 255.0 + 0.5).astype(np.uint8)
@@ -206,12 +241,21 @@ def _verify(tmp: Path, ext: str, rgba: np.ndarray, opaque: bool) -> None:
         inp.close()
 
 
-def write_image(path: str | os.PathLike[str], img: np.ndarray, alpha: str = "opaque") -> Path:
+def write_image(
+    path: str | os.PathLike[str],
+    img: np.ndarray,
+    alpha: str = "opaque",
+    *,
+    exposure: float = 1.0,
+    tonemap: str = "none",
+) -> Path:
     """Write a linear ``(H, W, 3|4)`` float image to ``.exr`` (float32) or ``.png`` (8-bit sRGB).
 
     Row 0 is the top of the picture. ``alpha="opaque"`` (the default) saves what you see: alpha 1
     everywhere (a render's colour is already composited over the sky; its alpha is the clouds'
     coverage ``1 − T``); ``alpha="keep"`` writes the image's alpha (straight, not premultiplied).
+    ``exposure`` and ``tonemap`` are :func:`to_srgb8`'s and apply to ``.png`` only (an ``.exr``
+    keeps the linear radiance).
     The write is atomic and verified (temporary file in the same folder, read back, flushed,
     then :func:`os.replace`; a symlink is written through, the file mode kept); on failure
     nothing is left behind and an existing file is unchanged. At most :data:`MAX_PIXELS`
@@ -224,6 +268,12 @@ def write_image(path: str | os.PathLike[str], img: np.ndarray, alpha: str = "opa
     target = Path(path)
     ext = _extension(target)
     rgba = _as_rgba(img)
+    to_srgb8(rgba[:1, :1], exposure, tonemap)  # checks both before anything is written
+    if ext == ".png" and (exposure != 1.0 or tonemap != "none"):
+        # The display values (in [0, 1], float64: to_srgb8 of them gives the same bytes).
+        shown = rgba.astype(np.float64)
+        shown[..., :3] = tone_map(shown[..., :3] * float(exposure), tonemap)
+        rgba = shown
     real = resolve_target(target)
     folder = real.parent
     if not folder.is_dir():

@@ -9,6 +9,11 @@ billboard clouds and fields (:mod:`cumuli.light.billboards`) — and returns an 
 :class:`LitScene` that the renderers draw. Nothing is stored on the clouds, and a failed call
 changes no object.
 
+With ``settings.lighting == "physical"`` every drawable gets its :class:`cumuli.PhysicalLight`
+instead (:mod:`cumuli.light.physical`: the sun's optical depth, the sky's visibility and the
+multiple scattering), and a scene with a ground gets the sun's shadow map on it
+(:mod:`cumuli.light.shadow`), in either mode.
+
 Light a caller already has is passed in ``lights``: a `LightGrid` made by `light_grid` is used
 while its record and sun match what the scene's settings would make (otherwise recomputed); a
 grid made by hand (``LightGrid(values, box)``, no record) is used as it is. Results are
@@ -23,14 +28,16 @@ import threading
 import weakref
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from cumuli import _progress
 from cumuli import _validate as check
+from cumuli.ground import ground_radiance_unshadowed
 from cumuli.light import billboards as billboard_pass
+from cumuli.light.grid import primitives_digest
 from cumuli.light.ndt import LightGrid, LightRecord, light_grid
 from cumuli.light.particles import (
     ParticleLight,
@@ -38,6 +45,8 @@ from cumuli.light.particles import (
     light_is_stale,
     particle_light_many,
 )
+from cumuli.light.physical import PhysicalLight, physical_light
+from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
 from cumuli.light.volume import VolumeLighting
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
@@ -61,6 +70,8 @@ class LitScene:
 
     scene: Scene
     lights: tuple[Any, ...]
+    #: The sun's shadow map on the scene's ground (None without a ground).
+    shadow: ShadowMap | None = None
 
     def __post_init__(self) -> None:
         if not isinstance(self.scene, Scene):
@@ -286,6 +297,62 @@ LIGHT_PASSES: dict[str, Callable[..., Any]] = {
 LIGHT_BATCHES: dict[str, Callable[..., list[Any]]] = {ParticleCloud.kind: particles_light_many}
 
 
+def drawable_digest(drawable: Any) -> tuple:
+    """What a drawable's light depends on, as a hashable key."""
+    if isinstance(drawable, Cloud):
+        return ("cloud", primitives_digest(drawable), drawable.model, drawable.kappa, drawable.phi)
+    if isinstance(drawable, VolumeCloud):
+        return ("volume", _digest(drawable.density), drawable.box, drawable.sigma_t)
+    return (drawable.kind, id(drawable))
+
+
+def light_sky(scene: Scene) -> Any:
+    """The sky that lights the clouds: the scene's, with the ground's unshadowed radiance below
+    the horizon when the scene has a ground."""
+    if scene.ground is None:
+        return scene.sky
+    return replace(scene.sky, ground=ground_radiance_unshadowed(scene.ground, scene.sky, scene.sun))
+
+
+def physical_pass(drawable: Any, scene: Scene, given: Any = None, threads: int = 0) -> Any:
+    """The physical mode's light of a `Cloud` or a `VolumeCloud` (:func:`physical_light`),
+    memoised by content; a :class:`PhysicalLight` given is used as it is."""
+    if given is not None:
+        if not isinstance(given, PhysicalLight):
+            raise TypeError(
+                f"the physical light of a drawable must be a cumuli.PhysicalLight, got "
+                f"{type(given).__name__}"
+            )
+        return given
+    sky = light_sky(scene)
+    others = tuple(drawable_digest(d) for d in scene.clouds if d is not drawable)
+    key = ("physical", drawable_digest(drawable), others, scene.noise.seed, scene.noise.size,
+           scene.settings, scene.sun, sky)  # fmt: skip
+    return _remember(key, lambda: physical_light(drawable, replace(scene, sky=sky), threads))
+
+
+#: The physical mode's light pass of each kind.
+PHYSICAL_LIGHT_PASSES: dict[str, Callable[..., Any]] = {
+    Cloud.kind: physical_pass,
+    VolumeCloud.kind: physical_pass,
+}
+
+
+def scene_shadow(scene: Scene, threads: int = 0) -> ShadowMap | None:
+    """The shadow map the renderers use for a scene's ground (None without a ground, or when
+    no cloud can shade it), memoised by content."""
+    if scene.ground is None:
+        return None
+    height = scene.ground.height
+    extent = default_extent(scene, height)
+    if extent is None:
+        return None
+    n = scene.settings.shadow_resolution
+    key = ("shadow", tuple(drawable_digest(d) for d in scene.clouds), scene.noise.seed,
+           scene.noise.size, scene.settings, scene.sun.direction, height)  # fmt: skip
+    return _remember(key, lambda: compute_shadow(scene, extent, (n, n), height, threads))
+
+
 def prepare_light(
     scene: Scene | LitScene,
     lights: Mapping[int, Any] | Sequence[Any] | None = None,
@@ -320,8 +387,11 @@ def prepare_light(
         if len(lights) != n:
             raise ValueError(f"lights must hold one entry per cloud ({n}), got {len(lights)}")
         given = list(lights)
+    # The physical mode replaces the light pass of the marched kinds; particles and billboards
+    # keep their own light models (Harris 2002, Torchelsen & Musse 2005) in either mode.
+    passes = {**LIGHT_PASSES, **PHYSICAL_LIGHT_PASSES} if scene.settings.physical else LIGHT_PASSES
     for k, drawable in enumerate(scene.clouds):  # every kind known before any work
-        if LIGHT_PASSES.get(drawable.kind) is None:
+        if passes.get(drawable.kind) is None:
             raise TypeError(f"scene.clouds[{k}]: no light pass for kind {drawable.kind!r}")
     out: list[Any] = [None] * n
     for kind, batch in LIGHT_BATCHES.items():  # kinds whose light passes share one C++ call
@@ -344,7 +414,7 @@ def prepare_light(
         drawable = scene.clouds[k]
         try:
             with _progress.core(f"light of cloud {k}", progress):
-                out[k] = LIGHT_PASSES[drawable.kind](drawable, scene, given[k], threads)
+                out[k] = passes[drawable.kind](drawable, scene, given[k], threads)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
-    return LitScene(scene, tuple(out))
+    return LitScene(scene, tuple(out), scene_shadow(scene, threads))

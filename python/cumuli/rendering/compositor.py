@@ -26,12 +26,14 @@ from cumuli import _core, _progress
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext, _thread_default, default_context
+from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
-from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUPED_KINDS
+from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUND_KINDS, GROUPED_KINDS
 from cumuli.rendering.painters import CPUPainter, GLPainter
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
+from cumuli.settings import RenderSettings
 from cumuli.sky import Sun, as_sky, sky_args
 
 #: Largest tile drawn in one call (keeps each draw short on software GL and under driver timeouts).
@@ -57,12 +59,13 @@ def _one_drawer(kinds: set[str]) -> bool:
 def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     """The draw calls of ``scene``: one ``(kind, indices)`` over the sky when one pass can draw
     everything (an empty scene draws the sky with the marcher; grouped kinds sharing a drawer,
-    like billboard clouds and fields, count as one), else one per drawable. With solids, every
-    drawable is its own layer (each composites with the solids by its own box)."""
+    like billboard clouds and fields, count as one; a scene with a ground needs a drawer that
+    draws the ground), else one per drawable. With solids, every drawable is its own layer (each
+    composites with the solids by its own box)."""
     kinds = scene.kinds
     if not kinds:
         return [("cloud", [])]
-    if not scene.solids and (len(kinds) == 1 or _one_drawer(set(kinds))):
+    if single_pass(scene):
         return [(kinds[0], list(range(len(kinds))))]
     return [(kind, [k]) for k, kind in enumerate(kinds)]
 
@@ -70,6 +73,17 @@ def plan(scene: Scene) -> list[tuple[str, list[int]]]:
 def _union_box(scene: Scene, indices: Sequence[int]) -> np.ndarray:
     boxes = np.array([scene.clouds[k].layer_box() for k in indices], np.float32)
     return np.stack([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
+
+
+def single_pass(scene: Scene) -> bool:
+    """Whether one drawer draws the whole scene over its background (see :func:`plan`)."""
+    if scene.solids:
+        return False
+    kinds = scene.kinds
+    if not kinds:
+        return True
+    one = len(kinds) == 1 or _one_drawer(set(kinds))
+    return one and (scene.ground is None or kinds[0] in GROUND_KINDS)
 
 
 def compose(
@@ -81,12 +95,12 @@ def compose(
     threads: int = 0,
     impostors: Any = None,
 ) -> np.ndarray:
-    """Draw ``lit`` with ``painter`` (:mod:`cumuli.rendering.painters`) and composite the layers
-    and the solids over the sky (see the module doc); ``impostors`` an
+    """Draw ``lit`` with ``painter`` (:mod:`cumuli.rendering.painters`) and composite the layers,
+    the solids and the ground over the sky (see the module doc); ``impostors`` an
     :class:`~cumuli.rendering.impostor_cache.ImpostorCache` draws every layer through it."""
     scene = lit.scene
     calls = plan(scene)
-    if impostors is None and not scene.solids and len(calls) == 1:
+    if impostors is None and single_pass(scene):
         kind, indices = calls[0]
         return painter.layer(lit, kind, indices, camera, width, height, True)
     if impostors is not None:
@@ -104,6 +118,7 @@ def compose(
         layers, boxes, camera.position, camera.target, camera.up, float(camera.fov),
         sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
         solid,
+        ground_args(scene.ground, scene.sky, lit.shadow),
     )  # fmt: skip
 
 
@@ -141,9 +156,9 @@ def _check_kinds(scene: Scene, drawers: dict[str, Any], backend: str) -> None:
 
 def _check_layers(scene: Scene, width: int, height: int) -> None:
     """The layers of a layered render (one per draw call) must fit in ``MAX_LAYER_BYTES``."""
-    calls = plan(scene)
-    if len(calls) == 1 and not scene.solids:
+    if single_pass(scene):
         return
+    calls = plan(scene)
     need = len(calls) * width * height * 16
     if need > MAX_LAYER_BYTES:
         raise ValueError(
@@ -350,9 +365,8 @@ class Renderer:
         lit = prepare_light(plain, progress=progress) if lit is None else lit
         self.tiles.last_gpu_ns = None
         image = compose(lit, camera, width, height, GLPainter(self), impostors=cache)
-        calls = plan(plain)
-        single = cache is None and not plain.solids and len(calls) == 1
-        self.last_gpu_ns = self.tiles.last_gpu_ns if single and calls[0][0] == "cloud" else None
+        marched = cache is None and single_pass(plain) and plan(plain)[0][0] == "cloud"
+        self.last_gpu_ns = self.tiles.last_gpu_ns if marched else None
         return image
 
     def _cache_arg(self, impostors: Any) -> Any:
@@ -513,12 +527,15 @@ def render_volume(
     step: float | None = None,
     threads: int = 0,
     context: GLContext | None = None,
+    settings: RenderSettings | None = None,
 ) -> np.ndarray:
     """Render one lit density volume: ``(height, width, 4)`` float32 linear RGBA, row 0 on top.
 
     ``volume`` ``(D, H, W)`` densities over ``box = (box_min, box_max)``; ``light`` ``(D, H, W, 4)``
     from :meth:`cumuli.VolumeLighting.light` (made with the same ``sigma_t``). ``step`` defaults
     to half the smallest voxel edge. ``g`` is the Henyey–Greenstein asymmetry of sun scattering.
+    With ``settings=RenderSettings(lighting="physical")`` the physical mode lights the volume
+    (``σt = sigma_t·volume``; ``light`` may be None, the light step computes its own).
     A thin wrapper: a scene holding one :class:`cumuli.VolumeCloud` through :func:`render`.
     """
     if backend not in BACKENDS:
@@ -530,11 +547,16 @@ def render_volume(
     width = check.integer(width, "width", 1, MAX_IMAGE)
     height = check.integer(height, "height", 1, MAX_IMAGE)
     cam = _as_camera(camera)
+    settings = RenderSettings() if settings is None else settings
+    if not isinstance(settings, RenderSettings):
+        raise TypeError(f"settings must be a cumuli.RenderSettings, got {type(settings).__name__}")
+    if light is None and not settings.physical:
+        raise ValueError("light is required unless settings.lighting == 'physical'")
+    lit = {} if light is None else {"light": light, "light_sun": sun, "light_sky": sky}
     vc = VolumeCloud(
-        density=volume, box=box, sigma_t=sigma_t, albedo=albedo, g=g, step=step, light=light,
-        light_sun=sun, light_sky=sky,
+        density=volume, box=box, sigma_t=sigma_t, albedo=albedo, g=g, step=step, **lit
     )  # fmt: skip
-    scene = Scene([vc], sun=sun, sky=sky)
+    scene = Scene([vc], sun=sun, sky=sky, settings=settings)
     if backend == "cpu":
         return render_cpu(scene, cam, width, height, threads=threads)
     if context is None:

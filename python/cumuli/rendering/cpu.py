@@ -18,7 +18,8 @@ import numpy as np
 from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
-from cumuli.light.ndt import LightGrid
+from cumuli.ground import ground_args
+from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, PhysicalLight
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.cloud import Cloud
 from cumuli.model.solid import solid_arrays
@@ -28,14 +29,51 @@ from cumuli.scene import Scene
 MAX_EDGE = 1 << 14
 #: Largest image in pixels (the core's own limit, checked before any light grid is made).
 MAX_PIXELS = 1 << 26
+#: The physical mode stops a ray once its transmittance falls below this.
+MIN_TRANSMITTANCE = 1e-4
 
 
-def cloud_core_dict(cloud: Cloud, grid: LightGrid, kappa: float | None = None) -> dict[str, Any]:
-    """The dict ``_core.render_cpu`` takes for one cloud and its light grid.
+def physical_core_tuple(light: PhysicalLight) -> tuple:
+    """A drawable's physical light as the core takes it."""
+    lo, hi = light.box
+    return (light.frame, light.sun_depth, lo, hi, light.grid)
+
+
+def physical_core_args(settings: Any, octaves: int) -> dict[str, Any]:
+    """The physical shading parameters of the core (RENDER_CONTRACT "Physical lighting")."""
+    return {
+        "extinction_scale": float(settings.extinction_scale),
+        "albedo": float(settings.albedo),
+        "dual_hg": settings.phase == "dual_hg",
+        "g1": float(settings.hg_g),
+        "g2": float(settings.hg_g2),
+        "blend": float(settings.hg_blend),
+        "octaves": int(octaves),
+        "a": OCTAVE_A,
+        "b": OCTAVE_B,
+        "c": OCTAVE_C,
+        "jitter_seed": int(settings.jitter_seed),
+        "min_transmittance": MIN_TRANSMITTANCE,
+    }
+
+
+def cloud_core_dict(cloud: Cloud, grid: Any, kappa: float | None = None) -> dict[str, Any]:
+    """The dict ``_core.render_cpu`` takes for one cloud and its light (a `LightGrid`, or a
+    `PhysicalLight` in the physical mode).
 
     ``kappa`` overrides the cloud's own κ when given (``RenderSettings.kappa``).
     """
     centres, radii, rotations, model, cloud_kappa, phi = cloud.core_args()
+    if isinstance(grid, PhysicalLight):
+        return {
+            "centres": centres,
+            "radii": radii,
+            "rotations": rotations,
+            "model": model,
+            "kappa": float(cloud_kappa if kappa is None else kappa),
+            "phi": float(phi),
+            "physical": physical_core_tuple(grid),
+        }
     lo, hi = grid.box
     return {
         "centres": centres,
@@ -112,7 +150,14 @@ def render_cpu_args(
         "threads": threads,
         "with_sky": bool(with_sky),
         "solids": solid_arrays(scene.solids)[0] if scene.solids else None,
+        "physical": physical_core_args(s, _octaves(lit, indices)) if s.physical else None,
+        "ground": ground_args(scene.ground, scene.sky, lit.shadow),
     }
+
+
+def _octaves(lit: LitScene, indices: Sequence[int]) -> int:
+    """Scattering orders drawn (every physical light of a pass draws the same)."""
+    return max((lit.lights[k].octaves for k in indices), default=1)
 
 
 def draw_clouds_cpu(

@@ -80,6 +80,8 @@ SPLIT_KEYS: dict[str, Callable[..., float]] = {
     BillboardCloud.kind: billboards.sort_key,
     BillboardField.kind: billboards.sort_key,
 }
+#: Kinds whose drawer draws the scene's ground itself (others are composited over it).
+GROUND_KINDS: set[str] = {Cloud.kind}
 
 
 def register_drawers(

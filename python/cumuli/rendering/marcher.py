@@ -19,8 +19,10 @@ import numpy as np
 
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
+from cumuli.light.ndt import LightGrid
 from cumuli.light.prepare import LitScene
 from cumuli.model.cloud import Cloud
+from cumuli.rendering.physical_gl import bind_ground, pack_physical, set_physical_uniforms
 from cumuli.rendering.solids import set_solid_uniforms
 from cumuli.scene import Scene
 from cumuli.settings import CANDIDATE_SORTS, MAX_CANDIDATES, MAX_CLOUDS
@@ -125,21 +127,24 @@ class MarcherGL:
         self.max_storage_block_size = int(info.get("GL_MAX_SHADER_STORAGE_BLOCK_SIZE", 1 << 27))
         self._use_variant("insertion")
 
-    def _use_variant(self, candidate_sort: str) -> None:
-        """Make the marcher compiled for ``candidate_sort`` current (compiled on first use)."""
-        if candidate_sort not in self._variants:
+    def _use_variant(self, candidate_sort: str, physical: bool = False) -> None:
+        """Make the marcher compiled for ``candidate_sort`` (and the lighting mode) current
+        (compiled on first use)."""
+        key = (candidate_sort, physical)
+        if key not in self._variants:
+            defines = {"CANDIDATE_SORT": CANDIDATE_SORTS.index(candidate_sort)}
+            if physical:
+                defines["PHYSICAL"] = 1
             program = self.gl.program(
-                "common/fullscreen.vert.glsl",
-                "march/march.frag.glsl",
-                defines={"CANDIDATE_SORT": CANDIDATE_SORTS.index(candidate_sort)},
+                "common/fullscreen.vert.glsl", "march/march.frag.glsl", defines=defines
             )
             try:
                 vao = self.gl.ctx.vertex_array(program, [])
             except Exception:
                 program.release()
                 raise
-            self._variants[candidate_sort] = (program, vao)
-        self.program, self.vao = self._variants[candidate_sort]
+            self._variants[key] = (program, vao)
+        self.program, self.vao = self._variants[key]
 
     def _noise_texture(self, scene: Scene) -> Any:
         key = (scene.noise.seed, scene.noise.size)
@@ -193,9 +198,16 @@ class MarcherGL:
         """The clouds ``indices`` of ``lit`` over the sky (``with_sky``) or as a premultiplied
         layer ``(colour, 1 − T)``: ``(height, width, 4)`` float32, row 0 on top."""
         scene = lit.scene
+        physical = scene.settings.physical
         clouds = [scene.clouds[k] for k in indices]
         grids = [lit.lights[k] for k in indices]
-        prim_bytes, cloud_bytes, atlas = pack_clouds(clouds, grids, scene.settings.kappa)
+        if physical:  # the paper's light atlas is not read: one texel
+            nd = [
+                LightGrid(np.zeros((1, 1, 1), np.float32), (c.bbox[0], c.bbox[1])) for c in clouds
+            ]
+            prim_bytes, cloud_bytes, atlas = pack_clouds(clouds, nd, scene.settings.kappa)
+        else:
+            prim_bytes, cloud_bytes, atlas = pack_clouds(clouds, grids, scene.settings.kappa)
         if len(prim_bytes) > self.max_storage_block_size:
             # Beyond it the driver clamps or drops the reads: primitives would silently vanish.
             raise ValueError(
@@ -224,9 +236,23 @@ class MarcherGL:
             light_tex.repeat_x = light_tex.repeat_y = light_tex.repeat_z = False
             prim_buf.bind_to_storage_buffer(0)
             cloud_buf.bind_to_storage_buffer(1)
-            self._use_variant(scene.settings.candidate_sort)
+            self._use_variant(scene.settings.candidate_sort, physical)
             self._noise_texture(scene).use(location=0)
             light_tex.use(location=1)
+            if physical:
+                phys_bytes, depth_atlas, grid_atlas = pack_physical(grids, self.max_3d_texture_size)
+                buf = ctx.buffer(phys_bytes)
+                scratch.append(buf)
+                buf.bind_to_storage_buffer(2)
+                for location, data, comps in ((2, depth_atlas, 1), (3, grid_atlas, 4)):
+                    d, h, w = data.shape[:3]
+                    tex = ctx.texture3d((w, h, d), comps, data.tobytes(), dtype="f4")
+                    scratch.append(tex)
+                    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+                    tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+                    tex.use(location=location)
+                set_physical_uniforms(self._set, scene.settings, grids)
+            scratch += bind_ground(ctx, self._set, lit, location=4)
             self._set_uniforms(scene, len(clouds), camera, width, height, with_sky)
             return self.tiles.draw(self.vao, self._set, width, height)
         finally:

@@ -31,9 +31,12 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext, _resolve_context
+from cumuli.light.physical import PhysicalLight
 from cumuli.light.prepare import LitScene
 from cumuli.model.solid import Solid, as_solids, solid_arrays
 from cumuli.model.volume import _box, _float_volumes
+from cumuli.rendering.cpu import physical_core_args, physical_core_tuple
+from cumuli.rendering.physical_gl import pack_physical, set_physical_uniforms
 from cumuli.rendering.solids import set_solid_uniforms
 from cumuli.sky import Sun, as_sky, sky_args
 
@@ -128,6 +131,15 @@ class VolumeRenderer:
             self.vao = ctx.vertex_array(self.program, [])
             self.context.timer_query()
         self.gpu_time_ns: int | None = None
+        self._physical: tuple[Any, Any] | None = None  # the PHYSICAL variant, made on first use
+
+    def _physical_program(self) -> tuple[Any, Any]:
+        if self._physical is None:
+            program = self.context.program(
+                "volume/quad.vert.glsl", "volume/march.frag.glsl", defines={"PHYSICAL": 1}
+            )
+            self._physical = (program, self.context.ctx.vertex_array(program, []))
+        return self._physical
 
     def render(
         self,
@@ -146,23 +158,25 @@ class VolumeRenderer:
         step: float | None = None,
         with_sky: bool = True,
         solids: Sequence[Solid] = (),
+        physical: Any = None,
     ) -> np.ndarray:
         """As :func:`cumuli.render_volume` with ``backend="gl"``; ``camera`` may also be the dict
         of :func:`camera_rays`. ``with_sky=False`` gives the premultiplied layer
         ``(colour, 1 − T)`` the compositor combines; each ray stops at the nearest of the opaque
-        ``solids``."""
+        ``solids``. ``physical`` ``(settings, PhysicalLight)`` selects the physical mode
+        (``light`` is then not read)."""
         if self.program is None or self.context.closed:
             raise ValueError("this VolumeRenderer has been released")
         with self.context.activate("this VolumeRenderer's GL context"):
             return self._render(
                 volume, light, box, camera, width, height, sun, sky, sigma_t, albedo, g, step,
-                with_sky, solids,
+                with_sky, solids, physical,
             )  # fmt: skip
 
     def _render(
         self, volume: Any, light: Any, box: Any, camera: Any, width: int, height: int, sun: Any,
         sky: Any, sigma_t: float, albedo: float, g: float, step: float | None, with_sky: bool,
-        solids: Sequence[Solid],
+        solids: Sequence[Solid], physical: Any,
     ) -> np.ndarray:  # fmt: skip
         sun = Sun() if sun is None else sun
         if not isinstance(sun, Sun):
@@ -190,7 +204,28 @@ class VolumeRenderer:
             made.append(colour)
             fbo = ctx.framebuffer(color_attachments=[colour])
             made.append(fbo)
-            prog = self.program
+            prog, vao = self.program, self.vao
+            if physical is not None:
+                settings, plight = physical
+                prog, vao = self._physical_program()
+                words, depth, grid = pack_physical([plight], limit)
+                buf = ctx.buffer(words)
+                made.append(buf)
+                buf.bind_to_storage_buffer(2)
+                for location, data, comps in ((2, depth, 1), (3, grid, 4)):
+                    dd, hh, ww = data.shape[:3]
+                    tex = ctx.texture3d((ww, hh, dd), comps, data.tobytes(), dtype="f4")
+                    made.append(tex)
+                    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+                    tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+                    tex.use(location=location)
+
+                def set_(name: str, value: Any, prog: Any = prog) -> None:
+                    if name in prog:
+                        prog[name].value = value
+
+                set_physical_uniforms(set_, settings, [plight])
+                set_("u_exact_light", bool(settings.exact_noise))
             values = {
                 "u_density": 0,
                 "u_light": 1,
@@ -227,7 +262,7 @@ class VolumeRenderer:
             ctx.viewport = (0, 0, width, height)
             query = self.context.timer_query()
             with query:
-                self.vao.render(moderngl.TRIANGLES, vertices=3)
+                vao.render(moderngl.TRIANGLES, vertices=3)
             ctx.finish()
             self.gpu_time_ns = int(query.elapsed)
             img = np.frombuffer(fbo.read(components=4, dtype="f4"), dtype=np.float32)
@@ -237,12 +272,16 @@ class VolumeRenderer:
                 obj.release()
 
     def release(self) -> None:
-        """Release the program (idempotent)."""
+        """Release the programs (idempotent)."""
         if self.program is not None and not self.context.closed:
             with self.context.activate("this VolumeRenderer's GL context"):
                 self.vao.release()
                 self.program.release()
+                if self._physical is not None:
+                    self._physical[1].release()
+                    self._physical[0].release()
         self.program = None
+        self._physical = None
 
     def __enter__(self) -> VolumeRenderer:
         return self
@@ -268,24 +307,37 @@ def render_volume_cpu(
     threads: int = 0,
     with_sky: bool = True,
     solids: Sequence[Solid] = (),
+    physical: Any = None,
 ) -> np.ndarray:
     """The C++ twin of :meth:`VolumeRenderer.render` (``_core.render_volume_cpu``)."""
     solids = as_solids(solids)
     spheres = solid_arrays(solids)[0] if solids else None
     vol, lig, lo, hi, width, height, step = _inputs(volume, light, box, width, height, step)
     cam = camera if isinstance(camera, dict) else camera_rays(camera)
+    phys_args: tuple[Any, Any] = (None, None)
+    if physical is not None:
+        settings, plight = physical
+        phys_args = (physical_core_args(settings, plight.octaves), physical_core_tuple(plight))
     return _core.render_volume_cpu(
         vol, lig, lo, hi, cam["position"], cam["forward"], cam["right"], cam["up"],
         cam["tan_half_fov"], width, height, sun.direction, sun.radiance, sky_args(as_sky(sky)),
         check.real(sigma_t, "sigma_t", 0.0), check.real(albedo, "albedo", 0.0, 1.0),
         check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True), step,
-        check.threads(threads), bool(with_sky), spheres,
+        check.threads(threads), bool(with_sky), spheres, *phys_args,
     )  # fmt: skip
 
 
 def _volume_args(lit: LitScene, k: int) -> tuple[Any, ...]:
     volume = lit.scene.clouds[k]
-    return volume.density, lit.lights[k], volume.box
+    light = lit.lights[k]
+    if isinstance(light, PhysicalLight):  # the paper mode's light volume is not read
+        light = np.zeros((*volume.shape, 4), np.float32)
+    return volume.density, light, volume.box
+
+
+def _physical(lit: LitScene, k: int) -> Any:
+    light = lit.lights[k]
+    return (lit.scene.settings, light) if isinstance(light, PhysicalLight) else None
 
 
 class VolumeGL:
@@ -322,7 +374,7 @@ class VolumeGL:
         return self.renderer.render(
             *_volume_args(lit, k), camera, width, height, lit.scene.sun, lit.scene.sky,
             sigma_t=v.sigma_t, albedo=v.albedo, g=v.g, step=v.step, with_sky=with_sky,
-            solids=lit.scene.solids,
+            solids=lit.scene.solids, physical=_physical(lit, k),
         )  # fmt: skip
 
     def release(self) -> None:
@@ -344,5 +396,5 @@ def draw_volume_cpu(
     return render_volume_cpu(
         *_volume_args(lit, k), camera, width, height, lit.scene.sun, lit.scene.sky,
         sigma_t=v.sigma_t, albedo=v.albedo, g=v.g, step=v.step, threads=threads,
-        with_sky=with_sky, solids=lit.scene.solids,
+        with_sky=with_sky, solids=lit.scene.solids, physical=_physical(lit, k),
     )  # fmt: skip

@@ -54,4 +54,16 @@ DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const Densi
 // Dispatch on cloud.density.model (j is ignored by the metaball model).
 DensitySample cloud_density(const CloudShape& cloud, int j, glm::vec3 p, const DensitySource& src);
 
+// The cloud's density FIELD at p (the physical mode's medium, RENDER_CONTRACT "Physical
+// lighting"): a spheroid sample belongs to the primitive p is deepest inside (smallest |q|, the
+// first on ties) — the union march's attribution rule; metaballs as cloud_density.
+DensitySample field_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src);
+
+// The density field on a res[0] × res[1] × res[2] (x, y, z) lattice over `box`, [z][y][x]:
+// each voxel the mean of field_density at ss³ points, (i + (a + ½)/ss)·(hi − lo)/res + lo for
+// a = 0..ss−1 on each axis (ss = 1: the texel centre). Threads over z-slices; the result does
+// not depend on the thread count.
+std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& src, const Box& box,
+                                const int res[3], int ss, int threads);
+
 }  // namespace cumuli

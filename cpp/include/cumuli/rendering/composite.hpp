@@ -9,6 +9,7 @@
 
 #include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"
+#include "cumuli/rendering/ground.hpp"
 #include "cumuli/rendering/march.hpp"
 #include "cumuli/rendering/solid.hpp"
 
@@ -21,14 +22,16 @@ struct Layer {
   Box box;
 };
 
-// out (height·width·4): rgb = Σ_k T_k·C_k + T·sky(d), alpha = 1 − T, with T_k the product of
+// out (height·width·4): rgb = Σ_k T_k·C_k + T·background(d), alpha = 1 − T (the background is
+// the ground where the ray meets an enabled ground, else the sky: ground.hpp), with T_k the product of
 // (1 − A_j) over the layers j the ray enters before k (entry max(t_in, 0), ties in layer order)
 // and T over all of them. A layer whose box the ray misses (or that lies behind the camera)
 // contributes nothing at that pixel. `solid` (height·width·4: rgb, view depth) may be null.
 // The result does not depend on the thread count.
 void composite_layers(const std::vector<Layer>& layers, const CameraParams& camera, int width,
-                      int height, const SkyParams& sky, const SunParams& sun, float* out,
-                      int threads, const float* solid = nullptr);
+                      int height, const SkyParams& sky, const SunParams& sun,
+                      const GroundParams& ground, float* out, int threads,
+                      const float* solid = nullptr);
 
 // The solid image (height·width·4 floats, row 0 on top): rgb shaded (solid.hpp), alpha the view
 // depth Z = t·(d·f) of the nearest solid, +∞ where the ray meets none.

@@ -19,6 +19,8 @@
 #include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"
 #include "cumuli/rendering/solid.hpp"
+#include "cumuli/rendering/ground.hpp"
+#include "cumuli/rendering/physical.hpp"
 
 namespace cumuli {
 
@@ -37,7 +39,8 @@ struct LightGrid {
 
 struct RenderCloud {
   CloudShape shape;
-  LightGrid light;
+  LightGrid light;         // the paper mode's light
+  PhysicalGrids physical;  // the physical mode's light
 };
 
 enum class MarchMode { Paper, Union };
@@ -79,6 +82,11 @@ struct MarchSettings {
   bool sort_candidates = true;
   FbmParams fbm;
   float density_constant = -1.0f;  // ≥ 0: constant density instead of fBm (analytic tests)
+  // The physical lighting mode (RENDER_CONTRACT "Physical lighting"): union marching with a
+  // jittered start, σ = extinction_scale·ρ, physical.hpp's shading; `absorption`, `hg_g` and
+  // `march` are then not used.
+  bool physical = false;
+  PhysicalParams phys;
 
   static constexpr int kMaxStepsLimit = 1 << 24;
   static constexpr int kMaxCandidatesLimit = 4096;
@@ -102,6 +110,7 @@ struct MarchScene {
   // beyond t_s is not taken — so the layer holds exactly the cloud in front of the solid
   // (spec harris.md §7.5, "march each ray only up to the object's depth"). Empty: no clipping.
   std::vector<SolidSphere> solids;
+  GroundParams ground;  // the background below the horizon when enabled
 
   void validate(const MarchSettings& settings) const;
 };

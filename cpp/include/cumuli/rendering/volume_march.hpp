@@ -18,6 +18,7 @@
 #include "cumuli/phase.hpp"
 #include "cumuli/light/volume_light.hpp"
 #include "cumuli/rendering/solid.hpp"
+#include "cumuli/rendering/physical.hpp"
 
 namespace cumuli {
 
@@ -39,6 +40,11 @@ struct VolumeRenderParams {
   // Opaque solids (solid.hpp): the ray is marched only up to the nearest one it meets (the box
   // span [t0, t_out] becomes [t0, min(t_out, t_s)], still in equal steps). Empty: no clipping.
   std::vector<SolidSphere> solids;
+  // The physical lighting mode (RENDER_CONTRACT "Physical lighting"): σ = sigma_t·ρ, samples at
+  // (k + ξ)·h, physical.hpp's shading with `grids` (the light argument is then not read).
+  bool physical = false;
+  PhysicalParams phys;
+  const PhysicalGrids* grids = nullptr;
 };
 
 constexpr float kVolumeMinTransmittance = 1e-4f;

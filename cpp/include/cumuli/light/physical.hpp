@@ -1,0 +1,110 @@
+// The light step of the physical lighting mode (RENDER_CONTRACT "Physical lighting"): what the
+// drawers read to solve the volume rendering equation with three stated approximations.
+//
+// 1. Sun transmittance: the optical depth τ_sun towards the sun on a lattice in the SUN'S frame
+//    (axes u, v across the light, w along it), fine along w, so that the steep rise of τ at a
+//    sunlit surface is resolved and trilinear lookups show no cells. Each column of the lattice
+//    is one ray marched through the drawable's extinction σt (the cloud's density field with
+//    the union march's attribution, or a volume's trilinear density), the τ of a node being the
+//    integral from the lattice's sun-side face to the node (the lattice box encloses the
+//    drawable, so nothing upstream of it is missed).
+// 2. Sky light: the SH projection (Sloan et al. 2002; the endless animation's sh_eval and
+//    quadrature, volume_light.hpp) of the visibility V(x, ω) = exp(−∫σt) over the quadrature's
+//    directions, dotted with the sky radiance's SH projection: E_sky(x) = Σ_m L_m V_m(x), the
+//    sky irradiance over the whole sphere that reaches x unscattered (clamped at 0).
+// 3. Multiple scattering: the diffusion approximation (Stam 1995, "Multiple scattering as a
+//    diffusion process"; Jensen et al. 2001 for the boundary) on the world lattice:
+//    −∇·(D∇φ) + σa·φ = Q, D = 1/(3σt'), σt' = σa + σs(1 − ḡ), with the collided source
+//    Q = σs·(E_sun·T_sun + E_sky) (scaled so that each cell receives the power it removes from
+//    the light, see diffusion_sources) and Marshak's vacuum boundary (no diffuse light enters)
+//    on every face between a medium cell and an empty one: outward flux 2D/(h + 4D)·φ. Cells
+//    with σt·h < 0.02 are empty. Solved by Jacobi-preconditioned conjugate gradients with
+//    reductions in fixed blocks, so the result does not depend on the thread count; empty
+//    cells next to the medium take the boundary value φ·4D/(h + 4D) so that trilinear lookups
+//    at the surface see the fluence there.
+#pragma once
+
+#include <cstddef>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "cumuli/light/volume_light.hpp"
+#include "cumuli/model/cloud.hpp"
+#include "cumuli/primitives.hpp"
+
+namespace cumuli {
+
+// A lattice in the sun's frame. Node (i, j, k) sits at frame coordinates
+// lo + ((i, j, k) + ½)·(hi − lo)/res; frame coordinates of a world point are (p·u, p·v, p·w).
+struct SunFrame {
+  glm::vec3 u{1.0f, 0.0f, 0.0f}, v{0.0f, 1.0f, 0.0f}, w{0.0f, 0.0f, 1.0f};
+  glm::vec3 lo{0.0f}, hi{1.0f};
+  int res[3] = {2, 2, 2};
+
+  glm::vec3 to_frame(glm::vec3 p) const;
+  // World position of a node.
+  glm::vec3 node(int i, int j, int k) const;
+  void validate() const;  // throws std::invalid_argument
+};
+
+// The frame of light travelling along −to_sun, its box enclosing `world_box` (padded by half a
+// node on every side so that the outermost nodes lie on the enclosing box).
+SunFrame make_sun_frame(const Box& world_box, glm::vec3 to_sun, const int res[3]);
+
+// Trilinear value of a [w][v][u] lattice at world point p (texel centres, clamp to edge).
+float sample_frame(const float* values, const SunFrame& f, glm::vec3 p);
+
+// What extinction a ray meets.
+struct CloudMedium {
+  const CloudShape* shape = nullptr;
+  DensitySource source;
+  float scale = 1.0f;  // σt = scale · ρ
+};
+struct VolumeMedium {
+  const float* density = nullptr;  // [z][y][x]
+  VolumeGrid grid;
+  float scale = 1.0f;  // σt = scale · density
+};
+struct Medium {
+  std::vector<CloudMedium> clouds;
+  std::vector<VolumeMedium> volumes;
+
+  // ∫ σt along o + t·d for t ≥ 0 through every cloud and volume (each to its box exit), in
+  // segments of at most `step` sampled at their midpoints (a cloud: only inside the union of its
+  // candidate primitives; exact for a constant σt). `d` is unit length.
+  float optical_depth(glm::vec3 o, glm::vec3 d, float step) const;
+};
+
+// τ at every node of `frame` ([w][v][u] floats): the optical depth of `medium` from the frame's
+// sun-side face (w = lo.w) to the node along +w, marched in segments of at most `step`.
+std::vector<float> light_space_depth(const Medium& medium, const SunFrame& frame, float step,
+                                     int threads);
+
+// E_sky (RGB, interleaved) at every voxel centre of the extinction lattice `ext` (σt, [z][y][x]
+// over g): Σ_m L_m V_m with V the SH projection (order², n_theta quadrature) of exp(−τ(x, ω)),
+// τ marched through `ext` with steps of step_voxels voxels, stopped once τ > 12.
+std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
+                                  int order, int n_theta, float step_voxels, int threads);
+
+struct DiffusionParams {
+  float albedo = 0.99f;       // ϖ
+  float mean_cosine = 0.6f;   // ḡ of the phase function
+  int max_iterations = 2000;  // conjugate-gradient iterations per channel
+  float tolerance = 1e-5f;    // on the residual relative to the source
+};
+
+// The collided sources per cell (`channels` per voxel, interleaved): channel 0 the sun's
+// (unit irradiance), 1..3 the sky's (when sky_e is not null). A cell of extinction σ whose
+// centre sees the light with transmittance T removes T·(e^{x/2} − e^{−x/2})/ℓ of a unit beam
+// per unit volume (x = σℓ, ℓ its thickness along the light: h_x h_y h_z / Σ_a |d_a| A_a for the
+// sun, 2h/3 — the mean chord — for the sky), the albedo's share of which scatters:
+// Q = ϖ·T·2 sinh(x/2)/ℓ (→ ϖσT for thin cells), so coarse cells keep the light's energy.
+std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
+                                     glm::vec3 to_sun, const float* sky_e, float albedo);
+
+// φ (the collided fluence, `channels` per voxel) of the diffusion problem above.
+std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
+                                     int channels, const DiffusionParams& p, int threads);
+
+}  // namespace cumuli

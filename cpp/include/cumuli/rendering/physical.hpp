@@ -1,0 +1,68 @@
+// The physical lighting mode's shading (RENDER_CONTRACT "Physical lighting"), shared by the C++
+// marcher of 2018 clouds and the volume marcher; shaders/common/physical.glsl is its GLSL twin.
+//
+// A sample at p of extinction σ = extinction_scale·ρ, seen along the unit ray direction d,
+// with the light of light/physical.hpp (τ_sun on the sun's lattice, the world lattice's diffuse
+// sunlight F and sky light S, both fluences with their gain):
+//   S(p) = ϖ·( E_sun·( Σ_{i<octaves} aⁱ·phase(bⁱ·g, d·sun)·e^{−cⁱ·τ_sun(p)} + F(p)/4π ) + S(p)/4π )
+//   colour += T·(1 − e^{−σΔ})·S(p),  T *= e^{−σΔ}
+// (order 0 is single scattering; octaves: Wrenninge et al. 2013). The first sample of every
+// union interval sits at ξ·Δ from its start, ξ the interleaved gradient noise of the pixel
+// (Jimenez 2014): ξ = fract(52.9829189·fract(0.06711056·x + 0.00583715·y)) with
+// x = column + 5.588238·seed, y = row + 5.588238·seed.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "cumuli/light/physical.hpp"
+#include "cumuli/light/volume_light.hpp"
+
+namespace cumuli {
+
+constexpr int kMaxOctaves = 8;
+
+struct PhysicalParams {
+  float extinction_scale = 12.0f;
+  float albedo = 0.99f;
+  bool dual_hg = false;
+  float g1 = 0.6f, g2 = -0.3f, blend = 0.2f;  // blend: weight of the second lobe
+  int octaves = 4;                            // scattering orders drawn (1: single scattering)
+  float oct_a = 0.5f, oct_b = 0.5f, oct_c = 0.5f;
+  int jitter_seed = 0;
+  float min_transmittance = 1e-4f;  // the ray stops below it
+
+  void validate() const;  // throws std::invalid_argument
+  // The phase function with its g's scaled by `scale`.
+  float phase(float cos_theta, float scale) const;
+};
+
+// The per-ray constants: weight aⁱ·phase(bⁱg, cosθ) and depth scale cⁱ of every order.
+struct OctaveTerms {
+  int n = 1;
+  float weight[kMaxOctaves] = {};
+  float scale[kMaxOctaves] = {};
+  OctaveTerms(const PhysicalParams& p, float cos_theta);
+  // Σ weight_i·e^{−scale_i·τ}
+  float sum(float tau) const;
+};
+
+// A drawable's physical light as the drawers read it.
+struct PhysicalGrids {
+  SunFrame frame;
+  std::vector<float> depth;  // [w][v][u]
+  VolumeGrid grid;
+  std::vector<float> rgba;  // [z][y][x][4]: F, S.rgb
+
+  void validate() const;  // throws std::invalid_argument
+  // The scattered radiance per unit σt·Δ... : ϖ·(E_sun·(octaves + F/4π) + S/4π).
+  glm::vec3 source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance,
+                   float albedo) const;
+};
+
+// Interleaved gradient noise in [0, 1) of pixel (row, col) for `seed`.
+float jitter(int row, int col, int seed);
+
+}  // namespace cumuli

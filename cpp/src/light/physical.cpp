@@ -1,0 +1,431 @@
+#include "cumuli/light/physical.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+
+#include <glm/geometric.hpp>
+
+#include "cumuli/candidates.hpp"
+#include "cumuli/parallel.hpp"
+
+namespace cumuli {
+
+namespace {
+
+constexpr int kMaxCandidates = 256;
+
+// Calls visit(s, σt, ℓ) for the segments of o + t·d, t in [t0, t1], inside the union of the
+// cloud's candidate intervals: segments of at most `step` from each union interval's start (the
+// last one cut at its end), σt at the midpoint s with the union attribution rule.
+template <class Visit>
+void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float t1, float step,
+                 Visit&& visit) {
+  Candidate cand[kMaxCandidates];
+  const CloudShape& shape = *c.shape;
+  const int n = collect_candidates(shape, o, d, t0, t1, cand, kMaxCandidates, true);
+  const bool attribute = shape.density.model == DensityModel::Spheroid;
+  float t = -INFINITY;
+  for (int k = 0; k < n; ++k) {
+    if (cand[k].t_out <= t) continue;
+    t = std::max(t, cand[k].t_in);
+    while (t < cand[k].t_out) {
+      const float end = std::min(t + step, cand[k].t_out);
+      const float s = 0.5f * (t + end);
+      const glm::vec3 p = o + s * d;
+      const int j = attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive)
+                              : cand[k].primitive;
+      const float rho = cloud_density(shape, j, p, c.source).rho;
+      visit(s, c.scale * rho, end - t);
+      t = end;
+    }
+  }
+}
+
+template <class Visit>
+void march_volume(const VolumeMedium& v, glm::vec3 o, glm::vec3 d, float t0, float t1, float step,
+                  Visit&& visit) {
+  Interval span;
+  if (!intersect(v.grid.box, o, 1.0f / d, span)) return;
+  const float a = std::max(span.t_in, t0), b = std::min(span.t_out, t1);
+  if (!(b > a)) return;
+  const int n = std::max(1, static_cast<int>(std::ceil((b - a) / step)));
+  const float h = (b - a) / static_cast<float>(n);
+  for (int i = 0; i < n; ++i) {
+    const float s = a + (static_cast<float>(i) + 0.5f) * h;
+    visit(s, v.scale * sample_trilinear(v.density, v.grid, o + s * d), h);
+  }
+}
+
+void split(float u, int n, int& i0, int& i1, float& f) {
+  const float s = u - 0.5f;
+  const float fl = std::floor(s);
+  f = s - fl;
+  i0 = std::clamp(static_cast<int>(fl), 0, n - 1);
+  i1 = std::clamp(static_cast<int>(fl) + 1, 0, n - 1);
+}
+
+// Fixed blocks for reductions: sums do not depend on the thread count.
+constexpr std::size_t kBlock = 4096;
+
+template <class F>
+double block_sum(std::size_t n, int threads, F&& term) {
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<double> part(blocks, 0.0);
+  parallel_for(blocks, threads, [&](std::size_t b) {
+    double s = 0.0;
+    const std::size_t end = std::min(n, (b + 1) * kBlock);
+    for (std::size_t i = b * kBlock; i < end; ++i) s += term(i);
+    part[b] = s;
+  });
+  double total = 0.0;
+  for (double s : part) total += s;
+  return total;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// The sun's frame
+
+glm::vec3 SunFrame::to_frame(glm::vec3 p) const {
+  return glm::vec3(glm::dot(p, u), glm::dot(p, v), glm::dot(p, w));
+}
+
+glm::vec3 SunFrame::node(int i, int j, int k) const {
+  const glm::vec3 f = lo + (glm::vec3(static_cast<float>(i), static_cast<float>(j),
+                                      static_cast<float>(k)) + 0.5f) *
+                               (hi - lo) / glm::vec3(static_cast<float>(res[0]),
+                                                     static_cast<float>(res[1]),
+                                                     static_cast<float>(res[2]));
+  return f.x * u + f.y * v + f.z * w;
+}
+
+void SunFrame::validate() const {
+  for (int a = 0; a < 3; ++a) {
+    if (res[a] < 2 || res[a] > 4096) throw std::invalid_argument("light frame resolution must be in [2, 4096]");
+    if (!(hi[a] > lo[a]) || !std::isfinite(lo[a]) || !std::isfinite(hi[a]))
+      throw std::invalid_argument("light frame box must be finite and non-empty");
+  }
+}
+
+SunFrame make_sun_frame(const Box& world_box, glm::vec3 to_sun, const int res[3]) {
+  const float len = glm::length(to_sun);
+  if (!(len > 0.0f) || !std::isfinite(len)) throw std::invalid_argument("sun direction must be non-zero");
+  SunFrame f;
+  f.w = -to_sun / len;
+  const glm::vec3 a = std::abs(f.w.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
+  f.u = glm::normalize(glm::cross(a, f.w));
+  f.v = glm::cross(f.w, f.u);
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  for (int c = 0; c < 8; ++c) {
+    const glm::vec3 p((c & 1) ? world_box.hi.x : world_box.lo.x,
+                      (c & 2) ? world_box.hi.y : world_box.lo.y,
+                      (c & 4) ? world_box.hi.z : world_box.lo.z);
+    const glm::vec3 q = f.to_frame(p);
+    lo = glm::min(lo, q);
+    hi = glm::max(hi, q);
+  }
+  for (int k = 0; k < 3; ++k) {
+    f.res[k] = res[k];
+    const float pad = 0.5f * (hi[k] - lo[k]) / static_cast<float>(std::max(res[k] - 1, 1));
+    f.lo[k] = lo[k] - pad;
+    f.hi[k] = hi[k] + pad;
+  }
+  f.validate();
+  return f;
+}
+
+float sample_frame(const float* values, const SunFrame& f, glm::vec3 p) {
+  const glm::vec3 q = (f.to_frame(p) - f.lo) / (f.hi - f.lo) *
+                      glm::vec3(static_cast<float>(f.res[0]), static_cast<float>(f.res[1]),
+                                static_cast<float>(f.res[2]));
+  int x0, x1, y0, y1, z0, z1;
+  float fx, fy, fz;
+  split(q.x, f.res[0], x0, x1, fx);
+  split(q.y, f.res[1], y0, y1, fy);
+  split(q.z, f.res[2], z0, z1, fz);
+  const std::size_t nu = static_cast<std::size_t>(f.res[0]), nv = static_cast<std::size_t>(f.res[1]);
+  auto at = [&](int x, int y, int z) { return values[(z * nv + y) * nu + x]; };
+  const float c00 = at(x0, y0, z0) + fx * (at(x1, y0, z0) - at(x0, y0, z0));
+  const float c10 = at(x0, y1, z0) + fx * (at(x1, y1, z0) - at(x0, y1, z0));
+  const float c01 = at(x0, y0, z1) + fx * (at(x1, y0, z1) - at(x0, y0, z1));
+  const float c11 = at(x0, y1, z1) + fx * (at(x1, y1, z1) - at(x0, y1, z1));
+  const float c0 = c00 + fy * (c10 - c00);
+  const float c1 = c01 + fy * (c11 - c01);
+  return c0 + fz * (c1 - c0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Optical depths
+
+float Medium::optical_depth(glm::vec3 o, glm::vec3 d, float step) const {
+  double tau = 0.0;
+  auto add = [&](float, float sigma, float len) { tau += static_cast<double>(sigma) * len; };
+  for (const CloudMedium& c : clouds) {
+    Interval span;
+    const Box box = candidate_bounds(*c.shape);
+    if (!intersect(box, o, 1.0f / d, span) || span.t_out <= 0.0f) continue;
+    march_cloud(c, o, d, std::max(span.t_in, 0.0f), span.t_out, step, add);
+  }
+  for (const VolumeMedium& v : volumes) march_volume(v, o, d, 0.0f, INFINITY, step, add);
+  return static_cast<float>(tau);
+}
+
+std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, float step,
+                                     int threads) {
+  f.validate();
+  if (!(step > 0.0f) || !std::isfinite(step)) throw std::invalid_argument("step must be > 0");
+  const std::size_t nu = static_cast<std::size_t>(f.res[0]), nv = static_cast<std::size_t>(f.res[1]),
+                    nw = static_cast<std::size_t>(f.res[2]);
+  std::vector<float> out(nu * nv * nw, 0.0f);
+  const float dw = (f.hi.z - f.lo.z) / static_cast<float>(nw);
+  const float length = f.hi.z - f.lo.z;
+  parallel_for(nu * nv, threads, [&](std::size_t col) {
+    const int i = static_cast<int>(col % nu), j = static_cast<int>(col / nu);
+    const glm::vec3 n0 = f.node(i, j, 0);
+    const glm::vec3 origin = n0 - (0.5f * dw) * f.w;  // on the sun-side face
+    // Segments of every drawable, merged in order of t (drawables may overlap).
+    std::vector<std::array<float, 3>> segs;
+    auto keep = [&](float s, float sigma, float len) {
+      if (sigma > 0.0f) segs.push_back({s - 0.5f * len, s + 0.5f * len, sigma});
+    };
+    for (const CloudMedium& c : medium.clouds) march_cloud(c, origin, f.w, 0.0f, length, step, keep);
+    for (const VolumeMedium& v : medium.volumes) march_volume(v, origin, f.w, 0.0f, length, step, keep);
+    if (segs.empty()) return;
+    // τ(t) = Σ over segments of σ·|[a, b] ∩ [0, t]|, at the nodes t_k = (k + ½)·dw.
+    std::sort(segs.begin(), segs.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
+    double done = 0.0;  // τ of the segments wholly before the current node
+    std::size_t next = 0;
+    for (std::size_t k = 0; k < nw; ++k) {
+      const float t = (static_cast<float>(k) + 0.5f) * dw;
+      while (next < segs.size() && segs[next][1] <= t) {
+        done += static_cast<double>(segs[next][2]) * (segs[next][1] - segs[next][0]);
+        ++next;
+      }
+      double partial = 0.0;
+      for (std::size_t m = next; m < segs.size() && segs[m][0] < t; ++m)
+        partial += static_cast<double>(segs[m][2]) * (t - segs[m][0]);
+      out[(k * nv + static_cast<std::size_t>(j)) * nu + static_cast<std::size_t>(i)] =
+          static_cast<float>(done + partial);
+    }
+  });
+  return out;
+}
+
+std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
+                                  int order, int n_theta, float step_voxels, int threads) {
+  g.validate();
+  if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
+  if (!(step_voxels > 0.0f)) throw std::invalid_argument("step must be > 0");
+  const SphereQuadrature quad(n_theta);
+  const int nc = order * order;
+  std::vector<float> basis(quad.dirs.size() * nc);
+  for (std::size_t k = 0; k < quad.dirs.size(); ++k) sh_eval(order, quad.dirs[k], &basis[k * nc]);
+  const glm::vec3 vs = g.voxel_size();
+  const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
+  const std::size_t nv = g.voxels();
+  std::vector<float> out(nv * 3);
+  // Voxels with no medium within one voxel are never read where light scatters: they get the
+  // unoccluded sky (V = 1: V_0 = √4π, the other coefficients 0).
+  const float open = 3.5449077018110318f;  // √(4π)
+  parallel_for(nv, threads, [&](std::size_t v) {
+    const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),
+              z = static_cast<int>(v / (static_cast<std::size_t>(g.w) * g.h));
+    bool near = false;
+    for (int dz = -1; dz <= 1 && !near; ++dz)
+      for (int dy = -1; dy <= 1 && !near; ++dy)
+        for (int dx = -1; dx <= 1 && !near; ++dx) {
+          const int xx = x + dx, yy = y + dy, zz = z + dz;
+          if (xx < 0 || yy < 0 || zz < 0 || xx >= g.w || yy >= g.h || zz >= g.d) continue;
+          near = ext[(static_cast<std::size_t>(zz) * g.h + yy) * g.w + xx] > 0.0f;
+        }
+    if (!near) {
+      for (int ch = 0; ch < 3; ++ch) out[v * 3 + ch] = std::max(0.0f, sky_coeffs[ch * nc] * open);
+      return;
+    }
+    const glm::vec3 p = g.centre(x, y, z);
+    double vis[kMaxShOrder * kMaxShOrder] = {};
+    for (std::size_t k = 0; k < quad.dirs.size(); ++k) {
+      const glm::vec3 d = quad.dirs[k];
+      Interval span;
+      double tau = 0.0;
+      if (intersect(g.box, p, 1.0f / d, span) && span.t_out > 0.0f) {
+        const float len = span.t_out - std::max(span.t_in, 0.0f);
+        const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
+        const float h = len / static_cast<float>(n);
+        const float t0 = std::max(span.t_in, 0.0f);
+        for (int i = 0; i < n && tau <= 12.0; ++i)
+          tau += static_cast<double>(sample_trilinear(ext, g, p + (t0 + (i + 0.5f) * h) * d)) * h;
+      }
+      const double vw = std::exp(-tau) * quad.weights[k];
+      for (int c = 0; c < nc; ++c) vis[c] += vw * basis[k * nc + c];
+    }
+    for (int ch = 0; ch < 3; ++ch) {
+      double e = 0.0;
+      for (int c = 0; c < nc; ++c) e += static_cast<double>(sky_coeffs[ch * nc + c]) * vis[c];
+      out[v * 3 + ch] = static_cast<float>(std::max(0.0, e));
+    }
+  });
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Diffusion
+
+namespace {
+constexpr float kMediumThickness = 0.02f;  // σt·h below this: an empty cell
+
+float boost(float x) {  // 2 sinh(x/2)/x, the thick-cell source factor (→ 1 for thin cells)
+  if (x < 1e-4f) return 1.0f;
+  x = std::min(x, 40.0f);
+  return 2.0f * std::sinh(0.5f * x) / x;
+}
+}  // namespace
+
+std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
+                                     glm::vec3 to_sun, const float* sky_e, float albedo) {
+  const std::size_t nv = g.voxels();
+  const int ch = sky_e != nullptr ? 4 : 1;
+  std::vector<float> q(nv * ch, 0.0f);
+  const glm::vec3 h = g.voxel_size();
+  const glm::vec3 s = glm::normalize(to_sun);
+  const float ell_sun = h.x * h.y * h.z /
+                        (std::abs(s.x) * h.y * h.z + std::abs(s.y) * h.x * h.z + std::abs(s.z) * h.x * h.y);
+  const float ell_sky = 2.0f * std::min(h.x, std::min(h.y, h.z)) / 3.0f;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const float sigma = ext[v];
+    if (!(sigma > 0.0f)) continue;
+    q[v * ch] = albedo * sigma * sun_t[v] * boost(sigma * ell_sun);
+    if (sky_e != nullptr) {
+      const float b = albedo * sigma * boost(sigma * ell_sky);
+      for (int c = 0; c < 3; ++c) q[v * ch + 1 + c] = b * sky_e[v * 3 + c];
+    }
+  }
+  return q;
+}
+
+std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
+                                     int channels, const DiffusionParams& p, int threads) {
+  g.validate();
+  if (channels < 1 || channels > 8) throw std::invalid_argument("channels must be in [1, 8]");
+  if (!(p.albedo >= 0.0f && p.albedo <= 1.0f)) throw std::invalid_argument("albedo must be in [0, 1]");
+  const int W = g.w, H = g.h, Dd = g.d;
+  const std::size_t n = g.voxels();
+  const glm::vec3 hv = g.voxel_size();
+  const float h[3] = {hv.x, hv.y, hv.z};
+  const float hmin = std::min(h[0], std::min(h[1], h[2]));
+  const std::size_t stride[3] = {1, static_cast<std::size_t>(W), static_cast<std::size_t>(W) * H};
+  const int dims[3] = {W, H, Dd};
+  std::vector<unsigned char> medium(n);
+  std::vector<float> D(n, 0.0f), diag(n, 1.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    medium[i] = ext[i] * hmin > kMediumThickness;
+    if (!medium[i]) continue;
+    const float st = ext[i], sa = (1.0f - p.albedo) * st;
+    const float stp = sa + p.albedo * st * (1.0f - p.mean_cosine);
+    D[i] = 1.0f / (3.0f * std::max(stp, 1e-12f));
+    diag[i] = sa;
+  }
+  // Face conductances (to the + neighbour along each axis) and the diagonal.
+  std::vector<float> cond(3 * n, 0.0f);
+  auto coord = [&](std::size_t i, int a) {
+    return a == 0 ? static_cast<int>(i % W) : a == 1 ? static_cast<int>((i / W) % H)
+                                                       : static_cast<int>(i / (static_cast<std::size_t>(W) * H));
+  };
+  auto leak = [&](float d, float ha) { return 2.0f * d / (ha * (ha + 4.0f * d)); };
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!medium[i]) continue;
+    for (int a = 0; a < 3; ++a) {
+      if (coord(i, a) + 1 < dims[a] && medium[i + stride[a]]) {
+        const std::size_t j = i + stride[a];
+        cond[3 * i + a] = 2.0f * D[i] * D[j] / (D[i] + D[j]) / (h[a] * h[a]);
+      }
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!medium[i]) continue;
+    for (int a = 0; a < 3; ++a) {
+      const int c = coord(i, a);
+      const bool plus = c + 1 < dims[a] && medium[i + stride[a]];
+      const bool minus = c > 0 && medium[i - stride[a]];
+      diag[i] += plus ? cond[3 * i + a] : leak(D[i], h[a]);
+      diag[i] += minus ? cond[3 * (i - stride[a]) + a] : leak(D[i], h[a]);
+    }
+  }
+  auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
+    parallel_for(n, threads, [&](std::size_t i) {
+      if (!medium[i]) {
+        y[i] = 0.0;
+        return;
+      }
+      double s = static_cast<double>(diag[i]) * x[i];
+      for (int a = 0; a < 3; ++a) {
+        if (cond[3 * i + a] > 0.0f) s -= static_cast<double>(cond[3 * i + a]) * x[i + stride[a]];
+        if (coord(i, a) > 0 && medium[i - stride[a]])
+          s -= static_cast<double>(cond[3 * (i - stride[a]) + a]) * x[i - stride[a]];
+      }
+      y[i] = s;
+    });
+  };
+  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
+  std::vector<double> x(n), r(n), z(n), q(n), Ap(n);
+  for (int c = 0; c < channels; ++c) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double b = medium[i] ? source[i * channels + c] : 0.0;
+      x[i] = 0.0;
+      r[i] = b;
+      z[i] = r[i] / diag[i];
+      q[i] = z[i];
+    }
+    const double bnorm = std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
+    if (!(bnorm > 0.0)) continue;
+    double rz = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
+    for (int it = 0; it < p.max_iterations; ++it) {
+      apply(q, Ap);
+      const double qAq = block_sum(n, threads, [&](std::size_t i) { return q[i] * Ap[i]; });
+      if (!(qAq > 0.0)) break;
+      const double alpha = rz / qAq;
+      parallel_for(n, threads, [&](std::size_t i) {
+        x[i] += alpha * q[i];
+        r[i] -= alpha * Ap[i];
+      });
+      const double rn = std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
+      if (rn <= p.tolerance * bnorm) break;
+      parallel_for(n, threads, [&](std::size_t i) { z[i] = r[i] / diag[i]; });
+      const double rz2 = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
+      const double beta = rz2 / rz;
+      rz = rz2;
+      parallel_for(n, threads, [&](std::size_t i) { q[i] = z[i] + beta * q[i]; });
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      out[i * channels + c] = medium[i] ? static_cast<float>(std::max(0.0, x[i])) : 0.0f;
+  }
+  // Empty cells next to the medium: the mean boundary value φ·4D/(h + 4D) of their medium
+  // neighbours, so that lookups between a surface cell and an empty one see the surface value.
+  std::vector<float> fill(n * static_cast<std::size_t>(channels), 0.0f);
+  parallel_for(n, threads, [&](std::size_t i) {
+    if (medium[i]) return;
+    int count = 0;
+    for (int a = 0; a < 3; ++a) {
+      for (int side = -1; side <= 1; side += 2) {
+        const int cc = coord(i, a) + side;
+        if (cc < 0 || cc >= dims[a]) continue;
+        const std::size_t j = side > 0 ? i + stride[a] : i - stride[a];
+        if (!medium[j]) continue;
+        const float f = 4.0f * D[j] / (h[a] + 4.0f * D[j]);
+        for (int c = 0; c < channels; ++c) fill[i * channels + c] += f * out[j * channels + c];
+        ++count;
+      }
+    }
+    if (count > 0)
+      for (int c = 0; c < channels; ++c) fill[i * channels + c] /= static_cast<float>(count);
+  });
+  for (std::size_t i = 0; i < n; ++i)
+    if (!medium[i])
+      for (int c = 0; c < channels; ++c) out[i * channels + c] = fill[i * channels + c];
+  return out;
+}
+
+}  // namespace cumuli

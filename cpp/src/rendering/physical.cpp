@@ -1,0 +1,77 @@
+#include "cumuli/rendering/physical.hpp"
+
+#include <algorithm>
+#include <stdexcept>
+
+#include "cumuli/phase.hpp"
+
+namespace cumuli {
+
+void PhysicalParams::validate() const {
+  if (!(extinction_scale >= 0.0f) || !std::isfinite(extinction_scale))
+    throw std::invalid_argument("extinction_scale must be finite and >= 0");
+  if (!(albedo >= 0.0f && albedo <= 1.0f)) throw std::invalid_argument("albedo must be in [0, 1]");
+  for (float g : {g1, g2})
+    if (!(g > -1.0f && g < 1.0f)) throw std::invalid_argument("phase g must be in (-1, 1)");
+  if (!(blend >= 0.0f && blend <= 1.0f)) throw std::invalid_argument("hg_blend must be in [0, 1]");
+  if (octaves < 1 || octaves > kMaxOctaves) throw std::invalid_argument("octaves must be in [1, 8]");
+  for (float c : {oct_a, oct_b, oct_c})
+    if (!(c >= 0.0f && c <= 1.0f)) throw std::invalid_argument("octave constants must be in [0, 1]");
+  if (jitter_seed < 0 || jitter_seed > 1023) throw std::invalid_argument("jitter_seed must be in [0, 1023]");
+  if (!(min_transmittance >= 0.0f && min_transmittance < 1.0f))
+    throw std::invalid_argument("min_transmittance must be in [0, 1)");
+}
+
+float PhysicalParams::phase(float cos_theta, float scale) const {
+  const float p1 = henyey_greenstein(g1 * scale, cos_theta);
+  if (!dual_hg) return p1;
+  return (1.0f - blend) * p1 + blend * henyey_greenstein(g2 * scale, cos_theta);
+}
+
+OctaveTerms::OctaveTerms(const PhysicalParams& p, float cos_theta) : n(p.octaves) {
+  float a = 1.0f, b = 1.0f, c = 1.0f;
+  for (int i = 0; i < n; ++i) {
+    weight[i] = a * p.phase(cos_theta, b);
+    scale[i] = c;
+    a *= p.oct_a;
+    b *= p.oct_b;
+    c *= p.oct_c;
+  }
+}
+
+float OctaveTerms::sum(float tau) const {
+  float s = 0.0f;
+  for (int i = 0; i < n; ++i) s += weight[i] * std::exp(-scale[i] * tau);
+  return s;
+}
+
+void PhysicalGrids::validate() const {
+  frame.validate();
+  grid.validate();
+  if (depth.size() != static_cast<std::size_t>(frame.res[0]) * frame.res[1] * frame.res[2])
+    throw std::invalid_argument("sun depth lattice does not match its frame");
+  if (rgba.size() != grid.voxels() * 4) throw std::invalid_argument("light lattice must be (D, H, W, 4)");
+}
+
+glm::vec3 PhysicalGrids::source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance,
+                                float albedo) const {
+  constexpr float kInv4Pi = 0.0795774715459477f;
+  const float tau = sample_frame(depth.data(), frame, p);
+  float L[4];
+  sample_trilinear(rgba.data(), grid, 4, p, L);
+  const float sun = terms.sum(tau) + L[0] * kInv4Pi;
+  return albedo * (sun_irradiance * sun + glm::vec3(L[1], L[2], L[3]) * kInv4Pi);
+}
+
+float jitter(int row, int col, int seed) {
+  const float s = 5.588238f * static_cast<float>(seed);
+  const float x = static_cast<float>(col) + s, y = static_cast<float>(row) + s;
+  const float a = 0.06711056f * x;
+  const float b = 0.00583715f * y;
+  const float f = a + b;
+  const float inner = f - std::floor(f);
+  const float g = 52.9829189f * inner;
+  return g - std::floor(g);
+}
+
+}  // namespace cumuli

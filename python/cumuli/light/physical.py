@@ -1,0 +1,213 @@
+"""The physical mode's light step (RENDER_CONTRACT, "Physical lighting"): for one drawable, the
+sun's optical depth on a lattice in the sun's frame and a world lattice of multiply scattered
+and sky light, the values the physical drawers read.
+
+The approximations, with their constants (``cpp/include/cumuli/light/physical.hpp`` has the
+maths):
+
+- **Sun, single scattering and low orders**: ``τ_sun`` on a lattice whose third axis runs along
+  the light, :data:`ALONG` × finer than across it, marched through the drawable's own extinction
+  (the procedural density of a 2018 cloud, not a voxelisation), plus the optical depth of the
+  scene's other drawables upstream of each column (clouds shade each other). The drawers add
+  the first :data:`OCTAVES` scattering orders as Wrenninge, Kulla & Lundqvist's octaves ("Oz:
+  the great and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky,
+  atmosphere and cloud rendering in Frostbite"): order ``i`` scatters ``aⁱ`` of the light with
+  the phase function's ``g`` scaled by ``bⁱ`` and the sun's optical depth scaled by ``cⁱ``, with
+  their ``a = b = c = ½`` (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`); order 0 is exact
+  single scattering.
+- **Multiple scattering through the cloud**: the diffusion approximation (Stam 1995) on the
+  world lattice, fed by the sun's and the sky's first scattering, with Marshak's vacuum
+  boundary: the light that reaches the shadowed side and the far side of the cloud. The camera
+  sees the first mean free path of the cloud while a lattice cell spans several, and the
+  diffuse light there is larger than its cell mean: the fluence is read with the gain
+  :data:`SUN_GAIN` = 1.5, calibrated once against Mitsuba 3 on the side-lit default cumulus
+  and checked front-, back- and top-lit (see the README for the errors).
+- **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
+  quadrature with 2·:data:`SKY_SAMPLES`² directions) times the sky's SH projection gives the
+  sky irradiance reaching each voxel unscattered; with multiple scattering on, it and its
+  diffusion are read with the gain :data:`SKY_GAIN` = 2 (calibrated likewise).
+
+Everything is a value: :class:`PhysicalLight` holds the lattices and nothing is stored on the
+drawable. Computed by :func:`physical_light`, the light pass ``prepare_light`` runs for every
+drawable when ``settings.lighting == "physical"``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from cumuli import _core
+from cumuli.light.medium import extinction_grid
+from cumuli.model.cloud import Cloud
+from cumuli.model.volume import VolumeCloud
+from cumuli.sky import sky_args
+
+#: Scattering orders drawn as octaves (order 0 is single scattering), and their constants.
+OCTAVES = 4
+OCTAVE_A = 0.5
+OCTAVE_B = 0.5
+OCTAVE_C = 0.5
+#: Gains on the lattice's diffuse light: the sun's multiple scattering, and the sky's light.
+SUN_GAIN = 1.5
+SKY_GAIN = 2.0
+#: SH order and quadrature (n_theta) of the sky visibility.
+SKY_ORDER = 3
+SKY_SAMPLES = 3
+#: The sun lattice: ACROSS × physical_resolution nodes across the light, ALONG × as many along.
+ACROSS = 2
+ALONG = 8
+#: Cell-averaging of the world lattice's extinction (supersample³ points per voxel).
+SUPERSAMPLE = 2
+
+
+@dataclass(frozen=True, eq=False)
+class PhysicalLight:
+    """The physical light of one drawable.
+
+    ``frame`` ``(u, v, w, lo, hi, res)``: the sun's lattice (``w`` the way light travels; node
+    ``(i, j, k)`` at frame coordinates ``lo + ((i, j, k) + ½)(hi − lo)/res``, frame coordinates
+    of ``p`` being ``(p·u, p·v, p·w)``); ``sun_depth`` ``(nw, nv, nu)`` its optical depths;
+    ``grid`` ``(D, H, W, 4)`` over ``box``: the diffuse sunlight per unit sun irradiance
+    (channel 0) and the diffuse sky light (RGB), both fluences already multiplied by the gain
+    the drawers use; ``octaves`` how many scattering orders the drawers draw from ``τ_sun``.
+    """
+
+    frame: tuple
+    sun_depth: np.ndarray
+    grid: np.ndarray
+    box: tuple[tuple[float, float, float], tuple[float, float, float]]
+    octaves: int
+
+    def sample_depth(self, points: Any) -> np.ndarray:
+        """``τ_sun`` at world ``(N, 3)`` points (trilinear in the sun's lattice)."""
+        pts = np.ascontiguousarray(points, dtype=np.float32)
+        return _core.sample_frame(self.sun_depth, self.frame, pts)
+
+
+def _medium_args(drawable: Any, settings: Any) -> tuple[list, list]:
+    if not isinstance(drawable, (Cloud, VolumeCloud)):
+        # Particle clouds and billboards keep their own light models (Harris 2002, Torchelsen
+        # & Musse 2005): they have no extinction field and cast no shadow into the media.
+        return [], []
+    if isinstance(drawable, VolumeCloud):
+        return [], [(drawable.density, drawable.box[0], drawable.box[1], float(drawable.sigma_t))]
+    centres, radii, rotations, model, kappa, phi = drawable.core_args()
+    if settings.kappa is not None and model == "spheroid":
+        kappa = settings.kappa
+    scale = float(settings.extinction_scale)
+    return [(centres, radii, rotations, model, float(kappa), float(phi), scale)], []
+
+
+def medium_args(drawables: Any, settings: Any) -> tuple[list, list]:
+    """The core's ``(clouds, volumes)`` lists of the drawables' extinction (their medium)."""
+    clouds: list = []
+    volumes: list = []
+    for d in drawables:
+        c, v = _medium_args(d, settings)
+        clouds += c
+        volumes += v
+    return clouds, volumes
+
+
+def fbm_args(settings: Any) -> tuple[int, float, float, float]:
+    return settings.octaves, settings.gain, settings.lacunarity, settings.frequency
+
+
+def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight:
+    """The :class:`PhysicalLight` of a `Cloud` or `VolumeCloud` under ``scene``'s sun and sky."""
+    if not isinstance(drawable, (Cloud, VolumeCloud)):
+        raise TypeError(f"no physical light pass for {type(drawable).__name__}")
+    s = scene.settings
+    n = s.physical_resolution
+    own = isinstance(drawable, VolumeCloud) and max(drawable.shape) <= n
+    field = extinction_grid(drawable, scene.noise, s, None if own else n, SUPERSAMPLE, threads)
+    lo, hi = field.box
+    to_sun = scene.sun.direction
+    across = ACROSS * n
+    frame = _core.light_frame(lo, hi, to_sun, (across, across, ALONG * n))
+    clouds, volumes = medium_args([drawable], s)
+    step = float(min(s.light_step, (frame[4][2] - frame[3][2]) / (ALONG * n)))
+    depth = _core.light_space_depth(
+        clouds, volumes, scene.noise._core, *fbm_args(s), frame, step, threads
+    )
+    others = [d for d in scene.clouds if d is not drawable]
+    if others:  # the other drawables' shadow: their optical depth upstream of every column
+        depth += _upstream_depth(others, scene, frame, step, threads)[None]
+    ext = field.values
+    d, h, w = ext.shape
+    centres = _lattice_centres(lo, hi, (w, h, d))
+    sun_t = np.exp(-_core.sample_frame(depth, frame, centres)).astype(np.float32).reshape(ext.shape)
+    grid = np.zeros((d, h, w, 4), np.float32)
+    sky_e = None
+    if s.sky_light:
+        coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
+        sky_e = _core.sky_irradiance(ext, lo, hi, coeffs, SKY_ORDER, SKY_SAMPLES, 1.0, threads)
+        grid[..., 1:4] = sky_e
+    octaves = 1
+    if s.multiple_scattering:
+        octaves = OCTAVES
+        phi = _core.diffusion_light(
+            ext, lo, hi, sun_t, to_sun, sky_e, s.albedo, s.mean_cosine, 2000, 1e-3, threads
+        )
+        grid[..., 0] = SUN_GAIN * phi[..., 0]
+        if sky_e is not None:
+            grid[..., 1:4] = SKY_GAIN * (sky_e + phi[..., 1:4])
+    depth.setflags(write=False)
+    grid.setflags(write=False)
+    return PhysicalLight(frame, depth, grid, (lo, hi), octaves)
+
+
+def _upstream_depth(others: Any, scene: Any, frame: tuple, step: float, threads: int) -> np.ndarray:
+    """``(nv, nu)``: the optical depth of ``others`` towards the sun from the sun-side face of
+    every column of ``frame``."""
+    u, v, w, lo, hi, (nu, nv, nw) = frame
+    fu = lo[0] + (np.arange(nu) + 0.5) * (hi[0] - lo[0]) / nu
+    fv = lo[1] + (np.arange(nv) + 0.5) * (hi[1] - lo[1]) / nv
+    gv, gu = np.meshgrid(fv, fu, indexing="ij")
+    pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
+           + lo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
+    clouds, volumes = medium_args(others, scene.settings)
+    tau = _core.medium_optical_depth(
+        clouds, volumes, scene.noise._core, *fbm_args(scene.settings), pts, scene.sun.direction,
+        step, threads,
+    )  # fmt: skip
+    return tau.reshape(nv, nu)
+
+
+def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarray:
+    """World texel centres of a ``(x, y, z)`` lattice over the box, in ``[z, y, x]`` order."""
+    axes = [
+        np.float32(lo[a])
+        + (np.arange(shape[a], dtype=np.float32) + np.float32(0.5))
+        * np.float32((hi[a] - lo[a]) / shape[a])
+        for a in range(3)
+    ]
+    zz, yy, xx = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+    return np.ascontiguousarray(np.stack([xx, yy, zz], -1).reshape(-1, 3), dtype=np.float32)
+
+
+def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[float, float]]:
+    """``(weight, c)`` of each drawn order for a ray whose direction makes ``cos_theta`` with the
+    sun: weight ``aⁱ·phase(bⁱ·g)``, optical-depth scale ``cⁱ`` (numpy reference of the drawers)."""
+    out = []
+    for i in range(octaves):
+        p = phase(settings, cos_theta, OCTAVE_B**i)
+        out.append((OCTAVE_A**i * p, OCTAVE_C**i))
+    return out
+
+
+def phase(settings: Any, cos_theta: float, g_scale: float = 1.0) -> float:
+    """The settings' phase function (HG or the two-lobe blend) with its g's scaled."""
+
+    def hg(g: float) -> float:
+        d = 1.0 + g * g - 2.0 * g * cos_theta
+        return (1.0 - g * g) / (4.0 * math.pi * d * math.sqrt(d))
+
+    if settings.phase == "dual_hg":
+        w = settings.hg_blend
+        return (1.0 - w) * hg(settings.hg_g * g_scale) + w * hg(settings.hg_g2 * g_scale)
+    return hg(settings.hg_g * g_scale)

@@ -1,0 +1,174 @@
+"""Sunlight on the ground: the transmittance of the sun's light through every cloud of a scene
+(RENDER_CONTRACT, "Ground").
+
+:func:`shadow_map` marches, from every texel centre of a rectangle of the ground plane, a ray
+towards the sun through each drawable's extinction — a 2018 cloud's density field (the union
+march's attribution) times ``extinction_scale`` in the physical mode or ``absorption/step_ref``
+(the paper mode's camera-ray extinction) in the paper mode; a volume's ``sigma_t·density`` — in
+segments of at most ``settings.light_step`` sampled at their midpoints, and returns
+``exp(−τ)``. The light step makes one for a scene with a ground (:func:`scene_shadow`), over
+the ground the clouds' boxes can shade.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from cumuli import _core
+from cumuli import _validate as check
+from cumuli.light.physical import fbm_args
+from cumuli.model.cloud import Cloud
+from cumuli.model.volume import VolumeCloud
+
+#: Largest shadow-map edge.
+MAX_RESOLUTION = 4096
+
+
+@dataclass(frozen=True, eq=False)
+class ShadowMap:
+    """Sunlight transmittance on the ground: ``values`` ``(nz, nx)`` float32 over
+    ``extent = (x0, z0, x1, z1)`` of the plane ``y = height``, texel ``(j, i)`` at
+    ``x = x0 + (i + ½)(x1 − x0)/nx``, ``z = z0 + (j + ½)(z1 − z0)/nz`` (bilinear in between,
+    clamped at the edges, 1 outside)."""
+
+    values: np.ndarray
+    extent: tuple[float, float, float, float]
+    height: float
+
+
+def cloud_extinction_scale(settings: Any) -> float:
+    """σt per unit of a 2018 cloud's density: the physical mode's ``extinction_scale``, the paper
+    mode's camera-ray ``absorption / step_ref``."""
+    if settings.physical:
+        return float(settings.extinction_scale)
+    return float(settings.absorption / settings.step_ref)
+
+
+def _medium(scene: Any) -> tuple[list, list]:
+    s = scene.settings
+    clouds, volumes = [], []
+    for d in scene.clouds:
+        if isinstance(d, Cloud):
+            centres, radii, rotations, model, kappa, phi = d.core_args()
+            if s.kappa is not None and model == "spheroid":
+                kappa = s.kappa
+            clouds.append((centres, radii, rotations, model, float(kappa), float(phi),
+                           cloud_extinction_scale(s)))  # fmt: skip
+        elif isinstance(d, VolumeCloud):
+            volumes.append((d.density, d.box[0], d.box[1], float(d.sigma_t)))
+        # Particle clouds and billboards have no extinction field (their own light models):
+        # they cast no shadow on the ground.
+    return clouds, volumes
+
+
+def default_extent(scene: Any, height: float) -> tuple[float, float, float, float] | None:
+    """The rectangle of the plane ``y = height`` the boxes of the drawables with a medium (2018
+    clouds, volumes) can shade (their corners moved along the light onto the plane, padded by
+    2 %); None when nothing can."""
+    s = np.asarray(scene.sun.direction, np.float64)
+    media = [d for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud))]
+    if s[1] <= 1e-3 or not media:
+        return None
+    pts = []
+    for d in media:
+        lo, hi = (np.asarray(b, np.float64) for b in d.layer_box())
+        for c in range(8):
+            p = np.where([c & 1, c & 2, c & 4], hi, lo)
+            t = max((p[1] - height) / s[1], 0.0)
+            pts.append(p - t * s)
+    pts = np.array(pts)
+    x0, z0 = pts[:, 0].min(), pts[:, 2].min()
+    x1, z1 = pts[:, 0].max(), pts[:, 2].max()
+    pad = 0.02 * max(x1 - x0, z1 - z0, 1e-3)
+    return (x0 - pad, z0 - pad, x1 + pad, z1 + pad)
+
+
+def _extent(extent: Any) -> tuple[float, float, float, float]:
+    if isinstance(extent, (str, bytes)) or not isinstance(extent, Sequence) or len(extent) != 2:
+        raise TypeError(f"extent must be ((x0, z0), (x1, z1)), got {extent!r}")
+    corners = []
+    for k, corner in enumerate(extent):
+        if isinstance(corner, (str, bytes)) or not isinstance(corner, Sequence) or len(corner) != 2:
+            raise TypeError(f"extent[{k}] must be a pair (x, z), got {corner!r}")
+        corners.append(tuple(check.real(v, f"extent[{k}]", -1e6, 1e6) for v in corner))
+    (x0, z0), (x1, z1) = corners
+    if not (x1 > x0 and z1 > z0):
+        raise ValueError(f"extent must have x1 > x0 and z1 > z0, got {extent!r}")
+    return (x0, z0, x1, z1)
+
+
+def _resolution(resolution: Any) -> tuple[int, int]:
+    if isinstance(resolution, (int, np.integer)) and not isinstance(resolution, bool):
+        n = check.integer(resolution, "resolution", 1, MAX_RESOLUTION)
+        return n, n
+    if (
+        isinstance(resolution, Sequence)
+        and not isinstance(resolution, str)
+        and len(resolution) == 2
+    ):
+        nx, nz = (check.integer(v, "resolution", 1, MAX_RESOLUTION) for v in resolution)
+        return nx, nz
+    raise TypeError(f"resolution must be an int or (nx, nz), got {resolution!r}")
+
+
+def compute_shadow(
+    scene: Any, extent: tuple[float, float, float, float], shape: tuple[int, int], height: float,
+    threads: int = 0,
+) -> ShadowMap:  # fmt: skip
+    """The :class:`ShadowMap` of ``scene`` over a validated extent and ``(nx, nz)``."""
+    x0, z0, x1, z1 = extent
+    nx, nz = shape
+    xs = x0 + (np.arange(nx) + 0.5) * (x1 - x0) / nx
+    zs = z0 + (np.arange(nz) + 0.5) * (z1 - z0) / nz
+    zz, xx = np.meshgrid(zs, xs, indexing="ij")
+    pts = np.stack([xx, np.full_like(xx, height), zz], -1).reshape(-1, 3).astype(np.float32)
+    clouds, volumes = _medium(scene)
+    s = scene.settings
+    if scene.sun.direction[1] <= 0 or (not clouds and not volumes):
+        values = np.ones((nz, nx), np.float32)
+    else:
+        tau = _core.medium_optical_depth(
+            clouds, volumes, scene.noise._core, *fbm_args(s), pts, scene.sun.direction,
+            float(s.light_step), threads,
+        )  # fmt: skip
+        values = np.exp(-tau.astype(np.float64)).astype(np.float32).reshape(nz, nx)
+    values.setflags(write=False)
+    return ShadowMap(values, (float(x0), float(z0), float(x1), float(z1)), float(height))
+
+
+def shadow_map(
+    scene: Any,
+    extent: Any = None,
+    resolution: int | Sequence[int] = 256,
+    threads: int = 0,
+) -> np.ndarray:
+    """Sunlight transmittance on the ground of ``scene``: ``(nz, nx)`` float32 in [0, 1].
+
+    ``extent`` ``((x0, z0), (x1, z1))`` is the rectangle of the plane ``y = scene.ground.height``
+    (``y = 0`` without a ground) to cover, by default the part the clouds can shade; texel
+    ``(j, i)`` is the ray from ``(x0 + (i + ½)(x1 − x0)/nx, height, z0 + (j + ½)(z1 − z0)/nz)``
+    towards the sun. ``resolution`` is one int or ``(nx, nz)``. A sun at or below the horizon
+    gives ones (no direct sunlight is shaded). For terrain and solar-irradiance work: multiply
+    by ``E_sun·max(sun.y, 0)`` for the direct irradiance.
+    """
+    from cumuli.scene import Scene
+
+    if not isinstance(scene, Scene):
+        raise TypeError(f"scene must be a cumuli.Scene, got {type(scene).__name__}")
+    height = 0.0 if scene.ground is None else scene.ground.height
+    shape = _resolution(resolution)
+    if extent is None:
+        ext = default_extent(scene, height)
+        if ext is None:
+            return np.ones(shape[::-1], np.float32)
+    else:
+        ext = _extent(extent)
+    threads = check.threads(threads)
+    if math.prod(shape) > MAX_RESOLUTION**2:
+        raise ValueError("resolution is too large")
+    return np.array(compute_shadow(scene, ext, shape, height, threads).values)

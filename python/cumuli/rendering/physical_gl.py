@@ -1,0 +1,120 @@
+"""GL pieces of the physical mode and the ground, shared by the GL drawers: atlases of the
+drawables' physical light (``shaders/common/physical.glsl``) and the ground's uniforms and
+shadow map (``shaders/common/ground.glsl``). RENDER_CONTRACT, "Physical lighting" and "Ground".
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from typing import Any
+
+import moderngl
+import numpy as np
+
+from cumuli.ground import sky_irradiance
+from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, PhysicalLight
+from cumuli.rendering.cpu import MIN_TRANSMITTANCE
+
+#: 32-bit words of one PhysicalCloud in the std430 storage buffer (ten vec4 / ivec4).
+WORDS = 40
+
+
+def shelf_pack(shapes: Sequence[tuple[int, int, int]], limit: int, what: str):
+    """Offsets ``(x, y, z)`` placing lattices of ``(nx, ny, nz)`` texels side by side in an
+    atlas no edge of which exceeds ``limit`` (rows along x, then along y, then layers along z),
+    and the atlas size ``(W, H, D)``."""
+    ox = oy = oz = row = layer = 0
+    size = [1, 1, 1]
+    offsets = []
+    for nx, ny, nz in shapes:
+        if max(nx, ny, nz) > limit:
+            raise ValueError(f"a {what} lattice of {(nx, ny, nz)} exceeds GL_MAX_3D_TEXTURE_SIZE")
+        if ox + nx > limit:
+            ox, oy, row = 0, oy + row, 0
+        if oy + ny > limit:
+            ox, oy, oz, row, layer = 0, 0, oz + layer, 0, 0
+        if oz + nz > limit:
+            raise ValueError(
+                f"the {what} lattices do not fit in one 3D texture of GL_MAX_3D_TEXTURE_SIZE="
+                f"{limit}: use fewer clouds or a smaller settings.physical_resolution"
+            )
+        offsets.append((ox, oy, oz))
+        ox += nx
+        row, layer = max(row, ny), max(layer, nz)
+        size = [max(size[0], ox), max(size[1], oy + ny), max(size[2], oz + nz)]
+    return offsets, tuple(size)
+
+
+def pack_physical(
+    lights: Sequence[PhysicalLight], limit: int
+) -> tuple[bytes, np.ndarray, np.ndarray]:
+    """The PhysicalCloud buffer and the two atlases (τ_sun ``[z, y, x]``, light ``[z, y, x, 4]``)
+    of the drawables' physical light."""
+    dshapes = [tuple(int(v) for v in light.frame[5]) for light in lights]
+    gshapes = [light.grid.shape[2::-1] for light in lights]
+    doff, dsize = shelf_pack(dshapes, limit, "sun depth")
+    goff, gsize = shelf_pack(gshapes, limit, "light")
+    depth = np.zeros(dsize[::-1], np.float32)
+    grid = np.zeros((*gsize[::-1], 4), np.float32)
+    words = np.zeros((max(len(lights), 1), WORDS), np.uint32)
+    for k, light in enumerate(lights):
+        u, v, w, lo, hi, res = light.frame
+        f = np.zeros(WORDS, np.float32)
+        i = f.view(np.int32)
+        f[0:3], f[3] = u, lo[0]
+        f[4:7], f[7] = v, lo[1]
+        f[8:11], f[11] = w, lo[2]
+        f[12:15] = hi
+        i[16:19] = res
+        i[20:23] = doff[k]
+        glo, ghi = light.box
+        f[24:27], f[28:31] = glo, ghi
+        i[32:35] = gshapes[k]
+        i[36:39] = goff[k]
+        words[k] = f.view(np.uint32)
+        (x, y, z), (nx, ny, nz) = doff[k], dshapes[k]
+        depth[z : z + nz, y : y + ny, x : x + nx] = light.sun_depth
+        (x, y, z), (nx, ny, nz) = goff[k], gshapes[k]
+        grid[z : z + nz, y : y + ny, x : x + nx] = light.grid
+    return words.tobytes(), depth, grid
+
+
+def set_physical_uniforms(
+    set_: Callable[[str, Any], None], settings: Any, lights: Sequence[PhysicalLight]
+) -> None:
+    """The physical shading uniforms (common/physical.glsl), atlases on units 2 and 3."""
+    set_("u_depth_atlas", 2)
+    set_("u_grid_atlas", 3)
+    set_("u_phys_extinction", float(settings.extinction_scale))
+    set_("u_phys_albedo", float(settings.albedo))
+    set_("u_phys_dual", settings.phase == "dual_hg")
+    set_("u_phys_g", (float(settings.hg_g), float(settings.hg_g2), float(settings.hg_blend)))
+    set_("u_phys_octaves", max((light.octaves for light in lights), default=1))
+    set_("u_phys_abc", (OCTAVE_A, OCTAVE_B, OCTAVE_C))
+    set_("u_phys_seed", int(settings.jitter_seed))
+    set_("u_phys_min_t", MIN_TRANSMITTANCE)
+
+
+def bind_ground(ctx: Any, set_: Callable[[str, Any], None], lit: Any, location: int) -> list:
+    """The ground's uniforms and shadow map (common/ground.glsl) on texture unit ``location``;
+    returns the GL objects made (the caller releases them)."""
+    scene = lit.scene
+    ground = scene.ground
+    shadow = lit.shadow if ground is not None else None
+    if shadow is not None:
+        nz, nx = shadow.values.shape
+        tex = ctx.texture((nx, nz), 1, np.ascontiguousarray(shadow.values).tobytes(), dtype="f4")
+    else:  # a sampler2D must not share a unit with the 3D ones, even unused
+        tex = ctx.texture((1, 1), 1, np.ones(1, np.float32).tobytes(), dtype="f4")
+    tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+    tex.use(location=location)
+    set_("u_shadow", location)
+    set_("u_ground", ground is not None)
+    set_("u_shadow_on", shadow is not None)
+    if ground is not None:
+        set_("u_ground_height", float(ground.height))
+        set_("u_ground_albedo", tuple(float(a) for a in ground.albedo))
+        set_("u_ground_sky", sky_irradiance(scene.sky))
+    if shadow is not None:
+        set_("u_shadow_extent", tuple(float(v) for v in shadow.extent))
+    return [tex]

@@ -1,0 +1,118 @@
+// The physical lighting mode's shading (RENDER_CONTRACT "Physical lighting"; C++ twin:
+// cpp/src/rendering/physical.cpp): phase function, scattering octaves, the interleaved-gradient
+// jitter, and the lookups of a drawable's physical light (τ_sun on the sun's lattice, the world
+// lattice's diffuse sunlight F and sky light S) in atlases.
+#include "common/phase.glsl"
+
+#define MAX_OCTAVES 8
+
+uniform float u_phys_extinction;  // σt = u_phys_extinction · ρ
+uniform float u_phys_albedo;      // ϖ
+uniform bool u_phys_dual;         // two HG lobes
+uniform vec3 u_phys_g;            // g1, g2, weight of the second lobe
+uniform int u_phys_octaves;       // scattering orders drawn
+uniform vec3 u_phys_abc;          // octave constants a, b, c
+uniform int u_phys_seed;          // jitter seed
+uniform float u_phys_min_t;       // the ray stops below this transmittance
+
+float phys_phase(float c, float scale) {
+    float p1 = hg_phase(u_phys_g.x * scale, c);
+    if (!u_phys_dual) return p1;
+    return (1.0 - u_phys_g.z) * p1 + u_phys_g.z * hg_phase(u_phys_g.y * scale, c);
+}
+
+// Weights aⁱ·phase(bⁱ·g, c) and depth scales cⁱ of the drawn orders; returns their count.
+int octave_terms(float c, out float w[MAX_OCTAVES], out float k[MAX_OCTAVES]) {
+    int n = clamp(u_phys_octaves, 1, MAX_OCTAVES);
+    float a = 1.0, b = 1.0, s = 1.0;
+    for (int i = 0; i < MAX_OCTAVES; ++i) {
+        w[i] = 0.0;
+        k[i] = 0.0;
+        if (i >= n) continue;
+        w[i] = a * phys_phase(c, b);
+        k[i] = s;
+        a *= u_phys_abc.x;
+        b *= u_phys_abc.y;
+        s *= u_phys_abc.z;
+    }
+    return n;
+}
+
+// Interleaved gradient noise (Jimenez 2014) of pixel (row, col).
+float phys_jitter(int row, int col) {
+    float s = 5.588238 * float(u_phys_seed);
+    float x = float(col) + s, y = float(row) + s;
+    float a = 0.06711056 * x;
+    float b = 0.00583715 * y;
+    float f = a + b;
+    float inner = f - floor(f);
+    float g = 52.9829189 * inner;
+    return g - floor(g);
+}
+
+// Trilinear lookup at texel coordinate q (texel centres at i + ½) of a lattice of size `res`
+// placed at `offset` in an atlas: hand-blended texelFetch (exact) or the hardware filter with
+// the coordinate clamped inside the tile (the same clamp to edge).
+vec4 atlas_lookup(sampler3D atlas, ivec3 offset, ivec3 res, vec3 q, bool exact) {
+    if (!exact) {
+        vec3 u = clamp(q, vec3(0.5), vec3(res) - 0.5) + vec3(offset);
+        return texture(atlas, u / vec3(textureSize(atlas, 0)));
+    }
+    vec3 x = q - 0.5;
+    vec3 f = floor(x);
+    vec3 w = x - f;
+    ivec3 hi = res - 1;
+    ivec3 i0 = clamp(ivec3(f), ivec3(0), hi) + offset;
+    ivec3 i1 = clamp(ivec3(f) + 1, ivec3(0), hi) + offset;
+    vec4 c000 = texelFetch(atlas, ivec3(i0.x, i0.y, i0.z), 0);
+    vec4 c100 = texelFetch(atlas, ivec3(i1.x, i0.y, i0.z), 0);
+    vec4 c010 = texelFetch(atlas, ivec3(i0.x, i1.y, i0.z), 0);
+    vec4 c110 = texelFetch(atlas, ivec3(i1.x, i1.y, i0.z), 0);
+    vec4 c001 = texelFetch(atlas, ivec3(i0.x, i0.y, i1.z), 0);
+    vec4 c101 = texelFetch(atlas, ivec3(i1.x, i0.y, i1.z), 0);
+    vec4 c011 = texelFetch(atlas, ivec3(i0.x, i1.y, i1.z), 0);
+    vec4 c111 = texelFetch(atlas, ivec3(i1.x, i1.y, i1.z), 0);
+    vec4 c00 = c000 + w.x * (c100 - c000);
+    vec4 c10 = c010 + w.x * (c110 - c010);
+    vec4 c01 = c001 + w.x * (c101 - c001);
+    vec4 c11 = c011 + w.x * (c111 - c011);
+    vec4 c0 = c00 + w.y * (c10 - c00);
+    vec4 c1 = c01 + w.y * (c11 - c01);
+    return c0 + w.z * (c1 - c0);
+}
+
+// A drawable's physical light in the atlases.
+struct PhysicalCloud {
+    vec4 fu;      // xyz: the sun frame's u axis; w: frame lo.x
+    vec4 fv;      // xyz: v axis; w: lo.y
+    vec4 fw;      // xyz: w axis (the way light travels); w: lo.z
+    vec4 fhi;     // xyz: frame hi
+    ivec4 fres;   // xyz: sun lattice resolution (u, v, w)
+    ivec4 foff;   // xyz: its offset in the depth atlas
+    vec4 glo;     // xyz: world lattice box
+    vec4 ghi;
+    ivec4 gres;   // xyz: world lattice resolution (x, y, z)
+    ivec4 goff;   // xyz: its offset in the light atlas
+};
+
+uniform sampler3D u_depth_atlas;  // R32F τ_sun lattices
+uniform sampler3D u_grid_atlas;   // RGBA32F (F, S.rgb) lattices
+
+// ϖ·(E_sun·(Σ octaves + F/4π) + S/4π) at p.
+vec3 phys_source(PhysicalCloud c, vec3 p, float w[MAX_OCTAVES], float k[MAX_OCTAVES], int n,
+                 vec3 sun_irradiance, bool exact) {
+    const float INV_4PI = 0.0795774715459477;
+    vec3 fq = vec3(dot(p, c.fu.xyz), dot(p, c.fv.xyz), dot(p, c.fw.xyz));
+    vec3 flo = vec3(c.fu.w, c.fv.w, c.fw.w);
+    vec3 q = (fq - flo) / (c.fhi.xyz - flo) * vec3(c.fres.xyz);
+    float tau = atlas_lookup(u_depth_atlas, c.foff.xyz, c.fres.xyz, q, exact).r;
+    vec3 g = (p - c.glo.xyz) / (c.ghi.xyz - c.glo.xyz) * vec3(c.gres.xyz);
+    vec4 L = atlas_lookup(u_grid_atlas, c.goff.xyz, c.gres.xyz, g, exact);
+    float sun = 0.0;
+    for (int i = 0; i < MAX_OCTAVES; ++i) {
+        if (i >= n) break;
+        sun += w[i] * exp(-k[i] * tau);
+    }
+    sun += L.x * INV_4PI;
+    return u_phys_albedo * (sun_irradiance * sun + L.yzw * INV_4PI);
+}
