@@ -1,9 +1,13 @@
-"""Shared pytest fixtures: a GL context when EGL works here (tests marked `gl` skip otherwise)."""
+"""Shared pytest fixtures: a GL context when EGL works here (tests marked `gl` skip otherwise),
+and a runner for the benchmark smoke tests."""
 
 from __future__ import annotations
 
 import os
-from collections.abc import Iterator
+import subprocess
+import sys
+from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import pytest
 
@@ -36,3 +40,21 @@ def gl_context() -> Iterator[cgl.GLContext]:
 def regen_references() -> bool:
     """True when reference images should be rewritten (CUMULI_REGEN=1)."""
     return os.environ.get("CUMULI_REGEN", "") == "1"
+
+
+def _run_bench(script: str, out: Path, timeout: float = 600) -> str:
+    """Run ``benchmarks/<script> --quick --out <out>`` in a fresh interpreter (plots to Agg);
+    fail with its output unless it exits 0. Returns what it printed."""
+    root = Path(__file__).resolve().parents[1]
+    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    cmd = [sys.executable, str(root / "benchmarks" / script), "--quick", "--out", str(out)]
+    res = subprocess.run(cmd, capture_output=True, text=True, timeout=timeout, env=env)
+    assert res.returncode == 0, res.stderr + res.stdout
+    return res.stdout
+
+
+@pytest.fixture(scope="session")
+def run_bench() -> Callable[..., str]:
+    """``run_bench(script, out, timeout=600)``: a benchmark's quick run, asserted to succeed;
+    returns its stdout."""
+    return _run_bench

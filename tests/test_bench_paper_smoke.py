@@ -4,9 +4,8 @@ JSON, and report.py turns them into RESULTS.md. Speed is not checked, only the s
 from __future__ import annotations
 
 import json
-import os
-import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -18,22 +17,9 @@ import bench_distance  # noqa: E402
 import report  # noqa: E402
 
 
-def run_bench(name: str, out: Path) -> dict:
-    env = dict(os.environ, MPLBACKEND="Agg", PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
-    res = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "benchmarks" / f"bench_{name}.py"),
-            "--quick",
-            "--out",
-            str(out),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env=env,
-    )
-    assert res.returncode == 0, res.stderr + res.stdout
+def quick_json(run_bench: Callable[..., str], name: str, out: Path) -> dict:
+    """``bench_<name>.py --quick``'s JSON (its plot must exist too)."""
+    run_bench(f"bench_{name}.py", out, timeout=600)
     assert (out / f"{name}.png").stat().st_size > 0
     return json.loads((out / f"{name}.json").read_text())
 
@@ -47,9 +33,9 @@ def assert_frame_entry(entry: dict) -> None:
 
 
 @pytest.mark.gl
-def test_paper_benchmarks_quick_and_report(tmp_path: Path) -> None:
+def test_paper_benchmarks_quick_and_report(tmp_path: Path, run_bench: Callable[..., str]) -> None:
     out = tmp_path / "out"
-    dist = run_bench("distance", out)
+    dist = quick_json(run_bench, "distance", out)
     assert dist["benchmark"] == "distance" and dist["quick"] is True
     assert dist["distances"] == bench_distance.QUICK_DISTANCES
     for size in dist["sizes"]:
@@ -60,7 +46,7 @@ def test_paper_benchmarks_quick_and_report(tmp_path: Path) -> None:
         assert set(dist["table3_min_distance_30fps"][size]) == set(dist["curves"][size])
     assert [t["limit_ms"] for t in dist["targets"]] == [1.0, 4.0]
 
-    speed = run_bench("speedups", out)
+    speed = quick_json(run_bench, "speedups", out)
     assert set(speed["summary"]) == {"hollow", "light", "sort", "lod", "march"}
     assert (
         speed["hollow"]["runs"][0]["primitives"]["hollow"]
@@ -71,7 +57,7 @@ def test_paper_benchmarks_quick_and_report(tmp_path: Path) -> None:
     for label, row in speed["light"]["threads"].items():
         assert row["naive_over_ndt_median"] > 0 and row["ndt_ms_median"] > 0, label
 
-    scale = run_bench("scaling", out)
+    scale = quick_json(run_bench, "scaling", out)
     assert [r["clouds"] for r in scale["clouds"]["rows"]] == [1, 4]
     for series in scale["primitives"]["series"].values():
         assert [r["primitives"] for r in series["rows"]] == [6, 48]

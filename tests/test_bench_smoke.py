@@ -6,6 +6,7 @@ import json
 import os
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import pytest
@@ -20,21 +21,10 @@ def _env() -> dict[str, str]:
     return env
 
 
-def test_bench_noise_quick_writes_json_and_plot(tmp_path: Path) -> None:
-    res = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "benchmarks" / "bench_noise.py"),
-            "--quick",
-            "--out",
-            str(tmp_path),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=_env(),
-    )
-    assert res.returncode == 0, res.stderr + res.stdout
+def test_bench_noise_quick_writes_json_and_plot(
+    tmp_path: Path, run_bench: Callable[..., str]
+) -> None:
+    stdout = run_bench("bench_noise.py", tmp_path, timeout=300)
     data = json.loads((tmp_path / "noise.json").read_text())
     assert (tmp_path / "noise.png").stat().st_size > 1000
 
@@ -82,7 +72,7 @@ def test_bench_noise_quick_writes_json_and_plot(tmp_path: Path) -> None:
         assert "cpp_1_thread_over_fastnoise" in data["ratios"]
         assert data["targets"]["cpp_per_thread_vs_fastnoise"]["met"] in (True, False)
     assert data["ratios"]["cpp_2_threads_over_1"] > 0
-    assert "target" in res.stdout and "noise.json" in res.stdout
+    assert "target" in stdout and "noise.json" in stdout
 
 
 def test_run_all_passes_quick_and_out_through(tmp_path: Path) -> None:

@@ -4,7 +4,7 @@ serial path, from worker processes started with the spawn method; clear errors."
 from __future__ import annotations
 
 import functools
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import numpy as np
@@ -106,28 +106,12 @@ def test_bad_sweep_arguments() -> None:
         cu.sweep(lambda: "not a scene", [{}], progress=False)
 
 
-def test_bench_cluster_quick_writes_json_and_plot(tmp_path: Path) -> None:
+def test_bench_cluster_quick_writes_json_and_plot(
+    tmp_path: Path, run_bench: Callable[..., str]
+) -> None:
     import json
-    import os
-    import subprocess
-    import sys
 
-    root = Path(__file__).resolve().parents[1]
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p), MPLBACKEND="Agg")
-    res = subprocess.run(
-        [
-            sys.executable,
-            str(root / "benchmarks" / "bench_cluster.py"),
-            "--quick",
-            "--out",
-            str(tmp_path),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=env,
-    )
-    assert res.returncode == 0, res.stderr + res.stdout
+    run_bench("bench_cluster.py", tmp_path, timeout=300)
     data = json.loads((tmp_path / "cluster.json").read_text())
     assert data["images_identical"] is True
     assert set(data["seconds"]) == {"serial", "1 worker", "2 workers"}

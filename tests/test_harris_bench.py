@@ -5,31 +5,18 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_bench_particles_quick(tmp_path: Path) -> None:
+def test_bench_particles_quick(tmp_path: Path, run_bench: Callable[..., str]) -> None:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
     env["MPLBACKEND"] = "Agg"
-    res = subprocess.run(
-        [
-            sys.executable,
-            str(ROOT / "benchmarks" / "bench_particles.py"),
-            "--quick",
-            "--out",
-            str(tmp_path),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=600,
-        env=env,
-    )
-    assert res.returncode == 0, res.stderr + res.stdout
+    run_bench("bench_particles.py", tmp_path, timeout=600)
     data = json.loads((tmp_path / "particles.json").read_text())
     assert (tmp_path / "particles.png").stat().st_size > 1000
     assert data["benchmark"] == "particles" and data["quick"] is True

@@ -4,23 +4,18 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_bench_animation_quick(tmp_path: Path) -> None:
+def test_bench_animation_quick(tmp_path: Path, run_bench: Callable[..., str]) -> None:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
     env["MPLBACKEND"] = "Agg"
-    res = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "bench_animation.py"), "--quick", "--out",
-         str(tmp_path)],
-        capture_output=True, text=True, timeout=300, env=env,
-    )  # fmt: skip
-    assert res.returncode == 0, res.stderr + res.stdout
+    stdout = run_bench("bench_animation.py", tmp_path, timeout=300)
     data = json.loads((tmp_path / "animation.json").read_text())
     assert (tmp_path / "animation.png").stat().st_size > 1000
     assert data["benchmark"] == "animation" and data["quick"] is True
@@ -60,4 +55,4 @@ def test_bench_animation_quick(tmp_path: Path) -> None:
     frame = data["frame"]
     assert frame["frame_total_s"] > 0
     assert ("render_gl" in frame) == (data["machine"]["gl_renderer"] is not None)
-    assert "animation.json" in res.stdout
+    assert "animation.json" in stdout

@@ -4,6 +4,7 @@ analytic Beer–Lambert cases, method and thread invariants, and bad input."""
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 
 import numpy as np
 import pytest
@@ -397,30 +398,10 @@ def test_many_rotated_primitives_match_reference(noise):
     assert (count > 0).sum() > 20
 
 
-def test_bench_light_quick_writes_json_and_plot(tmp_path):
+def test_bench_light_quick_writes_json_and_plot(tmp_path, run_bench: Callable[..., str]):
     import json
-    import os
-    import subprocess
-    import sys
-    from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
-    env = dict(os.environ, MPLBACKEND="Agg")
-    env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
-    res = subprocess.run(
-        [
-            sys.executable,
-            str(root / "benchmarks" / "bench_light.py"),
-            "--quick",
-            "--out",
-            str(tmp_path),
-        ],
-        capture_output=True,
-        text=True,
-        timeout=300,
-        env=env,
-    )
-    assert res.returncode == 0, res.stderr + res.stdout
+    stdout = run_bench("bench_light.py", tmp_path, timeout=300)
     data = json.loads((tmp_path / "light.json").read_text())
     assert (tmp_path / "light.png").stat().st_size > 1000
     assert data["benchmark"] == "light" and data["quick"] is True
@@ -460,8 +441,8 @@ def test_bench_light_quick_writes_json_and_plot(tmp_path):
             assert f["fbm_s"]["median"] > 0 and f["ns_per_point"] > 0
             assert f["ndt_march_s"] == row["march_s"]["median"]
             assert f["fbm_share_of_ndt"] == pytest.approx(f["fbm_s"]["median"] / f["ndt_march_s"])
-    assert "fBm floor" in res.stdout
-    assert ("[met]" in res.stdout) is ratio["met"]
+    assert "fBm floor" in stdout
+    assert ("[met]" in stdout) is ratio["met"]
 
 
 def test_zero_density_or_zero_extinction_leaves_full_light(noise):

@@ -4,23 +4,18 @@ from __future__ import annotations
 
 import json
 import os
-import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def test_bench_shapes_quick(tmp_path: Path) -> None:
+def test_bench_shapes_quick(tmp_path: Path, run_bench: Callable[..., str]) -> None:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
     env["MPLBACKEND"] = "Agg"
-    res = subprocess.run(
-        [sys.executable, str(ROOT / "benchmarks" / "bench_shapes.py"), "--quick", "--out",
-         str(tmp_path)],
-        capture_output=True, text=True, timeout=300, env=env,
-    )  # fmt: skip
-    assert res.returncode == 0, res.stderr + res.stdout
+    stdout = run_bench("bench_shapes.py", tmp_path, timeout=300)
     data = json.loads((tmp_path / "shapes.json").read_text())
     assert (tmp_path / "shapes.png").stat().st_size > 1000
     assert data["benchmark"] == "shapes" and data["quick"] is True
@@ -31,4 +26,4 @@ def test_bench_shapes_quick(tmp_path: Path) -> None:
         assert r["containment_cost_ratio"] > 0
         w = r["with_containment"]["wall_s"]
         assert w["min"] <= w["median"] <= w["max"]
-    assert "shapes.json" in res.stdout
+    assert "shapes.json" in stdout

@@ -32,7 +32,7 @@ import numpy as np
 from cumuli import _validate as check
 from cumuli._atomic import atomic_target
 from cumuli.io.jsonable import jsonable
-from cumuli.io.npz import check_path, check_readable, read_npz
+from cumuli.io.npz import check_path, check_readable, json_default, read_npz
 
 DENSITY_MODELS = ("spheroid", "metaball")
 #: Most primitives a cloud may hold.
@@ -240,7 +240,7 @@ class Cloud:
 
     # --- transforms (new clouds) ----------------------------------------------------------
     def _derived(self, transform: dict[str, Any], **changes: Any) -> Cloud:
-        params = json.loads(json.dumps(self.params, default=_json_default))
+        params = json.loads(json.dumps(self.params, default=json_default))
         params.setdefault("transforms", []).append(transform)
         fields: dict[str, Any] = {
             "centres": self.centres.copy(),
@@ -360,7 +360,7 @@ class Cloud:
             raise ValueError(f"path must end in .npz or .json, got {path.name!r}")
         meta = self._meta()
         try:
-            meta_text = json.dumps(meta, default=_json_default, allow_nan=False)
+            meta_text = json.dumps(meta, default=json_default, allow_nan=False)
         except (TypeError, ValueError) as exc:
             raise TypeError(f"params/stats must be JSON-serialisable: {exc}") from None
         if not path.parent.is_dir():
@@ -379,7 +379,7 @@ class Cloud:
                 doc["centres"] = self.centres.tolist()
                 doc["radii"] = self.radii.tolist()
                 doc["rotations"] = self.rotations.tolist()
-                text = json.dumps(doc, default=_json_default, allow_nan=False)
+                text = json.dumps(doc, default=json_default, allow_nan=False)
                 fh.write(text.encode("utf-8"))
         return path
 
@@ -443,7 +443,7 @@ def merge(clouds: Iterable[Cloud]) -> Cloud:
         stats={"parts": [dict(c.stats) for c in parts], "n": total},
         params={
             "generator": "merge",
-            "parts": [json.loads(json.dumps(c.params, default=_json_default)) for c in parts],
+            "parts": [json.loads(json.dumps(c.params, default=json_default)) for c in parts],
         },
     )
 
@@ -520,14 +520,3 @@ def _read_json(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
         except (TypeError, ValueError) as exc:
             raise ValueError(f"{path.name}: {key} is not a numeric array ({exc})") from None
     return doc, arrays
-
-
-def _json_default(obj: Any) -> Any:
-    """Let numpy scalars and arrays inside params/stats serialise as plain JSON."""
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, (tuple, set)):
-        return list(obj)
-    raise TypeError(f"{type(obj).__name__} is not JSON-serialisable")

@@ -28,6 +28,7 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli._atomic import atomic_target
 from cumuli.io.jsonable import array_from_json, array_to_json
+from cumuli.io.npz import json_default
 from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise
 
@@ -71,18 +72,8 @@ def _per_particle(value: Any, n: int, name: str, lo: float, hi: float, lo_open: 
 
 def _json_ready(obj: Any, name: str) -> Any:
     """``obj`` as plain JSON values (numpy scalars/arrays and tuples converted)."""
-
-    def default(o: Any) -> Any:
-        if isinstance(o, np.generic):
-            return o.item()
-        if isinstance(o, np.ndarray):
-            return o.tolist()
-        if isinstance(o, (tuple, set)):
-            return list(o)
-        raise TypeError(f"{type(o).__name__} is not JSON-serialisable")
-
     try:
-        return json.loads(json.dumps(obj, default=default, allow_nan=False))
+        return json.loads(json.dumps(obj, default=json_default, allow_nan=False))
     except (TypeError, ValueError) as exc:
         raise TypeError(f"{name} must be JSON-serialisable: {exc}") from None
 
