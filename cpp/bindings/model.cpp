@@ -64,6 +64,24 @@ LSystemRules make_rules(const std::map<std::string, std::string>& rules) {
 
 glm::dvec3 to_dvec3(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[1], a[2]); }
 
+// The density of a cloud: fBm from `noise`, or `constant` everywhere when it is >= 0 (ValueError
+// for bad fBm parameters or for neither).
+DensitySource density_source(const Noise* noise, float constant, int octaves, float gain,
+                             float lacunarity, float frequency) {
+  DensitySource src;
+  src.noise = noise;
+  src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+  try {
+    src.fbm.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  src.constant = constant;
+  if (constant < 0.0f && noise == nullptr)
+    throw py::value_error("give a noise or a constant density >= 0");
+  return src;
+}
+
 }  // namespace
 
 void bind_shapes(py::module_& m) {
@@ -226,13 +244,8 @@ void bind_shapes(py::module_& m) {
          float frequency, int threads) {
         const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
         require_points(points, "points");
-        DensitySource src;
-        src.noise = noise;
-        src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
-        src.fbm.validate();
-        src.constant = constant;
-        if (constant < 0.0f && noise == nullptr)
-          throw py::value_error("give a noise or a constant density >= 0");
+        const DensitySource src =
+            density_source(noise, constant, octaves, gain, lacunarity, frequency);
         const std::size_t n = static_cast<std::size_t>(points.shape(0));
         auto rho = new_array({static_cast<py::ssize_t>(n)});
         auto gamma = new_array({static_cast<py::ssize_t>(n)});
@@ -276,17 +289,8 @@ void bind_shapes(py::module_& m) {
          int octaves, float gain, float lacunarity, float frequency, std::array<float, 3> lo,
          std::array<float, 3> hi, std::array<int, 3> res, int supersample, int threads) {
         const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
-        DensitySource src;
-        src.noise = noise;
-        src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
-        src.constant = constant;
-        try {
-          src.fbm.validate();
-        } catch (const std::invalid_argument& e) {
-          throw py::value_error(e.what());
-        }
-        if (constant < 0.0f && noise == nullptr)
-          throw py::value_error("give a noise or a constant density >= 0");
+        const DensitySource src =
+            density_source(noise, constant, octaves, gain, lacunarity, frequency);
         Box box{glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])};
         for (int a = 0; a < 3; ++a) {
           if (!(box.hi[a] > box.lo[a]) || !std::isfinite(box.lo[a]) || !std::isfinite(box.hi[a]))
@@ -404,13 +408,8 @@ void bind_volumes(py::module_& m) {
          float density_scale, float padding, std::uint64_t seed, V3 box_lo, V3 box_hi,
          int threads) {
         const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
-        DensitySource src;
-        src.noise = noise;
-        src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
-        src.fbm.validate();
-        src.constant = constant;
-        if (constant < 0.0f && noise == nullptr)
-          throw py::value_error("give a noise or a constant density >= 0");
+        const DensitySource src =
+            density_source(noise, constant, octaves, gain, lacunarity, frequency);
         const EvolutionParams p =
             evolution(frames, res, growth, drift, jitter, wind, density_scale, padding, seed);
         std::vector<float> v;

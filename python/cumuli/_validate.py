@@ -195,3 +195,17 @@ def pair(
     if lo > hi:
         raise ValueError(f"{name} must have lo <= hi, got ({lo}, {hi})")
     return (lo, hi)
+
+
+def float_array(value: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
+    """``value`` as a C-contiguous float32 array of exactly ``shape`` with finite entries
+    (TypeError for a non-numeric dtype, ValueError for another shape or NaN/inf)."""
+    arr = np.asarray(value)
+    if arr.dtype.kind not in "fiu":
+        raise TypeError(f"{name} must be a real numeric array, got dtype {arr.dtype}")
+    if arr.shape != shape:
+        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
+    arr = np.ascontiguousarray(arr, dtype=np.float32)
+    if not np.isfinite(arr).all():
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return arr

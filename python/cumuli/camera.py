@@ -62,6 +62,20 @@ class Camera:
         u = _cross(r, f)
         return f, r, u
 
+    def uniforms(self, width: int, height: int) -> dict[str, Any]:
+        """The pinhole uniforms the GLSL ray setup reads (``u_cam_pos``, ``u_cam_f``/``r``/``u``,
+        ``u_th``, ``u_aspect``, ``u_image_size``) for a ``width × height`` image."""
+        f, r, u = self.basis()
+        return {
+            "u_cam_pos": tuple(np.float32(self.position).tolist()),
+            "u_cam_f": tuple(f.tolist()),
+            "u_cam_r": tuple(r.tolist()),
+            "u_cam_u": tuple(u.tolist()),
+            "u_th": math.tan(math.radians(self.fov) / 2),
+            "u_aspect": width / height,
+            "u_image_size": (width, height),
+        }
+
     def ray_directions(self, width: int, height: int) -> np.ndarray:
         """Unit ray directions ``(H, W, 3)`` float32, row 0 at the top (the contract's formula).
 

@@ -11,18 +11,7 @@ from typing import Any
 
 import numpy as np
 
-
-def _float_array(value: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
-    arr = np.asarray(value)
-    if arr.dtype.kind not in "fiu":
-        raise TypeError(f"{name} must be a real numeric array, got dtype {arr.dtype}")
-    if arr.shape != shape:
-        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
-    arr = np.ascontiguousarray(arr, dtype=np.float32)
-    if not np.isfinite(arr).all():
-        raise ValueError(f"{name} contains NaN or infinite values")
-    return arr
-
+from cumuli import _validate as check
 
 #: Per-instance layout of the fragment-shading buffer: cloud frame 4f, y range 2f, CAF row i.
 _SHADE_FORMAT = "4f 2f 1i/i"
@@ -58,14 +47,14 @@ class FragmentShading:
         n_l = dirs.shape[0] if dirs.ndim == 2 else -1
         if not 1 <= n_l <= MAX_SHADE_LIGHTS:
             raise ValueError(f"light_dirs must have shape (L, 3) with 1 <= L <= {MAX_SHADE_LIGHTS}")
-        object.__setattr__(self, "light_dirs", _float_array(dirs, "light_dirs", (n_l, 3)))
-        rad = _float_array(self.light_radiance, "light_radiance", (n_l, 3))
+        object.__setattr__(self, "light_dirs", check.float_array(dirs, "light_dirs", (n_l, 3)))
+        rad = check.float_array(self.light_radiance, "light_radiance", (n_l, 3))
         object.__setattr__(self, "light_radiance", rad)
         frame = np.asarray(self.frame)
         n = frame.shape[0] if frame.ndim == 2 else -1
-        object.__setattr__(self, "frame", _float_array(frame, "frame", (n, 4)))
-        object.__setattr__(self, "yrange", _float_array(self.yrange, "yrange", (n, 2)))
-        object.__setattr__(self, "caf", _float_array(self.caf, "caf", (n, n_l)))
+        object.__setattr__(self, "frame", check.float_array(frame, "frame", (n, 4)))
+        object.__setattr__(self, "yrange", check.float_array(self.yrange, "yrange", (n, 2)))
+        object.__setattr__(self, "caf", check.float_array(self.caf, "caf", (n, n_l)))
         p = dict(self.params)
         missing = {"d_min", "d_max", "k_dir", "directional", "ambient", "k_amb",
                    "height_levels"} - set(p)  # fmt: skip

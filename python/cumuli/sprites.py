@@ -60,18 +60,6 @@ _RECORD = np.dtype(
 )
 
 
-def _float_array(value: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
-    arr = np.asarray(value)
-    if arr.dtype.kind not in "fiu":
-        raise TypeError(f"{name} must be a real numeric array, got dtype {arr.dtype}")
-    if arr.shape != shape:
-        raise ValueError(f"{name} must have shape {shape}, got {arr.shape}")
-    arr = np.ascontiguousarray(arr, dtype=np.float32)
-    if not np.isfinite(arr).all():
-        raise ValueError(f"{name} contains NaN or infinite values")
-    return arr
-
-
 @dataclass(frozen=True, eq=False)
 class Sprites:
     """A batch of sprites, drawn in order (back to front). Arrays are float32 / int32.
@@ -99,18 +87,18 @@ class Sprites:
         half = np.asarray(self.half_sizes)
         if half.ndim == 1:
             half = np.repeat(half.reshape(-1, 1), 2, axis=1)
-        half = _float_array(half, "half_sizes", (n, 2))
+        half = check.float_array(half, "half_sizes", (n, 2))
         if (half <= 0).any():
             raise ValueError("half_sizes must be positive")
         colours = np.asarray(self.colours)
         if colours.shape == (n, 3):  # one colour per sprite
             colours = np.repeat(colours[:, None, :], 4, axis=1)
-        colours = _float_array(colours, "colours", (n, 4, 3))
-        alpha = _float_array(self.alpha, "alpha", (n,))
+        colours = check.float_array(colours, "colours", (n, 4, 3))
+        alpha = check.float_array(self.alpha, "alpha", (n,))
         if (alpha < 0).any() or (alpha > 1).any():
             raise ValueError("alpha must lie in [0, 1]")
         rotation = np.zeros(n, np.float32) if self.rotation is None else self.rotation
-        rotation = _float_array(rotation, "rotation", (n,))
+        rotation = check.float_array(rotation, "rotation", (n,))
         texture = np.full(n, -1, np.int32) if self.texture is None else np.asarray(self.texture)
         if texture.dtype.kind not in "iu" or texture.shape != (n,):
             raise TypeError(f"texture must be an integer array of shape ({n},)")

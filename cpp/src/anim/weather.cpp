@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cumuli/columns.hpp"
 #include "cumuli/rng.hpp"
 
 namespace cumuli {
@@ -233,31 +234,10 @@ void WeatherSim::spawn_edge(std::size_t layer, const Draw& d) {
 
 void WeatherSim::remove_if(std::size_t layer, const std::vector<char>& gone) {
   LayerState& ls = layers_[layer];
-  std::size_t w = 0;
-  for (std::size_t i = 0; i < ls.size(); ++i) {
-    if (gone[i]) continue;
-    ls.id[w] = ls.id[i];
-    ls.x0[w] = ls.x0[i];
-    ls.z0[w] = ls.z0[i];
-    ls.t0[w] = ls.t0[i];
-    ls.y[w] = ls.y[i];
-    ls.yaw[w] = ls.yaw[i];
-    ls.variant[w] = ls.variant[i];
-    ls.state[w] = ls.state[i];
-    ls.fade_in[w] = ls.fade_in[i];
-    ls.fade_out[w] = ls.fade_out[i];
-    ++w;
-  }
-  ls.id.resize(w);
-  ls.x0.resize(w);
-  ls.z0.resize(w);
-  ls.t0.resize(w);
-  ls.y.resize(w);
-  ls.yaw.resize(w);
-  ls.variant.resize(w);
-  ls.state.resize(w);
-  ls.fade_in.resize(w);
-  ls.fade_out.resize(w);
+  std::vector<char> keep(ls.size());
+  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = gone[i] ? 0 : 1;
+  keep_rows(keep, ls.id, ls.x0, ls.z0, ls.t0, ls.y, ls.yaw, ls.variant, ls.state, ls.fade_in,
+            ls.fade_out);
 }
 
 void WeatherSim::step(double dt) {

@@ -8,6 +8,7 @@
 
 #include <glm/geometric.hpp>
 
+#include "cumuli/columns.hpp"
 #include "cumuli/parallel.hpp"
 #include "cumuli/rng.hpp"
 
@@ -331,21 +332,8 @@ BillboardCloudData seed_box_cloud(const std::vector<SeedBoxParams>& seeds,
   out.billboards_drawn = nbb;
   if (bb.min_spacing > 0.0f && nbb > 0) {
     const std::vector<char> keep = spacing_filter(out.centres, bb.min_spacing);
-    std::size_t w = 0;
-    for (std::size_t i = 0; i < nbb; ++i) {
-      if (!keep[i]) continue;
-      out.centres[w] = out.centres[i];
-      out.sizes[w] = out.sizes[i];
-      out.texture[w] = out.texture[i];
-      out.rotation[w] = out.rotation[i];
-      out.box[w] = out.box[i];
-      ++w;
-    }
-    out.centres.resize(w);
-    out.sizes.resize(w);
-    out.texture.resize(w);
-    out.rotation.resize(w);
-    out.box.resize(w);
+    const std::size_t w =
+        keep_rows(keep, out.centres, out.sizes, out.texture, out.rotation, out.box);
     out.dropped_by_spacing = nbb - w;
   }
   return out;

@@ -11,7 +11,6 @@ blends with the C++ arithmetic (``exact``) — the twin of ``_core.display_impos
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -129,14 +128,8 @@ class ImpostorDisplayGL:
             planes, clamp, camera.position, camera.target, camera.up, float(camera.fov), width,
             height,
         )  # fmt: skip
-        f, r, u = camera.basis()
-        self._set("u_cam_pos", tuple(np.float32(camera.position).tolist()))
-        self._set("u_cam_f", tuple(f.tolist()))
-        self._set("u_cam_r", tuple(r.tolist()))
-        self._set("u_cam_u", tuple(u.tolist()))
-        self._set("u_th", math.tan(math.radians(camera.fov) / 2))
-        self._set("u_aspect", width / height)
-        self._set("u_image_size", (width, height))
+        for name, value in camera.uniforms(width, height).items():
+            self._set(name, value)
         self._set("u_exact", bool(exact))
         self._set("u_image", 0)
         # Per impostor: (centre, hw), (forward, hh), (right, clamp), (up, 0) as the shader reads.

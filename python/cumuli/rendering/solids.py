@@ -11,7 +11,6 @@ layers of a split impostor ([H]: "layer m, object m, layer m−1, …, object 1,
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -84,14 +83,8 @@ class SolidsGL:
         self, solids: Sequence[Solid], sun: Sun, camera: Camera, width: int, height: int
     ) -> np.ndarray:
         """The solid image ``(height, width, 4)`` (rgb, view depth; +∞ where none)."""
-        f, r, u = camera.basis()
-        self._set("u_cam_pos", tuple(np.float32(camera.position).tolist()))
-        self._set("u_cam_f", tuple(f.tolist()))
-        self._set("u_cam_r", tuple(r.tolist()))
-        self._set("u_cam_u", tuple(u.tolist()))
-        self._set("u_th", math.tan(math.radians(camera.fov) / 2))
-        self._set("u_aspect", width / height)
-        self._set("u_image_size", (width, height))
+        for name, value in camera.uniforms(width, height).items():
+            self._set(name, value)
         self._set("u_sun_dir", sun.direction)
         self._set("u_sun_radiance", sun.radiance)
         set_solid_uniforms(self.program, solids, colours=True)
