@@ -3,6 +3,7 @@
 // jitter, and the lookups of a drawable's physical light (τ_sun on the sun's lattice, the world
 // lattice's diffuse sunlight F and sky light S) in atlases.
 #include "common/phase.glsl"
+#include "common/trilinear.glsl"
 
 #define MAX_OCTAVES 8
 
@@ -58,27 +59,7 @@ vec4 atlas_lookup(sampler3D atlas, ivec3 offset, ivec3 res, vec3 q, bool exact) 
         vec3 u = clamp(q, vec3(0.5), vec3(res) - 0.5) + vec3(offset);
         return texture(atlas, u / vec3(textureSize(atlas, 0)));
     }
-    vec3 x = q - 0.5;
-    vec3 f = floor(x);
-    vec3 w = x - f;
-    ivec3 hi = res - 1;
-    ivec3 i0 = clamp(ivec3(f), ivec3(0), hi) + offset;
-    ivec3 i1 = clamp(ivec3(f) + 1, ivec3(0), hi) + offset;
-    vec4 c000 = texelFetch(atlas, ivec3(i0.x, i0.y, i0.z), 0);
-    vec4 c100 = texelFetch(atlas, ivec3(i1.x, i0.y, i0.z), 0);
-    vec4 c010 = texelFetch(atlas, ivec3(i0.x, i1.y, i0.z), 0);
-    vec4 c110 = texelFetch(atlas, ivec3(i1.x, i1.y, i0.z), 0);
-    vec4 c001 = texelFetch(atlas, ivec3(i0.x, i0.y, i1.z), 0);
-    vec4 c101 = texelFetch(atlas, ivec3(i1.x, i0.y, i1.z), 0);
-    vec4 c011 = texelFetch(atlas, ivec3(i0.x, i1.y, i1.z), 0);
-    vec4 c111 = texelFetch(atlas, ivec3(i1.x, i1.y, i1.z), 0);
-    vec4 c00 = c000 + w.x * (c100 - c000);
-    vec4 c10 = c010 + w.x * (c110 - c010);
-    vec4 c01 = c001 + w.x * (c101 - c001);
-    vec4 c11 = c011 + w.x * (c111 - c011);
-    vec4 c0 = c00 + w.y * (c10 - c00);
-    vec4 c1 = c01 + w.y * (c11 - c01);
-    return c0 + w.z * (c1 - c0);
+    return fetch_trilinear(atlas, offset, res, q - 0.5);
 }
 
 // A drawable's physical light in the atlases.

@@ -8,6 +8,7 @@
 
 #include "common/sky.glsl"
 #include "common/phase.glsl"
+#include "common/trilinear.glsl"
 #include "common/solid.glsl"
 #ifdef PHYSICAL
 // The physical lighting mode (RENDER_CONTRACT "Physical lighting"): σ = σ_t·ρ, samples at
@@ -45,25 +46,7 @@ const float MIN_TRANSMITTANCE = 1e-4;
 vec4 trilinear(sampler3D tex, vec3 p) {
   ivec3 n = textureSize(tex, 0);
   vec3 u = (p - u_box_min) / ((u_box_max - u_box_min) / vec3(n)) - 0.5;
-  vec3 fl = floor(u);
-  vec3 f = u - fl;
-  ivec3 i0 = clamp(ivec3(fl), ivec3(0), n - 1);
-  ivec3 i1 = clamp(ivec3(fl) + 1, ivec3(0), n - 1);
-  vec4 c000 = texelFetch(tex, ivec3(i0.x, i0.y, i0.z), 0);
-  vec4 c100 = texelFetch(tex, ivec3(i1.x, i0.y, i0.z), 0);
-  vec4 c010 = texelFetch(tex, ivec3(i0.x, i1.y, i0.z), 0);
-  vec4 c110 = texelFetch(tex, ivec3(i1.x, i1.y, i0.z), 0);
-  vec4 c001 = texelFetch(tex, ivec3(i0.x, i0.y, i1.z), 0);
-  vec4 c101 = texelFetch(tex, ivec3(i1.x, i0.y, i1.z), 0);
-  vec4 c011 = texelFetch(tex, ivec3(i0.x, i1.y, i1.z), 0);
-  vec4 c111 = texelFetch(tex, ivec3(i1.x, i1.y, i1.z), 0);
-  vec4 c00 = c000 + f.x * (c100 - c000);
-  vec4 c10 = c010 + f.x * (c110 - c010);
-  vec4 c01 = c001 + f.x * (c101 - c001);
-  vec4 c11 = c011 + f.x * (c111 - c011);
-  vec4 c0 = c00 + f.y * (c10 - c00);
-  vec4 c1 = c01 + f.y * (c11 - c01);
-  return c0 + f.z * (c1 - c0);
+  return fetch_trilinear(tex, ivec3(0), n, u);
 }
 
 void main() {
