@@ -6,7 +6,8 @@ is rendered at 320×240 and 640×480 on llvmpipe, at 640×480, 800×600 and 1920
 ``march="paper"`` and ``march="union"`` on both backends, and the physical lighting mode against
 the paper mode (``lighting_ratio``: the issue's limit of 1.5× the paper mode's frame time, as
 ``{limit, comparison, reached, met}``; GL and CPU, interleaved repeats of the same run; light
-steps excluded). GL time per frame is the sum of the
+steps excluded), and the GL frame time without and with empty-space skipping and the early
+exit (``work_per_pixel``, issue 14 item 4, ``_work.py``). GL time per frame is the sum of the
 tiles' GL_TIME_ELAPSED queries (the draw only: no upload, no read-back); wall time of the whole
 ``render`` call is recorded too. Ratios (union/paper, GL/CPU) come from the same run; on
 llvmpipe, whose timer queries miss the deferred rasteriser threads, they use wall time.
@@ -22,6 +23,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _common as common  # noqa: E402
+import _work  # noqa: E402
 
 import cumuli as cu  # noqa: E402
 from cumuli.demo import cumulus_scene  # noqa: E402
@@ -145,6 +147,18 @@ def main(argv: list[str] | None = None) -> int:
             "gl_wall_over_cpu_wall_union": med("gl_union", "wall_s") / med("cpu_union", "wall_s"),
         }
     lighting = lighting_ratios(base, camera, sizes, repeats, timer_ok)
+    # Issue 14 item 4: GL frame time without skipping and early exit, with skipping (the
+    # default), with both (_work.VARIANTS); wall time of Renderer.render.
+    with cu.Renderer() as renderer:
+        work = {
+            f"{w}x{h}": _work.gl_frame_times(renderer, base, camera, w, h, repeats)
+            for w, h in sizes
+        }
+    for key, entry in work.items():
+        common.log(
+            f"{key} gl work: off/skip {entry['gl_off_over_skip']:.2f}, "
+            f"off/fast {entry['gl_off_over_fast']:.2f}"
+        )
     data = {
         "benchmark": "render",
         "quick": args.quick,
@@ -156,6 +170,7 @@ def main(argv: list[str] | None = None) -> int:
         "methods": results,
         "ratios": ratios,
         "lighting": lighting,
+        "work_per_pixel": work,
         "gl_ratio_time": "gl_time_s (GL timer queries)" if timer_ok else "wall_s",
         "gl_timer_note": None
         if timer_ok

@@ -6,7 +6,10 @@ bit), ``march="paper"`` against ``"union"``, on the four cloud kinds of the pape
 cumulus, metaball cumulus, L-system castellanus, mesh → ellipsoids), with the GLSL marcher of the
 same run (GL timer queries of the draws, and wall time) for the CPU/GL ratios, and the physical
 lighting mode against the paper mode on every scene (``lighting``: the issue's limit of 1.5×, as
-``{limit, comparison, reached, met}``, CPU on every core and GL wall time, interleaved repeats).
+``{limit, comparison, reached, met}``, CPU on every core and GL wall time, interleaved repeats),
+and the work per pixel (``work_per_pixel``, issue 14 item 4, ``_work.py``: fBm evaluations per
+pixel without and with empty-space skipping and the early exit, their ratio against the target
+of 2, the image difference against 2e-3, CPU and GL frame-time ratios).
 Light grids are computed once, outside the timings. Writes ``render_cpu.json`` and
 ``render_cpu.png`` under ``benchmarks/out/`` (or ``--out``); ``--quick`` renders 96×72 with fewer
 repeats.
@@ -21,6 +24,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 import _common as common  # noqa: E402
+import _work  # noqa: E402
 
 import cumuli as cu  # noqa: E402
 
@@ -153,6 +157,12 @@ def main(argv: list[str] | None = None) -> int:
         }
     lighting = physical_ratios(renderer_ok=bool(machine["gl_renderer"]), width=width,
                                height=height, repeats=repeats)  # fmt: skip
+    work_renderer = cu.Renderer() if machine["gl_renderer"] else None
+    try:
+        work = _work.work_per_pixel(scenes(), width, height, repeats, work_renderer)
+    finally:
+        if work_renderer is not None:
+            work_renderer.close()
     data = {
         "benchmark": "render_cpu",
         "quick": args.quick,
@@ -167,6 +177,8 @@ def main(argv: list[str] | None = None) -> int:
         "methods": results,
         "ratios": ratios,
         "lighting": lighting,
+        "work_per_pixel": work,
+        "work_variants": _work.VARIANTS,
     }
     path = common.write_json(args.out / "render_cpu.json", data)
     common.log(f"wrote {path}")

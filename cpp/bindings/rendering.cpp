@@ -3,6 +3,7 @@
 // sprite rasteriser (sprite_raster.hpp) — the compositor (composite.hpp) and the impostor maths
 // of Harris 2002 (impostor.hpp).
 #include "cumuli/rendering/march.hpp"
+#include "cumuli/rendering/occupancy.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -160,7 +161,8 @@ void bind_march(py::module_& m) {
          float fixed_step, float hg_g, int max_steps, int max_candidates, const std::string& march,
          int octaves, float gain, float lacunarity, float frequency, const Noise* noise,
          int threads, float density_constant, bool sort_candidates, bool with_sky,
-         const py::object& solids, const py::object& physical, const py::object& ground) {
+         const py::object& solids, const py::object& physical, const py::object& ground,
+         float min_transmittance, bool skip_empty, bool return_stats) -> py::object {
         if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
           throw py::value_error("width and height must be in [1, " + std::to_string(kMaxEdge) +
                                 "], got " + std::to_string(width) + "x" + std::to_string(height));
@@ -189,6 +191,8 @@ void bind_march(py::module_& m) {
         s.sort_candidates = sort_candidates;
         s.fbm = FbmParams{octaves, gain, lacunarity, frequency};
         s.density_constant = density_constant;
+        s.min_transmittance = min_transmittance;
+        s.skip_empty = skip_empty;
         if (!physical.is_none()) {
           s.physical = true;
           s.phys = physical_of(physical.cast<py::dict>());
@@ -223,11 +227,24 @@ void bind_march(py::module_& m) {
 
         auto out = new_array({height, width, 4});
         float* dst = out.mutable_data();
-        {
+        if (!return_stats) {
           py::gil_scoped_release release;
           render_image(scene, s, cam, width, height, dst, threads);
+          return std::move(out);
         }
-        return out;
+        py::array_t<std::uint32_t> map({static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width)});
+        std::uint32_t* map_dst = map.mutable_data();
+        MarchStats stats;
+        {
+          py::gil_scoped_release release;
+          render_image(scene, s, cam, width, height, dst, threads, &stats, map_dst);
+        }
+        py::dict d;
+        d["fbm_evaluations"] = stats.fbm_evaluations;
+        d["steps"] = stats.steps;
+        d["skipped"] = stats.skipped;
+        d["fbm_map"] = map;
+        return py::make_tuple(out, d);
       },
       py::arg("camera_position"), py::arg("camera_target"), py::arg("camera_up"), py::arg("fov"),
       py::arg("width"), py::arg("height"), py::arg("clouds"), py::arg("sun_direction"),
@@ -240,12 +257,39 @@ void bind_march(py::module_& m) {
       py::arg("frequency"), py::arg("noise").none(true), py::arg("threads") = 0,
       py::arg("density_constant") = -1.0f, py::arg("sort_candidates") = true, py::arg("with_sky") = true,
       py::arg("solids") = py::none(), py::arg("physical") = py::none(),
-      py::arg("ground") = py::none(),
+      py::arg("ground") = py::none(), py::arg("min_transmittance") = 1e-6f,
+      py::arg("skip_empty") = false, py::arg("return_stats") = false,
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image, row 0 at "
       "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
       "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); sort_candidates=False leaves candidates "
       "unsorted (candidate_sort='none'); with_sky=False gives the premultiplied layer (colour, 1 − T); "
-      "solids (n, 4) (centre, radius) stop every ray at the nearest solid.");
+      "solids (n, 4) (centre, radius) stop every ray at the nearest solid. min_transmittance: the "
+      "paper mode's early exit; skip_empty: empty-space skipping (occupancy grids, the same "
+      "image); return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}).");
+
+  m.def(
+      "occupancy_grid",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+         const std::string& model, int resolution) {
+        if (resolution < 1 || resolution > 256)
+          throw py::value_error("resolution must be in [1, 256], got " + std::to_string(resolution));
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, 0.5f, 1.0f);
+        OccupancyGrid g;
+        {
+          py::gil_scoped_release release;
+          g = build_occupancy(cloud, resolution);
+        }
+        const py::ssize_t r = resolution;
+        py::array_t<std::uint8_t> cells({r, r, r});
+        std::copy(g.cells.begin(), g.cells.end(), cells.mutable_data());
+        return py::make_tuple(cells, py::make_tuple(g.box.lo.x, g.box.lo.y, g.box.lo.z),
+                              py::make_tuple(g.box.hi.x, g.box.hi.y, g.box.hi.z));
+      },
+      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
+      py::arg("resolution") = kOccupancyRes,
+      "A cloud's occupancy grid for empty-space skipping (RENDER_CONTRACT): (cells [z, y, x] "
+      "uint8, 1 where density may be > 0, 0 where it is certainly 0; lo; hi), over the cloud's "
+      "candidate box.");
 }
 
 void bind_volume_march(py::module_& m) {

@@ -64,6 +64,7 @@ from cumuli.model.volume import (
 )
 from cumuli.noise import Noise
 from cumuli.rendering.compositor import Renderer, render, render_cpu, render_volume
+from cumuli.rendering.cpu import MarchStats, occupancy_grid
 from cumuli.rendering.impostor_cache import ImpostorCache
 from cumuli.rendering.impostors import ImpostorSettings
 from cumuli.rendering.volume import VolumeRenderer
@@ -125,8 +126,10 @@ __all__ = [
     "merge",
     "mesh_cloud",
     "meshes",
+    "MarchStats",
     "metaball_cumulus",
     "Noise",
+    "occupancy_grid",
     "orbit",
     "PhysicalLight",
     "prepare_light",

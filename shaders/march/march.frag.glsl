@@ -7,6 +7,7 @@
 
 #include "march/density.glsl"
 #include "march/lighting.glsl"
+#include "march/occupancy.glsl"
 #include "common/sky.glsl"
 #include "common/solid.glsl"
 #include "common/ground.glsl"
@@ -60,6 +61,7 @@ uniform float u_g;            // HG asymmetry
 uniform int u_max_steps;
 uniform int u_max_candidates;
 uniform bool u_union;         // march = "union"
+uniform float u_min_t;        // the paper mode's early exit: stop once T < u_min_t
 uniform bool u_with_sky;      // false: the premultiplied layer (colour, 1 − T) for the compositor
 
 out vec4 frag;
@@ -272,8 +274,16 @@ void main() {
                 if (samples >= max_steps) { done = true; break; }
                 float s = t + offset;
                 if (!(s < t_solid)) break;  // a solid hides the rest of the ray
-                ++samples;
                 vec3 p = o + s * dir;
+                float t_safe;
+                if (u_skip_empty && empty_cell(c, p, o, dir, t_safe)) {
+                    // Pass over the lattice's samples in the empty cell (each one a step).
+                    t_safe = min(t_safe, t_solid);
+                    do { ++samples; t += step; }
+                    while (samples < max_steps && t < cand_out[k] && t + offset < t_safe);
+                    continue;
+                }
+                ++samples;
                 int a = c.info.z == 0 ? attribute_sample(n, s, p, k) : k;
                 float rho = cloud_density(c, cand_prim[a], p).x;
                 if (rho > 0.0) {
@@ -299,8 +309,16 @@ void main() {
                 if (samples >= max_steps) { done = true; break; }
                 float s = t + 0.5 * step;
                 if (!(s < t_solid)) break;
-                ++samples;
                 vec3 p = o + s * dir;
+                float t_safe;
+                if (u_skip_empty && empty_cell(c, p, o, dir, t_safe)) {
+                    // Pass over the lattice's samples in the empty cell (each one a step).
+                    t_safe = min(t_safe, t_solid);
+                    do { ++samples; t += step; }
+                    while (samples < max_steps && t < cand_out[k] && t + 0.5 * step < t_safe);
+                    continue;
+                }
+                ++samples;
                 int a = u_union && c.info.z == 0 ? attribute_sample(n, s, p, k) : k;
                 vec2 dg = cloud_density(c, cand_prim[a], p);
                 if (dg.x > 0.0) {
@@ -310,7 +328,7 @@ void main() {
                     vec3 sL = aL * phase * dg.y;
                     colour += (1.0 - dtau) * (aL + sL) * T;
                     T *= dtau;
-                    if (T < 1e-6) { done = true; break; }
+                    if (T < u_min_t) { done = true; break; }
                 }
                 t += step;
             }

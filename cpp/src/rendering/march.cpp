@@ -113,6 +113,8 @@ void MarchSettings::validate() const {
   require(max_candidates >= 1 && max_candidates <= kMaxCandidatesLimit,
           "max_candidates must be in [1, " + std::to_string(kMaxCandidatesLimit) + "]");
   require(std::isfinite(density_constant), "density_constant must be finite");
+  require(min_transmittance >= 0.0f && min_transmittance < 1.0f,
+          "min_transmittance must be in [0, 1)");
   fbm.validate();
   if (physical) phys.validate();
 }
@@ -163,6 +165,8 @@ struct PreparedCloud {
   const RenderCloud* cloud;
   Box box;
   float step;
+  const OccupancyGrid* occupancy;  // null without empty-space skipping
+  float margin;                    // a thousandth of the smallest cell edge
 };
 
 struct BoxHit {
@@ -171,9 +175,14 @@ struct BoxHit {
 };
 
 // Per-thread scratch: candidates of one cloud and the clouds a ray hits.
+// Per-thread scratch: candidates of one cloud, the clouds a ray hits, the density source with
+// this thread's fBm counter, and the thread's work counters.
 struct Scratch {
   std::vector<Candidate> candidates;
   std::vector<BoxHit> hits;
+  DensitySource src;
+  std::uint64_t fbm = 0;
+  std::uint64_t skipped = 0;
 };
 
 class RayMarcher {
@@ -186,7 +195,16 @@ class RayMarcher {
     src_.constant = settings.density_constant;
   }
 
-  glm::vec4 march(glm::vec3 origin, glm::vec3 dir, Scratch& scratch, float xi) const {
+  // A thread's scratch, its density source counting into it.
+  void init(Scratch& scratch) const {
+    scratch.candidates.resize(static_cast<std::size_t>(settings_.max_candidates));
+    scratch.hits.reserve(prepared_.size());
+    scratch.src = src_;
+    scratch.src.evaluations = &scratch.fbm;
+  }
+
+  // The pixel's colour; `steps` receives the samples marched.
+  glm::vec4 march(glm::vec3 origin, glm::vec3 dir, Scratch& scratch, float xi, int& steps) const {
     const glm::vec3 inv_dir = 1.0f / dir;
     // Clouds whose box the ray meets in front of the camera, sorted by entry (t ≥ 0) with a
     // stable insertion sort so that ties keep the scene order.
@@ -227,6 +245,7 @@ class RayMarcher {
         scene_.with_sky
             ? st.colour + st.T * background(scene_.sky, scene_.sun, scene_.ground, origin, dir)
             : st.colour;
+    steps = st.steps;
     return glm::vec4(rgb, 1.0f - st.T);
   }
 
@@ -243,10 +262,10 @@ class RayMarcher {
   // One sample at ray parameter s attributed to primitive j (Algorithm 3). Returns false when
   // the ray is done (opaque or out of samples).
   bool sample(const PreparedCloud& pc, int j, float s, glm::vec3 origin, glm::vec3 dir,
-              State& st) const {
+              Scratch& scratch, State& st) const {
     const RenderCloud& rc = *pc.cloud;
     const glm::vec3 p = origin + s * dir;
-    const DensitySample d = cloud_density(rc.shape, j, p, src_);
+    const DensitySample d = cloud_density(rc.shape, j, p, scratch.src);
     ++st.steps;
     if (d.rho > 0.0f) {
       const float dtau = std::exp(-settings_.absorption * d.rho * pc.step / settings_.ref_step);
@@ -255,9 +274,31 @@ class RayMarcher {
       const glm::vec3 sL = aL * st.phase * d.gamma;
       st.colour += (1.0f - dtau) * (aL + sL) * st.T;
       st.T *= dtau;
-      if (st.T < 1e-6f) return false;
+      if (st.T < settings_.min_transmittance) return false;
     }
     return st.steps < settings_.max_steps;
+  }
+
+  // Empty-space skipping (RENDER_CONTRACT "Empty-space skipping"). When the sample at s = t + off
+  // lies in an empty cell of the cloud's occupancy grid, it is passed over, and so is every
+  // following sample of the lattice (t += step, as the plain march adds) whose s stays a margin
+  // before the cell's exit, before t_end and before the solid. Each counts as a step, so the
+  // max_steps budget is spent as without skipping. Returns false when the sample must be taken.
+  bool skip_empty(const PreparedCloud& pc, float& t, float off, float t_end, glm::vec3 origin,
+                  glm::vec3 dir, Scratch& scratch, State& st) const {
+    const OccupancyGrid* occ = pc.occupancy;
+    if (occ == nullptr) return false;
+    int ix, iy, iz;
+    if (!occ->cell_of(origin + (t + off) * dir, ix, iy, iz) || occ->occupied(ix, iy, iz))
+      return false;
+    const float safe = std::min(occ->cell_exit(ix, iy, iz, origin, dir) - pc.margin, st.t_limit);
+    const float step = pc.step;
+    do {
+      ++st.steps;
+      ++scratch.skipped;
+      t += step;
+    } while (st.steps < settings_.max_steps && t < t_end && t + off < safe);
+    return true;
   }
 
   // Marches one cloud; false when the whole ray is done.
@@ -272,9 +313,14 @@ class RayMarcher {
     if (settings_.march == MarchMode::Paper) {
       // Every candidate interval on its own: overlaps are marched twice, as in the paper.
       for (int k = 0; k < n; ++k) {
-        for (float t = cand[k].t_in; t < cand[k].t_out; t += step) {
+        for (float t = cand[k].t_in; t < cand[k].t_out;) {
           if (!(t + half < st.t_limit)) break;
-          if (!sample(pc, cand[k].primitive, t + half, origin, dir, st)) return false;
+          if (skip_empty(pc, t, half, cand[k].t_out, origin, dir, scratch, st)) {
+            if (st.steps >= settings_.max_steps) return false;
+            continue;
+          }
+          if (!sample(pc, cand[k].primitive, t + half, origin, dir, scratch, st)) return false;
+          t += step;
         }
       }
       return true;
@@ -285,12 +331,17 @@ class RayMarcher {
     for (int k = 0; k < n; ++k) {
       if (cand[k].t_out <= t) continue;
       t = std::max(t, cand[k].t_in);
-      for (; t < cand[k].t_out; t += step) {
+      while (t < cand[k].t_out) {
         const float s = t + half;
         if (!(s < st.t_limit)) break;
+        if (skip_empty(pc, t, half, cand[k].t_out, origin, dir, scratch, st)) {
+          if (st.steps >= settings_.max_steps) return false;
+          continue;
+        }
         const int j = attribute ? union_owner(shape, cand, n, s, origin + s * dir, cand[k].primitive)
                                 : cand[k].primitive;
-        if (!sample(pc, j, s, origin, dir, st)) return false;
+        if (!sample(pc, j, s, origin, dir, scratch, st)) return false;
+        t += step;
       }
     }
     return true;
@@ -313,15 +364,17 @@ class RayMarcher {
     for (int k = 0; k < n; ++k) {
       if (cand[k].t_out <= t) continue;
       t = std::max(t, cand[k].t_in);
-      for (; t < cand[k].t_out; t += step) {
+      while (t < cand[k].t_out) {
         if (st.steps >= settings_.max_steps) return false;
         const float s = t + offset;
         if (!(s < st.t_limit)) return true;  // a solid hides the rest of the ray
+        if (skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st)) continue;
         ++st.steps;
         const glm::vec3 p = origin + s * dir;
         const int j = attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive)
                                 : cand[k].primitive;
-        const DensitySample d = cloud_density(shape, j, p, src_);
+        const DensitySample d = cloud_density(shape, j, p, scratch.src);
+        t += step;
         if (!(d.rho > 0.0f)) continue;
         const float sigma = ph.extinction_scale * d.rho;
         const float a = std::exp(-sigma * step);
@@ -343,38 +396,71 @@ class RayMarcher {
 }  // namespace
 
 void render_image(const MarchScene& scene, const MarchSettings& settings,
-                  const CameraParams& camera, int width, int height, float* out, int threads) {
+                  const CameraParams& camera, int width, int height, float* out, int threads,
+                  MarchStats* stats, std::uint32_t* fbm_map) {
   if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
   settings.validate();
   camera.validate();
   scene.validate(settings);
 
+  std::vector<OccupancyGrid> grids;
+  if (settings.skip_empty) {
+    grids.reserve(scene.clouds.size());
+    for (const auto& c : scene.clouds) grids.push_back(build_occupancy(c.shape));
+  }
   std::vector<PreparedCloud> prepared;
   prepared.reserve(scene.clouds.size());
-  for (const auto& c : scene.clouds)
-    prepared.push_back({&c, candidate_bounds(c.shape), settings.step_for(camera.position, c.shape.centre())});
+  for (std::size_t k = 0; k < scene.clouds.size(); ++k) {
+    const RenderCloud& c = scene.clouds[k];
+    PreparedCloud pc{&c, candidate_bounds(c.shape), settings.step_for(camera.position, c.shape.centre()),
+                     nullptr, 0.0f};
+    if (settings.skip_empty) {
+      const OccupancyGrid& g = grids[k];
+      const glm::vec3 cell = (g.box.hi - g.box.lo) / static_cast<float>(g.res);
+      pc.occupancy = &g;
+      pc.margin = 1e-3f * std::min(cell.x, std::min(cell.y, cell.z));
+    }
+    prepared.push_back(pc);
+  }
 
   const CameraRays rays(camera, width, height);
   const RayMarcher marcher(scene, settings, prepared);
+  // Per-row totals, summed in row order afterwards: the same whatever the thread count.
+  std::vector<MarchStats> rows(stats != nullptr ? static_cast<std::size_t>(height) : 0);
   // Rows are independent: each pixel is written by exactly one thread.
   parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
     Scratch scratch;
-    scratch.candidates.resize(static_cast<std::size_t>(settings.max_candidates));
-    scratch.hits.reserve(scene.clouds.size());
+    marcher.init(scratch);
     for (std::size_t r = r0; r < r1; ++r) {
+      std::uint64_t row_steps = 0;
+      const std::uint64_t fbm0 = scratch.fbm, skipped0 = scratch.skipped;
       for (int c = 0; c < width; ++c) {
         const glm::vec3 dir = rays.direction(static_cast<int>(r), c);
         const float xi = settings.physical ? jitter(static_cast<int>(r), c, settings.phys.jitter_seed)
                                            : 0.5f;
-        const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi);
-        float* o = out + (r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c)) * 4;
+        const std::uint64_t before = scratch.fbm;
+        int steps = 0;
+        const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi, steps);
+        row_steps += static_cast<std::uint64_t>(steps);
+        const std::size_t i = r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c);
+        if (fbm_map != nullptr) fbm_map[i] = static_cast<std::uint32_t>(scratch.fbm - before);
+        float* o = out + i * 4;
         o[0] = px.x;
         o[1] = px.y;
         o[2] = px.z;
         o[3] = px.w;
       }
+      if (stats != nullptr) rows[r] = {scratch.fbm - fbm0, row_steps, scratch.skipped - skipped0};
     }
   });
+  if (stats != nullptr) {
+    *stats = MarchStats{};
+    for (const MarchStats& m : rows) {
+      stats->fbm_evaluations += m.fbm_evaluations;
+      stats->steps += m.steps;
+      stats->skipped += m.skipped;
+    }
+  }
 }
 
 }  // namespace cumuli

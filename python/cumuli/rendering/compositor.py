@@ -29,6 +29,7 @@ from cumuli.gl import GLContext, _thread_default, default_context
 from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
+from cumuli.rendering.cpu import check_stats_scene, march_with_stats
 from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUND_KINDS, GROUPED_KINDS
 from cumuli.rendering.painters import CPUPainter, GLPainter
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
@@ -443,13 +444,16 @@ def render_cpu(
     threads: int = 0,
     impostors: Any = None,
     progress: bool | None = None,
-) -> np.ndarray:
+    return_stats: bool = False,
+) -> Any:
     """Render ``scene`` seen by ``camera`` with the C++ twins of every drawer and the C++
     compositor; returns ``(height, width, 4)`` float32 linear RGBA, row 0 at the top, alpha
     ``1 − T``. ``threads=0`` uses every core; the image does not depend on the thread count.
     ``impostors``: an :class:`cumuli.ImpostorCache` kept across frames. Ctrl-C stops it between
     chunks of rows; a progress bar shows when it takes more than a few seconds
-    (``progress=False``: none)."""
+    (``progress=False``: none). ``return_stats=True`` (2018 clouds only, no solids or
+    impostors: the marcher's single pass) returns ``(image, MarchStats)``: the same image and
+    the marcher's work (fBm evaluations, steps)."""
     from cumuli.rendering.impostor_cache import ImpostorCache
 
     lit, plain = _lit(scene)
@@ -464,8 +468,12 @@ def render_cpu(
         )
     _check_kinds(plain, CPU_DRAWERS, "CPU")
     _check_layers(plain, width, height)
+    if check.flag(return_stats, "return_stats"):
+        check_stats_scene(plain, impostors)
     lit = prepare_light(plain, threads=threads, progress=progress) if lit is None else lit
     with _progress.core("render (cpu)", progress):
+        if return_stats:
+            return march_with_stats(lit, camera, width, height, threads)
         return compose(lit, camera, width, height, CPUPainter(threads), threads, impostors)
 
 
@@ -477,9 +485,10 @@ def render(
     backend: str = "gl",
     impostors: Any = None,
     progress: bool | None = None,
-) -> np.ndarray:
+    return_stats: bool = False,
+) -> Any:
     """Render ``scene`` (a `Scene` or a `LitScene`) to an ``(height, width, 4)`` float32 linear
-    RGBA image, row 0 on top.
+    RGBA image, row 0 on top (``(image, MarchStats)`` with ``return_stats``: `render_cpu`).
 
     ``backend="gl"`` runs the GLSL drawers in a process-wide headless context; ``"cpu"`` runs
     their C++ twins (same contract, for parity and for machines without EGL). ``camera``
@@ -493,11 +502,14 @@ def render(
     _, plain = _lit(scene)
     if camera is None:
         camera = plain.default_camera()
+    if return_stats is not False and backend != "cpu":
+        raise ValueError("return_stats needs backend='cpu' (the CPU marcher counts its work)")
     if backend == "gl":
         return shared_renderer().render(
             scene, camera, width, height, impostors=impostors, progress=progress
         )
-    return render_cpu(scene, camera, width, height, impostors=impostors, progress=progress)
+    kw = {"impostors": impostors, "progress": progress, "return_stats": return_stats}
+    return render_cpu(scene, camera, width, height, **kw)
 
 
 def _as_camera(camera: Any) -> Camera:

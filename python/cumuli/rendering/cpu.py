@@ -11,6 +11,7 @@ of every kind.
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -31,6 +32,62 @@ MAX_EDGE = 1 << 14
 MAX_PIXELS = 1 << 26
 #: The physical mode stops a ray once its transmittance falls below this.
 MIN_TRANSMITTANCE = 1e-4
+#: Cells per axis of a cloud's occupancy grid (empty-space skipping; the shader's OCC_RES).
+OCCUPANCY_RESOLUTION = 16
+
+
+@dataclass(frozen=True)
+class MarchStats:
+    """The work of one CPU render of 2018 clouds (issue 14 item 4): counted by the C++ marcher
+    per pixel, so the numbers do not depend on the thread count, and counting never changes the
+    image.
+
+    Attributes
+    ----------
+    fbm_evaluations:
+        fBm evaluations of the density (eq. 1) over the image.
+    steps:
+        Samples marched, empty and skipped ones included (what ``max_steps`` bounds).
+    skipped:
+        Samples passed over by empty-space skipping (no density evaluated).
+    fbm_map:
+        ``(height, width)`` uint32: the fBm evaluations of each pixel.
+    """
+
+    fbm_evaluations: int
+    steps: int
+    skipped: int
+    fbm_map: np.ndarray
+
+    @property
+    def pixels(self) -> int:
+        """Pixels of the image."""
+        return int(self.fbm_map.size)
+
+    @property
+    def fbm_per_pixel(self) -> float:
+        """Mean fBm evaluations per pixel."""
+        return self.fbm_evaluations / self.pixels
+
+    @property
+    def steps_per_pixel(self) -> float:
+        """Mean samples marched per pixel."""
+        return self.steps / self.pixels
+
+
+def occupancy_grid(
+    cloud: Cloud, resolution: int = OCCUPANCY_RESOLUTION
+) -> tuple[np.ndarray, tuple[np.ndarray, np.ndarray]]:
+    """A cloud's coarse occupancy grid (RENDER_CONTRACT "Empty-space skipping"), as both
+    marchers use it: ``(cells, (lo, hi))`` with ``cells`` a ``[z, y, x]`` bool array of
+    ``resolution³`` cells over the box ``(lo, hi)`` (float32, the cloud's `layer_box`),
+    ``False`` where no primitive can give density > 0 anywhere in the cell (conservative)."""
+    if not isinstance(cloud, Cloud):
+        raise TypeError(f"cloud must be a cumuli.Cloud, got {type(cloud).__name__}")
+    resolution = check.integer(resolution, "resolution", 1, 256)
+    centres, radii, rotations, model, _, _ = cloud.core_args()
+    cells, lo, hi = _core.occupancy_grid(centres, radii, rotations, model, resolution)
+    return cells.astype(bool), (np.asarray(lo, np.float32), np.asarray(hi, np.float32))
 
 
 def physical_core_tuple(light: PhysicalLight) -> tuple:
@@ -152,12 +209,37 @@ def render_cpu_args(
         "solids": solid_arrays(scene.solids)[0] if scene.solids else None,
         "physical": physical_core_args(s, _octaves(lit, indices)) if s.physical else None,
         "ground": ground_args(scene.ground, scene.sky, lit.shadow),
+        "min_transmittance": float(s.min_transmittance),
+        "skip_empty": bool(s.empty_space_skipping),
     }
 
 
 def _octaves(lit: LitScene, indices: Sequence[int]) -> int:
     """Scattering orders drawn (every physical light of a pass draws the same)."""
     return max((lit.lights[k].octaves for k in indices), default=1)
+
+
+def check_stats_scene(scene: Scene, impostors: Any) -> None:
+    """``return_stats`` counts the 2018 marcher's single pass: only such scenes qualify."""
+    if not scene.clouds or not all(isinstance(c, Cloud) for c in scene.clouds):
+        raise ValueError("return_stats=True needs a scene of 2018 clouds (cumuli.Cloud) only")
+    if scene.solids or impostors is not None:
+        raise ValueError(
+            "return_stats=True counts the marcher's single pass: no solids or impostors"
+        )
+
+
+def march_with_stats(
+    lit: LitScene, camera: Camera, width: int, height: int, threads: int = 0
+) -> tuple[np.ndarray, MarchStats]:
+    """The CPU marcher's single pass over every cloud of ``lit`` (all 2018 clouds) with its
+    work statistics: the image `render_cpu` gives for such a scene, and a `MarchStats`."""
+    args = render_cpu_args(lit, camera, width, height, threads)
+    image, raw = _core.render_cpu(**args, return_stats=True)
+    stats = MarchStats(
+        int(raw["fbm_evaluations"]), int(raw["steps"]), int(raw["skipped"]), raw["fbm_map"]
+    )
+    return image, stats
 
 
 def draw_clouds_cpu(

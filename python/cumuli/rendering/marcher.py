@@ -22,6 +22,7 @@ from cumuli.gl import GLContext
 from cumuli.light.ndt import LightGrid
 from cumuli.light.prepare import LitScene
 from cumuli.model.cloud import Cloud
+from cumuli.rendering.cpu import OCCUPANCY_RESOLUTION, occupancy_grid
 from cumuli.rendering.physical_gl import bind_ground, pack_physical, set_physical_uniforms
 from cumuli.rendering.solids import set_solid_uniforms
 from cumuli.scene import Scene
@@ -93,7 +94,8 @@ def pack_clouds(
         # Kept apart, so the shader computes (fbm·r̄²)·φ in the C++ order.
         floats[k, 21] = cloud.mean_r2
         floats[k, 22] = cloud.phi
-        ints[k, 0:4] = (first, n, 1 if cloud.model == "metaball" else 0, 0)
+        # w: the cloud's first z slice in the occupancy atlas (occupancy_atlas)
+        ints[k, 0:4] = (first, n, 1 if cloud.model == "metaball" else 0, k * OCCUPANCY_RESOLUTION)
         ints[k, 4:8] = (w, h, d, z0)
         atlas[z0 : z0 + d, :h, :w] = values
         first += n
@@ -101,6 +103,16 @@ def pack_clouds(
     prim_bytes = (np.concatenate(prims) if prims else np.zeros((1, 20), np.float32)).tobytes()
     cloud_bytes = np.concatenate([floats.view(np.uint32), ints.view(np.uint32)], axis=1).tobytes()
     return prim_bytes, cloud_bytes, atlas
+
+
+def occupancy_atlas(clouds: Sequence[Cloud], skip: bool) -> np.ndarray:
+    """The clouds' occupancy grids (`occupancy_grid`) stacked along z, uint8 ``[z, y, x]``
+    (255 where occupied)
+    (shaders/march/occupancy.glsl); one occupied texel when ``skip`` is off."""
+    if not skip or not clouds:
+        return np.full((1, 1, 1), 255, np.uint8)
+    # R8 is normalised: 255 reads as 1.0 (occupied), 0 as 0.0 (empty).
+    return np.concatenate([occupancy_grid(c)[0] for c in clouds]).astype(np.uint8) * np.uint8(255)
 
 
 class MarcherGL:
@@ -253,6 +265,15 @@ class MarcherGL:
                     tex.use(location=location)
                 set_physical_uniforms(self._set, scene.settings, grids)
             scratch += bind_ground(ctx, self._set, lit, location=4)
+            skip = scene.settings.empty_space_skipping
+            occ = occupancy_atlas(clouds, skip)
+            d, h, w = occ.shape
+            occ_tex = ctx.texture3d((w, h, d), 1, occ.tobytes(), dtype="f1")
+            scratch.append(occ_tex)
+            occ_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            occ_tex.use(location=5)
+            self._set("u_occupancy", 5)
+            self._set("u_skip_empty", bool(skip))
             self._set_uniforms(scene, len(clouds), camera, width, height, with_sky)
             return self.tiles.draw(self.vao, self._set, width, height)
         finally:
@@ -298,6 +319,7 @@ class MarcherGL:
         set_("u_max_candidates", min(s.max_candidates, MAX_CANDIDATES))
         set_("u_union", s.march == "union")
         set_("u_exact", s.exact_noise)
+        set_("u_min_t", s.min_transmittance)
         set_("u_octaves", s.octaves)
         set_("u_gain", s.gain)
         set_("u_lacunarity", s.lacunarity)

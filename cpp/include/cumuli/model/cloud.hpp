@@ -6,6 +6,7 @@
 // density ρ = fbm(p) · r̄² · φ with r̄² the mean squared radius.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "cumuli/noise.hpp"
@@ -37,8 +38,14 @@ struct DensitySource {
   const Noise* noise = nullptr;
   FbmParams fbm;
   float constant = -1.0f;  // ≥ 0: use this instead of fBm
+  // When set, counts the fBm evaluations (the marcher's work statistics; one counter per thread).
+  std::uint64_t* evaluations = nullptr;
 
-  float operator()(glm::vec3 p) const { return constant >= 0.0f ? constant : noise->fbm(p, fbm); }
+  float operator()(glm::vec3 p) const {
+    if (constant >= 0.0f) return constant;
+    if (evaluations != nullptr) ++*evaluations;
+    return noise->fbm(p, fbm);
+  }
 };
 
 // One density sample. `gamma` is eq. (2)'s γ (1 for metaballs), used by the render pass.

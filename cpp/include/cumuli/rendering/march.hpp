@@ -8,6 +8,7 @@
 // the sky shows through what is left of T. Everything is float32, like the shader.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -21,6 +22,7 @@
 #include "cumuli/rendering/solid.hpp"
 #include "cumuli/rendering/ground.hpp"
 #include "cumuli/rendering/physical.hpp"
+#include "cumuli/rendering/occupancy.hpp"
 
 namespace cumuli {
 
@@ -87,6 +89,13 @@ struct MarchSettings {
   // `march` are then not used.
   bool physical = false;
   PhysicalParams phys;
+  // The paper mode's early exit: the ray stops once T < min_transmittance (the physical mode's
+  // is phys.min_transmittance). 1e-6 is the method before issue 14.
+  float min_transmittance = 1e-6f;
+  // Empty-space skipping (occupancy.hpp): samples in cells of a cloud's occupancy grid that
+  // cannot hold density are passed over without evaluating the density. They still count as
+  // steps and keep the sample lattice, so the image is the same bit for bit.
+  bool skip_empty = false;
 
   static constexpr int kMaxStepsLimit = 1 << 24;
   static constexpr int kMaxCandidatesLimit = 4096;
@@ -115,9 +124,20 @@ struct MarchScene {
   void validate(const MarchSettings& settings) const;
 };
 
+// Work statistics of one render (issue 14 item 4): counted per pixel, so the totals do not
+// depend on the thread count. Counting never changes the image.
+struct MarchStats {
+  std::uint64_t fbm_evaluations = 0;  // fBm evaluations of the density (eq. 1)
+  std::uint64_t steps = 0;            // samples marched (empty ones and skipped ones included)
+  std::uint64_t skipped = 0;          // samples passed over by empty-space skipping
+};
+
 // The (height, width, 4) float32 RGBA image, row 0 at the top, on `threads` threads (0 = all).
-// The result does not depend on the thread count. `out` holds height·width·4 floats.
+// The result does not depend on the thread count. `out` holds height·width·4 floats. When
+// `stats` is given it receives the totals, and `fbm_map` (height·width counts, if given) the
+// fBm evaluations of each pixel.
 void render_image(const MarchScene& scene, const MarchSettings& settings,
-                  const CameraParams& camera, int width, int height, float* out, int threads);
+                  const CameraParams& camera, int width, int height, float* out, int threads,
+                  MarchStats* stats = nullptr, std::uint32_t* fbm_map = nullptr);
 
 }  // namespace cumuli

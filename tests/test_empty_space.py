@@ -1,0 +1,226 @@
+"""Less work per pixel in the 2018 marcher (issue 14 item 4; RENDER_CONTRACT "Empty-space
+skipping"): conservative occupancy grids, bit-exact skipping in both marchers and both lighting
+modes, the early exit `min_transmittance`, and the fBm counts of the CPU twin."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+import cumuli as cu
+from cumuli import _core
+
+W, H = 96, 72
+OFF = {"empty_space_skipping": False, "min_transmittance": 1e-6}
+FAST = {"empty_space_skipping": True, "min_transmittance": 0.03}
+
+
+def _with(scene: cu.Scene, **changes) -> cu.Scene:
+    return scene.replace(settings=scene.settings.replace(**changes))
+
+
+def _benchmark_scenes() -> dict[str, cu.Scene]:
+    """The scenes of benchmarks/bench_render_cpu.py."""
+    rabbit = cu.mesh_cloud(cu.meshes.bunny_like(1), scale=1.2)
+    return {
+        "gaussian_cumulus": cu.Scene(clouds=[cu.gaussian_cumulus(seed=1)]),
+        "metaball_cumulus": cu.Scene(clouds=[cu.metaball_cumulus(seed=2)]),
+        "lsystem_cloud": cu.Scene(clouds=[cu.lsystem_cloud(iterations=7, seed=2)]),
+        "mesh_cloud": cu.Scene(
+            clouds=[rabbit], settings=cu.RenderSettings(fixed_step=0.03, absorption=3.0)
+        ),
+    }
+
+
+SCENES = _benchmark_scenes()
+
+
+def _random_cloud(model: str, seed: int, n: int = 12) -> cu.Cloud:
+    rng = np.random.default_rng(seed)
+    centres = rng.uniform(-3.0, 3.0, (n, 3)).astype(np.float32)
+    radii = rng.uniform(0.3, 1.6, (n, 3)).astype(np.float32)
+    rotations = np.empty((n, 3, 3), np.float32)
+    for k in range(n):
+        q, r = np.linalg.qr(rng.normal(size=(3, 3)))
+        rotations[k] = q * np.sign(np.diag(r))
+    return cu.Cloud(centres, radii, rotations, model=model)
+
+
+@pytest.mark.parametrize("model", ["spheroid", "metaball"])
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_occupancy_grid_is_conservative(model, seed):
+    cloud = _random_cloud(model, seed)
+    cells, (lo, hi) = cu.occupancy_grid(cloud)
+    assert cells.shape == (16, 16, 16) and cells.dtype == bool
+    np.testing.assert_array_equal(lo, cloud.layer_box()[0])
+    np.testing.assert_array_equal(hi, cloud.layer_box()[1])
+    assert 0.0 < cells.mean() < 0.9  # it marks empty cells, and keeps the cloud
+    rng = np.random.default_rng(seed + 10)
+    pts = [rng.uniform(lo, hi, (200_000, 3))]
+    # Points on and just inside every primitive's surface: where the support ends.
+    u = rng.normal(size=(20_000, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    j = rng.integers(0, cloud.n, 20_000)
+    scale = rng.uniform(0.97, 1.0, (20_000, 1))
+    local = u * cloud.radii[j] * scale
+    pts.append(cloud.centres[j] + np.einsum("nij,nj->ni", cloud.rotations[j], local))
+    pts = np.concatenate(pts).astype(np.float32)
+    pts = pts[((pts >= lo) & (pts <= hi)).all(axis=1)]
+    idx = np.clip(((pts - lo) / (hi - lo) * 16).astype(int), 0, 15)
+    in_empty = ~cells[idx[:, 2], idx[:, 1], idx[:, 0]]
+    noise = cu.Noise(seed=seed)
+    # A tiny constant density passes eq. (2)'s gate wherever |q| ≤ 1: the support itself.
+    support, _ = cloud.density(pts, constant=1e-6)
+    fbm, _ = cloud.density(pts, noise=noise, frequency=0.3)
+    assert (support > 0).sum() > 1000
+    assert not (support[in_empty] > 0).any()
+    assert not (fbm[in_empty] > 0).any()
+    assert in_empty.sum() > 1000  # the test looked at empty cells
+
+
+def test_occupancy_grid_bad_input():
+    with pytest.raises(TypeError, match="cloud"):
+        cu.occupancy_grid("cloud")
+    with pytest.raises(ValueError, match="resolution"):
+        cu.occupancy_grid(_random_cloud("spheroid", 1), resolution=0)
+
+
+@pytest.mark.parametrize("march", ["paper", "union"])
+@pytest.mark.parametrize("name", sorted(SCENES))
+def test_cpu_skipping_is_bit_exact_and_fast_setting_saves_fbm(name, march):
+    scene = _with(SCENES[name], march=march)
+    cam = scene.default_camera()
+    off, s_off = cu.render_cpu(_with(scene, **OFF), cam, W, H, return_stats=True)
+    skip, s_skip = cu.render_cpu(_with(scene, empty_space_skipping=True), cam, W, H,
+                                 return_stats=True)  # fmt: skip
+    fast, s_fast = cu.render_cpu(_with(scene, **FAST), cam, W, H, return_stats=True)
+    # Skipping alone: the same image bit for bit, the same steps, the same fBm evaluations (the
+    # density is only evaluated inside the support).
+    np.testing.assert_array_equal(off, skip)
+    assert s_skip.steps == s_off.steps and s_skip.fbm_evaluations == s_off.fbm_evaluations
+    if name == "metaball_cumulus":
+        assert s_skip.skipped > 0.2 * s_skip.steps  # most empty samples of the grown boxes
+    # The early exit: the issue's image bound on every benchmark scene, fewer fBm evaluations.
+    assert np.abs(fast - off).mean() <= 2e-3
+    ratio = s_off.fbm_evaluations / s_fast.fbm_evaluations
+    assert ratio >= 1.4, ratio
+    if name in ("metaball_cumulus", "mesh_cloud"):
+        assert ratio >= 2.0, ratio
+
+
+def test_stats_are_counts_independent_of_threads():
+    scene = _with(SCENES["metaball_cumulus"], **FAST)
+    cam = scene.default_camera()
+    lit = cu.prepare_light(scene)
+    a, sa = cu.render_cpu(lit, cam, W, H, threads=1, return_stats=True)
+    b, sb = cu.render_cpu(lit, cam, W, H, threads=2, return_stats=True)
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_array_equal(sa.fbm_map, sb.fbm_map)
+    assert (sa.fbm_evaluations, sa.steps, sa.skipped) == (sb.fbm_evaluations, sb.steps, sb.skipped)
+    assert sa.fbm_map.shape == (H, W) and int(sa.fbm_map.sum()) == sa.fbm_evaluations
+    assert sa.fbm_per_pixel == pytest.approx(sa.fbm_evaluations / (W * H))
+    # Counting does not change the image.
+    np.testing.assert_array_equal(a, cu.render_cpu(lit, cam, W, H))
+    np.testing.assert_array_equal(a, cu.render(lit, cam, W, H, backend="cpu"))
+    # Sky pixels cost no fBm; covered ones do.
+    assert (sa.fbm_map[a[..., 3] == 0] == 0).all() and sa.fbm_map[a[..., 3] > 0.5].min() > 0
+
+
+def test_skipping_keeps_the_step_budget_solids_and_physical_mode():
+    base = SCENES["metaball_cumulus"]
+    cam = base.default_camera()
+    # A small max_steps: skipped samples count as steps, as the empty samples they replace.
+    for changes in ({"max_steps": 7}, {"max_steps": 40, "march": "union"}):
+        off = cu.render_cpu(_with(base, **changes, empty_space_skipping=False), cam, 48, 36)
+        on = cu.render_cpu(_with(base, **changes), cam, 48, 36)
+        np.testing.assert_array_equal(off, on)
+    # A solid stops the rays (drawn through the compositor's layers).
+    lo, hi = base.clouds[0].layer_box()
+    solid = cu.Solid(centre=tuple(((lo + hi) / 2).tolist()), radius=1.0)
+    with_solid = base.replace(solids=(solid,))
+    off = cu.render_cpu(_with(with_solid, empty_space_skipping=False), cam, 48, 36)
+    np.testing.assert_array_equal(off, cu.render_cpu(with_solid, cam, 48, 36))
+    # The physical mode marches the same support.
+    phys = _with(base, lighting="physical", physical_resolution=12)
+    off = cu.render_cpu(_with(phys, empty_space_skipping=False), cam, 48, 36)
+    np.testing.assert_array_equal(off, cu.render_cpu(phys, cam, 48, 36))
+
+
+def test_settings_validation_and_scene_round_trip(tmp_path):
+    s = cu.RenderSettings()
+    assert s.empty_space_skipping is True and s.min_transmittance == 1e-6
+    with pytest.raises(TypeError, match="empty_space_skipping"):
+        cu.RenderSettings(empty_space_skipping=1)
+    for bad in (-0.1, 1.0, float("nan")):
+        with pytest.raises(ValueError, match="min_transmittance"):
+            cu.RenderSettings(min_transmittance=bad)
+    with pytest.raises(TypeError, match="min_transmittance"):
+        cu.RenderSettings(min_transmittance="0.1")
+    scene = _with(SCENES["gaussian_cumulus"], **FAST)
+    path = tmp_path / "scene.json"
+    scene.save(path)
+    data = json.loads(path.read_text())
+    assert data["settings"]["empty_space_skipping"] is True
+    assert data["settings"]["min_transmittance"] == 0.03
+    back = cu.load_scene(path)
+    assert back.settings == scene.settings
+    # A scene file from before the setting existed loads with the defaults.
+    del data["settings"]["empty_space_skipping"], data["settings"]["min_transmittance"]
+    path.write_text(json.dumps(data))
+    assert cu.load_scene(path).settings.empty_space_skipping is True
+
+
+def test_return_stats_bad_input():
+    scene = SCENES["gaussian_cumulus"]
+    cam = scene.default_camera()
+    with pytest.raises(ValueError, match="backend='cpu'"):
+        cu.render(scene, cam, 8, 6, backend="gl", return_stats=True)
+    with pytest.raises(TypeError, match="return_stats"):
+        cu.render_cpu(scene, cam, 8, 6, return_stats="yes")
+    vol = cu.Scene(
+        clouds=[
+            scene.clouds[0],
+            cu.VolumeCloud(np.ones((4, 4, 4), np.float32), ((0, 0, 0), (1, 1, 1))),
+        ]
+    )
+    with pytest.raises(ValueError, match="2018 clouds"):
+        cu.render_cpu(vol, cam, 8, 6, return_stats=True)
+    with pytest.raises(ValueError, match="min_transmittance"):
+        _core.render_cpu(**{**_args(scene, cam), "min_transmittance": 1.5})
+
+
+def _args(scene: cu.Scene, cam: cu.Camera) -> dict:
+    from cumuli.rendering.cpu import render_cpu_args
+
+    return render_cpu_args(scene, cam, 8, 6)
+
+
+@pytest.fixture(scope="module")
+def renderer(gl_context):
+    from cumuli.rendering.compositor import Renderer
+
+    r = Renderer(context=gl_context)
+    yield r
+    r.close()
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("lighting", ["paper", "physical"])
+@pytest.mark.parametrize("name", sorted(SCENES))
+def test_gl_skipping_is_exact_and_matches_cpu(renderer, name, lighting):
+    scene = _with(SCENES[name], exact_noise=True, lighting=lighting, physical_resolution=12)
+    cam = scene.default_camera()
+    off = renderer.render(_with(scene, empty_space_skipping=False), cam, W, H)
+    on = renderer.render(scene, cam, W, H)
+    assert np.abs(on - off).mean() <= 2e-3
+    np.testing.assert_array_equal(on, off)  # measured: bit for bit on llvmpipe
+    cpu = cu.render_cpu(scene, cam, W, H)
+    diff = np.abs(on.astype(np.float64) - cpu)
+    assert (diff.reshape(-1, 4).mean(0) <= 1e-3).all()  # tests/test_parity.py's tolerance
+    assert ((diff > 5e-2).any(axis=-1)).sum() <= int(1e-3 * W * H)
+    fast = _with(scene, **FAST)
+    gl_fast = renderer.render(fast, cam, W, H)
+    assert np.abs(gl_fast - off).mean() <= 2e-3
+    assert np.abs(gl_fast.astype(np.float64) - cu.render_cpu(fast, cam, W, H)).mean() <= 1e-3
