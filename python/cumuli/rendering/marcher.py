@@ -284,17 +284,11 @@ class MarcherGL:
         self, scene: Scene, count: int, camera: Camera, width: int, height: int, with_sky: bool
     ) -> None:
         s = scene.settings
-        f, r, u = camera.basis()
         set_ = self._set
         set_("u_lattice", 0)
         set_("u_light_atlas", 1)
-        set_("u_cam_pos", tuple(np.float32(camera.position).tolist()))
-        set_("u_cam_f", tuple(f.tolist()))
-        set_("u_cam_r", tuple(r.tolist()))
-        set_("u_cam_u", tuple(u.tolist()))
-        set_("u_th", math.tan(math.radians(camera.fov) / 2))
-        set_("u_aspect", width / height)
-        set_("u_image_size", (width, height))
+        for name, value in camera.uniforms(width, height).items():
+            set_(name, value)
         set_("u_sun_dir", scene.sun.direction)
         set_("u_sun_radiance", scene.sun.radiance)
         sky = scene.sky
