@@ -26,7 +26,7 @@ REPORT = HERE / "RESULTS.md"
 #: The JSON files a machine's section is written from (any may be missing).
 FILES = (
     "distance", "speedups", "scaling", "light", "noise", "render", "animation", "particles",
-    "particle_frames", "billboards",
+    "particle_frames", "billboards", "render_cpu", "cluster",
 )  # fmt: skip
 #: Plots archived beside the JSON and shown in RESULTS.md (the others stay in benchmarks/out/:
 #: the repository keeps few binaries).
@@ -459,6 +459,12 @@ def section(name: str, data: dict[str, dict[str, Any]], folder: Path | None = No
         from _report_billboards import billboards_lines
 
         lines += billboards_lines(data["billboards"])
+    from _report_speed import cluster_lines, work_lines
+
+    if "render_cpu" in data:
+        lines += work_lines(data["render_cpu"])
+    if "cluster" in data:
+        lines += cluster_lines(data["cluster"])
     return lines
 
 
