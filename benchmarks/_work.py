@@ -19,7 +19,7 @@ import numpy as np
 import cumuli as cu
 
 #: The early exit of the ``fast`` setting.
-FAST_MIN_TRANSMITTANCE = 0.03
+FAST_MIN_TRANSMITTANCE = 0.2
 VARIANTS = {
     "off": {"empty_space_skipping": False, "min_transmittance": 1e-6},
     "skip": {"empty_space_skipping": True, "min_transmittance": 1e-6},

@@ -14,7 +14,7 @@ from cumuli import _core
 
 W, H = 96, 72
 OFF = {"empty_space_skipping": False, "min_transmittance": 1e-6}
-FAST = {"empty_space_skipping": True, "min_transmittance": 0.03}
+FAST = {"empty_space_skipping": True, "min_transmittance": 0.2}
 
 
 def _with(scene: cu.Scene, **changes) -> cu.Scene:
@@ -102,12 +102,11 @@ def test_cpu_skipping_is_bit_exact_and_fast_setting_saves_fbm(name, march):
     assert s_skip.steps == s_off.steps and s_skip.fbm_evaluations == s_off.fbm_evaluations
     if name == "metaball_cumulus":
         assert s_skip.skipped > 0.2 * s_skip.steps  # most empty samples of the grown boxes
-    # The early exit: the image bound on every benchmark scene, fewer fBm evaluations.
+    # The early exit: the image bound on every benchmark scene, fewer fBm evaluations
+    # (÷ 2 on the paper march, the benchmark; the union march exits a little later).
     assert np.abs(fast - off).mean() <= 2e-3
     ratio = s_off.fbm_evaluations / s_fast.fbm_evaluations
-    assert ratio >= 1.4, ratio
-    if name in ("metaball_cumulus", "mesh_cloud"):
-        assert ratio >= 2.0, ratio
+    assert ratio >= (2.0 if march == "paper" else 1.5), ratio
 
 
 def test_stats_are_counts_independent_of_threads():
@@ -163,7 +162,7 @@ def test_settings_validation_and_scene_round_trip(tmp_path):
     scene.save(path)
     data = json.loads(path.read_text())
     assert data["settings"]["empty_space_skipping"] is True
-    assert data["settings"]["min_transmittance"] == 0.03
+    assert data["settings"]["min_transmittance"] == 0.2
     back = cu.load_scene(path)
     assert back.settings == scene.settings
     # A scene file from before the setting existed loads with the defaults.

@@ -328,7 +328,14 @@ void main() {
                     vec3 sL = aL * phase * dg.y;
                     colour += (1.0 - dtau) * (aL + sL) * T;
                     T *= dtau;
-                    if (T < u_min_t) { done = true; break; }
+                    if (T < u_min_t) {
+                        // Early exit: the rest of the ray's light estimated by this sample's
+                        // source (the medium taken as opaque beyond), as the C++ twin does.
+                        colour += T * (aL + sL);
+                        T = 0.0;
+                        done = true;
+                        break;
+                    }
                 }
                 t += step;
             }

@@ -274,7 +274,13 @@ class RayMarcher {
       const glm::vec3 sL = aL * st.phase * d.gamma;
       st.colour += (1.0f - dtau) * (aL + sL) * st.T;
       st.T *= dtau;
-      if (st.T < settings_.min_transmittance) return false;
+      if (st.T < settings_.min_transmittance) {
+        // Early exit: the light still to come is estimated by this sample's source over the
+        // rest of the ray (the medium taken as opaque beyond), not dropped.
+        st.colour += st.T * (aL + sL);
+        st.T = 0.0f;
+        return false;
+      }
     }
     return st.steps < settings_.max_steps;
   }
