@@ -23,7 +23,7 @@ from cumuli.light.ndt import LightGrid
 from cumuli.light.prepare import LitScene
 from cumuli.model.cloud import Cloud
 from cumuli.rendering.cpu import OCCUPANCY_RESOLUTION, occupancy_grid
-from cumuli.rendering.physical_gl import bind_ground, pack_physical, set_physical_uniforms
+from cumuli.rendering.physical_gl import bind_ground, bind_physical
 from cumuli.rendering.solids import set_solid_uniforms
 from cumuli.scene import Scene
 from cumuli.settings import CANDIDATE_SORTS, MAX_CANDIDATES, MAX_CLOUDS
@@ -252,18 +252,8 @@ class MarcherGL:
             self._noise_texture(scene).use(location=0)
             light_tex.use(location=1)
             if physical:
-                phys_bytes, depth_atlas, grid_atlas = pack_physical(grids, self.max_3d_texture_size)
-                buf = ctx.buffer(phys_bytes)
-                scratch.append(buf)
-                buf.bind_to_storage_buffer(2)
-                for location, data, comps in ((2, depth_atlas, 1), (3, grid_atlas, 4)):
-                    d, h, w = data.shape[:3]
-                    tex = ctx.texture3d((w, h, d), comps, data.tobytes(), dtype="f4")
-                    scratch.append(tex)
-                    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-                    tex.repeat_x = tex.repeat_y = tex.repeat_z = False
-                    tex.use(location=location)
-                set_physical_uniforms(self._set, scene.settings, grids)
+                limit = self.max_3d_texture_size
+                scratch += bind_physical(ctx, self._set, scene.settings, grids, limit)
             scratch += bind_ground(ctx, self._set, lit, location=4)
             skip = scene.settings.empty_space_skipping
             occ = occupancy_atlas(clouds, skip)

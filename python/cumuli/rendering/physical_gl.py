@@ -79,6 +79,30 @@ def pack_physical(
     return words.tobytes(), depth, grid
 
 
+def bind_physical(
+    ctx: Any,
+    set_: Callable[[str, Any], None],
+    settings: Any,
+    lights: Sequence[PhysicalLight],
+    limit: int,
+) -> list:
+    """Upload the drawables' physical light (the PhysicalCloud buffer on storage binding 2, the
+    sun-depth and light atlases on texture units 2 and 3, filtered linearly, clamped) and set
+    the physical uniforms; returns the GL objects made (the caller releases them)."""
+    words, depth, grid = pack_physical(lights, limit)
+    made: list[Any] = [ctx.buffer(words)]
+    made[0].bind_to_storage_buffer(2)
+    for location, data, comps in ((2, depth, 1), (3, grid, 4)):
+        d, h, w = data.shape[:3]
+        tex = ctx.texture3d((w, h, d), comps, data.tobytes(), dtype="f4")
+        made.append(tex)
+        tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+        tex.use(location=location)
+    set_physical_uniforms(set_, settings, lights)
+    return made
+
+
 def set_physical_uniforms(
     set_: Callable[[str, Any], None], settings: Any, lights: Sequence[PhysicalLight]
 ) -> None:

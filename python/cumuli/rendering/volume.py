@@ -36,7 +36,7 @@ from cumuli.light.prepare import LitScene
 from cumuli.model.solid import Solid, as_solids, solid_arrays
 from cumuli.model.volume import _box, _float_volumes
 from cumuli.rendering.cpu import physical_core_args, physical_core_tuple
-from cumuli.rendering.physical_gl import pack_physical, set_physical_uniforms
+from cumuli.rendering.physical_gl import bind_physical
 from cumuli.rendering.solids import set_solid_uniforms
 from cumuli.sky import Sun, as_sky, sky_args
 
@@ -208,23 +208,12 @@ class VolumeRenderer:
             if physical is not None:
                 settings, plight = physical
                 prog, vao = self._physical_program()
-                words, depth, grid = pack_physical([plight], limit)
-                buf = ctx.buffer(words)
-                made.append(buf)
-                buf.bind_to_storage_buffer(2)
-                for location, data, comps in ((2, depth, 1), (3, grid, 4)):
-                    dd, hh, ww = data.shape[:3]
-                    tex = ctx.texture3d((ww, hh, dd), comps, data.tobytes(), dtype="f4")
-                    made.append(tex)
-                    tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-                    tex.repeat_x = tex.repeat_y = tex.repeat_z = False
-                    tex.use(location=location)
 
                 def set_(name: str, value: Any, prog: Any = prog) -> None:
                     if name in prog:
                         prog[name].value = value
 
-                set_physical_uniforms(set_, settings, [plight])
+                made += bind_physical(ctx, set_, settings, [plight], limit)
                 set_("u_exact_light", bool(settings.exact_noise))
             values = {
                 "u_density": 0,
