@@ -9,15 +9,7 @@
 // lerp along x then y); otherwise the hardware bilinear filter. Output premultiplied, blended
 // (ONE, ONE_MINUS_SRC_ALPHA) in draw order (back to front).
 
-uniform vec3 u_cam_pos;
-uniform vec3 u_cam_f;
-uniform vec3 u_cam_r;
-uniform vec3 u_cam_u;
-uniform float u_th;
-uniform float u_aspect;
-uniform ivec2 u_image_size;
-uniform ivec2 u_tile_origin;
-uniform int u_tile_height;
+#include "common/camera.glsl"
 
 // The impostor's plane in one array (one upload per impostor): (centre, hw), (forward, hh),
 // (right, clamp: 1 for a screen impostor), (up, 0).
@@ -42,12 +34,7 @@ void main() {
     vec3 u_right = u_quad[2].xyz, u_up = u_quad[3].xyz;
     vec2 u_half = vec2(u_quad[0].w, u_quad[1].w);
     bool u_clamp = u_quad[2].w > 0.5;
-    int j = u_tile_origin.x + int(gl_FragCoord.x);
-    int i = u_tile_origin.y + (u_tile_height - 1 - int(gl_FragCoord.y));
-    float W = float(u_image_size.x), H = float(u_image_size.y);
-    float x = (2.0 * (float(j) + 0.5) / W - 1.0) * u_th * u_aspect;
-    float y = (1.0 - 2.0 * (float(i) + 0.5) / H) * u_th;
-    vec3 d = normalize(u_cam_f + x * u_cam_r + y * u_cam_u);
+    vec3 d = camera_ray(pixel_of_fragment());
     precise vec3 qo = u_centre - u_cam_pos;
     float denom = dot3(d, u_forward);
     if (!(denom > 0.0)) discard;

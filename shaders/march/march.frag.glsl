@@ -35,16 +35,7 @@ layout(std430, binding = 2) readonly buffer Physical { PhysicalCloud phys[]; };
 #define CANDIDATE_SORT SORT_INSERTION
 #endif
 
-// Camera (RENDER_CONTRACT): f, r, u unit vectors, th = tan(fov/2), aspect = W/H.
-uniform vec3 u_cam_pos;
-uniform vec3 u_cam_f;
-uniform vec3 u_cam_r;
-uniform vec3 u_cam_u;
-uniform float u_th;
-uniform float u_aspect;
-uniform ivec2 u_image_size;   // W, H
-uniform ivec2 u_tile_origin;  // column and row (row 0 = top of the image) of the tile's top-left
-uniform int u_tile_height;
+#include "common/camera.glsl"
 
 uniform vec3 u_sun_dir;
 uniform vec3 u_sun_radiance;
@@ -199,12 +190,9 @@ int attribute_sample(int n, float s, vec3 p, int fallback) {
 
 void main() {
     // Pixel (row i from the top, column j) of the whole image.
-    int j = u_tile_origin.x + int(gl_FragCoord.x);
-    int i = u_tile_origin.y + (u_tile_height - 1 - int(gl_FragCoord.y));
-    float W = float(u_image_size.x), H = float(u_image_size.y);
-    float x = (2.0 * (float(j) + 0.5) / W - 1.0) * u_th * u_aspect;
-    float y = (1.0 - 2.0 * (float(i) + 0.5) / H) * u_th;
-    vec3 dir = normalize(u_cam_f + x * u_cam_r + y * u_cam_u);
+    ivec2 pixel = pixel_of_fragment();
+    int i = pixel.x, j = pixel.y;
+    vec3 dir = camera_ray(pixel);
     vec3 o = u_cam_pos;
 
     const float HUGE = 1e30;

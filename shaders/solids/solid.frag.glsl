@@ -4,17 +4,9 @@
 // view depth Z = t·(d·f), +∞ where no solid is hit. GLSL twin of cumuli::draw_solids
 // (cpp/src/rendering/solid.cpp); the camera ray is RENDER_CONTRACT's, tiles as the marcher's.
 
+#include "common/camera.glsl"
 #include "common/solid.glsl"
 
-uniform vec3 u_cam_pos;
-uniform vec3 u_cam_f;
-uniform vec3 u_cam_r;
-uniform vec3 u_cam_u;
-uniform float u_th;
-uniform float u_aspect;
-uniform ivec2 u_image_size;
-uniform ivec2 u_tile_origin;
-uniform int u_tile_height;
 uniform vec3 u_sun_dir;
 uniform vec3 u_sun_radiance;
 uniform vec3 u_solid_colour[MAX_SOLIDS];
@@ -23,12 +15,7 @@ uniform vec3 u_solid_ambient[MAX_SOLIDS];
 out vec4 frag;
 
 void main() {
-    int j = u_tile_origin.x + int(gl_FragCoord.x);
-    int i = u_tile_origin.y + (u_tile_height - 1 - int(gl_FragCoord.y));
-    float W = float(u_image_size.x), H = float(u_image_size.y);
-    float x = (2.0 * (float(j) + 0.5) / W - 1.0) * u_th * u_aspect;
-    float y = (1.0 - 2.0 * (float(i) + 0.5) / H) * u_th;
-    vec3 dir = normalize(u_cam_f + x * u_cam_r + y * u_cam_u);
+    vec3 dir = camera_ray(pixel_of_fragment());
     int which;
     float t = nearest_solid(u_cam_pos, dir, which);
     if (which < 0) {
