@@ -433,6 +433,35 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline void deinterle
   z = _mm512_mask_permutex2var_ps(_mm512_permutex2var_ps(a, ab_z, b), 0xFC00, c_z, c);
 }
 
+// Points [first, first + 16·Groups) of a block (those past `count` are computed from zeros and
+// not stored), Groups registers in flight to overlap the gathers' latency.
+template <bool Madd, int Groups>
+__attribute__((target("avx512f,avx512bw"), always_inline)) inline void groups_avx512(
+    const Avx512Consts& k, const double* lattice, const FbmTables& t, const float* points,
+    std::size_t first, std::size_t count, float* out) {
+  __m512 px[Groups], py[Groups], pz[Groups], sum[Groups];
+  for (int g = 0; g < Groups; ++g) {
+    const std::size_t at = first + 16 * static_cast<std::size_t>(g);
+    const std::size_t n = at < count ? std::min<std::size_t>(16, count - at) : 0;
+    deinterleave16(points + 3 * std::min(at, count), n, px[g], py[g], pz[g]);
+    sum[g] = _mm512_setzero_ps();
+  }
+  for (int o = 0; o < t.octaves; ++o) {
+    const __m512 sc = _mm512_set1_ps(t.scale[o]);
+    const __m512 amp = _mm512_set1_ps(t.amplitude[o]);
+    for (int g = 0; g < Groups; ++g)
+      sum[g] = _mm512_add_ps(
+          sum[g], _mm512_mul_ps(amp, octave_avx512<Madd>(k, lattice, px[g], py[g], pz[g], sc)));
+  }
+  for (int g = 0; g < Groups; ++g) {
+    const std::size_t at = first + 16 * static_cast<std::size_t>(g);
+    if (at >= count) break;
+    const std::size_t n = std::min<std::size_t>(16, count - at);
+    _mm512_mask_storeu_ps(out + at, static_cast<__mmask16>(n >= 16 ? 0xFFFFu : (1u << n) - 1u),
+                          sum[g]);
+  }
+}
+
 template <bool Madd>
 __attribute__((target("avx512f,avx512bw"))) void kernel_avx512(const Lattice& lat,
                                                               const FbmTables& t,
@@ -451,29 +480,12 @@ __attribute__((target("avx512f,avx512bw"))) void kernel_avx512(const Lattice& la
       _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30),
       _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31)};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
-  constexpr int kGroups = 2;
-  for (std::size_t first = 0; first < count; first += 16 * kGroups) {
-    __m512 px[kGroups], py[kGroups], pz[kGroups], sum[kGroups];
-    for (int g = 0; g < kGroups; ++g) {
-      const std::size_t at = first + 16 * static_cast<std::size_t>(g);
-      const std::size_t n = at < count ? std::min<std::size_t>(16, count - at) : 0;
-      deinterleave16(points + 3 * std::min(at, count), n, px[g], py[g], pz[g]);
-      sum[g] = _mm512_setzero_ps();
-    }
-    for (int o = 0; o < t.octaves; ++o) {
-      const __m512 sc = _mm512_set1_ps(t.scale[o]);
-      const __m512 amp = _mm512_set1_ps(t.amplitude[o]);
-      for (int g = 0; g < kGroups; ++g)
-        sum[g] = _mm512_add_ps(
-            sum[g], _mm512_mul_ps(amp, octave_avx512<Madd>(k, lattice, px[g], py[g], pz[g], sc)));
-    }
-    for (int g = 0; g < kGroups; ++g) {
-      const std::size_t at = first + 16 * static_cast<std::size_t>(g);
-      if (at >= count) break;
-      const std::size_t n = std::min<std::size_t>(16, count - at);
-      _mm512_mask_storeu_ps(out + at, static_cast<__mmask16>(n >= 16 ? 0xFFFFu : (1u << n) - 1u),
-                            sum[g]);
-    }
+  // Two registers (32 points) at a time; a tail of at most 16 points takes one, not two.
+  for (std::size_t first = 0; first < count; first += 32) {
+    if (count - first > 16)
+      groups_avx512<Madd, 2>(k, lattice, t, points, first, count, out);
+    else
+      groups_avx512<Madd, 1>(k, lattice, t, points, first, count, out);
   }
 }
 
@@ -500,7 +512,11 @@ void Noise::fbm_many(const float* points, std::size_t count, float* out, const F
   const FbmTables tables = make_tables(params);
   const Kernel kernel = kernel_for(simd_level(), size_);
   const Lattice lat{padded_.data(), size_ + 1, mask_};
-  parallel_chunks(count, threads, [&](std::size_t b, std::size_t e) {
+  // Threads take whole blocks: the loop hands out up to 32 chunks per thread, which on a short
+  // call (a light ray's 64 queued samples) would otherwise be a kernel call per two points.
+  const std::size_t blocks = (count + kBlock - 1) / kBlock;
+  parallel_chunks(blocks, threads, [&](std::size_t block_begin, std::size_t block_end) {
+    const std::size_t b = block_begin * kBlock, e = std::min(count, block_end * kBlock);
     for (std::size_t i = b; i < e; i += kBlock) {
       const std::size_t n = std::min(kBlock, e - i);
       const float* pts = points + 3 * i;

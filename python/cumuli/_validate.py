@@ -32,6 +32,23 @@ def points3(
 
     With ``bound``, every component must also have a magnitude of at most ``bound``.
     """
+    arr, biggest = points3_magnitude(value, name, allow_empty=allow_empty)
+    if bound is not None and biggest > bound:
+        raise ValueError(
+            f"{name} has a component of magnitude {biggest:.3g}, beyond the limit ±{bound:g}"
+        )
+    return arr
+
+
+def points3_magnitude(
+    value: Any, name: str = "points", *, allow_empty: bool = True
+) -> tuple[np.ndarray, float]:
+    """`points3` and the largest magnitude of a component (0.0 when empty).
+
+    Two reductions (min and max, which propagate NaN) and no temporary array: on a million
+    points this is a fraction of the time ``np.isfinite(a).all()`` plus ``np.abs(a).max()`` take,
+    which matters where the call itself is fast (fBm).
+    """
     if isinstance(value, np.ndarray):
         arr = value
     else:
@@ -48,14 +65,12 @@ def points3(
     if not allow_empty and arr.shape[0] == 0:
         raise ValueError(f"{name} must not be empty")
     arr = np.ascontiguousarray(arr, dtype=np.float32)
-    if not np.isfinite(arr).all():
+    if arr.size == 0:
+        return arr, 0.0
+    lo, hi = float(arr.min()), float(arr.max())
+    if not (math.isfinite(lo) and math.isfinite(hi)):
         raise ValueError(f"{name} contains NaN or infinite values")
-    if bound is not None and arr.size and float(np.abs(arr).max()) > bound:
-        raise ValueError(
-            f"{name} has a component of magnitude {float(np.abs(arr).max()):.3g}, "
-            f"beyond the limit ±{bound:g}"
-        )
-    return arr
+    return arr, max(-lo, hi)
 
 
 def vec3(value: Any, name: str, *, bound: float | None = None) -> tuple[float, float, float]:

@@ -444,9 +444,9 @@ class FbmProgram:
     ) -> np.ndarray:
         from cumuli.noise import _fbm_params, check_fbm_reach
 
-        pts = check.points3(points, "points")
+        pts, biggest = check.points3_magnitude(points, "points")
         octaves, gain, lacunarity, frequency = _fbm_params(octaves, gain, lacunarity, frequency)
-        check_fbm_reach(pts, (octaves, gain, lacunarity, frequency), "points")
+        check_fbm_reach(biggest, (octaves, gain, lacunarity, frequency), "points")
         if not isinstance(exact, (bool, np.bool_)):
             raise TypeError(f"exact must be a bool, got {type(exact).__name__}")
         n = pts.shape[0]

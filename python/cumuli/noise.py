@@ -120,9 +120,9 @@ class Noise:
         ``frequency`` is in lattice texels per world unit. Runs on ``threads`` threads
         (0 = all cores) without the GIL; the result does not depend on the thread count.
         """
-        pts = check.points3(points, "points")
+        pts, biggest = check.points3_magnitude(points, "points")
         params = _fbm_params(octaves, gain, lacunarity, frequency)
-        check_fbm_reach(pts, params, "points")
+        check_fbm_reach(biggest, params, "points")
         return self._core.fbm(pts, *params, check.threads(threads))
 
     def fbm_grid(
@@ -169,7 +169,7 @@ class Noise:
         if not all(np.isfinite(a).all() for a in (xs, ys, zs)):
             raise ValueError("box_min and box_max must lie within the float32 range")
         corners = np.array([[xs[0], ys[0], zs[0]], [xs[-1], ys[-1], zs[-1]]], dtype=np.float32)
-        check_fbm_reach(corners, params, "box_min/box_max")
+        check_fbm_reach(float(np.abs(corners).max()), params, "box_min/box_max")
         out = np.empty((d, h, w), dtype=np.float32)
         planes = max(1, min(d, GRID_SLAB_VOXELS // (h * w)))
         pts = np.empty((planes, h, w, 3), dtype=np.float32)
@@ -212,12 +212,10 @@ def _fbm_params(
     return octaves, gain, lacunarity, frequency
 
 
-def check_fbm_reach(points: np.ndarray, params: tuple[int, float, float, float], name: str) -> None:
-    """Refuse points whose lattice coordinates ``p · frequency · lacunarityⁱ`` would overflow
-    float32: the fBm would come out NaN for finite input."""
-    if points.size == 0:
-        return
-    biggest = float(np.abs(points).max())
+def check_fbm_reach(biggest: float, params: tuple[int, float, float, float], name: str) -> None:
+    """Refuse points whose largest coordinate magnitude ``biggest`` would overflow float32 in
+    the lattice coordinates ``p · frequency · lacunarityⁱ``: the fBm would come out NaN for
+    finite input."""
     if biggest == 0.0:
         return
     octaves, _, lacunarity, frequency = params
