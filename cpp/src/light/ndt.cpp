@@ -470,6 +470,24 @@ CUMULI_VEC_CLONES void attenuation(const float* rho, const float* len, float* at
   for (std::size_t i = 0; i < n; ++i) att[i] = exp_nonpositive(-extinction * rho[i] * len[i]);
 }
 
+// The line loop's buffers (candidates, the candidate test's scratch, and per sample of the
+// current line: position, t of its midpoint, length, far end, |q|² of its primitive for eq. 2's
+// gate, primitive, density, attenuation). They only grow.
+struct LineBuffers {
+  std::vector<Candidate> cand;
+  SunCandidates::Scratch scratch{0};
+  std::vector<float> xyz, mid, len, t1s, q2s, rho, att;
+  std::vector<int> prim;
+
+  void reserve(std::size_t primitives, std::size_t collector_size) {
+    if (cand.size() < primitives) cand.resize(primitives);
+    if (scratch.b.size() < collector_size) {
+      scratch.b.resize(collector_size);
+      scratch.oo.resize(collector_size);
+    }
+  }
+};
+
 LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& density,
                              const LightSettings& s, const Box& box, float* light,
                              std::uint32_t* samples_out) {
@@ -534,13 +552,15 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
   std::vector<std::uint64_t> line_samples(lines, 0);
 
   parallel_chunks(lines, s.threads, [&](std::size_t first, std::size_t last) {
-    std::vector<Candidate> cand(static_cast<std::size_t>(capacity));
-    SunCandidates::Scratch scratch(collector.size());
-    ActiveBuffers active(static_cast<std::size_t>(capacity));
-    // Per sample of the current line: position, t of its midpoint, length, far end, |q|² of its
-    // primitive (for eq. 2's gate), primitive, density, attenuation.
-    std::vector<float> xyz, mid, len, t1s, q2s, rho, att;
-    std::vector<int> prim;
+    // This thread's buffers, kept between its chunks and between calls: a small grid's lines
+    // take microseconds each, so allocating them per chunk was a measurable share.
+    thread_local LineBuffers buffers;
+    buffers.reserve(static_cast<std::size_t>(capacity), collector.size());
+    std::vector<Candidate>& cand = buffers.cand;
+    SunCandidates::Scratch& scratch = buffers.scratch;
+    std::vector<float>&xyz = buffers.xyz, &mid = buffers.mid, &len = buffers.len,
+    &t1s = buffers.t1s, &q2s = buffers.q2s, &rho = buffers.rho, &att = buffers.att;
+    std::vector<int>& prim = buffers.prim;
     for (std::size_t line = first; line < last; ++line) {
       const int lb = b0 + static_cast<int>(line / nc), lc = c0 + static_cast<int>(line % nc);
       const int j_lo = served_lo[line], j_hi = served_hi[line];
@@ -676,12 +696,12 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
 
       for (int ib = 0; ib < rb; ++ib) {
         const float ub = static_cast<float>(ib) - sb * j;
-        const float fb_floor = std::floor(ub);
+        const float fb_floor = floor_small_light(ub);
         const float wb = ub - fb_floor;
         const std::size_t kb = static_cast<std::size_t>(static_cast<int>(fb_floor) - b0);
         for (int ic = 0; ic < rc; ++ic) {
           const float uc = static_cast<float>(ic) - sc * j;
-          const float fc_floor = std::floor(uc);
+          const float fc_floor = floor_small_light(uc);
           const float wc = uc - fc_floor;
           const std::size_t l00 = kb * nc + static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
           const std::size_t l10 = l00 + nc, l01 = l00 + 1, l11 = l00 + nc + 1;
