@@ -595,6 +595,7 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
         long long k = static_cast<long long>(std::floor(A / sub));
         while (k > 0 && static_cast<float>(k) * sub > A) --k;
         while (static_cast<float>(k + 1) * sub <= A) ++k;
+        const long long k_start = k;  // sample m0 + i lies in segment k_start + i (or next to it)
         for (;; ++k) {
           const float ta = static_cast<float>(k) * sub;
           if (!(ta < B)) break;
@@ -624,13 +625,24 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
         } else {
           std::fill(q2s.begin() + static_cast<std::ptrdiff_t>(m0),
                     q2s.begin() + static_cast<std::ptrdiff_t>(m), INFINITY);
+          // Samples are in increasing t, one per Δ' segment: the first sample at or after t
+          // (`after`: strictly after t) in [from, m) is found from t's segment index and a step
+          // or two along `mid` — what std::lower_bound / upper_bound return, without their
+          // mispredicted branches (a tenth of this method's time on the default cumulus).
+          const auto first_sample = [&](float t, std::size_t from, bool after) {
+            const long long guess = static_cast<long long>(m0) +
+                                    static_cast<long long>(floor_small_light(t / sub)) - k_start;
+            std::size_t i = static_cast<std::size_t>(std::clamp(
+                guess, static_cast<long long>(from), static_cast<long long>(m)));
+            const auto before_t = [&](float v) { return after ? v <= t : v < t; };
+            while (i > from && !before_t(mid[i - 1])) --i;
+            while (i < m && before_t(mid[i])) ++i;
+            return i;
+          };
           for (int cc = cfirst; cc < ci; ++cc) {
-            // Samples are in increasing t: those with t_in ≤ s ≤ t_out are one run.
-            const float* base = mid.data();
-            const auto i0 = static_cast<std::size_t>(
-                std::lower_bound(base + m0, base + m, cand[cc].t_in) - base);
-            const auto i1 = static_cast<std::size_t>(
-                std::upper_bound(base + i0, base + m, cand[cc].t_out) - base);
+            // Those with t_in ≤ s ≤ t_out are one run.
+            const std::size_t i0 = first_sample(cand[cc].t_in, m0, false);
+            const std::size_t i1 = first_sample(cand[cc].t_out, i0, true);
             quadratic(cand[cc].primitive, i0, i1, true);
           }
           // Rounding can leave a sample just past every interval: give it the last one that
