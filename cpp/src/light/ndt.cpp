@@ -464,10 +464,27 @@ CUMULI_VEC_CLONES void spheroid_gate(const float* q2, float* rho, std::size_t n,
   }
 }
 
-// att = exp(−A·ρ·ℓ) per sample.
-CUMULI_VEC_CLONES void attenuation(const float* rho, const float* len, float* att, std::size_t n,
-                                   float extinction) {
-  for (std::size_t i = 0; i < n; ++i) att[i] = exp_nonpositive(-extinction * rho[i] * len[i]);
+// att = exp(−A·ρ·ℓ) per sample, and its scattering term C·(ℓ/Δ) where ρ > 0, else 0 (then att
+// is exactly 1, so the sweep's S ← term + att·S leaves S unchanged without a branch).
+CUMULI_VEC_CLONES void attenuation(const float* rho, const float* len, float* att, float* term,
+                                   std::size_t n, float extinction, float scatter_per_length) {
+  for (std::size_t i = 0; i < n; ++i) {
+    att[i] = exp_nonpositive(-extinction * rho[i] * len[i]);
+    term[i] = rho[i] > 0.0f ? scatter_per_length * len[i] : 0.0f;
+  }
+}
+
+// |q|² = oo + s·(2b + s·a) of primitive j at the samples [i0, i1) (the candidate test's
+// quadratic); where it is smaller than q2s (or always, without keep_smaller) it and j are stored.
+CUMULI_VEC_CLONES void nearest_quadratic(const float* mid, float* q2s, int* prim, std::size_t i0,
+                                         std::size_t i1, float oo, float b2, float qa, int j,
+                                         bool keep_smaller) {
+  for (std::size_t i = i0; i < i1; ++i) {
+    const float q2 = oo + mid[i] * (b2 + mid[i] * qa);
+    const bool take = !keep_smaller || q2 < q2s[i];
+    q2s[i] = take ? q2 : q2s[i];
+    prim[i] = take ? j : prim[i];
+  }
 }
 
 // The line loop's buffers (candidates, the candidate test's scratch, and per sample of the
@@ -476,7 +493,7 @@ CUMULI_VEC_CLONES void attenuation(const float* rho, const float* len, float* at
 struct LineBuffers {
   std::vector<Candidate> cand;
   SunCandidates::Scratch scratch{0};
-  std::vector<float> xyz, mid, len, t1s, q2s, rho, att;
+  std::vector<float> xyz, mid, len, t1s, q2s, rho, att, term;
   std::vector<int> prim;
 
   void reserve(std::size_t primitives, std::size_t collector_size) {
@@ -559,7 +576,8 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
     std::vector<Candidate>& cand = buffers.cand;
     SunCandidates::Scratch& scratch = buffers.scratch;
     std::vector<float>&xyz = buffers.xyz, &mid = buffers.mid, &len = buffers.len,
-    &t1s = buffers.t1s, &q2s = buffers.q2s, &rho = buffers.rho, &att = buffers.att;
+    &t1s = buffers.t1s, &q2s = buffers.q2s, &rho = buffers.rho, &att = buffers.att,
+    &term = buffers.term;
     std::vector<int>& prim = buffers.prim;
     for (std::size_t line = first; line < last; ++line) {
       const int lb = b0 + static_cast<int>(line / nc), lc = c0 + static_cast<int>(line % nc);
@@ -581,7 +599,7 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
       if (len.size() < most) {
         xyz.resize(3 * most), mid.resize(most), len.resize(most), t1s.resize(most);
         q2s.resize(most);
-        prim.resize(most), rho.resize(most), att.resize(most);
+        prim.resize(most), rho.resize(most), att.resize(most), term.resize(most);
       }
       std::size_t m = 0;
       int ci = 0;
@@ -612,13 +630,8 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
         // by candidate over the samples it covers, so the inner loop is a vector loop.
         const auto quadratic = [&](int j, std::size_t i0, std::size_t i1, bool keep_smaller) {
           const auto js = static_cast<std::size_t>(j);
-          const float oo = scratch.oo[js], b2 = 2.0f * scratch.b[js], qa = pa[js];
-          for (std::size_t i = i0; i < i1; ++i) {
-            const float q2 = oo + mid[i] * (b2 + mid[i] * qa);
-            const bool take = !keep_smaller || q2 < q2s[i];
-            q2s[i] = take ? q2 : q2s[i];
-            prim[i] = take ? j : prim[i];
-          }
+          nearest_quadratic(mid.data(), q2s.data(), prim.data(), i0, i1, scratch.oo[js],
+                            2.0f * scratch.b[js], pa[js], j, keep_smaller);
         };
         if (ci - cfirst == 1 || !spheroid) {
           quadratic(cand[cfirst].primitive, m0, m, false);
@@ -677,7 +690,8 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
                        .rho;
         }
       }
-      attenuation(rho.data(), len.data(), att.data(), m, s.extinction);
+      attenuation(rho.data(), len.data(), att.data(), term.data(), m, s.extinction,
+                  scatter_per_length);
       // Walk back from the sun; the served layers in order of decreasing t.
       float Sv = s.intensity;
       std::size_t i = m;
@@ -687,7 +701,7 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
         const float t_layer = static_cast<float>(k_layer) * sub;
         while (i > 0 && t1s[i - 1] > t_layer) {
           --i;
-          if (rho[i] > 0.0f) Sv = scatter_per_length * len[i] + att[i] * Sv;
+          Sv = term[i] + att[i] * Sv;
         }
         S[at(line, j)] = Sv;
         if (samples_out) beyond[at(line, j)] = static_cast<std::uint32_t>(m - i);
