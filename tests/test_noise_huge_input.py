@@ -87,3 +87,28 @@ def test_glsl_fbm_refuses_the_same_points(gl_context: cgl.GLContext) -> None:
         cgl.fbm(noise, np.array([[3e38, 0, 0]], dtype=F32), context=gl_context)
     with pytest.raises(ValueError, match="lacunarity"):
         cgl.fbm(noise, np.zeros((1, 3), F32), lacunarity=1e3, octaves=16, context=gl_context)
+
+
+@pytest.mark.parametrize("count", [1, 255, 256, 257, 3000])
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_core_scan_reports_the_largest_magnitude_and_non_finite_points(
+    count: int, threads: int
+) -> None:
+    """``Noise.fbm`` takes its argument check from the pass that evaluates the points: the
+    largest |coordinate| must be exact and one non-finite value anywhere (first, last, a block
+    boundary) must be seen, on any thread count."""
+    noise = cu.Noise(seed=3)
+    rng = np.random.default_rng(count)
+    pts = rng.uniform(-40.0, 40.0, (count, 3)).astype(np.float32)
+    pts[count // 2, 2] = -1234.5  # the largest magnitude, negative
+    out, biggest = noise._core.fbm_scan(pts, 5, 0.5, 2.0, 1.0, threads)
+    assert biggest == 1234.5
+    assert np.array_equal(out, noise.fbm(pts, threads=1))
+    for row in sorted({0, count - 1, min(255, count - 1), min(256, count - 1)}):
+        for bad in (np.nan, np.inf, -np.inf):
+            q = pts.copy()
+            q[row, row % 3] = bad
+            _, reported = noise._core.fbm_scan(q, 5, 0.5, 2.0, 1.0, threads)
+            assert np.isnan(reported), (row, bad)
+            with pytest.raises(ValueError, match="NaN or infinite"):
+                noise.fbm(q, threads=threads)

@@ -1,6 +1,7 @@
 // Bindings for cumuli/noise.hpp.
 #include "cumuli/noise.hpp"
 
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -10,6 +11,21 @@
 namespace cumuli::bind {
 
 namespace {
+
+// fBm of (N, 3) points into a new (N,) array, without the GIL; `scan` as Noise::fbm_many's.
+py::array_t<float> fbm_array(const Noise& n, const FloatArray& points, const FbmParams& params,
+                             int threads, Noise::PointScan* scan) {
+  require_points(points, "points");
+  const std::size_t count = static_cast<std::size_t>(points.shape(0));
+  auto out = new_array({static_cast<py::ssize_t>(count)});
+  const float* src = points.data();
+  float* dst = out.mutable_data();
+  {
+    py::gil_scoped_release release;
+    n.fbm_many(src, count, dst, params, threads, scan);
+  }
+  return out;
+}
 
 FbmParams make_params(int octaves, float gain, float lacunarity, float frequency) {
   FbmParams p{octaves, gain, lacunarity, frequency};
@@ -65,20 +81,25 @@ void bind_noise(py::module_& m) {
           "fbm",
           [](const Noise& n, const FloatArray& points, int octaves, float gain, float lacunarity,
              float frequency, int threads) {
-            require_points(points, "points");
-            const FbmParams p = make_params(octaves, gain, lacunarity, frequency);
-            const std::size_t count = static_cast<std::size_t>(points.shape(0));
-            auto out = new_array({static_cast<py::ssize_t>(count)});
-            const float* src = points.data();
-            float* dst = out.mutable_data();
-            {
-              py::gil_scoped_release release;
-              n.fbm_many(src, count, dst, p, threads);
-            }
-            return out;
+            return fbm_array(n, points, make_params(octaves, gain, lacunarity, frequency),
+                             threads, nullptr);
           },
           py::arg("points"), py::arg("octaves") = 5, py::arg("gain") = 0.5f,
           py::arg("lacunarity") = 2.0f, py::arg("frequency") = 1.0f, py::arg("threads") = 0)
+      .def(
+          "fbm_scan",
+          [](const Noise& n, const FloatArray& points, int octaves, float gain, float lacunarity,
+             float frequency, int threads) {
+            Noise::PointScan scan;
+            auto out = fbm_array(n, points, make_params(octaves, gain, lacunarity, frequency),
+                                 threads, &scan);
+            const double biggest = scan.finite ? static_cast<double>(scan.max_abs)
+                                               : std::numeric_limits<double>::quiet_NaN();
+            return py::make_tuple(out, biggest);
+          },
+          py::arg("points"), py::arg("octaves") = 5, py::arg("gain") = 0.5f,
+          py::arg("lacunarity") = 2.0f, py::arg("frequency") = 1.0f, py::arg("threads") = 0,
+          "fbm and, read in the same pass, the largest |coordinate| (NaN if one is not finite).")
       .def(
           "lattice_at",
           [](const Noise& n, const FloatArray& coords) {

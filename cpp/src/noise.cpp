@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <stdexcept>
 #include <string>
 
@@ -507,7 +510,7 @@ Kernel kernel_for(SimdLevel level, int size) {
 }  // namespace
 
 void Noise::fbm_many(const float* points, std::size_t count, float* out, const FbmParams& params,
-                     int threads) const {
+                     int threads, PointScan* scan) const {
   params.validate();
   const FbmTables tables = make_tables(params);
   const Kernel kernel = kernel_for(simd_level(), size_);
@@ -515,17 +518,32 @@ void Noise::fbm_many(const float* points, std::size_t count, float* out, const F
   // Threads take whole blocks: the loop hands out up to 32 chunks per thread, which on a short
   // call (a light ray's 64 queued samples) would otherwise be a kernel call per two points.
   const std::size_t blocks = (count + kBlock - 1) / kBlock;
+  // Per block: its largest |coordinate|, NaN when one is not finite (combined after the loop, so
+  // no value is shared between threads).
+  std::vector<float> block_max(scan != nullptr ? blocks : 0);
   parallel_chunks(blocks, threads, [&](std::size_t block_begin, std::size_t block_end) {
     const std::size_t b = block_begin * kBlock, e = std::min(count, block_end * kBlock);
     for (std::size_t i = b; i < e; i += kBlock) {
       const std::size_t n = std::min(kBlock, e - i);
       const float* pts = points + 3 * i;
-      // Rounded multiplication is monotonic, so |p|·max_scale bounds |p|·scale of every octave;
-      // the test is written so that NaN fails it. A block with such a point (or a lattice whose
-      // size is not a power of two) takes the general per-point path.
-      int slow = mask_ < 0;
-      for (std::size_t j = 0; j < 3 * n; ++j)
-        slow |= static_cast<int>(!(std::fabs(pts[j]) * tables.max_scale < kFastLimit));
+      // The block's largest |coordinate|, as the bits of a non-negative float: their integer
+      // order is the float order, with inf and NaN above every finite value, so this is one
+      // integer max that vectorises (a float max reduction does not, because of NaN).
+      std::uint32_t top = 0;
+      for (std::size_t j = 0; j < 3 * n; ++j) {
+        std::uint32_t bits;
+        std::memcpy(&bits, pts + j, sizeof bits);
+        top = std::max(top, bits & 0x7fffffffu);
+      }
+      const bool finite = top < 0x7f800000u;
+      float biggest;
+      std::memcpy(&biggest, &top, sizeof biggest);
+      if (scan != nullptr)
+        block_max[i / kBlock] = finite ? biggest : std::numeric_limits<float>::quiet_NaN();
+      // Rounded multiplication is monotonic, so |p|·max_scale bounds |p|·scale of every octave
+      // and every point. A block with a point beyond the fast path (or not finite, or a lattice
+      // whose size is not a power of two) takes the general per-point path.
+      const bool slow = mask_ < 0 || !finite || !(biggest * tables.max_scale < kFastLimit);
       if (slow) {
         for (std::size_t k = 0; k < n; ++k)
           out[i + k] = fbm(glm::vec3(pts[3 * k], pts[3 * k + 1], pts[3 * k + 2]), params);
@@ -534,6 +552,13 @@ void Noise::fbm_many(const float* points, std::size_t count, float* out, const F
       }
     }
   });
+  if (scan != nullptr) {
+    *scan = PointScan{};
+    for (const float m : block_max) {
+      if (std::isnan(m)) scan->finite = false;
+      else scan->max_abs = std::max(scan->max_abs, m);
+    }
+  }
 }
 
 }  // namespace cumuli

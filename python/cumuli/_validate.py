@@ -49,6 +49,18 @@ def points3_magnitude(
     points this is a fraction of the time ``np.isfinite(a).all()`` plus ``np.abs(a).max()`` take,
     which matters where the call itself is fast (fBm).
     """
+    arr = points3_unscanned(value, name, allow_empty=allow_empty)
+    if arr.size == 0:
+        return arr, 0.0
+    lo, hi = float(arr.min()), float(arr.max())
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    return arr, max(-lo, hi)
+
+
+def points3_unscanned(value: Any, name: str = "points", *, allow_empty: bool = True) -> np.ndarray:
+    """`points3`'s type, shape and size checks and conversion, without reading the values: for a
+    caller whose core call reads them anyway and reports what it found (``Noise.fbm``)."""
     if isinstance(value, np.ndarray):
         arr = value
     else:
@@ -64,13 +76,7 @@ def points3_magnitude(
         raise ValueError(f"{name} has {arr.shape[0]} rows, more than the limit {MAX_POINTS}")
     if not allow_empty and arr.shape[0] == 0:
         raise ValueError(f"{name} must not be empty")
-    arr = np.ascontiguousarray(arr, dtype=np.float32)
-    if arr.size == 0:
-        return arr, 0.0
-    lo, hi = float(arr.min()), float(arr.max())
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        raise ValueError(f"{name} contains NaN or infinite values")
-    return arr, max(-lo, hi)
+    return np.ascontiguousarray(arr, dtype=np.float32)
 
 
 def vec3(value: Any, name: str, *, bound: float | None = None) -> tuple[float, float, float]:

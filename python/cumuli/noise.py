@@ -120,10 +120,15 @@ class Noise:
         ``frequency`` is in lattice texels per world unit. Runs on ``threads`` threads
         (0 = all cores) without the GIL; the result does not depend on the thread count.
         """
-        pts, biggest = check.points3_magnitude(points, "points")
+        pts = check.points3_unscanned(points, "points")
         params = _fbm_params(octaves, gain, lacunarity, frequency)
+        # The core reports the points' largest |coordinate| (NaN: one is not finite) from the
+        # pass that evaluates them; bad input has then cost one evaluation and is refused here.
+        out, biggest = self._core.fbm_scan(pts, *params, check.threads(threads))
+        if not math.isfinite(biggest):
+            raise ValueError("points contains NaN or infinite values")
         check_fbm_reach(biggest, params, "points")
-        return self._core.fbm(pts, *params, check.threads(threads))
+        return out
 
     def fbm_grid(
         self,

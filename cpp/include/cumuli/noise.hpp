@@ -38,11 +38,19 @@ class Noise {
   // eq. (1): Σ_{i=1..n} w^i · lattice(s^i · f · p).
   float fbm(glm::vec3 p, const FbmParams& params) const;
 
+  // What fbm_many read of its points, in the same pass: the largest coordinate magnitude, and
+  // whether every coordinate was finite (the caller's argument check, without a second pass).
+  struct PointScan {
+    float max_abs = 0.0f;
+    bool finite = true;
+  };
+
   // fBm of `count` points (xyz interleaved) into `out`, on `threads` threads (0 = all), with
   // the SIMD kernel of simd_level() (simd.hpp). Bit-identical to calling fbm() on each point,
-  // whatever the thread count and the SIMD level.
+  // whatever the thread count and the SIMD level. Non-finite points give NaN; with `scan`, it
+  // also receives their PointScan.
   void fbm_many(const float* points, std::size_t count, float* out, const FbmParams& params,
-                int threads) const;
+                int threads, PointScan* scan = nullptr) const;
 
  private:
   // One axis of a lookup: the wrapped index of the lower texel and the blend weight.
