@@ -318,6 +318,32 @@ __attribute__((target("avx2"), always_inline)) inline __m256 octave_avx2(
   return _mm256_add_ps(c0, _mm256_mul_ps(wz, _mm256_sub_ps(c1, c0)));
 }
 
+// Points [first, first + 8·Groups) of a block (those past `count` are computed from zeros and
+// not stored), Groups registers in flight to overlap the gathers' latency.
+template <bool Madd, int Groups>
+__attribute__((target("avx2"), always_inline)) inline void groups_avx2(
+    const Avx2Consts& k, const double* lattice, const FbmTables& t, const float* points,
+    std::size_t first, std::size_t count, float* out) {
+  alignas(32) float xs[8 * Groups], ys[8 * Groups], zs[8 * Groups], res[8 * Groups];
+  load_lanes<8 * Groups>(points, first, count, xs, ys, zs);
+  __m256 px[Groups], py[Groups], pz[Groups], sum[Groups];
+  for (int g = 0; g < Groups; ++g) {
+    px[g] = _mm256_load_ps(xs + 8 * g);
+    py[g] = _mm256_load_ps(ys + 8 * g);
+    pz[g] = _mm256_load_ps(zs + 8 * g);
+    sum[g] = _mm256_setzero_ps();
+  }
+  for (int o = 0; o < t.octaves; ++o) {
+    const __m256 sc = _mm256_set1_ps(t.scale[o]);
+    const __m256 amp = _mm256_set1_ps(t.amplitude[o]);
+    for (int g = 0; g < Groups; ++g)
+      sum[g] = _mm256_add_ps(
+          sum[g], _mm256_mul_ps(amp, octave_avx2<Madd>(k, lattice, px[g], py[g], pz[g], sc)));
+  }
+  for (int g = 0; g < Groups; ++g) _mm256_store_ps(res + 8 * g, sum[g]);
+  std::copy(res, res + std::min<std::size_t>(8 * Groups, count - first), out + first);
+}
+
 template <bool Madd>
 __attribute__((target("avx2"))) void kernel_avx2(const Lattice& lat, const FbmTables& t,
                                                  const float* points, std::size_t count,
@@ -328,26 +354,12 @@ __attribute__((target("avx2"))) void kernel_avx2(const Lattice& lat, const FbmTa
                      _mm256_set1_epi32(lat.p),      _mm256_set1_epi32(pp),
                      _mm256_set1_epi32(pp + lat.p)};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
-  constexpr int kGroups = 2;  // independent registers in flight: overlaps the gathers' latency
-  for (std::size_t first = 0; first < count; first += 8 * kGroups) {
-    alignas(32) float xs[8 * kGroups], ys[8 * kGroups], zs[8 * kGroups], res[8 * kGroups];
-    load_lanes<8 * kGroups>(points, first, count, xs, ys, zs);
-    __m256 px[kGroups], py[kGroups], pz[kGroups], sum[kGroups];
-    for (int g = 0; g < kGroups; ++g) {
-      px[g] = _mm256_load_ps(xs + 8 * g);
-      py[g] = _mm256_load_ps(ys + 8 * g);
-      pz[g] = _mm256_load_ps(zs + 8 * g);
-      sum[g] = _mm256_setzero_ps();
-    }
-    for (int o = 0; o < t.octaves; ++o) {
-      const __m256 sc = _mm256_set1_ps(t.scale[o]);
-      const __m256 amp = _mm256_set1_ps(t.amplitude[o]);
-      for (int g = 0; g < kGroups; ++g)
-        sum[g] = _mm256_add_ps(
-            sum[g], _mm256_mul_ps(amp, octave_avx2<Madd>(k, lattice, px[g], py[g], pz[g], sc)));
-    }
-    for (int g = 0; g < kGroups; ++g) _mm256_store_ps(res + 8 * g, sum[g]);
-    std::copy(res, res + std::min<std::size_t>(8 * kGroups, count - first), out + first);
+  // Two registers (16 points) at a time; a tail of at most 8 points takes one, not two.
+  for (std::size_t first = 0; first < count; first += 16) {
+    if (count - first > 8)
+      groups_avx2<Madd, 2>(k, lattice, t, points, first, count, out);
+    else
+      groups_avx2<Madd, 1>(k, lattice, t, points, first, count, out);
   }
 }
 
