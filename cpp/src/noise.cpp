@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -268,7 +269,8 @@ inline void load_lanes(const float* points, std::size_t first, std::size_t count
 
 struct Avx2Consts {
   __m256 half;
-  __m256i mask, p, pmul, row1, row2, row3;
+  __m256i mask, p, pmul;
+  std::ptrdiff_t row_offset[4];  // floats from a cell's lower corner to rows y1, z1 and y1z1
 };
 
 // One octave of 8 points at lattice scale `sc`: kernel_scalar's arithmetic, operation for
@@ -293,15 +295,17 @@ __attribute__((target("avx2"), always_inline)) inline __m256 octave_avx2(
     base = _mm256_add_epi32(
         _mm256_mullo_epi32(_mm256_add_epi32(_mm256_mullo_epi32(iz, k.p), iy), k.p), ix);
   }
-  const __m256i rows[4] = {base, _mm256_add_epi32(base, k.row1), _mm256_add_epi32(base, k.row2),
-                           _mm256_add_epi32(base, k.row3)};
+  // The four rows of the cell share the index vector: each gathers from the lattice moved by
+  // its row's offset (a scalar base address) instead of adding the offset to every index.
+  const __m128i lo_points = _mm256_castsi256_si128(base);
+  const __m128i hi_points = _mm256_extracti128_si256(base, 1);
   __m256 k0[4], k1[4];  // lower / upper x corner of rows (y0,z0), (y1,z0), (y0,z1), (y1,z1)
   for (int r = 0; r < 4; ++r) {
+    const double* row = reinterpret_cast<const double*>(
+        reinterpret_cast<const float*>(lattice) + k.row_offset[r]);
     // a: pairs of points 0..3, b: of points 4..7, as [p0 p1 | p2 p3] in 128-bit halves.
-    const __m256 a =
-        _mm256_castpd_ps(_mm256_i32gather_pd(lattice, _mm256_castsi256_si128(rows[r]), 4));
-    const __m256 b =
-        _mm256_castpd_ps(_mm256_i32gather_pd(lattice, _mm256_extracti128_si256(rows[r], 1), 4));
+    const __m256 a = _mm256_castpd_ps(_mm256_i32gather_pd(row, lo_points, 4));
+    const __m256 b = _mm256_castpd_ps(_mm256_i32gather_pd(row, hi_points, 4));
     const __m256 lo = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));  // points 0 1 4 5 | 2 3 6 7
     const __m256 hi = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
     k0[r] = _mm256_castpd_ps(
@@ -349,10 +353,11 @@ __attribute__((target("avx2"))) void kernel_avx2(const Lattice& lat, const FbmTa
                                                  const float* points, std::size_t count,
                                                  float* out) {
   const int pp = lat.p * lat.p;
-  const Avx2Consts k{_mm256_set1_ps(0.5f),          _mm256_set1_epi32(lat.mask),
-                     _mm256_set1_epi32(lat.p),      _mm256_set1_epi32((pp << 16) | lat.p),
-                     _mm256_set1_epi32(lat.p),      _mm256_set1_epi32(pp),
-                     _mm256_set1_epi32(pp + lat.p)};
+  const Avx2Consts k{_mm256_set1_ps(0.5f),
+                     _mm256_set1_epi32(lat.mask),
+                     _mm256_set1_epi32(lat.p),
+                     _mm256_set1_epi32((pp << 16) | lat.p),
+                     {0, lat.p, pp, pp + lat.p}};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
   // Two registers (16 points) at a time; a tail of at most 8 points takes one, not two.
   for (std::size_t first = 0; first < count; first += 16) {
@@ -367,7 +372,8 @@ __attribute__((target("avx2"))) void kernel_avx2(const Lattice& lat, const FbmTa
 
 struct Avx512Consts {
   __m512 half;
-  __m512i mask, p, pmul, row1, row2, row3, even, odd;
+  __m512i mask, p, pmul, even, odd;
+  std::ptrdiff_t row_offset[4];  // as Avx2Consts'
 };
 
 // As octave_avx2 for 16 points: the floor comes straight from a round-down conversion, and per
@@ -398,14 +404,14 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline __m512 octave_
     base = _mm512_add_epi32(
         _mm512_mullo_epi32(_mm512_add_epi32(_mm512_mullo_epi32(iz, k.p), iy), k.p), ix);
   }
-  const __m512i rows[4] = {base, _mm512_add_epi32(base, k.row1), _mm512_add_epi32(base, k.row2),
-                           _mm512_add_epi32(base, k.row3)};
+  const __m256i lo_points = _mm512_castsi512_si256(base);
+  const __m256i hi_points = _mm512_extracti64x4_epi64(base, 1);
   __m512 k0[4], k1[4];
   for (int r = 0; r < 4; ++r) {
-    const __m512 a = _mm512_castpd_ps(
-        _mm512_i32gather_pd(_mm512_castsi512_si256(rows[r]), lattice, 4));
-    const __m512 b = _mm512_castpd_ps(
-        _mm512_i32gather_pd(_mm512_extracti64x4_epi64(rows[r], 1), lattice, 4));
+    const double* row = reinterpret_cast<const double*>(
+        reinterpret_cast<const float*>(lattice) + k.row_offset[r]);
+    const __m512 a = _mm512_castpd_ps(_mm512_i32gather_pd(lo_points, row, 4));
+    const __m512 b = _mm512_castpd_ps(_mm512_i32gather_pd(hi_points, row, 4));
     k0[r] = _mm512_permutex2var_ps(a, k.even, b);
     k1[r] = _mm512_permutex2var_ps(a, k.odd, b);
   }
@@ -488,12 +494,10 @@ __attribute__((target("avx512f,avx512bw"))) void kernel_avx512(const Lattice& la
       _mm512_set1_epi32(lat.mask),
       _mm512_set1_epi32(lat.p),
       _mm512_set1_epi32((pp << 16) | lat.p),
-      _mm512_set1_epi32(lat.p),
-      _mm512_set1_epi32(pp),
-      _mm512_set1_epi32(pp + lat.p),
       // Even / odd floats of a gathered pair register couple (a, b): lane l takes 2l (2l + 1).
       _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30),
-      _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31)};
+      _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31),
+      {0, lat.p, pp, pp + lat.p}};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
   // Two registers (32 points) at a time; a tail of at most 16 points takes one, not two.
   for (std::size_t first = 0; first < count; first += 32) {
