@@ -491,6 +491,8 @@ CUMULI_VEC_CLONES void nearest_quadratic(const float* mid, float* q2s, int* prim
 // current line: position, t of its midpoint, length, far end, |q|² of its primitive for eq. 2's
 // gate, primitive, density, attenuation). They only grow.
 struct LineBuffers {
+  static constexpr std::size_t kKeepSamples = std::size_t{1} << 16;  // ≈ 2.3 MB kept at most
+
   std::vector<Candidate> cand;
   SunCandidates::Scratch scratch{0};
   std::vector<float> xyz, mid, len, t1s, q2s, rho, att, term;
@@ -709,6 +711,9 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
       }
       line_samples[line] = m;
     }
+    // Lines of hundreds of thousands of samples (a tiny step) are slow anyway: do not keep their
+    // buffers (tens of MB) alive in this thread after the call.
+    if (buffers.mid.size() > LineBuffers::kKeepSamples) buffers = LineBuffers{};
   });
 
   // Resample: each voxel blends the four lines around it on its layer (a few ns a voxel: small
