@@ -1,6 +1,7 @@
 #include "cumuli/light/ndt.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <cstring>
@@ -568,7 +569,8 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
   const int capacity = static_cast<int>(cloud.primitives.size());
   const bool spheroid = cloud.density.model == DensityModel::Spheroid;
   const float kappa = cloud.density.kappa;
-  std::vector<std::uint64_t> line_samples(lines, 0);
+  // Samples marched, summed per chunk (an integer sum: the same total in any order).
+  std::atomic<std::uint64_t> samples_total{0};
 
   parallel_chunks(lines, s.threads, [&](std::size_t first, std::size_t last) {
     // This thread's buffers, kept between its chunks and between calls: a small grid's lines
@@ -581,6 +583,7 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
     &t1s = buffers.t1s, &q2s = buffers.q2s, &rho = buffers.rho, &att = buffers.att,
     &term = buffers.term;
     std::vector<int>& prim = buffers.prim;
+    std::uint64_t chunk_samples = 0;
     for (std::size_t line = first; line < last; ++line) {
       const int lb = b0 + static_cast<int>(line / nc), lc = c0 + static_cast<int>(line % nc);
       const int j_lo = served_lo[line], j_hi = served_hi[line];
@@ -709,8 +712,9 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
         if (samples_out) beyond[at(line, j)] = static_cast<std::uint32_t>(m - i);
         if (j == j_start) break;
       }
-      line_samples[line] = m;
+      chunk_samples += m;
     }
+    samples_total += chunk_samples;
     // Lines of hundreds of thousands of samples (a tiny step) are slow anyway: do not keep their
     // buffers (tens of MB) alive in this thread after the call.
     if (buffers.mid.size() > LineBuffers::kKeepSamples) buffers = LineBuffers{};
@@ -722,38 +726,56 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
   const std::size_t voxels = static_cast<std::size_t>(ra) * rb * rc;
   const int resample_threads = voxels < (std::size_t{1} << 16) ? 1 : s.threads;
   parallel_chunks(static_cast<std::size_t>(ra), resample_threads, [&](std::size_t j0, std::size_t j1) {
+    // Per layer: S (and `beyond`) of the lines serving it, indexed by line, so that a voxel
+    // reads its four lines with plain loads; the c-axis index and weight of each voxel column.
+    std::vector<float> layer_S(lines);
+    std::vector<std::uint32_t> layer_beyond(samples_out ? lines : 0);
+    std::vector<std::size_t> kc(static_cast<std::size_t>(rc));
+    std::vector<float> wcs(static_cast<std::size_t>(rc));
     for (std::size_t jj = j0; jj < j1; ++jj) {
       const int j = static_cast<int>(jj);
-
+      for (int lb = lob[jj]; lb <= hib[jj]; ++lb) {
+        for (int lc = loc[jj]; lc <= hic[jj]; ++lc) {
+          const std::size_t line = static_cast<std::size_t>(lb - b0) * nc +
+                                   static_cast<std::size_t>(lc - c0);
+          layer_S[line] = S[at(line, j)];
+          if (samples_out) layer_beyond[line] = beyond[at(line, j)];
+        }
+      }
+      for (int ic = 0; ic < rc; ++ic) {
+        const float uc = static_cast<float>(ic) - sc * j;
+        const float fc_floor = floor_small_light(uc);
+        wcs[static_cast<std::size_t>(ic)] = uc - fc_floor;
+        kc[static_cast<std::size_t>(ic)] = static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
+      }
       for (int ib = 0; ib < rb; ++ib) {
         const float ub = static_cast<float>(ib) - sb * j;
         const float fb_floor = floor_small_light(ub);
         const float wb = ub - fb_floor;
         const std::size_t kb = static_cast<std::size_t>(static_cast<int>(fb_floor) - b0);
-        for (int ic = 0; ic < rc; ++ic) {
-          const float uc = static_cast<float>(ic) - sc * j;
-          const float fc_floor = floor_small_light(uc);
-          const float wc = uc - fc_floor;
-          const std::size_t l00 = kb * nc + static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
-          const std::size_t l10 = l00 + nc, l01 = l00 + 1, l11 = l00 + nc + 1;
-          const float v00 = S[at(l00, j)], v01 = S[at(l01, j)];
-          const float v10 = S[at(l10, j)], v11 = S[at(l11, j)];
+        const float* row0 = layer_S.data() + kb * nc;  // lines of b index kb; kb + 1 at + nc
+        const std::size_t v0 = static_cast<std::size_t>(j) * stride[a] +
+                               static_cast<std::size_t>(ib) * stride[b];
+        for (std::size_t ic = 0; ic < static_cast<std::size_t>(rc); ++ic) {
+          const std::size_t k = kc[ic];
+          const float wc = wcs[ic];
+          const float v00 = row0[k], v01 = row0[k + 1];
+          const float v10 = row0[nc + k], v11 = row0[nc + k + 1];
           const float s0 = v00 + wc * (v01 - v00);
           const float s1 = v10 + wc * (v11 - v10);
-          const std::size_t v = static_cast<std::size_t>(j) * stride[a] +
-                                static_cast<std::size_t>(ib) * stride[b] +
-                                static_cast<std::size_t>(ic) * stride[c];
+          const std::size_t v = v0 + ic * static_cast<std::size_t>(stride[c]);
           light[v] = s0 + wb * (s1 - s0);
           if (samples_out) {
-            const std::size_t near = wb < 0.5f ? (wc < 0.5f ? l00 : l01) : (wc < 0.5f ? l10 : l11);
-            samples_out[v] = beyond[at(near, j)];
+            const std::size_t near =
+                kb * nc + k + (wb < 0.5f ? 0 : static_cast<std::size_t>(nc)) + (wc < 0.5f ? 0 : 1);
+            samples_out[v] = layer_beyond[near];
           }
         }
       }
     }
   });
   LightStats stats;
-  for (const std::uint64_t n : line_samples) stats.samples += n;
+  stats.samples = samples_total.load();
   return stats;
 }
 
