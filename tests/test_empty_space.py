@@ -5,12 +5,18 @@ modes, the early exit `min_transmittance`, and the fBm counts of the CPU twin.""
 from __future__ import annotations
 
 import json
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import cumuli as cu
 from cumuli import _core
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+
+import bench_render_cpu  # noqa: E402
 
 W, H = 96, 72
 OFF = {"empty_space_skipping": False, "min_transmittance": 1e-6}
@@ -21,20 +27,7 @@ def _with(scene: cu.Scene, **changes) -> cu.Scene:
     return scene.replace(settings=scene.settings.replace(**changes))
 
 
-def _benchmark_scenes() -> dict[str, cu.Scene]:
-    """The scenes of benchmarks/bench_render_cpu.py."""
-    rabbit = cu.mesh_cloud(cu.meshes.bunny_like(1), scale=1.2)
-    return {
-        "gaussian_cumulus": cu.Scene(clouds=[cu.gaussian_cumulus(seed=1)]),
-        "metaball_cumulus": cu.Scene(clouds=[cu.metaball_cumulus(seed=2)]),
-        "lsystem_cloud": cu.Scene(clouds=[cu.lsystem_cloud(iterations=7, seed=2)]),
-        "mesh_cloud": cu.Scene(
-            clouds=[rabbit], settings=cu.RenderSettings(fixed_step=0.03, absorption=3.0)
-        ),
-    }
-
-
-SCENES = _benchmark_scenes()
+SCENES = bench_render_cpu.scenes()  # the benchmark's scenes, so the test checks what it measures
 
 
 def _random_cloud(model: str, seed: int, n: int = 12) -> cu.Cloud:
