@@ -6,6 +6,7 @@ content changes invalidating them, the parts protocol, and a filmed weather thro
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -86,20 +87,15 @@ def test_one_impostor_per_field_instance_keyed_by_its_id() -> None:
 
 @pytest.mark.gl
 @pytest.mark.parametrize("shading", ["vertex", "fragment"])
-def test_exact_display_gl_and_cpu_agree(shading: str) -> None:
+def test_exact_display_gl_and_cpu_agree(shading: str, exact_impostors_agree: Callable) -> None:
     """Exact mode (texelFetch display and atlas sampling) GL against the C++ twins ≤ 1e−5 mean,
     ≤ 1e−4 max, at the generation viewpoint and from a moved eye reusing the impostors."""
     sh = cu.BillboardShading(shading=shading, exact_textures=True)
     sc = cu.Scene([cloud().translated((-30, 0, 20)), field()], sun=SUN, billboard_shading=sh,
                   impostor_settings=cu.ImpostorSettings(exact=True, tolerance=1.0))  # fmt: skip
     moved = cu.Camera((10.4, 8.2, -59.6), (0.0, 2.0, 10.0), fov=40)
-    gl_cache, cpu_cache = cu.ImpostorCache(), cu.ImpostorCache()
     with cu.Renderer() as r:
-        for cam in (CAMERA, moved):
-            gl = r.render(sc, cam, W, H, impostors=gl_cache)
-            cpu = cu.render_cpu(sc, cam, W, H, impostors=cpu_cache)
-            assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5
-            assert np.abs(gl - cpu).max() <= 1e-4
+        gl, gl_cache, cpu_cache = exact_impostors_agree(r, sc, [CAMERA, moved], W, H)
         assert gl_cache.history[0]["updates"] == {"missing": 5}
         assert gl_cache.history[-1]["updates"] == {} == cpu_cache.history[-1]["updates"]
     assert gl[..., 3].max() > 0.9

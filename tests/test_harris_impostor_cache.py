@@ -5,6 +5,7 @@ marched clouds and volumes through impostors, and `render_frames(impostors=True)
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -43,19 +44,14 @@ def test_display_at_the_generation_viewpoint_is_a_resampling() -> None:
 
 
 @pytest.mark.gl
-def test_exact_display_gl_and_cpu_agree() -> None:
+def test_exact_display_gl_and_cpu_agree(exact_impostors_agree: Callable) -> None:
     """§10.3.1: exact mode (texelFetch blends) GL against the C++ display ≤ 1e−5, both at the
     generation viewpoint and from a moved eye that reuses the impostor; the hardware filter is
     close too."""
     sc = scene(exact=True, tolerance=1.0)
     moved = cu.Camera((10.6, 8.2, -69.5), (0.0, 2.0, 0.0), fov=35)
-    gl_cache, cpu_cache = cu.ImpostorCache(), cu.ImpostorCache()
     with cu.Renderer() as r:
-        for cam in (CAMERA, moved):
-            gl = r.render(sc, cam, W, H, impostors=gl_cache)
-            cpu = cu.render_cpu(sc, cam, W, H, impostors=cpu_cache)
-            assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5
-            assert np.abs(gl - cpu).max() <= 1e-4
+        _, gl_cache, _ = exact_impostors_agree(r, sc, [CAMERA, moved], W, H)
         assert gl_cache.history[-1]["updates"] == {}  # reused from the moved eye
         fast = r.render(scene(tolerance=1.0), moved, W, H, impostors=cu.ImpostorCache())
     fresh = cu.render_cpu(scene(tolerance=1.0), moved, W, H, impostors=cu.ImpostorCache())
