@@ -11,6 +11,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.ground import sky_irradiance
+from cumuli.light.particles import ground_shadow
 
 F = np.float32
 SUN = cu.Sun(direction=(0.5, 0.7, 0.3), colour=(1.0, 0.95, 0.9), intensity=3.0)
@@ -109,6 +110,64 @@ def test_shadow_map_defaults_and_bad_input() -> None:
         cu.shadow_map(s, resolution=0)
     with pytest.raises(TypeError, match="resolution"):
         cu.shadow_map(s, resolution=2.5)
+
+
+def texel_centres(extent, shape) -> np.ndarray:
+    """Ground points at the texel centres of a shadow map over ``extent`` of ``shape`` (nx, nz)."""
+    (x0, z0), (x1, z1) = extent
+    nx, nz = shape
+    xs = x0 + (np.arange(nx) + 0.5) * (x1 - x0) / nx
+    zs = z0 + (np.arange(nz) + 0.5) * (z1 - z0) / nz
+    zz, xx = np.meshgrid(zs, xs, indexing="ij")
+    return np.stack([xx, np.full_like(xx, GROUND.height), zz], -1).reshape(-1, 3).astype(F)
+
+
+def test_particle_clouds_shadow_the_ground() -> None:
+    """A particle cloud shades the ground with Harris 2002's own shadow map (its light pass's final
+    buffer for the sun, `ground_shadow`), multiplied into the media's exp(−τ)."""
+    particles = cu.particle_cumulus(centre=(14.0, 2.0, 4.0), n_particles=300, seed=1)
+    cumulus = scene().clouds[0]
+    extent, shape = ((-30.0, -30.0), (30.0, 30.0)), (40, 36)
+    both = scene(clouds=[cumulus, particles])
+    t_media = cu.shadow_map(scene(clouds=[cumulus]), extent, shape)
+    t_both = cu.shadow_map(both, extent, shape)
+    t_particles = ground_shadow(
+        particles, SUN, texel_centres(extent, shape), both.sprite_settings
+    ).reshape(shape[::-1])
+    assert t_particles.min() < 0.7 and t_particles.max() == 1.0  # a shadow, and open ground
+    assert (t_media[t_particles < 0.9] > 0.99).mean() > 0.5  # mostly apart from the cumulus'
+    np.testing.assert_allclose(t_both, t_media * t_particles, rtol=1e-6, atol=1e-7)
+    # Alone, over the default extent (the particle cloud's box moved along the light).
+    alone = scene(clouds=[particles])
+    assert cu.shadow_map(alone, resolution=32).min() < 0.7
+    # Billboards cast none: a scene of one has no shadow map.
+    billboards = cu.seed_box_cloud(cu.seedbox_presets.cumulus(), seed=5)
+    assert cu.prepare_light(scene(clouds=[billboards])).shadow is None
+    # The light step's map follows the cloud when it moves.
+    moved = scene(clouds=[particles.translated((0.0, 0.0, 20.0))])
+    lit, lit_moved = cu.prepare_light(alone), cu.prepare_light(moved)
+    assert lit.shadow is not None and lit_moved.shadow is not None
+    assert lit_moved.shadow.extent[1] == pytest.approx(lit.shadow.extent[1] + 20.0, abs=1e-3)
+
+
+@pytest.mark.gl
+def test_a_particle_cloud_shadow_in_the_picture(gl_context) -> None:
+    particles = cu.particle_cumulus(centre=(0.0, 2.0, 0.0), n_particles=300, seed=1)
+    s = scene(cu.RenderSettings(lighting="physical", shadow_resolution=64), [particles])
+    lit = cu.prepare_light(s)
+    cpu = cu.render_cpu(lit, CAMERA, 64, 48)
+    with cu.Renderer(context=gl_context) as r:
+        gl = r.render(lit, CAMERA, 64, 48)
+    assert lit.shadow is not None and lit.shadow.values.min() < 0.7
+    lum = cpu[..., :3].mean(-1)
+    open_ground = lum[-1, 0]  # near the camera, far from the shadow: albedo/π·(E_sun·y + E_sky)
+    sky_only = np.mean(np.asarray(GROUND.albedo) / math.pi * np.asarray(sky_irradiance(s.sky)))
+    darkest = sky_only + (open_ground - sky_only) * lit.shadow.values.min()
+    # Ground in the shadow (the sky is brighter than open ground here).
+    shaded = (cpu[..., 3] == 0) & (lum < 0.95 * open_ground)
+    assert shaded.sum() > 10  # the shadow is in the picture
+    assert lum[shaded].min() >= darkest - 1e-4
+    assert np.abs(gl[shaded] - cpu[shaded]).max() < 1e-4
 
 
 @pytest.mark.parametrize("lighting", ["paper", "physical"])

@@ -44,6 +44,7 @@ from cumuli.light.particles import (
     light_directions,
     light_is_stale,
     particle_light_many,
+    particles_digest,
 )
 from cumuli.light.physical import PhysicalLight, physical_light
 from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
@@ -338,6 +339,15 @@ PHYSICAL_LIGHT_PASSES: dict[str, Callable[..., Any]] = {
 }
 
 
+def _shadow_digest(drawable: Any) -> tuple:
+    """What a drawable's shadow on the ground depends on: its light's digest, and for a particle
+    cloud (whose light does not depend on where it is) also its bounding sphere."""
+    if isinstance(drawable, ParticleCloud):
+        centre, radius = drawable.sphere
+        return ("particles", particles_digest(drawable), tuple(centre.tolist()), radius)
+    return drawable_digest(drawable)
+
+
 def scene_shadow(scene: Scene, threads: int = 0) -> ShadowMap | None:
     """The shadow map the renderers use for a scene's ground (None without a ground, or when
     no cloud can shade it), memoised by content."""
@@ -348,8 +358,9 @@ def scene_shadow(scene: Scene, threads: int = 0) -> ShadowMap | None:
     if extent is None:
         return None
     n = scene.settings.shadow_resolution
-    key = ("shadow", tuple(drawable_digest(d) for d in scene.clouds), scene.noise.seed,
-           scene.noise.size, scene.settings, scene.sun.direction, height)  # fmt: skip
+    key = ("shadow", tuple(_shadow_digest(d) for d in scene.clouds), scene.noise.seed,
+           scene.noise.size, scene.settings, tuple(scene.sprite_settings.light_dict().items()),
+           scene.sun.direction, height)  # fmt: skip
     return _remember(key, lambda: compute_shadow(scene, extent, (n, n), height, threads))
 
 

@@ -6,8 +6,11 @@ towards the sun through each drawable's extinction — a 2018 cloud's density fi
 march's attribution) times ``extinction_scale`` in the physical mode or ``absorption/step_ref``
 (the paper mode's camera-ray extinction) in the paper mode; a volume's ``sigma_t·density`` — in
 segments of at most ``settings.light_step`` sampled at their midpoints, and returns
-``exp(−τ)``. The light step makes one for a scene with a ground (:func:`scene_shadow`), over
-the ground the clouds' boxes can shade.
+``exp(−τ)``, times the transmittance of every particle cloud: Harris 2002's own shadow map, the
+final buffer of its light pass for the sun (:func:`cumuli.light.particles.ground_shadow` with
+the scene's ``sprite_settings``). The light step makes one for a scene with a ground
+(:func:`scene_shadow`), over the ground the clouds' boxes can shade. Billboards have neither an
+extinction field nor a shadow buffer: they cast no shadow.
 """
 
 from __future__ import annotations
@@ -21,8 +24,10 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli.light.particles import ground_shadow
 from cumuli.light.physical import fbm_args
 from cumuli.model.cloud import Cloud
+from cumuli.model.particles import ParticleCloud
 from cumuli.model.volume import VolumeCloud
 
 #: Largest shadow-map edge.
@@ -61,17 +66,28 @@ def _medium(scene: Any) -> tuple[list, list]:
                            cloud_extinction_scale(s)))  # fmt: skip
         elif isinstance(d, VolumeCloud):
             volumes.append((d.density, d.box[0], d.box[1], float(d.sigma_t)))
-        # Particle clouds and billboards have no extinction field (their own light models):
-        # they cast no shadow on the ground.
+        # Particle clouds have no extinction field (their shadow is their light pass's buffer:
+        # _particle_transmittance); billboards have neither and cast no shadow.
     return clouds, volumes
 
 
+def _particle_transmittance(scene: Any, points: np.ndarray) -> np.ndarray | None:
+    """The product over the scene's particle clouds of the sun's transmittance through each at
+    ``points`` (Harris 2002's shadow map of the cloud); None without particle clouds."""
+    out = None
+    for d in scene.clouds:
+        if isinstance(d, ParticleCloud):
+            t = ground_shadow(d, scene.sun, points, scene.sprite_settings)
+            out = t if out is None else out * t
+    return out
+
+
 def default_extent(scene: Any, height: float) -> tuple[float, float, float, float] | None:
-    """The rectangle of the plane ``y = height`` the boxes of the drawables with a medium (2018
-    clouds, volumes) can shade (their corners moved along the light onto the plane, padded by
-    2 %); None when nothing can."""
+    """The rectangle of the plane ``y = height`` the boxes of the drawables that cast shadows
+    (2018 clouds, volumes, particle clouds) can shade (their corners moved along the light onto
+    the plane, padded by 2 %); None when nothing can."""
     s = np.asarray(scene.sun.direction, np.float64)
-    media = [d for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud))]
+    media = [d for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud, ParticleCloud))]
     if s[1] <= 1e-3 or not media:
         return None
     pts = []
@@ -129,14 +145,16 @@ def compute_shadow(
     pts = np.stack([xx, np.full_like(xx, height), zz], -1).reshape(-1, 3).astype(np.float32)
     clouds, volumes = _medium(scene)
     s = scene.settings
-    if scene.sun.direction[1] <= 0 or (not clouds and not volumes):
-        values = np.ones((nz, nx), np.float32)
-    else:
+    values = np.ones((nz, nx), np.float32)
+    if scene.sun.direction[1] > 0 and (clouds or volumes):
         tau = _core.medium_optical_depth(
             clouds, volumes, scene.noise._core, *fbm_args(s), pts, scene.sun.direction,
             float(s.light_step), threads,
         )  # fmt: skip
         values = np.exp(-tau.astype(np.float64)).astype(np.float32).reshape(nz, nx)
+    particles = _particle_transmittance(scene, pts) if scene.sun.direction[1] > 0 else None
+    if particles is not None:
+        values = values * particles.astype(np.float32).reshape(nz, nx)
     values.setflags(write=False)
     return ShadowMap(values, (float(x0), float(z0), float(x1), float(z1)), float(height))
 
