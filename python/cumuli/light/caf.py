@@ -267,6 +267,102 @@ def field_absorption_factors(
     return FieldLight(caf, length, first, s, at, params)
 
 
+def ground_caf_digest(drawable: BillboardCloud | BillboardField) -> str:
+    """A short hash of what `ground_caf` depends on besides the sun and the shading: the boxes
+    (a cloud's are in world space) and, for a field, its instances' variants, yaws, offsets and
+    alphas."""
+    if isinstance(drawable, BillboardCloud):
+        return cloud_digest(drawable)
+    h = hashlib.blake2b(digest_size=12)
+    for v in drawable.variants:
+        h.update(cloud_digest(v).encode())
+    for a in (drawable.variant, drawable.yaw, drawable.offsets, drawable.alpha):
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()
+
+
+def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """The 8 corners ``(8, 3)`` of the box ``[lo, hi]``."""
+    return np.array([[(hi if k & m else lo)[a] for a, m in enumerate((1, 2, 4))]
+                     for k in range(8)], np.float64)  # fmt: skip
+
+
+def _footprint(corners: np.ndarray, sun: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """Which ``points`` may see a box (its ``corners``) towards ``sun`` (a conservative test):
+    those inside the rectangle (x, z) the corners cover when moved along the light down to the
+    lowest and the highest of the points' heights."""
+    feet = []
+    for y in (float(points[:, 1].min()), float(points[:, 1].max())):
+        t = np.maximum((corners[:, 1] - y) / sun[1], 0.0)
+        feet.append(corners - t[:, None] * sun)
+    foot = np.concatenate(feet)
+    x, z = points[:, 0], points[:, 2]
+    return (
+        (x >= foot[:, 0].min()) & (x <= foot[:, 0].max())
+        & (z >= foot[:, 2].min()) & (z <= foot[:, 2].max())
+    )  # fmt: skip
+
+
+def ground_caf(
+    drawable: BillboardCloud | BillboardField,
+    sun: Sun | Sequence[float],
+    points: Any,
+    shading: BillboardShading | None = None,
+    threads: int = 0,
+) -> np.ndarray:
+    """Sunlight transmittance ``(M,)`` through a billboard cloud or field at world ``points``
+    ``(M, 3)``, for the cloud's shadow on the ground (beyond [TM]): the CAF the cloud's own
+    billboards would get there (spec §4.1 with ``shading``'s ``max_distance``, ``overlap`` and
+    ``caf_curve``: the chords of the ray towards the sun through its boxes; 1 where it crosses
+    none). Each field instance shades on its own, faded with its alpha (``1 − α·(1 − CAF)``),
+    and the instances' shadows multiply. A sun at or below the horizon gives ones."""
+    if not isinstance(drawable, (BillboardCloud, BillboardField)):
+        raise TypeError(
+            f"expected a BillboardCloud or BillboardField, got {type(drawable).__name__}"
+        )
+    s = np.asarray(_sun_direction(sun), np.float64)
+    pts = check.points3(points, "points", bound=check.MAX_COORD)
+    sh = BillboardShading() if shading is None else shading
+    if not isinstance(sh, BillboardShading):
+        raise TypeError(f"shading must be a BillboardShading, got {type(sh).__name__}")
+    threads = check.threads(threads)
+    out = np.ones(pts.shape[0], np.float32)
+    if s[1] <= 0 or pts.shape[0] == 0:
+        return out
+    if isinstance(drawable, BillboardCloud):
+        d_max = _max_distance(sh.max_distance, default_max_distance(drawable))
+        instances = [(drawable, np.zeros(3), 1.0, 0.0, 1.0)]
+    else:  # field_absorption_factors' default: 2 × the mean variant height
+        default = float(np.mean([default_max_distance(v) for v in drawable.variants]))
+        d_max = _max_distance(sh.max_distance, default)
+        instances = [
+            (drawable.variants[v], drawable.offsets[i].astype(np.float64),
+             *_core.yaw_cos_sin(float(drawable.yaw[i])), float(drawable.alpha[i]))
+            for i, v in enumerate(drawable.variant)
+        ]  # fmt: skip
+    for cloud, offset, c, sn, alpha in instances:
+        if cloud.n_boxes == 0 or alpha <= 0:
+            continue
+        # The instance's frame: local = R_y(−yaw)·(world − offset), the sun turned alike.
+        corners = _corners(*(np.asarray(b, np.float64) for b in cloud.box_bounds()))
+        world = np.stack([c * corners[:, 0] + sn * corners[:, 2], corners[:, 1],
+                          -sn * corners[:, 0] + c * corners[:, 2]], -1) + offset  # fmt: skip
+        near = np.flatnonzero(_footprint(world, s, pts))
+        if near.size == 0:
+            continue
+        rel = pts[near].astype(np.float64) - offset
+        local = np.stack([c * rel[:, 0] - sn * rel[:, 2], rel[:, 1],
+                          sn * rel[:, 0] + c * rel[:, 2]], -1).astype(np.float32)  # fmt: skip
+        sun_local = (c * s[0] - sn * s[2], s[1], sn * s[0] + c * s[2])
+        owner = np.full(near.size, -1, np.int32)
+        length = _core.caf_path_lengths(
+            cloud.boxes, local, owner, sun_local, sh.overlap, True, threads
+        )
+        caf = _core.caf_values(length, d_max, sh.caf_curve)
+        out[near] *= (1.0 - alpha * (1.0 - caf)).astype(np.float32)
+    return out
+
+
 def quad_corners(cloud: BillboardCloud, right: Sequence[float], up: Sequence[float]) -> np.ndarray:
     """Camera-facing quad corners ``(K, 4, 3)``: ``v0 = p − ½w·r′ − ½h·u′``, ``v1 = p + ½w·r′ −
     ½h·u′``, ``v2 = p + ½w·r′ + ½h·u′``, ``v3 = p − ½w·r′ + ½h·u′``, ``(r′, u′)`` the camera's

@@ -37,6 +37,7 @@ from cumuli import _progress
 from cumuli import _validate as check
 from cumuli.ground import ground_radiance_unshadowed
 from cumuli.light import billboards as billboard_pass
+from cumuli.light.caf import ground_caf_digest
 from cumuli.light.grid import primitives_digest
 from cumuli.light.ndt import LightGrid, LightRecord, light_grid
 from cumuli.light.particles import (
@@ -341,10 +342,13 @@ PHYSICAL_LIGHT_PASSES: dict[str, Callable[..., Any]] = {
 
 def _shadow_digest(drawable: Any) -> tuple:
     """What a drawable's shadow on the ground depends on: its light's digest, and for a particle
-    cloud (whose light does not depend on where it is) also its bounding sphere."""
+    cloud (whose light does not depend on where it is) also its bounding sphere; a billboard
+    cloud's or field's boxes where they are."""
     if isinstance(drawable, ParticleCloud):
         centre, radius = drawable.sphere
         return ("particles", particles_digest(drawable), tuple(centre.tolist()), radius)
+    if isinstance(drawable, (BillboardCloud, BillboardField)):
+        return ("billboards", ground_caf_digest(drawable))
     return drawable_digest(drawable)
 
 
@@ -360,7 +364,7 @@ def scene_shadow(scene: Scene, threads: int = 0) -> ShadowMap | None:
     n = scene.settings.shadow_resolution
     key = ("shadow", tuple(_shadow_digest(d) for d in scene.clouds), scene.noise.seed,
            scene.noise.size, scene.settings, tuple(scene.sprite_settings.light_dict().items()),
-           scene.sun.direction, height)  # fmt: skip
+           scene.billboard_shading, scene.sun.direction, height)  # fmt: skip
     return _remember(key, lambda: compute_shadow(scene, extent, (n, n), height, threads))
 
 

@@ -6,11 +6,12 @@ towards the sun through each drawable's extinction — a 2018 cloud's density fi
 march's attribution) times ``extinction_scale`` in the physical mode or ``absorption/step_ref``
 (the paper mode's camera-ray extinction) in the paper mode; a volume's ``sigma_t·density`` — in
 segments of at most ``settings.light_step`` sampled at their midpoints, and returns
-``exp(−τ)``, times the transmittance of every particle cloud: Harris 2002's own shadow map, the
+``exp(−τ)``, times the transmittance of every particle cloud — Harris 2002's own shadow map, the
 final buffer of its light pass for the sun (:func:`cumuli.light.particles.ground_shadow` with
-the scene's ``sprite_settings``). The light step makes one for a scene with a ground
-(:func:`scene_shadow`), over the ground the clouds' boxes can shade. Billboards have neither an
-extinction field nor a shadow buffer: they cast no shadow.
+the scene's ``sprite_settings``) — and of every billboard cloud or field — the CAF its own
+billboards would get at the ground point (:func:`cumuli.light.caf.ground_caf` with the scene's
+``billboard_shading``; beyond Torchelsen & Musse 2005). The light step makes one for a scene
+with a ground (:func:`scene_shadow`), over the ground the clouds' boxes can shade.
 """
 
 from __future__ import annotations
@@ -24,8 +25,11 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli.light.caf import ground_caf
 from cumuli.light.particles import ground_shadow
 from cumuli.light.physical import fbm_args
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
 from cumuli.model.cloud import Cloud
 from cumuli.model.particles import ParticleCloud
 from cumuli.model.volume import VolumeCloud
@@ -66,28 +70,35 @@ def _medium(scene: Any) -> tuple[list, list]:
                            cloud_extinction_scale(s)))  # fmt: skip
         elif isinstance(d, VolumeCloud):
             volumes.append((d.density, d.box[0], d.box[1], float(d.sigma_t)))
-        # Particle clouds have no extinction field (their shadow is their light pass's buffer:
-        # _particle_transmittance); billboards have neither and cast no shadow.
+        # Particle clouds and billboards have no extinction field: they shade the ground with
+        # their own light models (_own_shadows).
     return clouds, volumes
 
 
-def _particle_transmittance(scene: Any, points: np.ndarray) -> np.ndarray | None:
-    """The product over the scene's particle clouds of the sun's transmittance through each at
-    ``points`` (Harris 2002's shadow map of the cloud); None without particle clouds."""
+#: The drawables that shade the ground.
+SHADOW_CASTERS = (Cloud, VolumeCloud, ParticleCloud, BillboardCloud, BillboardField)
+
+
+def _own_shadows(scene: Any, points: np.ndarray, threads: int) -> np.ndarray | None:
+    """The product over the scene's particle clouds and billboards of the sun's transmittance
+    through each at ``points``, by their own light models; None when there are none."""
     out = None
     for d in scene.clouds:
         if isinstance(d, ParticleCloud):
             t = ground_shadow(d, scene.sun, points, scene.sprite_settings)
-            out = t if out is None else out * t
+        elif isinstance(d, (BillboardCloud, BillboardField)):
+            t = ground_caf(d, scene.sun, points, scene.billboard_shading, threads)
+        else:
+            continue
+        out = t if out is None else out * t
     return out
 
 
 def default_extent(scene: Any, height: float) -> tuple[float, float, float, float] | None:
-    """The rectangle of the plane ``y = height`` the boxes of the drawables that cast shadows
-    (2018 clouds, volumes, particle clouds) can shade (their corners moved along the light onto
-    the plane, padded by 2 %); None when nothing can."""
+    """The rectangle of the plane ``y = height`` the boxes of the drawables can shade (their
+    corners moved along the light onto the plane, padded by 2 %); None when nothing can."""
     s = np.asarray(scene.sun.direction, np.float64)
-    media = [d for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud, ParticleCloud))]
+    media = [d for d in scene.clouds if isinstance(d, SHADOW_CASTERS)]
     if s[1] <= 1e-3 or not media:
         return None
     pts = []
@@ -152,9 +163,9 @@ def compute_shadow(
             float(s.light_step), threads,
         )  # fmt: skip
         values = np.exp(-tau.astype(np.float64)).astype(np.float32).reshape(nz, nx)
-    particles = _particle_transmittance(scene, pts) if scene.sun.direction[1] > 0 else None
-    if particles is not None:
-        values = values * particles.astype(np.float32).reshape(nz, nx)
+    own = _own_shadows(scene, pts, threads) if scene.sun.direction[1] > 0 else None
+    if own is not None:
+        values = values * own.astype(np.float32).reshape(nz, nx)
     values.setflags(write=False)
     return ShadowMap(values, (float(x0), float(z0), float(x1), float(z1)), float(height))
 
