@@ -287,20 +287,16 @@ def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
                      for k in range(8)], np.float64)  # fmt: skip
 
 
-def _footprint(corners: np.ndarray, sun: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """Which ``points`` may see a box (its ``corners``) towards ``sun`` (a conservative test):
-    those inside the rectangle (x, z) the corners cover when moved along the light down to the
-    lowest and the highest of the points' heights."""
+def _footprint(corners: np.ndarray, sun: np.ndarray, heights: tuple[float, float]) -> np.ndarray:
+    """``(x0, x1, z0, z1)``: a rectangle holding every point at a height in ``heights`` (lowest,
+    highest) whose ray towards ``sun`` may cross a box (its ``corners``) — the corners moved
+    along the light down to both heights."""
     feet = []
-    for y in (float(points[:, 1].min()), float(points[:, 1].max())):
+    for y in heights:
         t = np.maximum((corners[:, 1] - y) / sun[1], 0.0)
         feet.append(corners - t[:, None] * sun)
     foot = np.concatenate(feet)
-    x, z = points[:, 0], points[:, 2]
-    return (
-        (x >= foot[:, 0].min()) & (x <= foot[:, 0].max())
-        & (z >= foot[:, 2].min()) & (z <= foot[:, 2].max())
-    )  # fmt: skip
+    return np.array([foot[:, 0].min(), foot[:, 0].max(), foot[:, 2].min(), foot[:, 2].max()])
 
 
 def ground_caf(
@@ -340,6 +336,11 @@ def ground_caf(
              *_core.yaw_cos_sin(float(drawable.yaw[i])), float(drawable.alpha[i]))
             for i, v in enumerate(drawable.variant)
         ]  # fmt: skip
+    # Points sorted by x: an instance's candidates are a slice, then a test on z.
+    order = np.argsort(pts[:, 0], kind="stable")
+    # float64 like the bounds searched for (otherwise each search casts the whole array)
+    xs, zs = pts[order, 0].astype(np.float64), pts[order, 2]
+    heights = (float(pts[:, 1].min()), float(pts[:, 1].max()))
     for cloud, offset, c, sn, alpha in instances:
         if cloud.n_boxes == 0 or alpha <= 0:
             continue
@@ -347,7 +348,10 @@ def ground_caf(
         corners = _corners(*(np.asarray(b, np.float64) for b in cloud.box_bounds()))
         world = np.stack([c * corners[:, 0] + sn * corners[:, 2], corners[:, 1],
                           -sn * corners[:, 0] + c * corners[:, 2]], -1) + offset  # fmt: skip
-        near = np.flatnonzero(_footprint(world, s, pts))
+        x0, x1, z0, z1 = _footprint(world, s, heights)
+        i0, i1 = np.searchsorted(xs, x0, "left"), np.searchsorted(xs, x1, "right")
+        strip = zs[i0:i1]
+        near = order[i0:i1][(strip >= z0) & (strip <= z1)]
         if near.size == 0:
             continue
         rel = pts[near].astype(np.float64) - offset
@@ -355,9 +359,11 @@ def ground_caf(
                           sn * rel[:, 0] + c * rel[:, 2]], -1).astype(np.float32)  # fmt: skip
         sun_local = (c * s[0] - sn * s[2], s[1], sn * s[0] + c * s[2])
         owner = np.full(near.size, -1, np.int32)
+        # A few hundred rays take less time than starting a thread.
         length = _core.caf_path_lengths(
-            cloud.boxes, local, owner, sun_local, sh.overlap, True, threads
-        )
+            cloud.boxes, local, owner, sun_local, sh.overlap, True,
+            threads if near.size >= 4096 else 1,
+        )  # fmt: skip
         caf = _core.caf_values(length, d_max, sh.caf_curve)
         out[near] *= (1.0 - alpha * (1.0 - caf)).astype(np.float32)
     return out
