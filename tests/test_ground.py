@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_torchelsen_caf import reference_lengths  # the numpy slab-test reference
 
 import cumuli as cu
 from cumuli.ground import sky_irradiance
@@ -148,42 +149,28 @@ def test_particle_clouds_shadow_the_ground() -> None:
     assert lit_moved.shadow.extent[1] == pytest.approx(lit.shadow.extent[1] + 20.0, abs=1e-3)
 
 
-def chords(boxes: np.ndarray, points: np.ndarray, sun: np.ndarray) -> np.ndarray:
-    """Σ over ``boxes`` (N, 2, 3) of the length of the ray from each point towards ``sun``
-    inside the box (numpy slab test, float64): the CAF's path length with overlap "sum"."""
-    p = points.astype(np.float64)[:, None, :]
-    with np.errstate(divide="ignore"):
-        ta = (boxes[None, :, 0, :] - p) / sun
-        tb = (boxes[None, :, 1, :] - p) / sun
-    t0 = np.maximum(np.minimum(ta, tb).max(-1), 0.0)
-    t1 = np.maximum(ta, tb).min(-1)
-    return np.clip(t1 - t0, 0.0, None).sum(-1)
-
-
 def test_billboards_shadow_the_ground_by_their_caf() -> None:
     """A billboard cloud or field shades the ground with the CAF its own billboards would get
     there (beyond [TM]): 1 − L/D_max, L the chords towards the sun through its boxes."""
-    model = cu.seedbox_presets.cumulus()
-    cloud = cu.seed_box_cloud(model, seed=5)
-    sun = np.array(SUN.direction)
+    cloud = cu.seed_box_cloud(cu.seedbox_presets.cumulus(), seed=5)
     shading = cu.BillboardShading(max_distance=12.0)
     extent, shape = ((-25.0, -25.0), (25.0, 25.0)), (50, 40)
     pts = texel_centres(extent, shape)
-    want = np.clip(1 - chords(cloud.boxes.astype(np.float64), pts, sun) / 12.0, 0, 1)
-    got = ground_caf(cloud, SUN, pts, shading)
+    lengths = reference_lengths(cloud.boxes, pts, SUN.direction, "sum")
+    want = np.clip(1 - lengths / 12.0, 0, 1)
     assert want.min() == 0 and want.max() == 1 and (want < 1).sum() > 20
-    np.testing.assert_allclose(got, want, atol=1e-5)
-    # A field: instances turned (90° is exact) and moved shade in their own frames, faded by
-    # their alpha; their shadows multiply.
-    field = cu.BillboardField([cloud], offsets=[(0, 0, 0), (30, 2, 0), (-30, 0, 10)],
-                              yaw=[0.0, 90.0, 0.0], alpha=[1.0, 1.0, 0.5])  # fmt: skip
+    np.testing.assert_allclose(ground_caf(cloud, SUN, pts, shading), want, atol=1e-5)
+    # A field: each instance shades as its cloud turned and moved would, faded by its alpha, and
+    # the instances' shadows multiply.
+    offsets, yaws, alphas = [(0, 0, 0), (30, 2, 0), (-30, 0, 10)], [0.0, 90.0, 0.0], [1, 1, 0.5]
+    field = cu.BillboardField([cloud], offsets=offsets, yaw=yaws, alpha=alphas)
     pts = texel_centres(((-60.0, -40.0), (60.0, 40.0)), (96, 64))
-    turned = cloud.boxes.astype(np.float64)[:, :, [2, 1, 0]] * [1, 1, -1]  # R_y(90°)
-    turned = np.stack([turned.min(1), turned.max(1)], 1) + [30, 2, 0]
-    moved = cloud.boxes.astype(np.float64) + [-30, 0, 10]
-    caf = [np.clip(1 - chords(b, pts, sun) / 12.0, 0, 1) for b in (cloud.boxes, turned, moved)]
-    want = caf[0] * caf[1] * (1 - 0.5 * (1 - caf[2]))
-    assert all((c < 0.5).any() for c in caf)
+    want = np.ones(len(pts))
+    for offset, yaw, alpha in zip(offsets, yaws, alphas, strict=True):
+        placed = cloud.rotated_y(yaw, about=(0, 0, 0)).translated(offset)
+        caf = ground_caf(placed, SUN, pts, shading)
+        assert (caf < 0.5).any()
+        want *= 1 - alpha * (1 - caf)
     np.testing.assert_allclose(ground_caf(field, SUN, pts, shading), want, atol=1e-5)
     # In a scene: the shadow map multiplies it in, with the scene's billboard shading.
     s = scene(clouds=[cloud]).replace(billboard_shading=shading)

@@ -37,6 +37,7 @@ from cumuli.light.billboard_shading import (  # noqa: F401  (re-exported)
     _choice,
     _max_distance,
 )
+from cumuli.light.footprint import box_corners, footprint
 from cumuli.light.ndt import light_grid
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
@@ -281,24 +282,6 @@ def ground_caf_digest(drawable: BillboardCloud | BillboardField) -> str:
     return h.hexdigest()
 
 
-def _corners(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """The 8 corners ``(8, 3)`` of the box ``[lo, hi]``."""
-    return np.array([[(hi if k & m else lo)[a] for a, m in enumerate((1, 2, 4))]
-                     for k in range(8)], np.float64)  # fmt: skip
-
-
-def _footprint(corners: np.ndarray, sun: np.ndarray, heights: tuple[float, float]) -> np.ndarray:
-    """``(x0, x1, z0, z1)``: a rectangle holding every point at a height in ``heights`` (lowest,
-    highest) whose ray towards ``sun`` may cross a box (its ``corners``) — the corners moved
-    along the light down to both heights."""
-    feet = []
-    for y in heights:
-        t = np.maximum((corners[:, 1] - y) / sun[1], 0.0)
-        feet.append(corners - t[:, None] * sun)
-    foot = np.concatenate(feet)
-    return np.array([foot[:, 0].min(), foot[:, 0].max(), foot[:, 2].min(), foot[:, 2].max()])
-
-
 def ground_caf(
     drawable: BillboardCloud | BillboardField,
     sun: Sun | Sequence[float],
@@ -345,10 +328,10 @@ def ground_caf(
         if cloud.n_boxes == 0 or alpha <= 0:
             continue
         # The instance's frame: local = R_y(−yaw)·(world − offset), the sun turned alike.
-        corners = _corners(*(np.asarray(b, np.float64) for b in cloud.box_bounds()))
+        corners = box_corners(*cloud.box_bounds())
         world = np.stack([c * corners[:, 0] + sn * corners[:, 2], corners[:, 1],
                           -sn * corners[:, 0] + c * corners[:, 2]], -1) + offset  # fmt: skip
-        x0, x1, z0, z1 = _footprint(world, s, heights)
+        x0, x1, z0, z1 = footprint(world, s, heights)
         i0, i1 = np.searchsorted(xs, x0, "left"), np.searchsorted(xs, x1, "right")
         strip = zs[i0:i1]
         near = order[i0:i1][(strip >= z0) & (strip <= z1)]

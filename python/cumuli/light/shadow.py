@@ -26,6 +26,7 @@ import numpy as np
 from cumuli import _core
 from cumuli import _validate as check
 from cumuli.light.caf import ground_caf
+from cumuli.light.footprint import box_corners, footprint
 from cumuli.light.particles import ground_shadow
 from cumuli.light.physical import fbm_args
 from cumuli.model.billboard_field import BillboardField
@@ -101,16 +102,9 @@ def default_extent(scene: Any, height: float) -> tuple[float, float, float, floa
     media = [d for d in scene.clouds if isinstance(d, SHADOW_CASTERS)]
     if s[1] <= 1e-3 or not media:
         return None
-    pts = []
-    for d in media:
-        lo, hi = (np.asarray(b, np.float64) for b in d.layer_box())
-        for c in range(8):
-            p = np.where([c & 1, c & 2, c & 4], hi, lo)
-            t = max((p[1] - height) / s[1], 0.0)
-            pts.append(p - t * s)
-    pts = np.array(pts)
-    x0, z0 = pts[:, 0].min(), pts[:, 2].min()
-    x1, z1 = pts[:, 0].max(), pts[:, 2].max()
+    feet = np.array([footprint(box_corners(*d.layer_box()), s, (height, height)) for d in media])
+    x0, z0 = feet[:, 0].min(), feet[:, 2].min()
+    x1, z1 = feet[:, 1].max(), feet[:, 3].max()
     pad = 0.02 * max(x1 - x0, z1 - z0, 1e-3)
     return (x0 - pad, z0 - pad, x1 + pad, z1 + pad)
 
