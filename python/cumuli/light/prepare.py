@@ -276,9 +276,11 @@ def particles_light_many(
         else:
             todo.append((key, i))
     if todo:
+        # With their final buffers: the sun's is the cloud's shadow map on the ground.
         made = particle_light_many(
-            [clouds[i] for _, i in todo], lights, scene.sprite_settings, threads=threads
-        )
+            [clouds[i] for _, i in todo], lights, scene.sprite_settings, threads=threads,
+            return_buffers=True,
+        )  # fmt: skip
         for (key, i), light in zip(todo, made, strict=True):
             _particle_remember(key, clouds[i], light)
             _resolved[clouds[i]] = (key, light)
@@ -352,9 +354,12 @@ def _shadow_digest(drawable: Any) -> tuple:
     return drawable_digest(drawable)
 
 
-def scene_shadow(scene: Scene, threads: int = 0) -> ShadowMap | None:
+def scene_shadow(
+    scene: Scene, threads: int = 0, lights: Sequence[Any] | None = None
+) -> ShadowMap | None:
     """The shadow map the renderers use for a scene's ground (None without a ground, or when
-    no cloud can shade it), memoised by content."""
+    no cloud can shade it), memoised by content; ``lights``: the scene's, whose particle light
+    buffers (their shadow maps) it reuses."""
     if scene.ground is None:
         return None
     height = scene.ground.height
@@ -365,7 +370,7 @@ def scene_shadow(scene: Scene, threads: int = 0) -> ShadowMap | None:
     key = ("shadow", tuple(_shadow_digest(d) for d in scene.clouds), scene.noise.seed,
            scene.noise.size, scene.settings, tuple(scene.sprite_settings.light_dict().items()),
            scene.billboard_shading, scene.sun.direction, height)  # fmt: skip
-    return _remember(key, lambda: compute_shadow(scene, extent, (n, n), height, threads))
+    return _remember(key, lambda: compute_shadow(scene, extent, (n, n), height, threads, lights))
 
 
 def prepare_light(
@@ -432,4 +437,4 @@ def prepare_light(
                 out[k] = passes[drawable.kind](drawable, scene, given[k], threads)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
-    return LitScene(scene, tuple(out), scene_shadow(scene, threads))
+    return LitScene(scene, tuple(out), scene_shadow(scene, threads, out))

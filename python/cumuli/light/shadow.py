@@ -80,13 +80,17 @@ def _medium(scene: Any) -> tuple[list, list]:
 SHADOW_CASTERS = (Cloud, VolumeCloud, ParticleCloud, BillboardCloud, BillboardField)
 
 
-def _own_shadows(scene: Any, points: np.ndarray, threads: int) -> np.ndarray | None:
+def _own_shadows(
+    scene: Any, points: np.ndarray, threads: int, lights: Sequence[Any] | None
+) -> np.ndarray | None:
     """The product over the scene's particle clouds and billboards of the sun's transmittance
-    through each at ``points``, by their own light models; None when there are none."""
+    through each at ``points``, by their own light models; None when there are none. A
+    particle cloud's light in ``lights`` (aligned with ``scene.clouds``) lends its buffers."""
     out = None
-    for d in scene.clouds:
+    for k, d in enumerate(scene.clouds):
         if isinstance(d, ParticleCloud):
-            t = ground_shadow(d, scene.sun, points, scene.sprite_settings)
+            light = lights[k] if lights is not None else None
+            t = ground_shadow(d, scene.sun, points, scene.sprite_settings, light)
         elif isinstance(d, (BillboardCloud, BillboardField)):
             t = ground_caf(d, scene.sun, points, scene.billboard_shading, threads)
         else:
@@ -139,9 +143,10 @@ def _resolution(resolution: Any) -> tuple[int, int]:
 
 def compute_shadow(
     scene: Any, extent: tuple[float, float, float, float], shape: tuple[int, int], height: float,
-    threads: int = 0,
+    threads: int = 0, lights: Sequence[Any] | None = None,
 ) -> ShadowMap:  # fmt: skip
-    """The :class:`ShadowMap` of ``scene`` over a validated extent and ``(nx, nz)``."""
+    """The :class:`ShadowMap` of ``scene`` over a validated extent and ``(nx, nz)``; ``lights``
+    (aligned with ``scene.clouds``, optional) the light step's, whose particle buffers it reuses."""
     x0, z0, x1, z1 = extent
     nx, nz = shape
     xs = x0 + (np.arange(nx) + 0.5) * (x1 - x0) / nx
@@ -157,7 +162,7 @@ def compute_shadow(
             float(s.light_step), threads,
         )  # fmt: skip
         values = np.exp(-tau.astype(np.float64)).astype(np.float32).reshape(nz, nx)
-    own = _own_shadows(scene, pts, threads) if scene.sun.direction[1] > 0 else None
+    own = _own_shadows(scene, pts, threads, lights) if scene.sun.direction[1] > 0 else None
     if own is not None:
         values = values * own.astype(np.float32).reshape(nz, nx)
     values.setflags(write=False)
