@@ -180,8 +180,13 @@ def test_billboards_shadow_the_ground_by_their_caf() -> None:
         atol=1e-6,
     )
     assert cu.prepare_light(s).shadow is not None
-    with pytest.raises(TypeError, match="BillboardCloud"):
-        ground_caf(scene().clouds[0], SUN, pts)
+    # cu.ground_shadow takes every sprite kind.
+    np.testing.assert_array_equal(
+        cu.ground_shadow(field, SUN, pts, shading), ground_caf(field, SUN, pts, shading)
+    )
+    for shade in (ground_caf, cu.ground_shadow):
+        with pytest.raises(TypeError, match="BillboardCloud"):
+            shade(scene().clouds[0], SUN, pts)
     assert (ground_caf(cloud, cu.Sun(direction=(0.3, -0.5, 0.1)), pts) == 1).all()
 
 

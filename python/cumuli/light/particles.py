@@ -29,6 +29,8 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli.light.billboard_shading import BillboardShading
+from cumuli.light.caf import ground_caf
 from cumuli.light.sprite_settings import (  # noqa: F401 (public names)
     KERNELS,
     MAX_LIGHTS,
@@ -41,6 +43,8 @@ from cumuli.light.sprite_settings import (  # noqa: F401 (public names)
     SpriteSettings,
     as_settings,
 )
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
 from cumuli.model.particles import ParticleCloud
 from cumuli.sky import Sky, Sun
 
@@ -233,18 +237,31 @@ def particle_light_many(
 
 
 def ground_shadow(
-    cloud: ParticleCloud,
+    cloud: ParticleCloud | BillboardCloud | BillboardField,
     sun: Sun,
     points: Any,
-    settings: SpriteSettings | None = None,
+    settings: SpriteSettings | BillboardShading | None = None,
     light: ParticleLight | None = None,
 ) -> np.ndarray:
     """Transmittance ``(M,)`` of ``sun``'s light through ``cloud`` at world ``points`` ``(M, 3)``:
     the light pass's final buffer — the cloud's shadow map seen from the sun (spec §4 step 6) —
     sampled bilinearly where each point projects (1 outside it or in front of the cloud). Pass a
-    ``light`` made with ``return_buffers=True`` for this sun (first light) to reuse its buffer."""
+    ``light`` made with ``return_buffers=True`` for this sun (first light) to reuse its buffer.
+
+    A billboard cloud or field (with a :class:`BillboardShading` as ``settings``) gives the CAF
+    its own billboards would get at each point (:func:`cumuli.light.caf.ground_caf`, beyond
+    Torchelsen & Musse 2005)."""
     if not isinstance(sun, Sun):
         raise TypeError(f"sun must be a cumuli.Sun, got {type(sun).__name__}")
+    if isinstance(cloud, (BillboardCloud, BillboardField)):
+        if light is not None:
+            raise TypeError("light is a particle cloud's; a billboard cloud's shadow takes none")
+        return ground_caf(cloud, sun, points, settings)  # type: ignore[arg-type]
+    if not isinstance(cloud, ParticleCloud):
+        raise TypeError(
+            f"cloud must be a ParticleCloud, BillboardCloud or BillboardField, got "
+            f"{type(cloud).__name__}"
+        )
     pts = check.points3(points, "points", bound=check.MAX_COORD)
     settings = as_settings(settings)
     buffers = None
