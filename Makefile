@@ -5,7 +5,7 @@
 #   make bench   run the benchmarks (~25 min on 2 cores): JSON, plots and RESULTS.md of the run
 #                under benchmarks/out/; `make bench ARCHIVE=1` also archives the JSON under
 #                benchmarks/results/<machine>/ and rewrites benchmarks/RESULTS.md
-#   make lint    ruff on python/, tests/, benchmarks/
+#   make lint    ruff on python/, tests/, benchmarks/; clang-format on cpp/
 #   make inplace build the extension into python/cumuli for PYTHONPATH=python development
 
 VENV ?= .venv
@@ -69,6 +69,7 @@ bench-quick: install
 lint:
 	$(PY) -m ruff check python tests benchmarks
 	$(PY) -m ruff format --check python tests benchmarks
+	$(VENV)/bin/clang-format --dry-run -Werror $$(find cpp -name '*.cpp' -o -name '*.hpp')
 
 inplace: $(PY)
 	cmake -S . -B build/inplace -DCUMULI_INPLACE=ON -DCMAKE_BUILD_TYPE=Release \

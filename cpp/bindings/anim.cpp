@@ -76,7 +76,8 @@ void bind_anim(py::module_& m) {
   m.def(
       "blend_volumes",
       [](const FloatArray& a, const FloatArray& b, float w, int threads) {
-        if (shape_of(a) != shape_of(b)) throw py::value_error("the two volumes must have the same shape");
+        if (shape_of(a) != shape_of(b))
+          throw py::value_error("the two volumes must have the same shape");
         auto out = new_array(shape_of(a));
         const float* pa = a.data();
         const float* pb = b.data();
@@ -137,9 +138,12 @@ WeatherConfig weather_config(std::array<double, 4> area, const py::list& layers,
     }
     l.radius = d["radius"].cast<std::vector<double>>();
     const auto boundary = d["boundary"].cast<std::string>();
-    if (boundary == "respawn") l.boundary = Boundary::Respawn;
-    else if (boundary == "wrap") l.boundary = Boundary::Wrap;
-    else throw py::value_error("boundary must be 'respawn' or 'wrap', got '" + boundary + "'");
+    if (boundary == "respawn")
+      l.boundary = Boundary::Respawn;
+    else if (boundary == "wrap")
+      l.boundary = Boundary::Wrap;
+    else
+      throw py::value_error("boundary must be 'respawn' or 'wrap', got '" + boundary + "'");
     l.fade_time = d["fade_time"].cast<double>();
     c.layers.push_back(std::move(l));
   }
@@ -159,7 +163,8 @@ void bind_weather(py::module_& m) {
       .def(
           "step",
           [](WeatherSim& w, double dt) {
-            if (!(std::isfinite(dt) && dt >= 0.0)) throw py::value_error("dt must be finite and >= 0");
+            if (!(std::isfinite(dt) && dt >= 0.0))
+              throw py::value_error("dt must be finite and >= 0");
             py::gil_scoped_release release;
             w.step(dt);
           },
@@ -208,7 +213,8 @@ void bind_weather(py::module_& m) {
             py::dict d;
             d["quota"] = s.quota;
             d["events"] = s.events;
-            d["spawn_edges"] = std::vector<std::uint64_t>(s.spawn_edges.begin(), s.spawn_edges.end());
+            d["spawn_edges"] =
+                std::vector<std::uint64_t>(s.spawn_edges.begin(), s.spawn_edges.end());
             d["spawned"] = s.spawned;
             d["destroyed"] = s.destroyed;
             d["wrapped"] = s.wrapped;

@@ -92,7 +92,9 @@ py::array_t<double> to_array_d(const std::vector<double>& v, py::ssize_t n) {
 }
 
 SkyParams sky_of(const py::tuple& t) {
-  if (t.size() != 6) throw py::value_error("sky must be (zenith, horizon, ground, exponent, disc radius, disc intensity)");
+  if (t.size() != 6)
+    throw py::value_error(
+        "sky must be (zenith, horizon, ground, exponent, disc radius, disc intensity)");
   SkyParams s;
   s.zenith = v3(t[0].cast<V3>());
   s.horizon = v3(t[1].cast<V3>());
@@ -165,7 +167,8 @@ PhysicalParams physical_of(const py::dict& d) {
 
 PhysicalGrids physical_grids_of(const py::object& obj) {
   const py::tuple t = obj.cast<py::tuple>();
-  if (t.size() != 5) throw py::value_error("physical light must be (frame, depth, grid_lo, grid_hi, rgba)");
+  if (t.size() != 5)
+    throw py::value_error("physical light must be (frame, depth, grid_lo, grid_hi, rgba)");
   PhysicalGrids g;
   const py::tuple f = t[0].cast<py::tuple>();
   if (f.size() != 6) throw py::value_error("frame must be (u, v, w, lo, hi, res)");

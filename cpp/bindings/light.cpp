@@ -9,8 +9,8 @@
 #include <stdexcept>
 #include <string>
 
-#include <glm/geometric.hpp>
 #include <pybind11/stl.h>
+#include <glm/geometric.hpp>
 
 #include "common.hpp"
 #include "cumuli/light/caf.hpp"
@@ -29,10 +29,9 @@ void bind_light(py::module_& m) {
       [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
          const std::string& model, float kappa, float phi, const Noise* noise,
          std::array<float, 3> sun_dir, std::array<int, 3> resolution, const std::string& method,
-         float step, float extinction, float solid_angle, int octaves, float gain,
-         float lacunarity, float frequency, float density_constant, int threads) {
-        const CloudShape cloud =
-            cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+         float step, float extinction, float solid_angle, int octaves, float gain, float lacunarity,
+         float frequency, float density_constant, int threads) {
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
         LightSettings s;
         s.sun_dir = glm::vec3(sun_dir[0], sun_dir[1], sun_dir[2]);
         for (int a = 0; a < 3; ++a) s.resolution[a] = resolution[a];
@@ -201,7 +200,8 @@ void bind_volume_light(py::module_& m) {
         auto dirs = new_array({static_cast<py::ssize_t>(q.dirs.size()), 3});
         for (std::size_t i = 0; i < q.dirs.size(); ++i)
           for (int k = 0; k < 3; ++k) dirs.mutable_data()[3 * i + k] = q.dirs[i][k];
-        return py::make_tuple(dirs, to_array(q.weights, {static_cast<py::ssize_t>(q.weights.size())}));
+        return py::make_tuple(dirs,
+                              to_array(q.weights, {static_cast<py::ssize_t>(q.weights.size())}));
       },
       py::arg("n_theta"));
 
@@ -290,7 +290,8 @@ void bind_volume_light(py::module_& m) {
         require_points(points, "points");
         std::vector<glm::vec3> pts(static_cast<std::size_t>(points.shape(0)));
         for (std::size_t i = 0; i < pts.size(); ++i)
-          pts[i] = glm::vec3(points.data()[3 * i], points.data()[3 * i + 1], points.data()[3 * i + 2]);
+          pts[i] =
+              glm::vec3(points.data()[3 * i], points.data()[3 * i + 1], points.data()[3 * i + 2]);
         const int n = static_cast<int>(vols.shape(0));
         const float* v = vols.data();
         std::vector<float> out;
@@ -322,7 +323,8 @@ void bind_volume_light(py::module_& m) {
           throw py::value_error("point optical depth must have shape (D, H, W, K)");
         std::vector<glm::vec3> pts(static_cast<std::size_t>(np));
         for (std::size_t i = 0; i < pts.size(); ++i)
-          pts[i] = glm::vec3(points.data()[3 * i], points.data()[3 * i + 1], points.data()[3 * i + 2]);
+          pts[i] =
+              glm::vec3(points.data()[3 * i], points.data()[3 * i + 1], points.data()[3 * i + 2]);
         auto out = new_array(shape_of(light));
         std::copy(light.data(), light.data() + light.size(), out.mutable_data());
         float* po = out.mutable_data();
@@ -350,7 +352,8 @@ std::vector<Box> boxes_of(const FloatArray& a, const char* name) {
     out[i].lo = glm::vec3(d[6 * i], d[6 * i + 1], d[6 * i + 2]);
     out[i].hi = glm::vec3(d[6 * i + 3], d[6 * i + 4], d[6 * i + 5]);
     for (int k = 0; k < 3; ++k)
-      if (!std::isfinite(out[i].lo[k]) || !std::isfinite(out[i].hi[k]) || out[i].lo[k] > out[i].hi[k])
+      if (!std::isfinite(out[i].lo[k]) || !std::isfinite(out[i].hi[k]) ||
+          out[i].lo[k] > out[i].hi[k])
         throw py::value_error(std::string(name) + " must be finite with lo <= hi");
   }
   return out;
@@ -381,7 +384,8 @@ std::vector<int> owners_of(const IntArray& a, std::size_t n, std::size_t boxes, 
 glm::vec3 unit(V3 v, const char* name) {
   const glm::vec3 d = v3(v);
   const float len = glm::length(d);
-  if (!std::isfinite(len) || !(len > 0.0f)) throw py::value_error(std::string(name) + " must be a non-zero finite vector");
+  if (!std::isfinite(len) || !(len > 0.0f))
+    throw py::value_error(std::string(name) + " must be a non-zero finite vector");
   return d / len;
 }
 
@@ -398,7 +402,8 @@ std::vector<int> columns_of(const IntArray& a, std::size_t n, std::size_t q, con
   return out;
 }
 
-std::vector<glm::vec2> sizes_of(const FloatArray& sizes, const FloatArray& rotation, std::size_t n) {
+std::vector<glm::vec2> sizes_of(const FloatArray& sizes, const FloatArray& rotation,
+                                std::size_t n) {
   if (sizes.ndim() != 2 || sizes.shape(1) != 2 || static_cast<std::size_t>(sizes.shape(0)) != n)
     throw py::value_error("sizes must have shape (K, 2) matching centres");
   if (rotation.ndim() != 1 || static_cast<std::size_t>(rotation.shape(0)) != n)
@@ -444,9 +449,12 @@ ShadeInputs shade_inputs(const FloatArray& caf, const FloatArray& boxes,
   in.params.d_min = d_min;
   in.params.d_max = d_max;
   in.params.k_dir = k_dir;
-  if (directional == "linear") in.params.directional = Directional::Linear;
-  else if (directional == "smoothstep") in.params.directional = Directional::Smoothstep;
-  else throw py::value_error("directional must be 'linear' or 'smoothstep'");
+  if (directional == "linear")
+    in.params.directional = Directional::Linear;
+  else if (directional == "smoothstep")
+    in.params.directional = Directional::Smoothstep;
+  else
+    throw py::value_error("directional must be 'linear' or 'smoothstep'");
   in.params.ambient = v3(ambient);
   in.params.k_amb = k_amb;
   for (const auto& h : height_levels) in.params.height_levels.emplace_back(h[0], h[1]);
@@ -485,9 +493,12 @@ void bind_caf(py::module_& m) {
       [](const py::array_t<double, py::array::c_style | py::array::forcecast>& lengths,
          double max_distance, const std::string& curve) {
         CafCurve c;
-        if (curve == "linear") c = CafCurve::Linear;
-        else if (curve == "exp") c = CafCurve::Exp;
-        else throw py::value_error("curve must be 'linear' or 'exp', got '" + curve + "'");
+        if (curve == "linear")
+          c = CafCurve::Linear;
+        else if (curve == "exp")
+          c = CafCurve::Exp;
+        else
+          throw py::value_error("curve must be 'linear' or 'exp', got '" + curve + "'");
         if (!(max_distance > 0.0)) throw py::value_error("max_distance must be > 0");
         auto out = new_array({static_cast<py::ssize_t>(lengths.size())});
         for (py::ssize_t i = 0; i < lengths.size(); ++i)
@@ -663,10 +674,14 @@ ParticleLightSettings light_settings(const py::dict& d) {
   s.kernel = splat_kernel_kind(pick<std::string>(d, "kernel", "gaussian"));
   s.peak = pick<float>(d, "peak", s.peak);
   const std::string rb = pick<std::string>(d, "readback", "pixel");
-  if (rb == "pixel") s.readback = Readback::Pixel;
-  else if (rb == "bilinear") s.readback = Readback::Bilinear;
-  else if (rb == "solid_angle") s.readback = Readback::SolidAngle;
-  else throw py::value_error("readback must be 'pixel', 'bilinear' or 'solid_angle'");
+  if (rb == "pixel")
+    s.readback = Readback::Pixel;
+  else if (rb == "bilinear")
+    s.readback = Readback::Bilinear;
+  else if (rb == "solid_angle")
+    s.readback = Readback::SolidAngle;
+  else
+    throw py::value_error("readback must be 'pixel', 'bilinear' or 'solid_angle'");
   s.readback_solid_angle = pick<float>(d, "readback_solid_angle", s.readback_solid_angle);
   s.forward = pick<bool>(d, "forward", s.forward);
   s.clamp = pick<bool>(d, "clamp", s.clamp);
@@ -747,7 +762,8 @@ void bind_particle_light(py::module_& m) {
       },
       py::arg("clouds"), py::arg("directions"), py::arg("settings"),
       py::arg("return_buffers") = false, py::arg("threads") = 0,
-      "Harris 2002 light pass for clouds × lights: [(light (N, L), buffers (L, N_L, N_L) | None)].");
+      "Harris 2002 light pass for clouds × lights: [(light (N, L), buffers (L, N_L, N_L) | "
+      "None)].");
 
   m.def(
       "particle_light_splats",
@@ -794,7 +810,8 @@ void bind_particle_light(py::module_& m) {
         return py::make_tuple(geom, index, patch, frames, radius);
       },
       "The light pass's splats per light in processing order: (geometry (L, N, 5) = x, y, r_px, "
-      "forward factor, alpha; index (L, N); patch (L, N); frames (L, 4, 3) = centre, f, r, u; R_b).");
+      "forward factor, alpha; index (L, N); patch (L, N); frames (L, 4, 3) = centre, f, r, u; "
+      "R_b).");
 
   m.def(
       "particle_shadow",
@@ -812,7 +829,8 @@ void bind_particle_light(py::module_& m) {
         const auto count = static_cast<std::size_t>(points.shape(0));
         std::vector<glm::vec3> pts(count);
         for (std::size_t k = 0; k < count; ++k)
-          pts[k] = glm::vec3(points.data()[3 * k], points.data()[3 * k + 1], points.data()[3 * k + 2]);
+          pts[k] =
+              glm::vec3(points.data()[3 * k], points.data()[3 * k + 1], points.data()[3 * k + 2]);
         auto out = new_array({points.shape(0)});
         particle_shadow(f, buffer.data(), static_cast<int>(buffer.shape(0)), pts.data(), count,
                         out.mutable_data());
@@ -879,14 +897,16 @@ void medium_of(MediumArgs& m, const py::list& clouds, const py::list& volumes, c
   m.shapes.reserve(clouds.size());
   for (const auto& h : clouds) {
     const py::tuple t = h.cast<py::tuple>();
-    if (t.size() != 7) throw py::value_error("a cloud is (centres, radii, rotations, model, kappa, phi, scale)");
+    if (t.size() != 7)
+      throw py::value_error("a cloud is (centres, radii, rotations, model, kappa, phi, scale)");
     m.shapes.push_back(cloud_from_arrays(t[0].cast<FloatArray>(), t[1].cast<FloatArray>(),
                                          t[2].cast<FloatArray>(), t[3].cast<std::string>(),
                                          t[4].cast<float>(), t[5].cast<float>()));
   }
   for (std::size_t k = 0; k < clouds.size(); ++k) {
     const float scale = clouds[k].cast<py::tuple>()[6].cast<float>();
-    if (!(scale >= 0.0f) || !std::isfinite(scale)) throw py::value_error("extinction scale must be >= 0");
+    if (!(scale >= 0.0f) || !std::isfinite(scale))
+      throw py::value_error("extinction scale must be >= 0");
     m.medium.clouds.push_back(CloudMedium{&m.shapes[k], src, scale});
   }
   for (const auto& h : volumes) {
@@ -980,7 +1000,8 @@ void bind_physical_light(py::module_& m) {
         {
           py::gil_scoped_release release;
           parallel_for(n, threads, [&](std::size_t i) {
-            o[i] = args.medium.optical_depth(glm::vec3(p[3 * i], p[3 * i + 1], p[3 * i + 2]), d, step);
+            o[i] =
+                args.medium.optical_depth(glm::vec3(p[3 * i], p[3 * i + 1], p[3 * i + 2]), d, step);
           });
         }
         return out;
@@ -1010,8 +1031,8 @@ void bind_physical_light(py::module_& m) {
 
   m.def(
       "sky_irradiance",
-      [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sky_coeffs, int order,
-         int n_theta, float step, int threads) {
+      [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sky_coeffs, int order, int n_theta,
+         float step, int threads) {
         const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
         if (order < 1 || order > kMaxShOrder) throw py::value_error("sh_order must be in [1, 4]");
         if (n_theta < 1 || n_theta > 64) throw py::value_error("sh_samples must be in [1, 64]");
@@ -1026,8 +1047,8 @@ void bind_physical_light(py::module_& m) {
         }
         return to_array(out, {g.d, g.h, g.w, 3});
       },
-      py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sky_coeffs"),
-      py::arg("order"), py::arg("n_theta"), py::arg("step"), py::arg("threads") = 0,
+      py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sky_coeffs"), py::arg("order"),
+      py::arg("n_theta"), py::arg("step"), py::arg("threads") = 0,
       "Sky irradiance reaching each voxel unscattered (SH visibility × sky SH): (D, H, W, 3).");
 
   m.def(

@@ -3,13 +3,13 @@
 // clouds of the endless-animation database (anim/endless.hpp), and the seed-and-box billboard
 // clouds with their sprite atlas (model/seedbox.hpp, model/sprite_atlas.hpp).
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
+#include <cstdint>
 #include <map>
+#include <string>
 #include <tuple>
 #include <utility>
-#include <cstdint>
-#include <string>
 #include <vector>
 
 #include <pybind11/stl.h>
@@ -17,10 +17,10 @@
 #include "common.hpp"
 #include "cumuli/anim/endless.hpp"
 #include "cumuli/model/cloud.hpp"
-#include "cumuli/model/particles.hpp"
 #include "cumuli/model/gaussian.hpp"
 #include "cumuli/model/lsystem.hpp"
 #include "cumuli/model/mesh_ellipsoids.hpp"
+#include "cumuli/model/particles.hpp"
 #include "cumuli/model/seedbox.hpp"
 #include "cumuli/model/sprite_atlas.hpp"
 #include "cumuli/noise.hpp"
@@ -56,7 +56,8 @@ RadiusModel parse_radius_model(const std::string& s) {
 LSystemRules make_rules(const std::map<std::string, std::string>& rules) {
   LSystemRules r;
   for (const auto& [key, value] : rules) {
-    if (key.size() != 1) throw py::value_error("rules: every key must be one symbol, got '" + key + "'");
+    if (key.size() != 1)
+      throw py::value_error("rules: every key must be one symbol, got '" + key + "'");
     r.set(key[0], value);
   }
   return r;
@@ -101,13 +102,21 @@ void bind_shapes(py::module_& m) {
         p.sigma = to_vec3(sigma);
         p.clamp_lo = to_vec3(clamp_lo);
         p.clamp_hi = to_vec3(clamp_hi);
-        if (clamp_mode == "saturate") p.clamp_mode = ClampMode::Saturate;
-        else if (clamp_mode == "resample") p.clamp_mode = ClampMode::Resample;
-        else throw py::value_error("clamp_mode must be 'saturate' or 'resample', got '" + clamp_mode + "'");
+        if (clamp_mode == "saturate")
+          p.clamp_mode = ClampMode::Saturate;
+        else if (clamp_mode == "resample")
+          p.clamp_mode = ClampMode::Resample;
+        else
+          throw py::value_error("clamp_mode must be 'saturate' or 'resample', got '" + clamp_mode +
+                                "'");
         p.radius_model = parse_radius_model(radius_model);
-        if (eq16_combine == "sum") p.eq16_combine = Eq16Combine::Sum;
-        else if (eq16_combine == "product") p.eq16_combine = Eq16Combine::Product;
-        else throw py::value_error("eq16_combine must be 'sum' or 'product', got '" + eq16_combine + "'");
+        if (eq16_combine == "sum")
+          p.eq16_combine = Eq16Combine::Sum;
+        else if (eq16_combine == "product")
+          p.eq16_combine = Eq16Combine::Product;
+        else
+          throw py::value_error("eq16_combine must be 'sum' or 'product', got '" + eq16_combine +
+                                "'");
         p.epsilon = epsilon;
         p.radius_scale = radius_scale;
         p.radius_lo = radius_lo;
@@ -146,7 +155,8 @@ void bind_shapes(py::module_& m) {
         std::vector<glm::vec3> c(n);
         std::vector<float> r(radii.data(), radii.data() + n);
         for (std::size_t i = 0; i < n; ++i)
-          c[i] = glm::vec3(centres.data()[3 * i], centres.data()[3 * i + 1], centres.data()[3 * i + 2]);
+          c[i] = glm::vec3(centres.data()[3 * i], centres.data()[3 * i + 1],
+                           centres.data()[3 * i + 2]);
         // Eq. (17) compares radii and distances: NaN or non-positive radii would make the
         // kept set meaningless rather than fail, so refuse them here.
         for (std::size_t i = 0; i < n; ++i) {
@@ -169,7 +179,8 @@ void bind_shapes(py::module_& m) {
 
   m.def(
       "lsystem_length",
-      [](const std::string& axiom, const std::map<std::string, std::string>& rules, int iterations) {
+      [](const std::string& axiom, const std::map<std::string, std::string>& rules,
+         int iterations) {
         const LSystemRules r = make_rules(rules);
         const LSystemLength n = lsystem_length(axiom, r, iterations, UINT64_MAX - 1);
         return py::make_tuple(n.final_length, n.peak_length);
@@ -226,14 +237,16 @@ void bind_shapes(py::module_& m) {
         stats["turns"] = r.turns;
         stats["moves"] = r.moves;
         stats["max_depth"] = r.max_depth;
-        stats["final_position"] = py::make_tuple(r.final_position.x, r.final_position.y, r.final_position.z);
-        stats["final_heading"] = py::make_tuple(r.final_heading.x, r.final_heading.y, r.final_heading.z);
+        stats["final_position"] =
+            py::make_tuple(r.final_position.x, r.final_position.y, r.final_position.z);
+        stats["final_heading"] =
+            py::make_tuple(r.final_heading.x, r.final_heading.y, r.final_heading.z);
         return py::make_tuple(points_array(r.centres), scalar_array(r.radii), stats);
       },
       py::arg("symbols"), py::arg("angle_lo"), py::arg("angle_hi"), py::arg("radius_lo"),
       py::arg("radius_hi"), py::arg("step_lo"), py::arg("step_hi"), py::arg("draw_symbols"),
-      py::arg("move_symbols"), py::arg("start"), py::arg("heading"), py::arg("up"),
-      py::arg("seed"), py::arg("max_spheres"),
+      py::arg("move_symbols"), py::arg("start"), py::arg("heading"), py::arg("up"), py::arg("seed"),
+      py::arg("max_spheres"),
       "Walk an L-system string with the 3D turtle: returns (centres (N,3), radii (N,), stats).");
 
   m.def(
@@ -297,7 +310,8 @@ void bind_shapes(py::module_& m) {
             throw py::value_error("box hi must be greater than lo on every axis (finite)");
           if (res[a] < 1 || res[a] > 4096) throw py::value_error("resolution must be in [1, 4096]");
         }
-        if (supersample < 1 || supersample > 8) throw py::value_error("supersample must be in [1, 8]");
+        if (supersample < 1 || supersample > 8)
+          throw py::value_error("supersample must be in [1, 8]");
         if (py::ssize_t{res[0]} * res[1] * res[2] > (py::ssize_t{1} << 30))
           throw py::value_error("resolution has more than 2^30 voxels");
         std::vector<float> out;
@@ -393,8 +407,8 @@ void bind_volumes(py::module_& m) {
          float growth, V3 drift, float jitter, V3 wind, float density_scale, float padding,
          std::uint64_t seed) {
         const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
-        const Box b = evolving_cloud_box(
-            cloud, evolution(frames, res, growth, drift, jitter, wind, density_scale, padding, seed));
+        const Box b = evolving_cloud_box(cloud, evolution(frames, res, growth, drift, jitter, wind,
+                                                          density_scale, padding, seed));
         return py::make_tuple(V3{b.lo.x, b.lo.y, b.lo.z}, V3{b.hi.x, b.hi.y, b.hi.z});
       },
       "World box holding the evolving cloud at every frame (padded): ((x,y,z) lo, (x,y,z) hi).");
@@ -404,9 +418,8 @@ void bind_volumes(py::module_& m) {
       [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
          const std::string& model, float kappa, float phi, const Noise* noise, float constant,
          int octaves, float gain, float lacunarity, float frequency, int frames,
-         std::array<int, 3> res, float growth, V3 drift, float jitter, V3 wind,
-         float density_scale, float padding, std::uint64_t seed, V3 box_lo, V3 box_hi,
-         int threads) {
+         std::array<int, 3> res, float growth, V3 drift, float jitter, V3 wind, float density_scale,
+         float padding, std::uint64_t seed, V3 box_lo, V3 box_hi, int threads) {
         const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
         const DensitySource src =
             density_source(noise, constant, octaves, gain, lacunarity, frequency);
@@ -420,7 +433,6 @@ void bind_volumes(py::module_& m) {
         return to_array(v, {frames, res[2], res[1], res[0]});
       },
       "Voxelise an evolving cloud: (frames, D, H, W) float32 densities.");
-
 }
 
 namespace {
@@ -452,9 +464,12 @@ SeedBoxParams seed_params(const py::handle& h) {
   p.child_max = child[1];
   std::tie(p.billboards_min, p.billboards_max) = int_pair(d, "billboards_per_box");
   const auto per = d["count_per"].cast<std::string>();
-  if (per == "direction") p.count_per = CountPer::Direction;
-  else if (per == "level") p.count_per = CountPer::Level;
-  else throw py::value_error("count_per must be 'direction' or 'level', got '" + per + "'");
+  if (per == "direction")
+    p.count_per = CountPer::Direction;
+  else if (per == "level")
+    p.count_per = CountPer::Level;
+  else
+    throw py::value_error("count_per must be 'direction' or 'level', got '" + per + "'");
   p.flat_base = d["flat_base"].cast<bool>();
   return p;
 }
@@ -546,10 +561,14 @@ void bind_sprite_atlas(py::module_& m) {
       "sprite_atlas",
       [](const std::string& style, int n, int size, std::uint64_t seed, int threads) {
         AtlasStyle s;
-        if (style == "sunny") s = AtlasStyle::Sunny;
-        else if (style == "rainy") s = AtlasStyle::Rainy;
-        else if (style == "wispy") s = AtlasStyle::Wispy;
-        else throw py::value_error("style must be 'sunny', 'rainy' or 'wispy', got '" + style + "'");
+        if (style == "sunny")
+          s = AtlasStyle::Sunny;
+        else if (style == "rainy")
+          s = AtlasStyle::Rainy;
+        else if (style == "wispy")
+          s = AtlasStyle::Wispy;
+        else
+          throw py::value_error("style must be 'sunny', 'rainy' or 'wispy', got '" + style + "'");
         if (n < 1 || n > kMaxAtlasSprites) throw py::value_error("n must be in [1, 256]");
         if (size < kMinAtlasSprite || size > kMaxAtlasSprite)
           throw py::value_error("size must be in [8, 512]");
@@ -580,8 +599,8 @@ void bind_particles(py::module_& m) {
   m.attr("PARTICLES_MAX") = static_cast<py::ssize_t>(kMaxParticles);
   const auto arrays = [](ParticleArrays&& a) {
     const auto n = static_cast<py::ssize_t>(a.size());
-    return py::make_tuple(to_array(a.centres, {n, 3}), to_array(a.radii, {n}),
-                          to_array(a.tau, {n}), to_array(a.albedo, {n}));
+    return py::make_tuple(to_array(a.centres, {n, 3}), to_array(a.radii, {n}), to_array(a.tau, {n}),
+                          to_array(a.albedo, {n}));
   };
   m.def(
       "particle_fill",
@@ -610,10 +629,10 @@ void bind_particles(py::module_& m) {
         return arrays(std::move(out));
       },
       py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
-      py::arg("kappa"), py::arg("phi"), py::arg("n"), py::arg("radius_min"),
-      py::arg("radius_max"), py::arg("tau"), py::arg("albedo"), py::arg("noise").none(true),
-      py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"),
-      py::arg("tau_floor"), py::arg("seed"), py::arg("threads"),
+      py::arg("kappa"), py::arg("phi"), py::arg("n"), py::arg("radius_min"), py::arg("radius_max"),
+      py::arg("tau"), py::arg("albedo"), py::arg("noise").none(true), py::arg("octaves"),
+      py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"), py::arg("tau_floor"),
+      py::arg("seed"), py::arg("threads"),
       "Fill a cloud's ellipsoid union with particles: (centres, radii, tau, albedo).");
 
   m.def(
@@ -640,8 +659,7 @@ void bind_particles(py::module_& m) {
         return arrays(std::move(out));
       },
       py::arg("density"), py::arg("lo"), py::arg("hi"), py::arg("n"), py::arg("radius"),
-      py::arg("tau"), py::arg("albedo"), py::arg("tau_floor"), py::arg("seed"),
-      py::arg("threads"),
+      py::arg("tau"), py::arg("albedo"), py::arg("tau_floor"), py::arg("seed"), py::arg("threads"),
       "Importance-sample a density volume into particles: (centres, radii, tau, albedo).");
 
   m.def(

@@ -37,8 +37,9 @@ FbmParams make_params(int octaves, float gain, float lacunarity, float frequency
 
 void bind_noise(py::module_& m) {
   // SIMD level of the bulk loops (cumuli/simd.hpp); the Python layer is cumuli.noise.simd_*.
-  m.def("simd_level", [] { return std::string(simd_name(simd_level())); },
-        "The SIMD level the core's fBm uses now: 'scalar', 'avx2' or 'avx512'.");
+  m.def(
+      "simd_level", [] { return std::string(simd_name(simd_level())); },
+      "The SIMD level the core's fBm uses now: 'scalar', 'avx2' or 'avx512'.");
   m.def(
       "set_simd_level",
       [](const std::string& name) {
@@ -73,7 +74,8 @@ void bind_noise(py::module_& m) {
             const py::ssize_t s = n.size();
             // A read-only view that keeps the Noise alive.
             py::array_t<float> view({s, s, s}, n.lattice().data(), self);
-            py::detail::array_proxy(view.ptr())->flags &= ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
+            py::detail::array_proxy(view.ptr())->flags &=
+                ~py::detail::npy_api::NPY_ARRAY_WRITEABLE_;
             return view;
           },
           "The size³ uniform lattice, [z, y, x], read-only view.")
@@ -81,8 +83,8 @@ void bind_noise(py::module_& m) {
           "fbm",
           [](const Noise& n, const FloatArray& points, int octaves, float gain, float lacunarity,
              float frequency, int threads) {
-            return fbm_array(n, points, make_params(octaves, gain, lacunarity, frequency),
-                             threads, nullptr);
+            return fbm_array(n, points, make_params(octaves, gain, lacunarity, frequency), threads,
+                             nullptr);
           },
           py::arg("points"), py::arg("octaves") = 5, py::arg("gain") = 0.5f,
           py::arg("lacunarity") = 2.0f, py::arg("frequency") = 1.0f, py::arg("threads") = 0)

@@ -64,12 +64,10 @@ RenderCloud cloud_from_dict(const py::handle& h, std::size_t index) {
   const std::string at = "clouds[" + std::to_string(index) + "].";
   RenderCloud rc;
   try {
-    rc.shape = cloud_from_arrays(item(d, "centres", index).cast<FloatArray>(),
-                                 item(d, "radii", index).cast<FloatArray>(),
-                                 item(d, "rotations", index).cast<FloatArray>(),
-                                 item(d, "model", index).cast<std::string>(),
-                                 item(d, "kappa", index).cast<float>(),
-                                 item(d, "phi", index).cast<float>());
+    rc.shape = cloud_from_arrays(
+        item(d, "centres", index).cast<FloatArray>(), item(d, "radii", index).cast<FloatArray>(),
+        item(d, "rotations", index).cast<FloatArray>(), item(d, "model", index).cast<std::string>(),
+        item(d, "kappa", index).cast<float>(), item(d, "phi", index).cast<float>());
   } catch (const std::invalid_argument& e) {
     throw py::value_error(at + e.what());
   }
@@ -84,8 +82,7 @@ RenderCloud cloud_from_dict(const py::handle& h, std::size_t index) {
   const FloatArray light = item(d, "light", index).cast<FloatArray>();
   if (light.ndim() != 3 || light.shape(0) < 1 || light.shape(1) < 1 || light.shape(2) < 1)
     throw py::value_error(at + "light must be a non-empty (D, H, W) array indexed [z, y, x]");
-  if (light.size() > (py::ssize_t{1} << 27))
-    throw py::value_error(at + "light grid is too large");
+  if (light.size() > (py::ssize_t{1} << 27)) throw py::value_error(at + "light grid is too large");
   rc.light.nz = static_cast<int>(light.shape(0));
   rc.light.ny = static_cast<int>(light.shape(1));
   rc.light.nx = static_cast<int>(light.shape(2));
@@ -232,7 +229,8 @@ void bind_march(py::module_& m) {
           render_image(scene, s, cam, width, height, dst, threads);
           return std::move(out);
         }
-        py::array_t<std::uint32_t> map({static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width)});
+        py::array_t<std::uint32_t> map(
+            {static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width)});
         std::uint32_t* map_dst = map.mutable_data();
         MarchStats stats;
         {
@@ -248,21 +246,23 @@ void bind_march(py::module_& m) {
       },
       py::arg("camera_position"), py::arg("camera_target"), py::arg("camera_up"), py::arg("fov"),
       py::arg("width"), py::arg("height"), py::arg("clouds"), py::arg("sun_direction"),
-      py::arg("sun_radiance"), py::arg("sky_zenith"), py::arg("sky_horizon"),
-      py::arg("sky_ground"), py::arg("sky_exponent"), py::arg("sun_disc_radius"),
-      py::arg("sun_disc_intensity"), py::arg("absorption"), py::arg("lod_a"),
-      py::arg("lod_delta"), py::arg("ref_step"), py::arg("step_min"), py::arg("step_max"),
-      py::arg("fixed_step"), py::arg("hg_g"), py::arg("max_steps"), py::arg("max_candidates"),
-      py::arg("march"), py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"),
-      py::arg("frequency"), py::arg("noise").none(true), py::arg("threads") = 0,
-      py::arg("density_constant") = -1.0f, py::arg("sort_candidates") = true, py::arg("with_sky") = true,
-      py::arg("solids") = py::none(), py::arg("physical") = py::none(),
-      py::arg("ground") = py::none(), py::arg("min_transmittance") = 1e-6f,
-      py::arg("skip_empty") = false, py::arg("return_stats") = false,
+      py::arg("sun_radiance"), py::arg("sky_zenith"), py::arg("sky_horizon"), py::arg("sky_ground"),
+      py::arg("sky_exponent"), py::arg("sun_disc_radius"), py::arg("sun_disc_intensity"),
+      py::arg("absorption"), py::arg("lod_a"), py::arg("lod_delta"), py::arg("ref_step"),
+      py::arg("step_min"), py::arg("step_max"), py::arg("fixed_step"), py::arg("hg_g"),
+      py::arg("max_steps"), py::arg("max_candidates"), py::arg("march"), py::arg("octaves"),
+      py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"), py::arg("noise").none(true),
+      py::arg("threads") = 0, py::arg("density_constant") = -1.0f,
+      py::arg("sort_candidates") = true, py::arg("with_sky") = true, py::arg("solids") = py::none(),
+      py::arg("physical") = py::none(), py::arg("ground") = py::none(),
+      py::arg("min_transmittance") = 1e-6f, py::arg("skip_empty") = false,
+      py::arg("return_stats") = false,
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image, row 0 at "
       "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
-      "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); sort_candidates=False leaves candidates "
-      "unsorted (candidate_sort='none'); with_sky=False gives the premultiplied layer (colour, 1 − T); "
+      "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); "
+      "sort_candidates=False leaves candidates "
+      "unsorted (candidate_sort='none'); with_sky=False gives the premultiplied layer (colour, 1 − "
+      "T); "
       "solids (n, 4) (centre, radius) stop every ray at the nearest solid. min_transmittance: the "
       "paper mode's early exit; skip_empty: empty-space skipping (occupancy grids, the same "
       "image); return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}).");
@@ -272,7 +272,8 @@ void bind_march(py::module_& m) {
       [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
          const std::string& model, int resolution) {
         if (resolution < 1 || resolution > 256)
-          throw py::value_error("resolution must be in [1, 256], got " + std::to_string(resolution));
+          throw py::value_error("resolution must be in [1, 256], got " +
+                                std::to_string(resolution));
         const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, 0.5f, 1.0f);
         OccupancyGrid g;
         {
@@ -297,8 +298,9 @@ void bind_volume_march(py::module_& m) {
       "render_volume_cpu",
       [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi, V3 position, V3 forward,
          V3 right, V3 up, float tan_half_fov, int width, int height, V3 sun_dir, V3 sun_radiance,
-         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads, bool with_sky,
-         const py::object& solids, const py::object& physical, const py::object& physical_light) {
+         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads,
+         bool with_sky, const py::object& solids, const py::object& physical,
+         const py::object& physical_light) {
         const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
         const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
         if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
@@ -352,7 +354,8 @@ void bind_composite(py::module_& m) {
           throw py::value_error("layers must have shape (L, H, W, 4)");
         const py::ssize_t n = layers.shape(0), height = layers.shape(1), width = layers.shape(2);
         if (height < 1 || width < 1 || height > kMaxEdge || width > kMaxEdge)
-          throw py::value_error("layers: image edges must be in [1, " + std::to_string(kMaxEdge) + "]");
+          throw py::value_error("layers: image edges must be in [1, " + std::to_string(kMaxEdge) +
+                                "]");
         if (boxes.ndim() != 3 || boxes.shape(0) != n || boxes.shape(1) != 2 || boxes.shape(2) != 3)
           throw py::value_error("boxes must have shape (L, 2, 3), one (lo, hi) per layer");
         if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
@@ -519,7 +522,8 @@ std::vector<Sprite> sprites_of(const FloatArray& centres, const FloatArray& half
   const py::ssize_t n = centres.shape(0);
   if (half_sizes.ndim() != 2 || half_sizes.shape(0) != n || half_sizes.shape(1) != 2)
     throw py::value_error("half_sizes must have shape (N, 2)");
-  if (colours.ndim() != 3 || colours.shape(0) != n || colours.shape(1) != 4 || colours.shape(2) != 3)
+  if (colours.ndim() != 3 || colours.shape(0) != n || colours.shape(1) != 4 ||
+      colours.shape(2) != 3)
     throw py::value_error("colours must have shape (N, 4, 3)");
   for (const auto* a : {&rotation, &alpha})
     if (a->ndim() != 1 || a->shape(0) != n)
@@ -534,7 +538,8 @@ std::vector<Sprite> sprites_of(const FloatArray& centres, const FloatArray& half
     s.half_size = glm::vec2(h[2 * k], h[2 * k + 1]);
     s.rotation = rotation.data()[k];
     for (int v = 0; v < 4; ++v)
-      s.colour[v] = glm::vec3(col[12 * k + 3 * v], col[12 * k + 3 * v + 1], col[12 * k + 3 * v + 2]);
+      s.colour[v] =
+          glm::vec3(col[12 * k + 3 * v], col[12 * k + 3 * v + 1], col[12 * k + 3 * v + 2]);
     s.alpha = alpha.data()[k];
     s.texture = texture.data()[k];
   }
@@ -593,7 +598,8 @@ std::vector<ImpostorQuad> impostor_quads(const py::object& images, const FloatAr
 // --- billboard shading (Torchelsen spec §4.2) ---------------------------------------------------
 
 std::vector<glm::vec3> rows3(const FloatArray& a, const char* name) {
-  if (a.ndim() != 2 || a.shape(1) != 3) throw py::value_error(std::string(name) + " must have shape (N, 3)");
+  if (a.ndim() != 2 || a.shape(1) != 3)
+    throw py::value_error(std::string(name) + " must have shape (N, 3)");
   std::vector<glm::vec3> out(static_cast<std::size_t>(a.shape(0)));
   for (std::size_t i = 0; i < out.size(); ++i) {
     out[i] = glm::vec3(a.data()[3 * i], a.data()[3 * i + 1], a.data()[3 * i + 2]);
@@ -607,7 +613,8 @@ std::vector<glm::vec3> rows3(const FloatArray& a, const char* name) {
 // d_min, d_max, k_dir, directional, ambient, k_amb, height_levels [(f, h), ...].
 std::pair<std::vector<ShadeLight>, ShadeParams> shade_of(const py::dict& d) {
   const std::vector<glm::vec3> dirs = rows3(d["light_dirs"].cast<FloatArray>(), "light_dirs");
-  const std::vector<glm::vec3> rad = rows3(d["light_radiance"].cast<FloatArray>(), "light_radiance");
+  const std::vector<glm::vec3> rad =
+      rows3(d["light_radiance"].cast<FloatArray>(), "light_radiance");
   if (dirs.size() != rad.size()) throw py::value_error("one radiance per light direction");
   std::vector<ShadeLight> lights(dirs.size());
   for (std::size_t l = 0; l < dirs.size(); ++l) {
@@ -621,9 +628,12 @@ std::pair<std::vector<ShadeLight>, ShadeParams> shade_of(const py::dict& d) {
   p.d_max = d["d_max"].cast<float>();
   p.k_dir = d["k_dir"].cast<float>();
   const std::string dir = d["directional"].cast<std::string>();
-  if (dir == "linear") p.directional = Directional::Linear;
-  else if (dir == "smoothstep") p.directional = Directional::Smoothstep;
-  else throw py::value_error("directional must be 'linear' or 'smoothstep'");
+  if (dir == "linear")
+    p.directional = Directional::Linear;
+  else if (dir == "smoothstep")
+    p.directional = Directional::Smoothstep;
+  else
+    throw py::value_error("directional must be 'linear' or 'smoothstep'");
   const auto amb = d["ambient"].cast<std::array<float, 3>>();
   p.ambient = glm::vec3(amb[0], amb[1], amb[2]);
   p.k_amb = d["k_amb"].cast<float>();
@@ -655,8 +665,7 @@ void bind_sprites(py::module_& m) {
       [](const FloatArray& centres, const FloatArray& half_sizes, const FloatArray& rotation,
          const FloatArray& colours, const FloatArray& alpha, const IntArray& texture,
          const py::dict& camera, const std::string& kernel, float peak, const py::object& atlas,
-         std::array<int, 2> grid, int threads, const py::object& shading,
-         const py::object& depth) {
+         std::array<int, 2> grid, int threads, const py::object& shading, const py::object& depth) {
         const std::vector<Sprite> sprites =
             sprites_of(centres, half_sizes, rotation, colours, alpha, texture);
         // Fragment shading (billboards, spec §4.2): per sprite frame (N, 4), yrange (N, 2),
@@ -736,7 +745,8 @@ void bind_sprites(py::module_& m) {
         std::fill(ones.mutable_data(), ones.mutable_data() + n, 1.0f);
         IntArray tex(n);
         std::fill(tex.mutable_data(), tex.mutable_data() + n, -1);
-        const std::vector<Sprite> sprites = sprites_of(centres, half_sizes, rotation, zeros_c, ones, tex);
+        const std::vector<Sprite> sprites =
+            sprites_of(centres, half_sizes, rotation, zeros_c, ones, tex);
         const SpriteCamera cam = sprite_camera(camera);
         auto out = new_array({n, 6});
         float* o = out.mutable_data();
@@ -774,15 +784,22 @@ void bind_sprites(py::module_& m) {
         }
         ParticleSpriteSettings s;
         s.solid_angle = solid_angle;
-        if (phase == "rayleigh") s.phase = PhaseKind::Rayleigh;
-        else if (phase == "isotropic") s.phase = PhaseKind::Isotropic;
-        else if (phase == "hg") s.phase = PhaseKind::HenyeyGreenstein;
-        else throw py::value_error("phase must be 'rayleigh', 'isotropic' or 'hg'");
+        if (phase == "rayleigh")
+          s.phase = PhaseKind::Rayleigh;
+        else if (phase == "isotropic")
+          s.phase = PhaseKind::Isotropic;
+        else if (phase == "hg")
+          s.phase = PhaseKind::HenyeyGreenstein;
+        else
+          throw py::value_error("phase must be 'rayleigh', 'isotropic' or 'hg'");
         s.hg_g = hg_g;
         s.ambient = v3(ambient);
-        if (sort == "distance") s.sort = SpriteSort::Distance;
-        else if (sort == "depth") s.sort = SpriteSort::Depth;
-        else throw py::value_error("sort must be 'distance' or 'depth'");
+        if (sort == "distance")
+          s.sort = SpriteSort::Distance;
+        else if (sort == "depth")
+          s.sort = SpriteSort::Depth;
+        else
+          throw py::value_error("sort must be 'distance' or 'depth'");
         s.cull = cull;
         const SpriteCamera cam = sprite_camera(camera);
         ParticleSpriteList list;
@@ -834,16 +851,18 @@ void bind_impostors(py::module_& m) {
         return d;
       },
       "The tight impostor camera of a bounding sphere seen from an eye (dict).");
-  m.def("impostor_translation_error",
-        [](std::array<double, 3> n, std::array<double, 3> f, std::array<double, 3> e) {
-          return translation_error(dvec(n), dvec(f), dvec(e));
-        },
-        "α_trans (radians): the angle at the eye between the near and far points.");
-  m.def("impostor_backwards",
-        [](std::array<double, 3> n, std::array<double, 3> f, std::array<double, 3> e) {
-          return impostor_backwards(dvec(n), dvec(f), dvec(e));
-        },
-        "Whether the eye is nearer the far point than the near point.");
+  m.def(
+      "impostor_translation_error",
+      [](std::array<double, 3> n, std::array<double, 3> f, std::array<double, 3> e) {
+        return translation_error(dvec(n), dvec(f), dvec(e));
+      },
+      "α_trans (radians): the angle at the eye between the near and far points.");
+  m.def(
+      "impostor_backwards",
+      [](std::array<double, 3> n, std::array<double, 3> f, std::array<double, 3> e) {
+        return impostor_backwards(dvec(n), dvec(f), dvec(e));
+      },
+      "Whether the eye is nearer the far point than the near point.");
   m.def("impostor_focal_length_px", &focal_length_px, "f_px = (H/2)/tan(fov/2).");
   m.def("impostor_required_resolution", &required_resolution, "res_req = res_scale·f_px·2R/d.");
   m.def("impostor_resolution", &impostor_resolution,
@@ -852,12 +871,13 @@ void bind_impostors(py::module_& m) {
         "SkyWorks' impostor resolution rule.");
   m.def("impostor_near_corner_radius", &near_corner_radius, "near·√(1 + th²(1 + aspect²)).");
   m.def("impostor_half_diagonal_fov", &half_diagonal_fov, "atan(th·√(1 + aspect²)), radians.");
-  m.def("needs_screen_impostor",
-        [](std::array<double, 3> eye, std::array<double, 3> centre, double radius, double th,
-           double aspect, double near) {
-          return needs_screen_impostor(dvec(eye), dvec(centre), radius, th, aspect, near);
-        },
-        "Whether the sphere must be drawn through a screen impostor from the eye.");
+  m.def(
+      "needs_screen_impostor",
+      [](std::array<double, 3> eye, std::array<double, 3> centre, double radius, double th,
+         double aspect, double near) {
+        return needs_screen_impostor(dvec(eye), dvec(centre), radius, th, aspect, near);
+      },
+      "Whether the sphere must be drawn through a screen impostor from the eye.");
   m.def("screen_impostor_size", &screen_impostor_size, "⌈size/factor⌉.");
 
   m.def(
@@ -920,8 +940,8 @@ void bind_billboards(py::module_& m) {
       [](const py::list& variants, const IntArray& variant, const FloatArray& offsets,
          const FloatArray& yaw, const FloatArray& alpha,
          const py::array_t<std::int64_t, py::array::c_style | py::array::forcecast>& caf_first,
-         const FloatArray& caf, const py::dict& shade, const py::dict& camera,
-         const py::dict& draw, int threads) {
+         const FloatArray& caf, const py::dict& shade, const py::dict& camera, const py::dict& draw,
+         int threads) {
         const auto [lights, params] = shade_of(shade);
         const SpriteCamera cam = sprite_camera(camera);
         std::vector<VariantArrays> keep(variants.size());
@@ -966,10 +986,9 @@ void bind_billboards(py::module_& m) {
         }
         require_points(offsets, "offsets");
         const py::ssize_t ni = offsets.shape(0);
-        for (const py::array* a : {static_cast<const py::array*>(&variant),
-                                   static_cast<const py::array*>(&yaw),
-                                   static_cast<const py::array*>(&alpha),
-                                   static_cast<const py::array*>(&caf_first)})
+        for (const py::array* a :
+             {static_cast<const py::array*>(&variant), static_cast<const py::array*>(&yaw),
+              static_cast<const py::array*>(&alpha), static_cast<const py::array*>(&caf_first)})
           if (a->ndim() != 1 || a->shape(0) != ni)
             throw py::value_error("variant, yaw, alpha and caf_first must have shape (N,)");
         if (caf.ndim() != 2 || caf.shape(0) != static_cast<py::ssize_t>(lights.size()))
@@ -989,9 +1008,12 @@ void bind_billboards(py::module_& m) {
         st.caf_per_box = draw["caf_per_box"].cast<bool>();
         st.global_sort = draw["global_sort"].cast<bool>();
         const std::string sort = draw["sort"].cast<std::string>();
-        if (sort == "distance") st.sort = SpriteSort::Distance;
-        else if (sort == "depth") st.sort = SpriteSort::Depth;
-        else throw py::value_error("sort must be 'distance' or 'depth'");
+        if (sort == "distance")
+          st.sort = SpriteSort::Distance;
+        else if (sort == "depth")
+          st.sort = SpriteSort::Depth;
+        else
+          throw py::value_error("sort must be 'distance' or 'depth'");
         st.cull = draw["cull"].cast<bool>();
         if (!draw["fade_near"].is_none()) {
           const auto z = draw["fade_near"].cast<std::array<float, 2>>();
@@ -1031,8 +1053,10 @@ void bind_billboards(py::module_& m) {
         py::array_t<std::int32_t> tex(n), inst_out(n), bb(n);
         for (py::ssize_t i = 0; i < n; ++i) {
           tex.mutable_data()[i] = list.texture[static_cast<std::size_t>(i)];
-          inst_out.mutable_data()[i] = static_cast<std::int32_t>(list.instance[static_cast<std::size_t>(i)]);
-          bb.mutable_data()[i] = static_cast<std::int32_t>(list.billboard[static_cast<std::size_t>(i)]);
+          inst_out.mutable_data()[i] =
+              static_cast<std::int32_t>(list.instance[static_cast<std::size_t>(i)]);
+          bb.mutable_data()[i] =
+              static_cast<std::int32_t>(list.billboard[static_cast<std::size_t>(i)]);
         }
         out["texture"] = tex;
         out["instance"] = inst_out;
@@ -1044,9 +1068,9 @@ void bind_billboards(py::module_& m) {
         }
         return out;
       },
-      py::arg("variants"), py::arg("variant"), py::arg("offsets"), py::arg("yaw"),
-      py::arg("alpha"), py::arg("caf_first"), py::arg("caf"), py::arg("shade"), py::arg("camera"),
-      py::arg("draw"), py::arg("threads") = 0,
+      py::arg("variants"), py::arg("variant"), py::arg("offsets"), py::arg("yaw"), py::arg("alpha"),
+      py::arg("caf_first"), py::arg("caf"), py::arg("shade"), py::arg("camera"), py::arg("draw"),
+      py::arg("threads") = 0,
       "The sprites of billboard clouds for a camera: culled, faded, sorted back to front and "
       "shaded (vertex colours, or per-sprite fragment-shading data): a dict of arrays.");
 }

@@ -277,8 +277,10 @@ struct Avx2Consts {
 // operation. Per row of the cell (y0/y1 × z0/z1) two 4-element 64-bit gathers fetch
 // (c[x0], c[x0 + 1]) for the 8 points; shuffles split the pairs into the two corners.
 template <bool Madd>
-__attribute__((target("avx2"), always_inline)) inline __m256 octave_avx2(
-    const Avx2Consts& k, const double* lattice, __m256 px, __m256 py, __m256 pz, __m256 sc) {
+__attribute__((target("avx2"), always_inline)) inline __m256 octave_avx2(const Avx2Consts& k,
+                                                                         const double* lattice,
+                                                                         __m256 px, __m256 py,
+                                                                         __m256 pz, __m256 sc) {
   const __m256 x = _mm256_sub_ps(_mm256_mul_ps(px, sc), k.half);
   const __m256 y = _mm256_sub_ps(_mm256_mul_ps(py, sc), k.half);
   const __m256 z = _mm256_sub_ps(_mm256_mul_ps(pz, sc), k.half);
@@ -301,17 +303,15 @@ __attribute__((target("avx2"), always_inline)) inline __m256 octave_avx2(
   const __m128i hi_points = _mm256_extracti128_si256(base, 1);
   __m256 k0[4], k1[4];  // lower / upper x corner of rows (y0,z0), (y1,z0), (y0,z1), (y1,z1)
   for (int r = 0; r < 4; ++r) {
-    const double* row = reinterpret_cast<const double*>(
-        reinterpret_cast<const float*>(lattice) + k.row_offset[r]);
+    const double* row =
+        reinterpret_cast<const double*>(reinterpret_cast<const float*>(lattice) + k.row_offset[r]);
     // a: pairs of points 0..3, b: of points 4..7, as [p0 p1 | p2 p3] in 128-bit halves.
     const __m256 a = _mm256_castpd_ps(_mm256_i32gather_pd(row, lo_points, 4));
     const __m256 b = _mm256_castpd_ps(_mm256_i32gather_pd(row, hi_points, 4));
     const __m256 lo = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(2, 0, 2, 0));  // points 0 1 4 5 | 2 3 6 7
     const __m256 hi = _mm256_shuffle_ps(a, b, _MM_SHUFFLE(3, 1, 3, 1));
-    k0[r] = _mm256_castpd_ps(
-        _mm256_permute4x64_pd(_mm256_castps_pd(lo), _MM_SHUFFLE(3, 1, 2, 0)));
-    k1[r] = _mm256_castpd_ps(
-        _mm256_permute4x64_pd(_mm256_castps_pd(hi), _MM_SHUFFLE(3, 1, 2, 0)));
+    k0[r] = _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(lo), _MM_SHUFFLE(3, 1, 2, 0)));
+    k1[r] = _mm256_castpd_ps(_mm256_permute4x64_pd(_mm256_castps_pd(hi), _MM_SHUFFLE(3, 1, 2, 0)));
   }
   const __m256 c00 = _mm256_add_ps(k0[0], _mm256_mul_ps(wx, _mm256_sub_ps(k1[0], k0[0])));
   const __m256 c10 = _mm256_add_ps(k0[1], _mm256_mul_ps(wx, _mm256_sub_ps(k1[1], k0[1])));
@@ -408,8 +408,8 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline __m512 octave_
   const __m256i hi_points = _mm512_extracti64x4_epi64(base, 1);
   __m512 k0[4], k1[4];
   for (int r = 0; r < 4; ++r) {
-    const double* row = reinterpret_cast<const double*>(
-        reinterpret_cast<const float*>(lattice) + k.row_offset[r]);
+    const double* row =
+        reinterpret_cast<const double*>(reinterpret_cast<const float*>(lattice) + k.row_offset[r]);
     const __m512 a = _mm512_castpd_ps(_mm512_i32gather_pd(lo_points, row, 4));
     const __m512 b = _mm512_castpd_ps(_mm512_i32gather_pd(hi_points, row, 4));
     k0[r] = _mm512_permutex2var_ps(a, k.even, b);
@@ -485,9 +485,9 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline void groups_av
 
 template <bool Madd>
 __attribute__((target("avx512f,avx512bw"))) void kernel_avx512(const Lattice& lat,
-                                                              const FbmTables& t,
-                                                              const float* points,
-                                                              std::size_t count, float* out) {
+                                                               const FbmTables& t,
+                                                               const float* points,
+                                                               std::size_t count, float* out) {
   const int pp = lat.p * lat.p;
   const Avx512Consts k{
       _mm512_set1_ps(0.5f),
@@ -571,8 +571,10 @@ void Noise::fbm_many(const float* points, std::size_t count, float* out, const F
   if (scan != nullptr) {
     *scan = PointScan{};
     for (const float m : block_max) {
-      if (std::isnan(m)) scan->finite = false;
-      else scan->max_abs = std::max(scan->max_abs, m);
+      if (std::isnan(m))
+        scan->finite = false;
+      else
+        scan->max_abs = std::max(scan->max_abs, m);
     }
   }
 }

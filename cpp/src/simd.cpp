@@ -93,6 +93,8 @@ void set_simd_level(SimdLevel level) {
   g_level.store(static_cast<int>(level), std::memory_order_relaxed);
 }
 
-void reset_simd_level() { g_level.store(static_cast<int>(default_level()), std::memory_order_relaxed); }
+void reset_simd_level() {
+  g_level.store(static_cast<int>(default_level()), std::memory_order_relaxed);
+}
 
 }  // namespace cumuli

@@ -1,8 +1,8 @@
 // Value-noise lattice and fBm (Jiménez de Parga & Gómez Palomo 2018, §3.1, eq. 1).
 //
 // The lattice is a size³ cube of uniform values in [0, 1). Lookups follow the GL texel-centre
-// convention of a LINEAR / REPEAT 3D texture, so that the GLSL in shaders/common/noise.glsl returns the
-// same numbers: at lattice coordinate u (in texels) we blend texels floor(u - 0.5) and the next
+// convention of a LINEAR / REPEAT 3D texture, so that the GLSL in shaders/common/noise.glsl returns
+// the same numbers: at lattice coordinate u (in texels) we blend texels floor(u - 0.5) and the next
 // with weight fract(u - 0.5), indices wrapped modulo size. World point p maps to u = p · f.
 #pragma once
 

@@ -36,7 +36,7 @@ struct SkyParams {
 
 struct SunParams {
   glm::vec3 direction{0.0f, 1.0f, 0.0f};  // unit, towards the sun
-  glm::vec3 radiance{1.0f};              // colour · intensity
+  glm::vec3 radiance{1.0f};               // colour · intensity
 };
 
 // Sky radiance seen along unit direction d:

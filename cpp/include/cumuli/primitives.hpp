@@ -15,7 +15,9 @@ struct Ellipsoid {
   glm::mat3 rotation{1.0f};  // columns are the ellipsoid's axes in world space
 
   // World point → unit-sphere frame.
-  glm::vec3 to_local(glm::vec3 p) const { return (glm::transpose(rotation) * (p - centre)) / radii; }
+  glm::vec3 to_local(glm::vec3 p) const {
+    return (glm::transpose(rotation) * (p - centre)) / radii;
+  }
   // |q|: 0 at the centre, 1 on the surface.
   float normalised_distance(glm::vec3 p) const;
   // World-space axis-aligned bounds.

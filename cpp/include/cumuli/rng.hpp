@@ -32,7 +32,9 @@ class Rng {
   float uniform() { return static_cast<float>(next_u64() >> 40) * (1.0f / 16777216.0f); }
 
   // Uniform in [0, 1) with 53 bits.
-  double uniform_double() { return static_cast<double>(next_u64() >> 11) * (1.0 / 9007199254740992.0); }
+  double uniform_double() {
+    return static_cast<double>(next_u64() >> 11) * (1.0 / 9007199254740992.0);
+  }
 
   double uniform(double lo, double hi) { return lo + (hi - lo) * uniform_double(); }
 

@@ -82,7 +82,8 @@ std::vector<float> evolving_cloud_volumes(const CloudShape& cloud, const Density
   const auto own = own_drifts(cloud, params);
   std::vector<CloudShape> frames;
   frames.reserve(static_cast<std::size_t>(params.frames));
-  for (int t = 0; t < params.frames; ++t) frames.push_back(frame_cloud(cloud, params, own, t, true));
+  for (int t = 0; t < params.frames; ++t)
+    frames.push_back(frame_cloud(cloud, params, own, t, true));
 
   const int W = params.res_x, H = params.res_y, D = params.res_z;
   const glm::vec3 step = (box.hi - box.lo) / glm::vec3(W, H, D);
@@ -103,8 +104,8 @@ std::vector<float> evolving_cloud_volumes(const CloudShape& cloud, const Density
       const glm::vec3 origin =
           glm::vec3(box.lo.x, box.lo.y + (y + 0.5f) * step.y, box.lo.z + (z + 0.5f) * step.z) -
           shift;
-      const int count = collect_candidates(c, origin, glm::vec3(1, 0, 0), 0.0f,
-                                           box.hi.x - box.lo.x, cand.data(), capacity);
+      const int count = collect_candidates(c, origin, glm::vec3(1, 0, 0), 0.0f, box.hi.x - box.lo.x,
+                                           cand.data(), capacity);
       float* dst = out.data() + row * static_cast<std::size_t>(W);
       for (int x = 0; x < W; ++x) {
         const float tx = (x + 0.5f) * step.x;
@@ -214,8 +215,8 @@ float crossfade_weight(int step, int frames) {
 }
 
 bool EndlessWalk::allowed(int c, int l) const {
-  if (l == c + 1) return l < n_;  // the natural successor
-  if (h_ == 0) return c + 1 < n_ || l >= 1;  // a cut (the last frame cannot cut to frame 0)
+  if (l == c + 1) return l < n_;                    // the natural successor
+  if (h_ == 0) return c + 1 < n_ || l >= 1;         // a cut (the last frame cannot cut to frame 0)
   return c + h_ <= n_ - 1 && l + h_ - 1 <= n_ - 1;  // both cross-dissolve windows exist
 }
 

@@ -29,8 +29,9 @@ bool zero_wind(const LayerConfig& l) { return std::hypot(l.wind_x, l.wind_z) < k
 
 int LayerConfig::variant_id(int state, int model, int variant) const {
   int offset = 0;
-  for (int s = 0; s < state; ++s) offset += states[static_cast<std::size_t>(s)].models *
-                                            states[static_cast<std::size_t>(s)].variants;
+  for (int s = 0; s < state; ++s)
+    offset +=
+        states[static_cast<std::size_t>(s)].models * states[static_cast<std::size_t>(s)].variants;
   return offset + model * states[static_cast<std::size_t>(state)].variants + variant;
 }
 
@@ -72,9 +73,9 @@ void WeatherConfig::validate() const {
   require(!schedule.empty(), "cv schedule must hold at least one keyframe");
   for (std::size_t k = 0; k < schedule.size(); ++k) {
     require(std::isfinite(schedule[k].first), "cv schedule times must be finite");
-    require(std::isfinite(schedule[k].second) && schedule[k].second >= 0.0 &&
-                schedule[k].second <= 1.0,
-            "cv schedule values must be in [0, 1]");
+    require(
+        std::isfinite(schedule[k].second) && schedule[k].second >= 0.0 && schedule[k].second <= 1.0,
+        "cv schedule values must be in [0, 1]");
     require(k == 0 || schedule[k].first > schedule[k - 1].first,
             "cv schedule times must be strictly increasing");
   }
@@ -142,8 +143,8 @@ int WeatherSim::target(std::size_t layer, double cv) const {
   double w;
   mix(layer, cv, a, b, w);
   const auto& st = config_.layers[layer].states;
-  const double n = (1.0 - w) * st[static_cast<std::size_t>(a)].count +
-                   w * st[static_cast<std::size_t>(b)].count;
+  const double n =
+      (1.0 - w) * st[static_cast<std::size_t>(a)].count + w * st[static_cast<std::size_t>(b)].count;
   return static_cast<int>(std::floor(n + 0.5));
 }
 
@@ -219,10 +220,22 @@ void WeatherSim::spawn_edge(std::size_t layer, const Draw& d) {
   }
   double x = 0.0, z = 0.0;
   switch (edge) {
-    case 0: x = c.x0 - d.radius; z = c.z0 + d.u_pos * depth; break;
-    case 1: x = c.x1 + d.radius; z = c.z0 + d.u_pos * depth; break;
-    case 2: z = c.z0 - d.radius; x = c.x0 + d.u_pos * width; break;
-    default: z = c.z1 + d.radius; x = c.x0 + d.u_pos * width; break;
+    case 0:
+      x = c.x0 - d.radius;
+      z = c.z0 + d.u_pos * depth;
+      break;
+    case 1:
+      x = c.x1 + d.radius;
+      z = c.z0 + d.u_pos * depth;
+      break;
+    case 2:
+      z = c.z0 - d.radius;
+      x = c.x0 + d.u_pos * width;
+      break;
+    default:
+      z = c.z1 + d.radius;
+      x = c.x0 + d.u_pos * width;
+      break;
   }
   push(layer, d, x, z, -kInf);
   LayerState& ls = layers_[layer];
@@ -361,7 +374,8 @@ void WeatherSim::set_state(double t, std::vector<LayerState> layers) {
       require(std::isfinite(s.x0[i]) && std::isfinite(s.z0[i]) && std::isfinite(s.t0[i]) &&
                   std::isfinite(s.y[i]) && std::isfinite(s.yaw[i]),
               at + "instance data must be finite");
-      require(!std::isnan(s.fade_in[i]) && !std::isnan(s.fade_out[i]), at + "fades must not be NaN");
+      require(!std::isnan(s.fade_in[i]) && !std::isnan(s.fade_out[i]),
+              at + "fades must not be NaN");
       require(s.id[i] < s.events, at + "instance id beyond the event counter");
     }
     require(std::isfinite(s.quota) && s.quota >= 0.0, at + "quota must be finite and >= 0");
@@ -370,7 +384,8 @@ void WeatherSim::set_state(double t, std::vector<LayerState> layers) {
   t_ = t;
 }
 
-void WeatherSim::positions(std::size_t layer, std::vector<double>& x, std::vector<double>& z) const {
+void WeatherSim::positions(std::size_t layer, std::vector<double>& x,
+                           std::vector<double>& z) const {
   const LayerState& ls = layers_[layer];
   const LayerConfig& lc = config_.layers[layer];
   const bool still = zero_wind(lc);

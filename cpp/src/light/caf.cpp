@@ -42,12 +42,13 @@ BoxIndex::BoxIndex(std::vector<Box> boxes) : boxes_(std::move(boxes)) {
   // About two boxes per cell, but cells no smaller than half a typical box (a box then covers a
   // few cells) and at most kMaxDim per axis.
   const double floor_ext = std::max(longest * 1e-6, 1e-30);
-  const double volume = std::max(ext.x, floor_ext) * std::max(ext.y, floor_ext) *
-                        std::max(ext.z, floor_ext);
+  const double volume =
+      std::max(ext.x, floor_ext) * std::max(ext.y, floor_ext) * std::max(ext.z, floor_ext);
   double cell = std::cbrt(volume / (2.0 * static_cast<double>(boxes_.size())));
   cell = std::max({cell, 0.5 * mean_extent, longest / kMaxDim});
   for (int k = 0; k < 3; ++k) {
-    dims_[k] = ext[k] > 0.0 ? std::clamp(static_cast<int>(std::ceil(ext[k] / cell)), 1, kMaxDim) : 1;
+    dims_[k] =
+        ext[k] > 0.0 ? std::clamp(static_cast<int>(std::ceil(ext[k] / cell)), 1, kMaxDim) : 1;
     cell_[k] = ext[k] > 0.0 ? static_cast<float>(ext[k] / dims_[k]) : 1.0f;
   }
   const std::size_t cells = static_cast<std::size_t>(dims_[0]) * dims_[1] * dims_[2];
@@ -56,10 +57,10 @@ BoxIndex::BoxIndex(std::vector<Box> boxes) : boxes_(std::move(boxes)) {
   auto range = [&](const Box& b, int lo[3], int hi[3]) {
     for (int k = 0; k < 3; ++k) {
       const float pad = 1e-3f * cell_[k];
-      lo[k] = std::clamp(static_cast<int>(std::floor((b.lo[k] - pad - bounds_.lo[k]) / cell_[k])), 0,
-                         dims_[k] - 1);
-      hi[k] = std::clamp(static_cast<int>(std::floor((b.hi[k] + pad - bounds_.lo[k]) / cell_[k])), 0,
-                         dims_[k] - 1);
+      lo[k] = std::clamp(static_cast<int>(std::floor((b.lo[k] - pad - bounds_.lo[k]) / cell_[k])),
+                         0, dims_[k] - 1);
+      hi[k] = std::clamp(static_cast<int>(std::floor((b.hi[k] + pad - bounds_.lo[k]) / cell_[k])),
+                         0, dims_[k] - 1);
     }
   };
   std::vector<std::uint32_t> count(cells + 1, 0);
@@ -107,8 +108,8 @@ void BoxIndex::candidates(glm::vec3 o, glm::vec3 d, Scratch& s) const {
   double t_max[3], t_delta[3];
   for (int k = 0; k < 3; ++k) {
     const double p = double(o[k]) + t_start * double(d[k]);
-    cell[k] = std::clamp(static_cast<int>(std::floor((p - bounds_.lo[k]) / cell_[k])), 0,
-                         dims_[k] - 1);
+    cell[k] =
+        std::clamp(static_cast<int>(std::floor((p - bounds_.lo[k]) / cell_[k])), 0, dims_[k] - 1);
     if (d[k] > 0.0f) {
       step[k] = 1;
       t_max[k] = (bounds_.lo[k] + double(cell[k] + 1) * cell_[k] - double(o[k])) / d[k];
@@ -124,7 +125,8 @@ void BoxIndex::candidates(glm::vec3 o, glm::vec3 d, Scratch& s) const {
     }
   }
   for (;;) {
-    const std::size_t c = (static_cast<std::size_t>(cell[2]) * dims_[1] + cell[1]) * dims_[0] + cell[0];
+    const std::size_t c =
+        (static_cast<std::size_t>(cell[2]) * dims_[1] + cell[1]) * dims_[0] + cell[0];
     for (std::uint32_t j = cell_start_[c]; j < cell_start_[c + 1]; ++j) {
       const std::uint32_t b = cell_box_[j];
       if (s.stamp[b] != s.tick) {
@@ -150,8 +152,8 @@ void BoxIndex::spans(glm::vec3 o, glm::vec3 d, std::size_t skip_lo, std::size_t 
     if (i >= skip_lo && i < skip_hi) return;
     Interval iv;
     if (!intersect(boxes_[i], o, inv, iv) || !(iv.t_out > 0.0f)) return;
-    out.push_back(Span{static_cast<std::uint32_t>(i), std::max(0.0, double(iv.t_in)),
-                       double(iv.t_out)});
+    out.push_back(
+        Span{static_cast<std::uint32_t>(i), std::max(0.0, double(iv.t_in)), double(iv.t_out)});
   };
   if (!grid_) {
     for (std::size_t i = 0; i < boxes_.size(); ++i) test(i);
@@ -196,8 +198,8 @@ float caf_value(double length, double max_distance, CafCurve curve) {
 }
 
 void caf_path_lengths(const BoxIndex& index, const glm::vec3* points, const int* owner,
-                      std::size_t n, glm::vec3 sun, Overlap overlap, bool include_self,
-                      double* out, int threads) {
+                      std::size_t n, glm::vec3 sun, Overlap overlap, bool include_self, double* out,
+                      int threads) {
   parallel_chunks(n, threads, [&](std::size_t b, std::size_t e) {
     BoxIndex::Scratch scratch;
     std::vector<Span> spans;
@@ -265,8 +267,8 @@ void field_path_lengths(const std::vector<BoxIndex>& variants,
   parallel_chunks(total, threads, [&](std::size_t b, std::size_t e) {
     BoxIndex::Scratch own_scratch, world_scratch;
     std::vector<Span> spans, others;
-    std::size_t i = static_cast<std::size_t>(
-        std::upper_bound(first.begin(), first.end(), b) - first.begin() - 1);
+    std::size_t i = static_cast<std::size_t>(std::upper_bound(first.begin(), first.end(), b) -
+                                             first.begin() - 1);
     for (std::size_t q = b; q < e; ++q) {
       while (q >= first[i + 1]) ++i;
       const Instance& inst = instances[i];
@@ -286,7 +288,8 @@ void field_path_lengths(const std::vector<BoxIndex>& variants,
       variants[v].spans(points[v][k], local_sun, lo, hi, spans, own_scratch);
       if (between_clouds) {
         const glm::vec3 p = points[v][k];
-        const glm::vec3 wp(static_cast<float>(c * p.x + s * p.z + inst.offset.x), p.y + inst.offset.y,
+        const glm::vec3 wp(static_cast<float>(c * p.x + s * p.z + inst.offset.x),
+                           p.y + inst.offset.y,
                            static_cast<float>(-s * p.x + c * p.z + inst.offset.z));
         others.clear();
         world_index.spans(wp, sun, box_first[i], box_first[i + 1], others, world_scratch);
@@ -373,9 +376,8 @@ glm::vec3 shade_point(glm::vec3 v, const ShadeFrame& frame, const float* caf, st
 }
 
 void billboard_shade(const glm::vec3* points, const int* index, std::size_t n, const float* caf,
-                     std::size_t q, const ShadeFrame& frame,
-                     const std::vector<ShadeLight>& lights, const ShadeParams& params, float* out,
-                     int threads) {
+                     std::size_t q, const ShadeFrame& frame, const std::vector<ShadeLight>& lights,
+                     const ShadeParams& params, float* out, int threads) {
   parallel_for(n, threads, [&](std::size_t i) {
     const auto b = static_cast<std::size_t>(index[i]);
     const glm::vec3 c = shade_point(points[i], frame, caf + b, q, lights, params);

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -173,9 +173,9 @@ class SunCandidates {
       std::size_t entries = 0;
       for (std::size_t j = 0; j < n_; ++j) {
         const auto cu = static_cast<std::size_t>(bin(pu[j] + pr[j] - lo_u_, inv_u_, nu_) -
-                                                  bin(pu[j] - pr[j] - lo_u_, inv_u_, nu_) + 1);
+                                                 bin(pu[j] - pr[j] - lo_u_, inv_u_, nu_) + 1);
         const auto cw = static_cast<std::size_t>(bin(pw[j] + pr[j] - lo_w_, inv_w_, nw_) -
-                                                  bin(pw[j] - pr[j] - lo_w_, inv_w_, nw_) + 1);
+                                                 bin(pw[j] - pr[j] - lo_w_, inv_w_, nw_) + 1);
         entries += cu * cw;
       }
       if (entries <= max_entries || (nu_ == 1 && nw_ == 1)) break;
@@ -305,9 +305,14 @@ struct ActiveBuffers {
 // primitive with the same |q| to float precision, hence the same γ of eq. (2).
 class UnionAttribution {
  public:
-  UnionAttribution(const Candidate* cand, int first, int last, ActiveBuffers& buf,
-                   const float* a, const SunCandidates::Scratch& sc)
-      : cand_(cand), next_(first), last_(last), buf_(buf), a_(a), sc_(sc),
+  UnionAttribution(const Candidate* cand, int first, int last, ActiveBuffers& buf, const float* a,
+                   const SunCandidates::Scratch& sc)
+      : cand_(cand),
+        next_(first),
+        last_(last),
+        buf_(buf),
+        a_(a),
+        sc_(sc),
         fallback_(cand[first].primitive) {}
 
   int operator()(float s) {
@@ -437,9 +442,8 @@ inline float exp_nonpositive(float x) {
   const float r = (xc - kf * 0.693359375f) - kf * -2.12194440e-4f;
   const float poly =
       1.0f +
-      r * (1.0f +
-           r * (0.5f + r * (1.0f / 6.0f +
-                            r * (1.0f / 24.0f + r * (1.0f / 120.0f + r * (1.0f / 720.0f))))));
+      r * (1.0f + r * (0.5f + r * (1.0f / 6.0f + r * (1.0f / 24.0f +
+                                                      r * (1.0f / 120.0f + r * (1.0f / 720.0f))))));
   const std::int32_t bits = (static_cast<std::int32_t>(kf) + 127) << 23;
   float scale;
   std::memcpy(&scale, &bits, sizeof scale);
@@ -509,9 +513,8 @@ struct LineBuffers {
 };
 
 LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& density,
-                             const LightSettings& s, const Box& box,
-                             const SunCandidates& collector, float* light,
-                             std::uint32_t* samples_out) {
+                             const LightSettings& s, const Box& box, const SunCandidates& collector,
+                             float* light, std::uint32_t* samples_out) {
   const int res[3] = {s.resolution[0], s.resolution[1], s.resolution[2]};
   const glm::vec3 cell = (box.hi - box.lo) / glm::vec3(res[0], res[1], res[2]);
   const glm::vec3 d = s.sun_dir;
@@ -600,7 +603,8 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
       // At most one sample per Δ' segment of the span plus one per interval end.
       float span = 0.0f;
       for (int k = 0; k < n; ++k) span = std::max(span, cand[k].t_out);
-      const std::size_t most = static_cast<std::size_t>(span / sub) + 2 * static_cast<std::size_t>(n) + 2;
+      const std::size_t most =
+          static_cast<std::size_t>(span / sub) + 2 * static_cast<std::size_t>(n) + 2;
       if (len.size() < most) {
         xyz.resize(3 * most), mid.resize(most), len.resize(most), t1s.resize(most);
         q2s.resize(most);
@@ -650,8 +654,8 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
           const auto first_sample = [&](float t, std::size_t from, bool after) {
             const long long guess = static_cast<long long>(m0) +
                                     static_cast<long long>(floor_small_light(t / sub)) - k_start;
-            std::size_t i = static_cast<std::size_t>(std::clamp(
-                guess, static_cast<long long>(from), static_cast<long long>(m)));
+            std::size_t i = static_cast<std::size_t>(
+                std::clamp(guess, static_cast<long long>(from), static_cast<long long>(m)));
             const auto before_t = [&](float v) { return after ? v <= t : v < t; };
             while (i > from && !before_t(mid[i - 1])) --i;
             while (i < m && before_t(mid[i])) ++i;
@@ -690,9 +694,9 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
         DensitySource known;
         for (std::size_t i = 0; i < m; ++i) {
           known.constant = rho[i];
-          rho[i] = metaball_density(cloud, glm::vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]),
-                                    known)
-                       .rho;
+          rho[i] =
+              metaball_density(cloud, glm::vec3(xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]), known)
+                  .rho;
         }
       }
       attenuation(rho.data(), len.data(), att.data(), term.data(), m, s.extinction,
@@ -725,55 +729,58 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
   const int stride[3] = {1, res[0], res[0] * res[1]};  // [z][y][x]
   const std::size_t voxels = static_cast<std::size_t>(ra) * rb * rc;
   const int resample_threads = voxels < (std::size_t{1} << 16) ? 1 : s.threads;
-  parallel_chunks(static_cast<std::size_t>(ra), resample_threads, [&](std::size_t j0, std::size_t j1) {
-    // Per layer: S (and `beyond`) of the lines serving it, indexed by line, so that a voxel
-    // reads its four lines with plain loads; the c-axis index and weight of each voxel column.
-    std::vector<float> layer_S(lines);
-    std::vector<std::uint32_t> layer_beyond(samples_out ? lines : 0);
-    std::vector<std::size_t> kc(static_cast<std::size_t>(rc));
-    std::vector<float> wcs(static_cast<std::size_t>(rc));
-    for (std::size_t jj = j0; jj < j1; ++jj) {
-      const int j = static_cast<int>(jj);
-      for (int lb = lob[jj]; lb <= hib[jj]; ++lb) {
-        for (int lc = loc[jj]; lc <= hic[jj]; ++lc) {
-          const std::size_t line = static_cast<std::size_t>(lb - b0) * nc +
-                                   static_cast<std::size_t>(lc - c0);
-          layer_S[line] = S[at(line, j)];
-          if (samples_out) layer_beyond[line] = beyond[at(line, j)];
-        }
-      }
-      for (int ic = 0; ic < rc; ++ic) {
-        const float uc = static_cast<float>(ic) - sc * j;
-        const float fc_floor = floor_small_light(uc);
-        wcs[static_cast<std::size_t>(ic)] = uc - fc_floor;
-        kc[static_cast<std::size_t>(ic)] = static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
-      }
-      for (int ib = 0; ib < rb; ++ib) {
-        const float ub = static_cast<float>(ib) - sb * j;
-        const float fb_floor = floor_small_light(ub);
-        const float wb = ub - fb_floor;
-        const std::size_t kb = static_cast<std::size_t>(static_cast<int>(fb_floor) - b0);
-        const float* row0 = layer_S.data() + kb * nc;  // lines of b index kb; kb + 1 at + nc
-        const std::size_t v0 = static_cast<std::size_t>(j) * stride[a] +
-                               static_cast<std::size_t>(ib) * stride[b];
-        for (std::size_t ic = 0; ic < static_cast<std::size_t>(rc); ++ic) {
-          const std::size_t k = kc[ic];
-          const float wc = wcs[ic];
-          const float v00 = row0[k], v01 = row0[k + 1];
-          const float v10 = row0[nc + k], v11 = row0[nc + k + 1];
-          const float s0 = v00 + wc * (v01 - v00);
-          const float s1 = v10 + wc * (v11 - v10);
-          const std::size_t v = v0 + ic * static_cast<std::size_t>(stride[c]);
-          light[v] = s0 + wb * (s1 - s0);
-          if (samples_out) {
-            const std::size_t near =
-                kb * nc + k + (wb < 0.5f ? 0 : static_cast<std::size_t>(nc)) + (wc < 0.5f ? 0 : 1);
-            samples_out[v] = layer_beyond[near];
+  parallel_chunks(
+      static_cast<std::size_t>(ra), resample_threads, [&](std::size_t j0, std::size_t j1) {
+        // Per layer: S (and `beyond`) of the lines serving it, indexed by line, so that a voxel
+        // reads its four lines with plain loads; the c-axis index and weight of each voxel column.
+        std::vector<float> layer_S(lines);
+        std::vector<std::uint32_t> layer_beyond(samples_out ? lines : 0);
+        std::vector<std::size_t> kc(static_cast<std::size_t>(rc));
+        std::vector<float> wcs(static_cast<std::size_t>(rc));
+        for (std::size_t jj = j0; jj < j1; ++jj) {
+          const int j = static_cast<int>(jj);
+          for (int lb = lob[jj]; lb <= hib[jj]; ++lb) {
+            for (int lc = loc[jj]; lc <= hic[jj]; ++lc) {
+              const std::size_t line =
+                  static_cast<std::size_t>(lb - b0) * nc + static_cast<std::size_t>(lc - c0);
+              layer_S[line] = S[at(line, j)];
+              if (samples_out) layer_beyond[line] = beyond[at(line, j)];
+            }
+          }
+          for (int ic = 0; ic < rc; ++ic) {
+            const float uc = static_cast<float>(ic) - sc * j;
+            const float fc_floor = floor_small_light(uc);
+            wcs[static_cast<std::size_t>(ic)] = uc - fc_floor;
+            kc[static_cast<std::size_t>(ic)] =
+                static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
+          }
+          for (int ib = 0; ib < rb; ++ib) {
+            const float ub = static_cast<float>(ib) - sb * j;
+            const float fb_floor = floor_small_light(ub);
+            const float wb = ub - fb_floor;
+            const std::size_t kb = static_cast<std::size_t>(static_cast<int>(fb_floor) - b0);
+            const float* row0 = layer_S.data() + kb * nc;  // lines of b index kb; kb + 1 at + nc
+            const std::size_t v0 =
+                static_cast<std::size_t>(j) * stride[a] + static_cast<std::size_t>(ib) * stride[b];
+            for (std::size_t ic = 0; ic < static_cast<std::size_t>(rc); ++ic) {
+              const std::size_t k = kc[ic];
+              const float wc = wcs[ic];
+              const float v00 = row0[k], v01 = row0[k + 1];
+              const float v10 = row0[nc + k], v11 = row0[nc + k + 1];
+              const float s0 = v00 + wc * (v01 - v00);
+              const float s1 = v10 + wc * (v11 - v10);
+              const std::size_t v = v0 + ic * static_cast<std::size_t>(stride[c]);
+              light[v] = s0 + wb * (s1 - s0);
+              if (samples_out) {
+                const std::size_t near = kb * nc + k +
+                                         (wb < 0.5f ? 0 : static_cast<std::size_t>(nc)) +
+                                         (wc < 0.5f ? 0 : 1);
+                samples_out[v] = layer_beyond[near];
+              }
+            }
           }
         }
-      }
-    }
-  });
+      });
   LightStats stats;
   stats.samples = samples_total.load();
   return stats;
@@ -803,8 +810,9 @@ void LightSettings::validate(const Box& box) const {
   const double diag = glm::length(glm::dvec3(box.hi - box.lo));
   if (!std::isfinite(diag)) throw std::invalid_argument("cloud box is not finite");
   if (diag / step > kMaxStepsPerRay)
-    throw std::invalid_argument("step " + std::to_string(step) + " is too small for the cloud box (" +
-                                std::to_string(diag) + " units across): a ray would need more than " +
+    throw std::invalid_argument("step " + std::to_string(step) +
+                                " is too small for the cloud box (" + std::to_string(diag) +
+                                " units across): a ray would need more than " +
                                 std::to_string(static_cast<long long>(kMaxStepsPerRay)) + " steps");
 }
 
@@ -847,8 +855,7 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
   const SunCandidates collector(cloud, s.sun_dir);
   if (s.method == LightMethod::Shared) {
     LightStats stats = light_grid_shared(cloud, density, s, box, collector, light, samples);
-    stats.seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     return stats;
   }
   // Samples per row of voxels, summed after the loop (no shared counter between threads).
@@ -868,16 +875,14 @@ LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& dens
         Accum acc;
         const RayContext r{cloud, density, v, s.sun_dir, s.step, s.extinction, scatter, queue, acc};
         const std::size_t idx = row * rx + x;
-        light[idx] = light_at(r, s.method, cand.data(), n, s.intensity, collector, scratch,
-                              active);
+        light[idx] = light_at(r, s.method, cand.data(), n, s.intensity, collector, scratch, active);
         if (samples) samples[idx] = acc.samples;
         row_samples[row] += acc.samples;
       }
     }
   });
   LightStats stats;
-  stats.seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  stats.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   for (const std::uint64_t n : row_samples) stats.samples += n;
   return stats;
 }

@@ -60,8 +60,9 @@ void check_energy(const ParticleView& particles, const ParticleLightSettings& se
     const float alpha = 1.0f - std::exp(-particles.tau[k]);
     if (g > alpha)
       throw std::invalid_argument(
-          "solid_angle too large: particle " + std::to_string(k) + " scatters forward a·τ·p_fwd·γ/4π = " +
-          std::to_string(g) + " > its opacity 1 − e^{−τ} = " + std::to_string(alpha) +
+          "solid_angle too large: particle " + std::to_string(k) +
+          " scatters forward a·τ·p_fwd·γ/4π = " + std::to_string(g) +
+          " > its opacity 1 − e^{−τ} = " + std::to_string(alpha) +
           ", so it would add light (lower solid_angle, or pass allow_gain=True)");
   }
 }
@@ -74,7 +75,7 @@ LightFrame light_frame(const ParticleView& particles, glm::vec3 sun_direction) {
   frame.forward = -sun_direction;
   // SkyWorks' degenerate-basis guard: a light straight up or down takes +x as its up.
   const glm::vec3 up = std::abs(frame.forward.y) > 1.0f - 1e-6f ? glm::vec3(1.0f, 0.0f, 0.0f)
-                                                                 : glm::vec3(0.0f, 1.0f, 0.0f);
+                                                                : glm::vec3(0.0f, 1.0f, 0.0f);
   frame.right = glm::normalize(glm::cross(frame.forward, up));
   frame.up = glm::cross(frame.right, frame.forward);
   return frame;
@@ -127,7 +128,8 @@ std::vector<LightSplat> light_splats(const ParticleView& particles, const LightF
     if (settings.readback == Readback::SolidAngle) {
       // SkyWorks: a patch subtending γ_r at the distance from the light box's near plane.
       const float dist = t[k] + frame.radius;
-      const float side = std::floor(std::sqrt(settings.readback_solid_angle * dist * dist) * nl / two_r);
+      const float side =
+          std::floor(std::sqrt(settings.readback_solid_angle * dist * dist) * nl / two_r);
       s.patch = static_cast<std::int32_t>(std::clamp(side, 1.0f, nl));
     }
   }
@@ -150,8 +152,10 @@ float light_read_back(const float* buffer, int n, const LightSplat& s, Readback 
     const float u = s.x - 0.5f, v = s.y - 0.5f;
     const float fu = std::floor(u), fv = std::floor(v);
     const float wx = u - fu, wy = v - fv;
-    const int x0 = static_cast<int>(clamp_index(fu, n)), x1 = static_cast<int>(clamp_index(fu + 1.0f, n));
-    const int y0 = static_cast<int>(clamp_index(fv, n)), y1 = static_cast<int>(clamp_index(fv + 1.0f, n));
+    const int x0 = static_cast<int>(clamp_index(fu, n)),
+              x1 = static_cast<int>(clamp_index(fu + 1.0f, n));
+    const int y0 = static_cast<int>(clamp_index(fv, n)),
+              y1 = static_cast<int>(clamp_index(fv + 1.0f, n));
     const float b0 = lerp(buffer[y0 * n + x0], buffer[y0 * n + x1], wx);
     const float b1 = lerp(buffer[y1 * n + x0], buffer[y1 * n + x1], wx);
     return lerp(b0, b1, wy);

@@ -34,8 +34,8 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
       const float end = std::min(t + step, cand[k].t_out);
       const float s = 0.5f * (t + end);
       const glm::vec3 p = o + s * d;
-      const int j = attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive)
-                              : cand[k].primitive;
+      const int j =
+          attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive) : cand[k].primitive;
       const float rho = cloud_density(shape, j, p, c.source).rho;
       visit(s, c.scale * rho, end - t);
       t = end;
@@ -94,17 +94,18 @@ glm::vec3 SunFrame::to_frame(glm::vec3 p) const {
 }
 
 glm::vec3 SunFrame::node(int i, int j, int k) const {
-  const glm::vec3 f = lo + (glm::vec3(static_cast<float>(i), static_cast<float>(j),
-                                      static_cast<float>(k)) + 0.5f) *
-                               (hi - lo) / glm::vec3(static_cast<float>(res[0]),
-                                                     static_cast<float>(res[1]),
-                                                     static_cast<float>(res[2]));
+  const glm::vec3 f =
+      lo + (glm::vec3(static_cast<float>(i), static_cast<float>(j), static_cast<float>(k)) + 0.5f) *
+               (hi - lo) /
+               glm::vec3(static_cast<float>(res[0]), static_cast<float>(res[1]),
+                         static_cast<float>(res[2]));
   return f.x * u + f.y * v + f.z * w;
 }
 
 void SunFrame::validate() const {
   for (int a = 0; a < 3; ++a) {
-    if (res[a] < 2 || res[a] > 4096) throw std::invalid_argument("light frame resolution must be in [2, 4096]");
+    if (res[a] < 2 || res[a] > 4096)
+      throw std::invalid_argument("light frame resolution must be in [2, 4096]");
     if (!(hi[a] > lo[a]) || !std::isfinite(lo[a]) || !std::isfinite(hi[a]))
       throw std::invalid_argument("light frame box must be finite and non-empty");
   }
@@ -112,10 +113,12 @@ void SunFrame::validate() const {
 
 SunFrame make_sun_frame(const Box& world_box, glm::vec3 to_sun, const int res[3]) {
   const float len = glm::length(to_sun);
-  if (!(len > 0.0f) || !std::isfinite(len)) throw std::invalid_argument("sun direction must be non-zero");
+  if (!(len > 0.0f) || !std::isfinite(len))
+    throw std::invalid_argument("sun direction must be non-zero");
   SunFrame f;
   f.w = -to_sun / len;
-  const glm::vec3 a = std::abs(f.w.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
+  const glm::vec3 a =
+      std::abs(f.w.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
   f.u = glm::normalize(glm::cross(a, f.w));
   f.v = glm::cross(f.w, f.u);
   glm::vec3 lo(INFINITY), hi(-INFINITY);
@@ -146,7 +149,8 @@ float sample_frame(const float* values, const SunFrame& f, glm::vec3 p) {
   split(q.x, f.res[0], x0, x1, fx);
   split(q.y, f.res[1], y0, y1, fy);
   split(q.z, f.res[2], z0, z1, fz);
-  const std::size_t nu = static_cast<std::size_t>(f.res[0]), nv = static_cast<std::size_t>(f.res[1]);
+  const std::size_t nu = static_cast<std::size_t>(f.res[0]),
+                    nv = static_cast<std::size_t>(f.res[1]);
   auto at = [&](int x, int y, int z) { return values[(z * nv + y) * nu + x]; };
   const float c00 = at(x0, y0, z0) + fx * (at(x1, y0, z0) - at(x0, y0, z0));
   const float c10 = at(x0, y1, z0) + fx * (at(x1, y1, z0) - at(x0, y1, z0));
@@ -177,7 +181,8 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
                                      int threads) {
   f.validate();
   if (!(step > 0.0f) || !std::isfinite(step)) throw std::invalid_argument("step must be > 0");
-  const std::size_t nu = static_cast<std::size_t>(f.res[0]), nv = static_cast<std::size_t>(f.res[1]),
+  const std::size_t nu = static_cast<std::size_t>(f.res[0]),
+                    nv = static_cast<std::size_t>(f.res[1]),
                     nw = static_cast<std::size_t>(f.res[2]);
   std::vector<float> out(nu * nv * nw, 0.0f);
   const float dw = (f.hi.z - f.lo.z) / static_cast<float>(nw);
@@ -191,8 +196,10 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
     auto keep = [&](float s, float sigma, float len) {
       if (sigma > 0.0f) segs.push_back({s - 0.5f * len, s + 0.5f * len, sigma});
     };
-    for (const CloudMedium& c : medium.clouds) march_cloud(c, origin, f.w, 0.0f, length, step, keep);
-    for (const VolumeMedium& v : medium.volumes) march_volume(v, origin, f.w, 0.0f, length, step, keep);
+    for (const CloudMedium& c : medium.clouds)
+      march_cloud(c, origin, f.w, 0.0f, length, step, keep);
+    for (const VolumeMedium& v : medium.volumes)
+      march_volume(v, origin, f.w, 0.0f, length, step, keep);
     if (segs.empty()) return;
     // τ(t) = Σ over segments of σ·|[a, b] ∩ [0, t]|, at the nodes t_k = (k + ½)·dw.
     std::sort(segs.begin(), segs.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
@@ -291,8 +298,9 @@ std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, cons
   std::vector<float> q(nv * ch, 0.0f);
   const glm::vec3 h = g.voxel_size();
   const glm::vec3 s = glm::normalize(to_sun);
-  const float ell_sun = h.x * h.y * h.z /
-                        (std::abs(s.x) * h.y * h.z + std::abs(s.y) * h.x * h.z + std::abs(s.z) * h.x * h.y);
+  const float ell_sun =
+      h.x * h.y * h.z /
+      (std::abs(s.x) * h.y * h.z + std::abs(s.y) * h.x * h.z + std::abs(s.z) * h.x * h.y);
   const float ell_sky = 2.0f * std::min(h.x, std::min(h.y, h.z)) / 3.0f;
   for (std::size_t v = 0; v < nv; ++v) {
     const float sigma = ext[v];
@@ -310,7 +318,8 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
                                      int channels, const DiffusionParams& p, int threads) {
   g.validate();
   if (channels < 1 || channels > 8) throw std::invalid_argument("channels must be in [1, 8]");
-  if (!(p.albedo >= 0.0f && p.albedo <= 1.0f)) throw std::invalid_argument("albedo must be in [0, 1]");
+  if (!(p.albedo >= 0.0f && p.albedo <= 1.0f))
+    throw std::invalid_argument("albedo must be in [0, 1]");
   const int W = g.w, H = g.h, Dd = g.d;
   const std::size_t n = g.voxels();
   const glm::vec3 hv = g.voxel_size();
@@ -331,8 +340,9 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
   // Face conductances (to the + neighbour along each axis) and the diagonal.
   std::vector<float> cond(3 * n, 0.0f);
   auto coord = [&](std::size_t i, int a) {
-    return a == 0 ? static_cast<int>(i % W) : a == 1 ? static_cast<int>((i / W) % H)
-                                                       : static_cast<int>(i / (static_cast<std::size_t>(W) * H));
+    return a == 0   ? static_cast<int>(i % W)
+           : a == 1 ? static_cast<int>((i / W) % H)
+                    : static_cast<int>(i / (static_cast<std::size_t>(W) * H));
   };
   auto leak = [&](float d, float ha) { return 2.0f * d / (ha * (ha + 4.0f * d)); };
   for (std::size_t i = 0; i < n; ++i) {
@@ -379,7 +389,8 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
       z[i] = r[i] / diag[i];
       q[i] = z[i];
     }
-    const double bnorm = std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
+    const double bnorm =
+        std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
     if (!(bnorm > 0.0)) continue;
     double rz = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
     for (int it = 0; it < p.max_iterations; ++it) {
@@ -391,7 +402,8 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
         x[i] += alpha * q[i];
         r[i] -= alpha * Ap[i];
       });
-      const double rn = std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
+      const double rn =
+          std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
       if (rn <= p.tolerance * bnorm) break;
       parallel_for(n, threads, [&](std::size_t i) { z[i] = r[i] / diag[i]; });
       const double rz2 = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });

@@ -5,9 +5,9 @@
 #include <cstdint>
 #include <stdexcept>
 
+#include <glm/ext/vector_double3.hpp>
 #include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
-#include <glm/ext/vector_double3.hpp>
 
 #include "cumuli/parallel.hpp"
 #include "cumuli/rng.hpp"
@@ -19,8 +19,7 @@ constexpr double kPi = 3.14159265358979323846;
 const float kSqrt4Pi = static_cast<float>(std::sqrt(4.0 * kPi));
 
 void check_order(int order) {
-  if (order < 1 || order > kMaxShOrder)
-    throw std::invalid_argument("sh_order must be in [1, 4]");
+  if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
 }
 
 void check_step(float step_voxels) {
@@ -61,13 +60,15 @@ float min_voxel(const VolumeGrid& g) {
 }  // namespace
 
 void VolumeGrid::validate() const {
-  if (w < 1 || h < 1 || d < 1) throw std::invalid_argument("volume shape must be >= 1 on every axis");
+  if (w < 1 || h < 1 || d < 1)
+    throw std::invalid_argument("volume shape must be >= 1 on every axis");
   for (int k = 0; k < 3; ++k)
     if (!(box.hi[k] > box.lo[k]) || !std::isfinite(box.lo[k]) || !std::isfinite(box.hi[k]))
       throw std::invalid_argument("box_max must be greater than box_min on every axis (finite)");
 }
 
-void sample_trilinear(const float* vol, const VolumeGrid& g, int channels, glm::vec3 p, float* out) {
+void sample_trilinear(const float* vol, const VolumeGrid& g, int channels, glm::vec3 p,
+                      float* out) {
   const glm::vec3 u = (p - g.box.lo) / g.voxel_size();
   int x0, x1, y0, y1, z0, z1;
   float fx, fy, fz;
@@ -105,8 +106,7 @@ float optical_depth_ray(const float* vol, const VolumeGrid& g, glm::vec3 p, glm:
   const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
   const float h = len / static_cast<float>(n);
   double sum = 0.0;
-  for (int i = 0; i < n; ++i)
-    sum += sample_trilinear(vol, g, p + (t0 + (i + 0.5f) * h) * dir);
+  for (int i = 0; i < n; ++i) sum += sample_trilinear(vol, g, p + (t0 + (i + 0.5f) * h) * dir);
   return static_cast<float>(sum * h);
 }
 
@@ -122,8 +122,8 @@ namespace {
 // consecutive indices b0 = first + k (no clamping needed): contiguous loads, a vector loop.
 // Compiled for the baseline and AVX2 / AVX-512 (same IEEE operations, so the same bits).
 CUMULI_VEC_CLONES void sweep_row(float* row, std::size_t k0, std::size_t k1, const float* s0c0,
-                                 const float* s0c1, const float* s1c0, const float* s1c1,
-                                 float wa, float wb, float wc, float h) {
+                                 const float* s0c1, const float* s1c0, const float* s1c1, float wa,
+                                 float wb, float wc, float h) {
   for (std::size_t k = k0; k < k1; ++k) {
     const float p00 = s0c0[k] + wb * (s0c0[k + 1] - s0c0[k]);
     const float p01 = s0c1[k] + wb * (s0c1[k + 1] - s0c1[k]);
@@ -169,16 +169,19 @@ void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, f
   }
   const int na = n[a], nb = n[b], nc = n[c];
   const int sgn = e[a] > 0.0f ? 1 : -1;
-  const float lambda = 1.0f / std::fabs(e[a]);  // ray length per layer
+  const float lambda = 1.0f / std::fabs(e[a]);     // ray length per layer
   const float sb = e[b] / e[a], sc = e[c] / e[a];  // index shift per layer (|s| ≤ 1)
   const float dt = step_voxels * min_voxel(g);
   // Lines: index coordinates (lb + sb·u, u, lc + sc·u) for layer coordinate u (axes b, a, c).
   const float span_b = sb * static_cast<float>(na - 1), span_c = sc * static_cast<float>(na - 1);
   const int lb0 = static_cast<int>(floor_fast(std::min(0.0f, -span_b)));
-  const int lb1 = static_cast<int>(floor_fast(static_cast<float>(nb - 1) + std::max(0.0f, -span_b))) + 1;
+  const int lb1 =
+      static_cast<int>(floor_fast(static_cast<float>(nb - 1) + std::max(0.0f, -span_b))) + 1;
   const int lc0 = static_cast<int>(floor_fast(std::min(0.0f, -span_c)));
-  const int lc1 = static_cast<int>(floor_fast(static_cast<float>(nc - 1) + std::max(0.0f, -span_c))) + 1;
-  const std::size_t Lb = static_cast<std::size_t>(lb1 - lb0 + 1), Lc = static_cast<std::size_t>(lc1 - lc0 + 1);
+  const int lc1 =
+      static_cast<int>(floor_fast(static_cast<float>(nc - 1) + std::max(0.0f, -span_c))) + 1;
+  const std::size_t Lb = static_cast<std::size_t>(lb1 - lb0 + 1),
+                    Lc = static_cast<std::size_t>(lc1 - lc0 + 1);
   const std::size_t lines = Lb * Lc;
   // On layer j, the lines a voxel or its ray can read lie within 2 voxels of the voxel range
   // sideways (the ray leaves the box half a voxel out, its lines one voxel further).
@@ -188,7 +191,8 @@ void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, f
   const auto axis_range = [](float shift, int lo_line, int count, std::size_t L, std::size_t& k_lo,
                              std::size_t& k_hi) {
     const int first = static_cast<int>(floor_fast(-2.5f - shift)) - lo_line;
-    const int last = -static_cast<int>(floor_fast(-(static_cast<float>(count) + 1.5f - shift))) - lo_line;
+    const int last =
+        -static_cast<int>(floor_fast(-(static_cast<float>(count) + 1.5f - shift))) - lo_line;
     k_lo = static_cast<std::size_t>(std::clamp(first, 0, static_cast<int>(L)));
     k_hi = static_cast<std::size_t>(std::clamp(last + 1, 0, static_cast<int>(L)));
   };
@@ -208,8 +212,10 @@ void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, f
     const float* s0 = src + static_cast<std::size_t>(a0) * vst[a];
     const float* s1 = src + static_cast<std::size_t>(a1) * vst[a];
     // Lines whose lower b corner lb + ob is in [0, nb − 2] need no clamping.
-    const std::size_t in_lo = static_cast<std::size_t>(std::clamp(-ob - lb0, 0, static_cast<int>(Lb)));
-    const std::size_t in_hi = static_cast<std::size_t>(std::clamp(nb - 1 - ob - lb0, 0, static_cast<int>(Lb)));
+    const std::size_t in_lo =
+        static_cast<std::size_t>(std::clamp(-ob - lb0, 0, static_cast<int>(Lb)));
+    const std::size_t in_hi =
+        static_cast<std::size_t>(std::clamp(nb - 1 - ob - lb0, 0, static_cast<int>(Lb)));
     for (std::size_t kc = r.c_lo; kc < r.c_hi; ++kc) {
       const int lc = lc0 + static_cast<int>(kc);
       const std::size_t c0 = static_cast<std::size_t>(std::clamp(lc + oc, 0, nc - 1)) * vst[c];
@@ -218,7 +224,8 @@ void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, f
       const auto clamped = [&](std::size_t kb) {
         const int lb = lb0 + static_cast<int>(kb);
         const std::size_t b0 = static_cast<std::size_t>(std::clamp(lb + ob, 0, nb - 1)) * vst[b];
-        const std::size_t b1 = static_cast<std::size_t>(std::clamp(lb + ob + 1, 0, nb - 1)) * vst[b];
+        const std::size_t b1 =
+            static_cast<std::size_t>(std::clamp(lb + ob + 1, 0, nb - 1)) * vst[b];
         const float p00 = s0[b0 + c0] + wb * (s0[b1 + c0] - s0[b0 + c0]);
         const float p01 = s0[b0 + c1] + wb * (s0[b1 + c1] - s0[b0 + c1]);
         const float q00 = s1[b0 + c0] + wb * (s1[b1 + c0] - s1[b0 + c0]);
@@ -262,8 +269,8 @@ void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, f
       std::copy(prev, prev + lines, pj);
     }
     for (int i = 1; i < 2 * panels; ++i) {
-      const float u = static_cast<float>(j) + (from - static_cast<float>(j)) *
-                                                 (static_cast<float>(i) / (2.0f * panels));
+      const float u = static_cast<float>(j) +
+                      (from - static_cast<float>(j)) * (static_cast<float>(i) / (2.0f * panels));
       add_tap(pj, u, (i % 2 ? 4.0f : 2.0f) * w, r);
     }
     // The plane values at j, for this interval and the next one (whose lines may reach one
@@ -290,7 +297,8 @@ void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, f
   const auto to_side = [](float shift, int count) {
     std::vector<float> out(static_cast<std::size_t>(count), INFINITY);
     for (int i = 0; i < count; ++i) {
-      if (shift > 0.0f) out[static_cast<std::size_t>(i)] = (static_cast<float>(count) - 0.5f - i) / shift;
+      if (shift > 0.0f)
+        out[static_cast<std::size_t>(i)] = (static_cast<float>(count) - 0.5f - i) / shift;
       if (shift < 0.0f) out[static_cast<std::size_t>(i)] = (-0.5f - i) / shift;
     }
     return out;
@@ -318,7 +326,8 @@ void sweep_optical_depth(const float* vol, const VolumeGrid& g, glm::vec3 dir, f
         const float here = blend(pj);
         // Layer coordinate of the exit: the a face unless a side face comes first.
         float ue = face;
-        const float side = std::min(to_side_b[static_cast<std::size_t>(ib)], to_side_c[static_cast<std::size_t>(ic)]);
+        const float side = std::min(to_side_b[static_cast<std::size_t>(ib)],
+                                    to_side_c[static_cast<std::size_t>(ic)]);
         const float along = std::fabs(face - static_cast<float>(j));  // layers to the a face
         if (side < along) ue = static_cast<float>(j) + static_cast<float>(sgn) * side;
         float at_exit = 0.0f;  // Φ = 0 on the a face by construction
@@ -348,7 +357,8 @@ std::vector<float> sun_optical_depth(const float* volumes, int count, const Volu
   g.validate();
   check_step(step_voxels);
   const float len = glm::length(to_sun);
-  if (!(len > 0.0f) || !std::isfinite(len)) throw std::invalid_argument("sun direction must be non-zero");
+  if (!(len > 0.0f) || !std::isfinite(len))
+    throw std::invalid_argument("sun direction must be non-zero");
   const glm::vec3 dir = to_sun / len;
   const std::size_t nv = g.voxels();
   std::vector<float> out(nv * static_cast<std::size_t>(count));
@@ -424,8 +434,8 @@ SphereQuadrature::SphereQuadrature(int n_theta) {
     const double s = std::sqrt(std::max(0.0, 1.0 - mu * mu));
     for (int j = 0; j < m; ++j) {
       const double phi = 2.0 * kPi * (j + 0.5) / m;
-      dirs.emplace_back(static_cast<float>(s * std::cos(phi)), static_cast<float>(s * std::sin(phi)),
-                        static_cast<float>(mu));
+      dirs.emplace_back(static_cast<float>(s * std::cos(phi)),
+                        static_cast<float>(s * std::sin(phi)), static_cast<float>(mu));
       weights.push_back(static_cast<float>(wmu * 2.0 * kPi / m));
     }
   }
@@ -454,17 +464,25 @@ CUMULI_VEC_CLONES void project_depths(double* acc, const float* depth, std::size
                                       std::size_t vb, std::size_t ve, std::size_t kn,
                                       const float* basis, const float* w, int nc) {
   switch (nc) {
-    case 1: project_fixed<1>(acc, depth, nv, vb, ve, kn, basis, w); break;
-    case 4: project_fixed<4>(acc, depth, nv, vb, ve, kn, basis, w); break;
-    case 9: project_fixed<9>(acc, depth, nv, vb, ve, kn, basis, w); break;
-    default: project_fixed<16>(acc, depth, nv, vb, ve, kn, basis, w); break;
+    case 1:
+      project_fixed<1>(acc, depth, nv, vb, ve, kn, basis, w);
+      break;
+    case 4:
+      project_fixed<4>(acc, depth, nv, vb, ve, kn, basis, w);
+      break;
+    case 9:
+      project_fixed<9>(acc, depth, nv, vb, ve, kn, basis, w);
+      break;
+    default:
+      project_fixed<16>(acc, depth, nv, vb, ve, kn, basis, w);
+      break;
   }
 }
 
 }  // namespace
 
-std::vector<float> sh_optical_depth(const float* volumes, int count, const VolumeGrid& g,
-                                    int order, int n_theta, float step_voxels, int threads,
+std::vector<float> sh_optical_depth(const float* volumes, int count, const VolumeGrid& g, int order,
+                                    int n_theta, float step_voxels, int threads,
                                     DepthMethod method) {
   g.validate();
   check_order(order);
@@ -480,7 +498,8 @@ std::vector<float> sh_optical_depth(const float* volumes, int count, const Volum
     // voxel's projection accumulated over the batch in direction order (so the sums, hence the
     // result, do not depend on the thread count).
     const std::size_t ndir = quad.dirs.size();
-    const std::size_t batch = std::min<std::size_t>(ndir, 2 * std::max<std::size_t>(resolve_threads(threads, ndir), 1));
+    const std::size_t batch =
+        std::min<std::size_t>(ndir, 2 * std::max<std::size_t>(resolve_threads(threads, ndir), 1));
     std::vector<float> depth(batch * nv);
     std::vector<std::vector<float>> phi(batch);
     std::vector<float> yzx;
@@ -535,7 +554,8 @@ std::vector<float> sky_sh(const SkyParams& sky_params, int order, int n_theta) {
     const glm::vec3 L3 = sky_radiance(no_disc, sun, quad.dirs[k]);
     for (int ch = 0; ch < 3; ++ch) {
       const float L = L3[ch];
-      for (int c = 0; c < nc; ++c) acc[ch * nc + c] += static_cast<double>(L) * quad.weights[k] * y[c];
+      for (int c = 0; c < nc; ++c)
+        acc[ch * nc + c] += static_cast<double>(L) * quad.weights[k] * y[c];
     }
   }
   return std::vector<float>(acc.begin(), acc.end());
@@ -659,9 +679,8 @@ ShExpTable fit_shexp(const float* f, std::size_t count, int order, float sigma_t
       const double v = std::exp(e) * quad.weights[k];
       for (int c = 0; c < nc; ++c) tau[c] += v * basis[k * nc + c];
     }
-    const int bin = t.max_norm > 0.0f
-                        ? std::min(bins - 1, static_cast<int>(norms[i] / t.max_norm * bins))
-                        : 0;
+    const int bin =
+        t.max_norm > 0.0f ? std::min(bins - 1, static_cast<int>(norms[i] / t.max_norm * bins)) : 0;
     t0[bin] += tau[0];
     for (int c = 1; c < nc; ++c) {
       num[bin] += tau[c] * gh[c];
@@ -795,7 +814,8 @@ std::vector<OrderEntry> sweep_order(const VolumeGrid& g, glm::vec3 q) {
 
 // Trilinear density at index coordinates u (voxel centres at integers), clamped to the edges:
 // sample_trilinear without the world-to-index division.
-inline float trilinear_index(const float* vol, const int n[3], const std::size_t st[3], glm::vec3 u) {
+inline float trilinear_index(const float* vol, const int n[3], const std::size_t st[3],
+                             glm::vec3 u) {
   int i0[3], i1[3];
   float w[3];
   for (int k = 0; k < 3; ++k) {
@@ -809,10 +829,14 @@ inline float trilinear_index(const float* vol, const int n[3], const std::size_t
     return vol[static_cast<std::size_t>(x) + static_cast<std::size_t>(y) * st[1] +
                static_cast<std::size_t>(z) * st[2]];
   };
-  const float c00 = at(i0[0], i0[1], i0[2]) + w[0] * (at(i1[0], i0[1], i0[2]) - at(i0[0], i0[1], i0[2]));
-  const float c10 = at(i0[0], i1[1], i0[2]) + w[0] * (at(i1[0], i1[1], i0[2]) - at(i0[0], i1[1], i0[2]));
-  const float c01 = at(i0[0], i0[1], i1[2]) + w[0] * (at(i1[0], i0[1], i1[2]) - at(i0[0], i0[1], i1[2]));
-  const float c11 = at(i0[0], i1[1], i1[2]) + w[0] * (at(i1[0], i1[1], i1[2]) - at(i0[0], i1[1], i1[2]));
+  const float c00 =
+      at(i0[0], i0[1], i0[2]) + w[0] * (at(i1[0], i0[1], i0[2]) - at(i0[0], i0[1], i0[2]));
+  const float c10 =
+      at(i0[0], i1[1], i0[2]) + w[0] * (at(i1[0], i1[1], i0[2]) - at(i0[0], i1[1], i0[2]));
+  const float c01 =
+      at(i0[0], i0[1], i1[2]) + w[0] * (at(i1[0], i0[1], i1[2]) - at(i0[0], i0[1], i1[2]));
+  const float c11 =
+      at(i0[0], i1[1], i1[2]) + w[0] * (at(i1[0], i1[1], i1[2]) - at(i0[0], i1[1], i1[2]));
   const float c0 = c00 + w[1] * (c10 - c00);
   const float c1 = c01 + w[1] * (c11 - c01);
   return c0 + w[2] * (c1 - c0);
@@ -887,10 +911,14 @@ void sweep_point_depth(const float* vol, const VolumeGrid& g, glm::vec3 q, float
           const float mb = ui[b] + 0.5f * t * dqi[b], mc = ui[c] + 0.5f * t * dqi[c];
           const float gb = floor_fast(mb), gc = floor_fast(mc);
           const float vb = mb - gb, vc = mc - gc;
-          const std::size_t m0 = static_cast<std::size_t>(std::clamp(static_cast<int>(gb), 0, n[b] - 1)) * st[b];
-          const std::size_t m1 = static_cast<std::size_t>(std::clamp(static_cast<int>(gb) + 1, 0, n[b] - 1)) * st[b];
-          const std::size_t n0 = static_cast<std::size_t>(std::clamp(static_cast<int>(gc), 0, n[c] - 1)) * st[c];
-          const std::size_t n1 = static_cast<std::size_t>(std::clamp(static_cast<int>(gc) + 1, 0, n[c] - 1)) * st[c];
+          const std::size_t m0 =
+              static_cast<std::size_t>(std::clamp(static_cast<int>(gb), 0, n[b] - 1)) * st[b];
+          const std::size_t m1 =
+              static_cast<std::size_t>(std::clamp(static_cast<int>(gb) + 1, 0, n[b] - 1)) * st[b];
+          const std::size_t n0 =
+              static_cast<std::size_t>(std::clamp(static_cast<int>(gc), 0, n[c] - 1)) * st[c];
+          const std::size_t n1 =
+              static_cast<std::size_t>(std::clamp(static_cast<int>(gc) + 1, 0, n[c] - 1)) * st[c];
           const auto bilerp = [&](const float* sl) {
             const float p0 = sl[m0 + n0] + vb * (sl[m1 + n0] - sl[m0 + n0]);
             const float p1 = sl[m0 + n1] + vb * (sl[m1 + n1] - sl[m0 + n1]);
@@ -935,15 +963,16 @@ std::vector<float> point_optical_depth(const float* volumes, int count, const Vo
     // The sweep order of each point depends on the grid only: made once for every volume.
     std::vector<std::vector<OrderEntry>> orders(np);
     parallel_for(np, threads, [&](std::size_t k) { orders[k] = sweep_order(g, points[k]); });
-    parallel_chunks(static_cast<std::size_t>(count) * np, threads, [&](std::size_t b, std::size_t e) {
-      std::vector<float> gm(nv);
-      std::vector<std::uint8_t> done(nv);
-      for (std::size_t task = b; task < e; ++task) {
-        const std::size_t vol = task / np, k = task % np;
-        sweep_point_depth(volumes + vol * nv, g, points[k], step_voxels, orders[k],
-                          out.data() + vol * nv * np + k, np, gm.data(), done.data());
-      }
-    });
+    parallel_chunks(
+        static_cast<std::size_t>(count) * np, threads, [&](std::size_t b, std::size_t e) {
+          std::vector<float> gm(nv);
+          std::vector<std::uint8_t> done(nv);
+          for (std::size_t task = b; task < e; ++task) {
+            const std::size_t vol = task / np, k = task % np;
+            sweep_point_depth(volumes + vol * nv, g, points[k], step_voxels, orders[k],
+                              out.data() + vol * nv * np + k, np, gm.data(), done.data());
+          }
+        });
     return out;
   }
   parallel_for(static_cast<std::size_t>(count) * nv, threads, [&](std::size_t i) {
@@ -974,7 +1003,8 @@ void add_multiple_scattering(const float* density, float* light, const VolumeGri
   // E of the previous order at the voxels (RGB), starting with the single scattering.
   std::vector<float> prev(nv * 3), total(nv * 3, 0.0f);
   for (std::size_t v = 0; v < nv; ++v)
-    for (int c = 0; c < 3; ++c) prev[v * 3 + c] = sun_radiance[c] * light[v * 4] + light[v * 4 + 1 + c];
+    for (int c = 0; c < 3; ++c)
+      prev[v * 3 + c] = sun_radiance[c] * light[v * 4] + light[v * 4 + 1 + c];
   std::vector<glm::vec3> src(np);
   std::vector<float> next(nv * 3);
   for (int n = 0; n < orders; ++n) {
@@ -982,7 +1012,8 @@ void add_multiple_scattering(const float* density, float* light, const VolumeGri
       float e[3];
       sample_trilinear(prev.data(), g, 3, points[k], e);
       const float rho = sample_trilinear(density, g, points[k]);
-      src[k] = (weight * sigma_t * rho * albedo * 0.0795774715459477f) * glm::vec3(e[0], e[1], e[2]);
+      src[k] =
+          (weight * sigma_t * rho * albedo * 0.0795774715459477f) * glm::vec3(e[0], e[1], e[2]);
     }
     parallel_for(nv, threads, [&](std::size_t v) {
       const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),

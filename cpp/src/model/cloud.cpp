@@ -109,9 +109,9 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
   const std::size_t nx = static_cast<std::size_t>(res[0]), ny = static_cast<std::size_t>(res[1]),
                     nz = static_cast<std::size_t>(res[2]);
   std::vector<float> out(nx * ny * nz);
-  const glm::vec3 cell = (box.hi - box.lo) / glm::vec3(static_cast<float>(res[0]),
-                                                        static_cast<float>(res[1]),
-                                                        static_cast<float>(res[2]));
+  const glm::vec3 cell =
+      (box.hi - box.lo) /
+      glm::vec3(static_cast<float>(res[0]), static_cast<float>(res[1]), static_cast<float>(res[2]));
   const float inv_n = 1.0f / static_cast<float>(ss * ss * ss);
   parallel_for(nz * ny, threads, [&](std::size_t row) {
     const std::size_t z = row / ny, y = row % ny;

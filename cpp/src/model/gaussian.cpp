@@ -104,7 +104,8 @@ GaussianCumulusResult gaussian_cumulus(const GaussianCumulusParams& p) {
       if (v < lo || v > hi) {
         ++out.clamped;
         if (p.clamp_mode == ClampMode::Resample)
-          for (int t = 0; t < kMaxRedraws && (v < lo || v > hi); ++t) v = rng.normal(p.mu[k], p.sigma[k]);
+          for (int t = 0; t < kMaxRedraws && (v < lo || v > hi); ++t)
+            v = rng.normal(p.mu[k], p.sigma[k]);
         v = std::min(std::max(v, lo), hi);
       }
       offset[k] = v;
@@ -118,7 +119,8 @@ GaussianCumulusResult gaussian_cumulus(const GaussianCumulusParams& p) {
       case RadiusModel::Eq16: {
         const glm::dvec3 u = offset / (2.0 * glm::dvec3(p.sigma));
         const glm::dvec3 u2 = u * u;
-        const double s = p.eq16_combine == Eq16Combine::Sum ? u2.x + u2.y + u2.z : u2.x * u2.y * u2.z;
+        const double s =
+            p.eq16_combine == Eq16Combine::Sum ? u2.x + u2.y + u2.z : u2.x * u2.y * u2.z;
         r = p.epsilon * (1.0 - kEq16Falloff * std::sqrt(s));
         // Eq. (16) turns negative beyond 10 × 2σ; such clamp windows are allowed, so keep a small
         // positive radius rather than an invalid sphere.

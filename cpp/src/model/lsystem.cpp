@@ -57,7 +57,8 @@ void LSystemRules::set(char symbol, const std::string& replacement) {
 LSystemLength lsystem_length(const std::string& axiom, const LSystemRules& rules, int iterations,
                              std::uint64_t cap) {
   if (iterations < 0 || iterations > kMaxIterations)
-    throw std::invalid_argument("iterations must be in [0, " + std::to_string(kMaxIterations) + "]");
+    throw std::invalid_argument("iterations must be in [0, " + std::to_string(kMaxIterations) +
+                                "]");
   require_ascii(axiom, "axiom");
   const std::uint64_t limit = cap + 1;  // saturate here
   // len[c] = length of symbol c after k rewrites; start with k = 0.
@@ -104,7 +105,8 @@ std::string lsystem_expand(const std::string& axiom, const LSystemRules& rules, 
     const std::uint64_t shown = final_too_long ? exact.final_length : exact.peak_length;
     throw std::invalid_argument(
         std::string(final_too_long ? "the expansion" : "an intermediate string of the expansion") +
-        " would have " + (shown >= UINT64_MAX ? std::string("more than 2^64") : std::to_string(shown)) +
+        " would have " +
+        (shown >= UINT64_MAX ? std::string("more than 2^64") : std::to_string(shown)) +
         " symbols, more than max_length " + std::to_string(max_length) +
         "; lower iterations or raise max_length");
   }
@@ -191,12 +193,24 @@ TurtleResult lsystem_interpret(const std::string& symbols, const TurtleParams& p
       continue;
     }
     switch (c) {
-      case '+': turn(f.u, +1.0); break;
-      case '-': turn(f.u, -1.0); break;
-      case '&': turn(left, +1.0); break;
-      case '^': turn(left, -1.0); break;
-      case '\\': turn(f.h, -1.0); break;
-      case '/': turn(f.h, +1.0); break;
+      case '+':
+        turn(f.u, +1.0);
+        break;
+      case '-':
+        turn(f.u, -1.0);
+        break;
+      case '&':
+        turn(left, +1.0);
+        break;
+      case '^':
+        turn(left, -1.0);
+        break;
+      case '\\':
+        turn(f.h, -1.0);
+        break;
+      case '/':
+        turn(f.h, +1.0);
+        break;
       case '|':
         f.h = -f.h;  // 180° about U: heading reverses, up stays
         ++out.turns;

@@ -40,8 +40,8 @@ glm::dmat3 rotation_onto_d(glm::dvec3 from, glm::dvec3 to) {
     a = glm::normalize(a - f * glm::dot(a, f));
     return 2.0 * glm::outerProduct(a, a) - glm::dmat3(1.0);
   }
-  const glm::dvec3 x = c / s;                  // eq. (27)
-  const double theta = std::atan2(s, d);       // eq. (28), stabler than acos near 0 and π
+  const glm::dvec3 x = c / s;             // eq. (27)
+  const double theta = std::atan2(s, d);  // eq. (28), stabler than acos near 0 and π
   const glm::dmat3 a = skew(x);
   return glm::dmat3(1.0) + std::sin(theta) * a + (1.0 - std::cos(theta)) * (a * a);  // eq. (29)
 }
@@ -54,8 +54,7 @@ glm::mat3 rotation_onto(glm::vec3 from, glm::vec3 to) {
 
 MeshEllipsoidsResult ellipsoids_from_mesh(const float* vertices, std::size_t vertex_count,
                                           const std::int64_t* faces, std::size_t face_count,
-                                          float scale, bool rotate, float min_radius,
-                                          int threads) {
+                                          float scale, bool rotate, float min_radius, int threads) {
   if (vertex_count == 0) throw std::invalid_argument("vertices must not be empty");
   if (face_count == 0) throw std::invalid_argument("faces must not be empty");
   if (!(std::isfinite(scale) && scale > 0.0f && scale <= 2.0f))

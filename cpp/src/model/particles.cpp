@@ -130,8 +130,9 @@ ParticleArrays particle_fill(const CloudShape& shape, const ParticleFillParams& 
       for (int attempt = 0; attempt < ParticleFillParams::kMaxAttempts; ++attempt) {
         const double u = rng.uniform_double() * total;
         const std::size_t j = std::min<std::size_t>(
-            m - 1, static_cast<std::size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), u) -
-                                            cumulative.begin()));
+            m - 1,
+            static_cast<std::size_t>(std::upper_bound(cumulative.begin(), cumulative.end(), u) -
+                                     cumulative.begin()));
         glm::vec3 q;
         do {  // uniform in the unit ball (rejection from the cube)
           q = glm::vec3(2.0f * rng.uniform() - 1.0f, 2.0f * rng.uniform() - 1.0f,
@@ -192,12 +193,12 @@ ParticleArrays particles_from_volume(const float* density, int d, int h, int w, 
   }
   if (!(total > 0.0)) throw std::invalid_argument("density has no positive voxel");
   const glm::vec3 size = box.hi - box.lo;
-  const glm::vec3 cell = size / glm::vec3(static_cast<float>(w), static_cast<float>(h),
-                                          static_cast<float>(d));
+  const glm::vec3 cell =
+      size / glm::vec3(static_cast<float>(w), static_cast<float>(h), static_cast<float>(d));
   float radius = params.radius;
   if (radius <= 0.0f)
-    radius = static_cast<float>(std::cbrt(static_cast<double>(size.x) * size.y * size.z /
-                                          static_cast<double>(params.n)));
+    radius = static_cast<float>(
+        std::cbrt(static_cast<double>(size.x) * size.y * size.z / static_cast<double>(params.n)));
   const std::size_t n = static_cast<std::size_t>(params.n);
   ParticleArrays out;
   out.centres.resize(3 * n);
@@ -217,8 +218,10 @@ ParticleArrays particles_from_volume(const float* density, int d, int h, int w, 
       const std::size_t y = (v / static_cast<std::size_t>(w)) % static_cast<std::size_t>(h);
       const std::size_t z = v / (static_cast<std::size_t>(w) * static_cast<std::size_t>(h));
       const glm::vec3 jitter(rng.uniform(), rng.uniform(), rng.uniform());
-      const glm::vec3 p = box.lo + (glm::vec3(static_cast<float>(x), static_cast<float>(y),
-                                              static_cast<float>(z)) + jitter) * cell;
+      const glm::vec3 p =
+          box.lo + (glm::vec3(static_cast<float>(x), static_cast<float>(y), static_cast<float>(z)) +
+                    jitter) *
+                       cell;
       out.centres[3 * k] = p.x;
       out.centres[3 * k + 1] = p.y;
       out.centres[3 * k + 2] = p.z;
@@ -231,9 +234,9 @@ ParticleArrays particles_from_volume(const float* density, int d, int h, int w, 
 
 void particles_to_volume(const ParticleView& particles, int nx, int ny, int nz, const Box& box,
                          float* out, int threads) {
-  const glm::vec3 cell = (box.hi - box.lo) / glm::vec3(static_cast<float>(nx),
-                                                       static_cast<float>(ny),
-                                                       static_cast<float>(nz));
+  const glm::vec3 cell =
+      (box.hi - box.lo) /
+      glm::vec3(static_cast<float>(nx), static_cast<float>(ny), static_cast<float>(nz));
   constexpr float kSqrtTwoPi = 2.5066282746310002f;
   const std::size_t slice = static_cast<std::size_t>(nx) * static_cast<std::size_t>(ny);
   parallel_chunks(static_cast<std::size_t>(nz), threads, [&](std::size_t z0, std::size_t z1) {
@@ -252,8 +255,8 @@ void particles_to_volume(const ParticleView& particles, int nx, int ny, int nz, 
         const float f1 = (p[a] + reach - box.lo[a]) / cell[a] - 0.5f;
         // Clamped in float before the conversion (a far particle must not overflow an int).
         lo[a] = static_cast<int>(std::clamp(std::ceil(f0), 0.0f, static_cast<float>(dims[a])));
-        hi[a] = static_cast<int>(
-            std::clamp(std::floor(f1), -1.0f, static_cast<float>(dims[a] - 1)));
+        hi[a] =
+            static_cast<int>(std::clamp(std::floor(f1), -1.0f, static_cast<float>(dims[a] - 1)));
       }
       const int zlo = std::max(lo[2], static_cast<int>(z0));
       const int zhi = std::min(hi[2], static_cast<int>(z1) - 1);
@@ -261,7 +264,9 @@ void particles_to_volume(const ParticleView& particles, int nx, int ny, int nz, 
         for (int y = lo[1]; y <= hi[1]; ++y)
           for (int x = lo[0]; x <= hi[0]; ++x) {
             const glm::vec3 c = box.lo + (glm::vec3(static_cast<float>(x), static_cast<float>(y),
-                                                    static_cast<float>(z)) + 0.5f) * cell;
+                                                    static_cast<float>(z)) +
+                                          0.5f) *
+                                             cell;
             const glm::vec3 dv = c - p;
             const float r2 = glm::dot(dv, dv);
             if (r2 > reach * reach) continue;

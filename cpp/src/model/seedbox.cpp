@@ -67,7 +67,7 @@ SeedOutput grow_seed(const SeedBoxParams& p, std::uint64_t seed, std::uint64_t i
     const double sn = std::sqrt(std::max(0.0, 1.0 - c * c));
     const double phi = 2.0 * kPi * u2;
     const glm::dvec3 r = c * dir[i] + sn * (std::cos(phi) * e1[i] + std::sin(phi) * e2[i]);
-    const double rho = 1.0 - u3;  // ‖R‖ uniform in (0, 1]
+    const double rho = 1.0 - u3;                                 // ‖R‖ uniform in (0, 1]
     const glm::dvec3 b = s + (double(level) * rho * reach) * r;  // eq. (1)
     const double scale = double(p.child_min) + u4 * double(p.child_max - p.child_min);
     const glm::dvec3 hh = scale * h;
@@ -215,10 +215,10 @@ void SeedBoxParams::validate() const {
   require(std::isfinite(child_min) && std::isfinite(child_max) && child_min > 0.0f &&
               child_min <= child_max && child_max <= 4.0f,
           "child_scale must satisfy 0 < min <= max <= 4");
-  require(billboards_min >= 0 && billboards_min <= billboards_max &&
-              billboards_max <= kMaxBillboardsPerBox,
-          "billboards_per_box must satisfy 0 <= min <= max <= " +
-              std::to_string(kMaxBillboardsPerBox));
+  require(
+      billboards_min >= 0 && billboards_min <= billboards_max &&
+          billboards_max <= kMaxBillboardsPerBox,
+      "billboards_per_box must satisfy 0 <= min <= max <= " + std::to_string(kMaxBillboardsPerBox));
   // The farthest box corner must stay a sane float32 coordinate.
   const double far = std::abs(double(centre.x)) + std::abs(double(centre.y)) +
                      std::abs(double(centre.z)) + double(levels) * double(effective_reach()) +
@@ -242,7 +242,8 @@ void BillboardParams::validate() const {
   require(!textures.empty() && textures.size() <= std::size_t(kMaxTextures),
           "textures must hold 1 to " + std::to_string(kMaxTextures) + " indices");
   for (int t : textures)
-    require(t >= 0 && t < kMaxTextures, "textures must be in [0, " + std::to_string(kMaxTextures) + ")");
+    require(t >= 0 && t < kMaxTextures,
+            "textures must be in [0, " + std::to_string(kMaxTextures) + ")");
   require(std::isfinite(min_spacing) && min_spacing >= 0.0f, "min_spacing must be finite and >= 0");
 }
 

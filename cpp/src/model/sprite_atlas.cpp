@@ -22,12 +22,12 @@ float smoothstep(float e0, float e1, float x) {
 
 // What distinguishes the styles.
 struct StyleParams {
-  float k;           // contrast of the threshold
-  float t;           // fBm threshold
-  float sx, sy;      // lattice texels per unit of x and y
-  float ry;          // mask ellipse: r = sqrt(x² + (y / ry)²)
-  float flat_share;  // share of flat-bottomed sprites
-  float dark, light; // grey level at the bottom and at the top
+  float k;            // contrast of the threshold
+  float t;            // fBm threshold
+  float sx, sy;       // lattice texels per unit of x and y
+  float ry;           // mask ellipse: r = sqrt(x² + (y / ry)²)
+  float flat_share;   // share of flat-bottomed sprites
+  float dark, light;  // grey level at the bottom and at the top
   glm::vec3 tint;
 };
 
@@ -92,7 +92,8 @@ SpriteAtlas sprite_atlas(AtlasStyle style, int n, int size, std::uint64_t seed, 
     const int cx = i % atlas.nx, cy = i / atlas.nx;
     const float y = -((static_cast<float>(py) + 0.5f) - half) * scale;  // y up
     float* row = out + ((static_cast<std::size_t>(cy) * size + py) * width +
-                        static_cast<std::size_t>(cx) * size) * 4;
+                        static_cast<std::size_t>(cx) * size) *
+                           4;
     for (int px = 0; px < size; ++px) {
       const float x = ((static_cast<float>(px) + 0.5f) - half) * scale;
       const float yr = y / sp.ry;

@@ -72,8 +72,10 @@ BillboardSpriteList billboard_sprites(const std::vector<BillboardVariant>& varia
       throw std::invalid_argument("instance variant out of range");
     const BillboardVariant& v = variants[static_cast<std::size_t>(in.variant)];
     const std::size_t need = settings.caf_per_box ? v.boxes : v.billboards;
-    if (in.caf_first + need > columns) throw std::invalid_argument("instance CAF block out of range");
-    if (!(in.alpha >= 0.0f && in.alpha <= 1.0f)) throw std::invalid_argument("instance alpha in [0, 1]");
+    if (in.caf_first + need > columns)
+      throw std::invalid_argument("instance CAF block out of range");
+    if (!(in.alpha >= 0.0f && in.alpha <= 1.0f))
+      throw std::invalid_argument("instance alpha in [0, 1]");
     if (!std::isfinite(in.yaw) || !std::isfinite(in.offset.x) || !std::isfinite(in.offset.y) ||
         !std::isfinite(in.offset.z))
       throw std::invalid_argument("instance offset and yaw must be finite");
@@ -97,8 +99,8 @@ BillboardSpriteList billboard_sprites(const std::vector<BillboardVariant>& varia
                                                       : glm::length(to_centre);
     const float alpha_i = v.opacity * in.alpha;
     if (!(alpha_i > 0.0f) || v.billboards == 0) return;
-    if (settings.cull && sphere_outside_frustum(to_world(v.sphere_centre, c, s, in.offset),
-                                                v.sphere_radius, camera))
+    if (settings.cull &&
+        sphere_outside_frustum(to_world(v.sphere_centre, c, s, in.offset), v.sphere_radius, camera))
       return;
     std::vector<Kept>& out = kept[i];
     out.reserve(v.billboards);
@@ -205,13 +207,14 @@ BillboardSpriteList billboard_sprites(const std::vector<BillboardVariant>& varia
     // billboard_corners in the local frame, then shade_point (light/caf.cpp).
     double rc, rs;
     yaw_cos_sin(v.rotation[q], rc, rs);
-    const glm::vec3 r2 = static_cast<float>(rc) * local_right[i] + static_cast<float>(rs) * local_up[i];
-    const glm::vec3 u2 = static_cast<float>(-rs) * local_right[i] + static_cast<float>(rc) * local_up[i];
+    const glm::vec3 r2 =
+        static_cast<float>(rc) * local_right[i] + static_cast<float>(rs) * local_up[i];
+    const glm::vec3 u2 =
+        static_cast<float>(-rs) * local_right[i] + static_cast<float>(rc) * local_up[i];
     for (int corner = 0; corner < 4; ++corner) {
-      const glm::vec3 p = v.centres[q] + (sx[corner] * v.sizes[q].x) * r2 +
-                          (sy[corner] * v.sizes[q].y) * u2;
-      const glm::vec3 col =
-          shade_point(p, v.frame, caf + column, columns, local_lights[i], params);
+      const glm::vec3 p =
+          v.centres[q] + (sx[corner] * v.sizes[q].x) * r2 + (sy[corner] * v.sizes[q].y) * u2;
+      const glm::vec3 col = shade_point(p, v.frame, caf + column, columns, local_lights[i], params);
       out.colour[12 * k + 3 * corner] = col.x;
       out.colour[12 * k + 3 * corner + 1] = col.y;
       out.colour[12 * k + 3 * corner + 2] = col.z;

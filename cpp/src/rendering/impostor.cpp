@@ -12,7 +12,9 @@ namespace cumuli {
 
 namespace {
 
-bool finite3(glm::dvec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite3(glm::dvec3 v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 constexpr double kPi = 3.14159265358979323846;
 
@@ -110,7 +112,9 @@ int screen_impostor_size(int size, int factor) { return (size + factor - 1) / fa
 
 namespace {
 
-bool finite3f(glm::vec3 v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite3f(glm::vec3 v) {
+  return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 // (a.x·b.x + a.y·b.y) + a.z·b.z, the shader's order.
 float dot3(glm::vec3 a, glm::vec3 b) { return (a.x * b.x + a.y * b.y) + a.z * b.z; }

@@ -46,7 +46,8 @@ void LightGrid::validate() const {
   if (values.size() != static_cast<std::size_t>(nx) * ny * nz)
     throw std::invalid_argument("light grid size does not match its resolution");
   for (float v : values)
-    if (!std::isfinite(v)) throw std::invalid_argument("light grid contains NaN or infinite values");
+    if (!std::isfinite(v))
+      throw std::invalid_argument("light grid contains NaN or infinite values");
   for (int k = 0; k < 3; ++k) {
     if (!std::isfinite(box.lo[k]) || !std::isfinite(box.hi[k]))
       throw std::invalid_argument("light_box must be finite");
@@ -344,8 +345,9 @@ class RayMarcher {
           if (st.steps >= settings_.max_steps) return false;
           continue;
         }
-        const int j = attribute ? union_owner(shape, cand, n, s, origin + s * dir, cand[k].primitive)
-                                : cand[k].primitive;
+        const int j = attribute
+                          ? union_owner(shape, cand, n, s, origin + s * dir, cand[k].primitive)
+                          : cand[k].primitive;
         if (!sample(pc, j, s, origin, dir, scratch, st)) return false;
         t += step;
       }
@@ -377,8 +379,8 @@ class RayMarcher {
         if (skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st)) continue;
         ++st.steps;
         const glm::vec3 p = origin + s * dir;
-        const int j = attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive)
-                                : cand[k].primitive;
+        const int j =
+            attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive) : cand[k].primitive;
         const DensitySample d = cloud_density(shape, j, p, scratch.src);
         t += step;
         if (!(d.rho > 0.0f)) continue;
@@ -418,8 +420,8 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
   prepared.reserve(scene.clouds.size());
   for (std::size_t k = 0; k < scene.clouds.size(); ++k) {
     const RenderCloud& c = scene.clouds[k];
-    PreparedCloud pc{&c, candidate_bounds(c.shape), settings.step_for(camera.position, c.shape.centre()),
-                     nullptr, 0.0f};
+    PreparedCloud pc{&c, candidate_bounds(c.shape),
+                     settings.step_for(camera.position, c.shape.centre()), nullptr, 0.0f};
     if (settings.skip_empty) {
       const OccupancyGrid& g = grids[k];
       const glm::vec3 cell = (g.box.hi - g.box.lo) / static_cast<float>(g.res);
@@ -442,8 +444,8 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
       const std::uint64_t fbm0 = scratch.fbm, skipped0 = scratch.skipped;
       for (int c = 0; c < width; ++c) {
         const glm::vec3 dir = rays.direction(static_cast<int>(r), c);
-        const float xi = settings.physical ? jitter(static_cast<int>(r), c, settings.phys.jitter_seed)
-                                           : 0.5f;
+        const float xi =
+            settings.physical ? jitter(static_cast<int>(r), c, settings.phys.jitter_seed) : 0.5f;
         const std::uint64_t before = scratch.fbm;
         int steps = 0;
         const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi, steps);

@@ -78,9 +78,10 @@ OccupancyGrid build_occupancy(const CloudShape& cloud, int res) {
             }
           } else {
             const Box& b = bounds[j];  // the cell must also meet the primitive's bounds
-            const bool meets = clo.x <= b.hi.x + kMargin * size.x && chi.x >= b.lo.x - kMargin * size.x &&
-                               clo.y <= b.hi.y + kMargin * size.y && chi.y >= b.lo.y - kMargin * size.y &&
-                               clo.z <= b.hi.z + kMargin * size.z && chi.z >= b.lo.z - kMargin * size.z;
+            const bool meets =
+                clo.x <= b.hi.x + kMargin * size.x && chi.x >= b.lo.x - kMargin * size.x &&
+                clo.y <= b.hi.y + kMargin * size.y && chi.y >= b.lo.y - kMargin * size.y &&
+                clo.z <= b.hi.z + kMargin * size.z && chi.z >= b.lo.z - kMargin * size.z;
             occupied = meets && lower <= 1.0 + kMargin;
           }
         }

@@ -14,10 +14,13 @@ void PhysicalParams::validate() const {
   for (float g : {g1, g2})
     if (!(g > -1.0f && g < 1.0f)) throw std::invalid_argument("phase g must be in (-1, 1)");
   if (!(blend >= 0.0f && blend <= 1.0f)) throw std::invalid_argument("hg_blend must be in [0, 1]");
-  if (octaves < 1 || octaves > kMaxOctaves) throw std::invalid_argument("octaves must be in [1, 8]");
+  if (octaves < 1 || octaves > kMaxOctaves)
+    throw std::invalid_argument("octaves must be in [1, 8]");
   for (float c : {oct_a, oct_b, oct_c})
-    if (!(c >= 0.0f && c <= 1.0f)) throw std::invalid_argument("octave constants must be in [0, 1]");
-  if (jitter_seed < 0 || jitter_seed > 1023) throw std::invalid_argument("jitter_seed must be in [0, 1023]");
+    if (!(c >= 0.0f && c <= 1.0f))
+      throw std::invalid_argument("octave constants must be in [0, 1]");
+  if (jitter_seed < 0 || jitter_seed > 1023)
+    throw std::invalid_argument("jitter_seed must be in [0, 1023]");
   if (!(min_transmittance >= 0.0f && min_transmittance < 1.0f))
     throw std::invalid_argument("min_transmittance must be in [0, 1)");
 }
@@ -50,7 +53,8 @@ void PhysicalGrids::validate() const {
   grid.validate();
   if (depth.size() != static_cast<std::size_t>(frame.res[0]) * frame.res[1] * frame.res[2])
     throw std::invalid_argument("sun depth lattice does not match its frame");
-  if (rgba.size() != grid.voxels() * 4) throw std::invalid_argument("light lattice must be (D, H, W, 4)");
+  if (rgba.size() != grid.voxels() * 4)
+    throw std::invalid_argument("light lattice must be (D, H, W, 4)");
 }
 
 glm::vec3 PhysicalGrids::source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance,

@@ -22,7 +22,8 @@ float dot3(glm::vec3 a, glm::vec3 b) { return (a.x * b.x + a.y * b.y) + a.z * b.
 
 void SolidSphere::validate() const {
   if (!finite3(centre)) throw std::invalid_argument("solid centre must be finite");
-  if (!std::isfinite(radius) || !(radius > 0.0f)) throw std::invalid_argument("solid radius must be > 0");
+  if (!std::isfinite(radius) || !(radius > 0.0f))
+    throw std::invalid_argument("solid radius must be > 0");
   if (!finite3(colour) || !finite3(ambient) || colour.x < 0.0f || colour.y < 0.0f ||
       colour.z < 0.0f || ambient.x < 0.0f || ambient.y < 0.0f || ambient.z < 0.0f)
     throw std::invalid_argument("solid colour and ambient must be finite and >= 0");
@@ -80,8 +81,8 @@ void draw_solids(const std::vector<SolidSphere>& solids, const CameraParams& cam
           o[3] = kNoSolid;
           continue;
         }
-        const glm::vec3 rgb = shade_solid(solids[static_cast<std::size_t>(which)],
-                                          rays.origin + t * dir, sun);
+        const glm::vec3 rgb =
+            shade_solid(solids[static_cast<std::size_t>(which)], rays.origin + t * dir, sun);
         o[0] = rgb.x;
         o[1] = rgb.y;
         o[2] = rgb.z;

@@ -110,7 +110,8 @@ void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& c
     throw std::invalid_argument("peak must be in (0, 1]");
   for (const Sprite& s : sprites) {
     if (s.texture < 0) continue;
-    if (atlas == nullptr) throw std::invalid_argument("a sprite has a texture but there is no atlas");
+    if (atlas == nullptr)
+      throw std::invalid_argument("a sprite has a texture but there is no atlas");
     if (s.texture >= atlas->nx * atlas->ny)
       throw std::invalid_argument("sprite texture index beyond the atlas cells");
   }
@@ -151,8 +152,8 @@ void rasterise_sprites(const std::vector<Sprite>& sprites, const SpriteCamera& c
             continue;
           glm::vec3 colour = sp.colour[0];
           if (shading != nullptr) {
-            const glm::vec3 p = sp.centre + (s * sp.half_size.x) * right2[k] +
-                                (t * sp.half_size.y) * up2[k];
+            const glm::vec3 p =
+                sp.centre + (s * sp.half_size.x) * right2[k] + (t * sp.half_size.y) * up2[k];
             const glm::vec4 fr = shading->frame[k];
             ShadeFrame frame;
             frame.centre = glm::vec3(fr.x, fr.y, fr.z);

@@ -25,7 +25,8 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
   for (const auto& s : p.solids) s.validate();
   if (p.physical) {
     p.phys.validate();
-    if (p.grids == nullptr) throw std::invalid_argument("the physical mode needs the physical light");
+    if (p.grids == nullptr)
+      throw std::invalid_argument("the physical mode needs the physical light");
     p.grids->validate();
   }
   const std::size_t npix = static_cast<std::size_t>(p.width) * p.height;
@@ -66,8 +67,8 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
         if (rho <= 0.0f) continue;
         float L[4];
         sample_trilinear(light, g, 4, x, L);
-        const glm::vec3 S = p.albedo * (p.sun.radiance * (L[0] * phase) +
-                                        glm::vec3(L[1], L[2], L[3]) * kInv4Pi);
+        const glm::vec3 S =
+            p.albedo * (p.sun.radiance * (L[0] * phase) + glm::vec3(L[1], L[2], L[3]) * kInv4Pi);
         const float dtau = std::exp(-p.sigma_t * rho * h);
         colour += T * (1.0f - dtau) * S;
         T *= dtau;

@@ -22,13 +22,13 @@ namespace cumuli {
 struct EvolutionParams {
   int frames = 16;
   int res_x = 32, res_y = 32, res_z = 32;  // voxels along x, y, z
-  float growth = 0.3f;            // radii at the last frame are (1 + growth) × the first ones
-  glm::vec3 drift{0.0f};          // translation of the whole cloud per frame (world units)
-  float jitter = 0.0f;            // per-primitive random drift speed (world units per frame)
-  glm::vec3 wind{0.0f};           // noise-domain advection per frame (world units)
-  float density_scale = 1.0f;     // multiplies every density
-  float padding = 0.05f;          // box padding as a fraction of the extent (automatic box)
-  std::uint64_t seed = 0;         // draws the per-primitive drift directions
+  float growth = 0.3f;         // radii at the last frame are (1 + growth) × the first ones
+  glm::vec3 drift{0.0f};       // translation of the whole cloud per frame (world units)
+  float jitter = 0.0f;         // per-primitive random drift speed (world units per frame)
+  glm::vec3 wind{0.0f};        // noise-domain advection per frame (world units)
+  float density_scale = 1.0f;  // multiplies every density
+  float padding = 0.05f;       // box padding as a fraction of the extent (automatic box)
+  std::uint64_t seed = 0;      // draws the per-primitive drift directions
 };
 
 // The world box that holds the cloud at every frame (growth and drift are linear in the frame,

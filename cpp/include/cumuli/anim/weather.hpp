@@ -61,13 +61,13 @@ struct WeatherConfig {
 
 // The instances of one layer (structure of arrays) and its bookkeeping.
 struct LayerState {
-  std::vector<std::uint64_t> id;        // the spawn event that created it (unique per layer)
-  std::vector<double> x0, z0, t0;       // spawn position and time
-  std::vector<float> y, yaw;            // height, yaw in degrees
-  std::vector<int> variant, state;      // variant id, source state
+  std::vector<std::uint64_t> id;          // the spawn event that created it (unique per layer)
+  std::vector<double> x0, z0, t0;         // spawn position and time
+  std::vector<float> y, yaw;              // height, yaw in degrees
+  std::vector<int> variant, state;        // variant id, source state
   std::vector<double> fade_in, fade_out;  // start times (−inf / +inf: none)
   double quota = 0.0;
-  std::uint64_t events = 0;             // spawn/fade events drawn so far
+  std::uint64_t events = 0;                    // spawn/fade events drawn so far
   std::array<std::uint64_t, 4> spawn_edges{};  // spawns on edges x0, x1, z0, z1
   std::uint64_t spawned = 0, destroyed = 0, wrapped = 0, faded_out = 0;
   std::vector<double> last_spawn_x, last_spawn_z;  // spawns of the last step (or the start)

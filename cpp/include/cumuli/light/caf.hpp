@@ -93,8 +93,8 @@ float caf_value(double length, double max_distance, CafCurve curve);
 // Path lengths L towards unit `sun` for n points; owner[i] is the box owning point i (skipped
 // unless include_self; −1: none).
 void caf_path_lengths(const BoxIndex& index, const glm::vec3* points, const int* owner,
-                      std::size_t n, glm::vec3 sun, Overlap overlap, bool include_self,
-                      double* out, int threads);
+                      std::size_t n, glm::vec3 sun, Overlap overlap, bool include_self, double* out,
+                      int threads);
 
 // cos and sin of an angle in degrees, exact (0, ±1) at multiples of 90°.
 void yaw_cos_sin(double degrees, double& c, double& s);
@@ -159,9 +159,8 @@ glm::vec3 shade_point(glm::vec3 v, const ShadeFrame& frame, const float* caf, st
 // Colours (n, 3) at points; caf is (lights × q) row-major and point i uses column index[i] (its
 // box, or its billboard with per-billboard CAFs).
 void billboard_shade(const glm::vec3* points, const int* index, std::size_t n, const float* caf,
-                     std::size_t q, const ShadeFrame& frame,
-                     const std::vector<ShadeLight>& lights, const ShadeParams& params, float* out,
-                     int threads);
+                     std::size_t q, const ShadeFrame& frame, const std::vector<ShadeLight>& lights,
+                     const ShadeParams& params, float* out, int threads);
 
 // Camera-facing quad corners (n, 4, 3): v0 = p − ½w·r′ − ½h·u′, v1 = p + ½w·r′ − ½h·u′,
 // v2 = p + ½w·r′ + ½h·u′, v3 = p − ½w·r′ + ½h·u′, with r′ = cos ρ·r + sin ρ·u and

@@ -86,7 +86,6 @@ struct LightStats {
 // number of samples marched for each voxel (same layout). The result does not depend on the
 // thread count. Throws std::invalid_argument on bad settings or an invalid cloud.
 LightStats compute_light_grid(const CloudShape& cloud, const DensitySource& density,
-                              const LightSettings& settings, float* light,
-                              std::uint32_t* samples);
+                              const LightSettings& settings, float* light, std::uint32_t* samples);
 
 }  // namespace cumuli

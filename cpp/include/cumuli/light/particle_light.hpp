@@ -5,15 +5,17 @@
 //   1. light frame f = −s, r = normalize(f × up), u = r × f (up = +y, or +x when |f·y| > 1 − 1e−6),
 //      bounding sphere (c, R_b) of the particles (centres ± radii);
 //   2. an orthographic N_L × N_L buffer tightly fit to the sphere; particle k lands at
-//      x = ((p − c)·r + R_b)/(2R_b)·N_L, y = ((p − c)·u + R_b)/(2R_b)·N_L, footprint r_px = r_k·N_L/(2R_b);
+//      x = ((p − c)·r + R_b)/(2R_b)·N_L, y = ((p − c)·u + R_b)/(2R_b)·N_L, footprint r_px =
+//      r_k·N_L/(2R_b);
 //   3. the buffer is cleared to 1 (I₀ = 1: the light's colour multiplies later);
 //   4. particles sorted by t_k = (p_k − c)·f ascending (nearest the light first), ties by index;
 //   5. for each particle in that order: read back I_k before drawing it (pixel, bilinear or a
 //      SkyWorks solid-angle patch), store it, then splat g_k = a_k τ_k p_fwd γ/(4π)·I_k with alpha
 //      α_k = 1 − e^{−τ_k} over its footprint: B ← w·g_k + (1 − w·α_k)·B, w = K(d) — GL blending
 //      (ONE, ONE_MINUS_SRC_ALPHA), recurrence (4): I_k = g_{k−1} + T_{k−1}·I_{k−1}.
-// Optional 2002 emulation: quantize = 8 rounds the buffer to 1/255 (and clamps to [0, 1]) after each
-// blend, clamp = true clamps it to [0, 1]. The final buffer is the cloud's transmittance shadow map.
+// Optional 2002 emulation: quantize = 8 rounds the buffer to 1/255 (and clamps to [0, 1]) after
+// each blend, clamp = true clamps it to [0, 1]. The final buffer is the cloud's transmittance
+// shadow map.
 //
 // Everything is float32 in a fixed operation order (the GLSL twin shaders/particles/light.comp.glsl
 // and the GL read-back path agree to ~1e−7). Clouds × lights run on threads, each task sequential
@@ -40,18 +42,18 @@ float splat_kernel(SplatKernel kernel, float peak, float d);
 enum class Readback { Pixel = 0, Bilinear = 1, SolidAngle = 2 };
 
 struct ParticleLightSettings {
-  int resolution = 32;              // N_L (SkyWorks s_iShadeResolution)
-  float solid_angle = 1.0f;         // γ of g = a τ p_fwd I γ/4π ([H]: 1, i.e. omitted)
+  int resolution = 32;       // N_L (SkyWorks s_iShadeResolution)
+  float solid_angle = 1.0f;  // γ of g = a τ p_fwd I γ/4π ([H]: 1, i.e. omitted)
   PhaseKind phase = PhaseKind::Rayleigh;
   float hg_g = 0.6f;
   SplatKernel kernel = SplatKernel::Gaussian;
   float peak = 1.0f;
   Readback readback = Readback::Pixel;
   float readback_solid_angle = 0.09f;  // γ_r of the SkyWorks read-back patch (sr)
-  bool forward = true;              // false: g = 0 (single scattering only, [H] Fig. 10)
-  bool clamp = false;               // clamp the buffer to [0, 1] after each blend
-  int quantize = 0;                 // 0 (float32) or 8 (round to 1/255 after each blend)
-  bool allow_gain = false;          // allow a τ p_fwd γ/4π > α (a particle adding light)
+  bool forward = true;                 // false: g = 0 (single scattering only, [H] Fig. 10)
+  bool clamp = false;                  // clamp the buffer to [0, 1] after each blend
+  int quantize = 0;                    // 0 (float32) or 8 (round to 1/255 after each blend)
+  bool allow_gain = false;             // allow a τ p_fwd γ/4π > α (a particle adding light)
 
   static constexpr int kMinResolution = 8;
   static constexpr int kMaxResolution = 4096;
@@ -68,20 +70,20 @@ void check_energy(const ParticleView& particles, const ParticleLightSettings& se
 
 // The orthographic light camera of one cloud and light.
 struct LightFrame {
-  glm::vec3 centre{0.0f};  // c, centre of the particles' AABB
-  float radius = 0.0f;     // R_b
+  glm::vec3 centre{0.0f};                          // c, centre of the particles' AABB
+  float radius = 0.0f;                             // R_b
   glm::vec3 forward{0.0f}, right{0.0f}, up{0.0f};  // f = −s, r, u
 };
 LightFrame light_frame(const ParticleView& particles, glm::vec3 sun_direction);
 
 // One particle as the light pass splats it, in processing order.
 struct LightSplat {
-  float x = 0.0f, y = 0.0f;   // continuous buffer coordinates of the centre
-  float r_px = 0.0f;          // footprint radius in buffer pixels
-  float forward = 0.0f;       // forward_factor (g_k = forward·I_k)
-  float alpha = 0.0f;         // 1 − e^{−τ_k}
-  std::uint32_t index = 0;    // the particle's index in the cloud
-  std::int32_t patch = 1;     // side n of the solid-angle read-back patch
+  float x = 0.0f, y = 0.0f;  // continuous buffer coordinates of the centre
+  float r_px = 0.0f;         // footprint radius in buffer pixels
+  float forward = 0.0f;      // forward_factor (g_k = forward·I_k)
+  float alpha = 0.0f;        // 1 − e^{−τ_k}
+  std::uint32_t index = 0;   // the particle's index in the cloud
+  std::int32_t patch = 1;    // side n of the solid-angle read-back patch
 };
 // The splats of one light, sorted nearest the light first (ties by index).
 std::vector<LightSplat> light_splats(const ParticleView& particles, const LightFrame& frame,

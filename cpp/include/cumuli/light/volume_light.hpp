@@ -103,8 +103,8 @@ struct SphereQuadrature {
 
 // SH projection of per-voxel optical depth over the quadrature's directions:
 // count × voxels × order² floats (coefficients innermost).
-std::vector<float> sh_optical_depth(const float* volumes, int count, const VolumeGrid& g,
-                                    int order, int n_theta, float step_voxels, int threads,
+std::vector<float> sh_optical_depth(const float* volumes, int count, const VolumeGrid& g, int order,
+                                    int n_theta, float step_voxels, int threads,
                                     DepthMethod method = DepthMethod::March);
 
 // SH projection (order² coefficients per channel, 3 channels) of the render pass's sky radiance

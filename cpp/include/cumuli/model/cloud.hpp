@@ -27,10 +27,10 @@ struct CloudShape {
   std::vector<Ellipsoid> primitives;
   DensityParams density;
 
-  Box bounds() const;          // union of the primitives' bounds
-  glm::vec3 centre() const;    // centre of the bounds
+  Box bounds() const;                 // union of the primitives' bounds
+  glm::vec3 centre() const;           // centre of the bounds
   float mean_squared_radius() const;  // eq. (20), with an ellipsoid's r² the mean of its radii²
-  void validate() const;       // throws std::invalid_argument (empty, NaN, radii ≤ 0, ...)
+  void validate() const;              // throws std::invalid_argument (empty, NaN, radii ≤ 0, ...)
 };
 
 // Where density comes from: fBm of a noise lattice, or (for analytic tests) a constant.
@@ -55,7 +55,8 @@ struct DensitySample {
 };
 
 // Pseudo-spheroid density at p attributed to primitive j (eq. 2); rho = 0 outside the cloud.
-DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p, const DensitySource& src);
+DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
+                               const DensitySource& src);
 // Metaball density at p (eqs. 19–21); rho = 0 outside the iso-surface.
 DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src);
 // Dispatch on cloud.density.model (j is ignored by the metaball model).

@@ -43,9 +43,9 @@ struct GaussianCumulusParams {
   ClampMode clamp_mode = ClampMode::Saturate;
   RadiusModel radius_model = RadiusModel::Eq16;
   Eq16Combine eq16_combine = Eq16Combine::Sum;
-  float epsilon = 2.5f;        // ε₁ (eq. 15, paper 15) or ε₂ (eq. 16, paper 2.5)
-  float radius_scale = 2.9f;   // multiplies the formula's radius
-  float radius_lo = 1.0f;      // RadiusModel::Uniform: radius ∈ [lo, hi] (before radius_scale)
+  float epsilon = 2.5f;       // ε₁ (eq. 15, paper 15) or ε₂ (eq. 16, paper 2.5)
+  float radius_scale = 2.9f;  // multiplies the formula's radius
+  float radius_lo = 1.0f;     // RadiusModel::Uniform: radius ∈ [lo, hi] (before radius_scale)
   float radius_hi = 1.0f;
   bool hollow = true;
   glm::vec3 hollow_box{0.75f, 1.0f / 3.0f, 0.75f};  // half extents in units of σ
@@ -61,7 +61,7 @@ struct GaussianCumulusResult {
   std::vector<float> radii;
   // What each step did.
   int drawn = 0;
-  int clamped = 0;                 // coordinates that hit a clamp (Saturate) or were redrawn
+  int clamped = 0;  // coordinates that hit a clamp (Saturate) or were redrawn
   int removed_by_hollow = 0;
   int removed_by_containment = 0;
 };

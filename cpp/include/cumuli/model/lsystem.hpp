@@ -60,7 +60,7 @@ std::string lsystem_expand(const std::string& axiom, const LSystemRules& rules, 
 struct TurtleParams {
   double angle_lo = 25.0, angle_hi = 25.0;  // δ, degrees
   double radius_lo = 0.6, radius_hi = 1.0;
-  double step_lo = 0.8, step_hi = 1.2;      // in units of the placed radius
+  double step_lo = 0.8, step_hi = 1.2;  // in units of the placed radius
   std::string draw_symbols = "XY";
   std::string move_symbols = "f";
   glm::dvec3 start{0.0};
@@ -76,8 +76,8 @@ struct TurtleResult {
   std::vector<glm::vec3> centres;
   std::vector<float> radii;
   int turns = 0;
-  int moves = 0;       // move-only advances
-  int max_depth = 0;   // deepest '[' nesting
+  int moves = 0;      // move-only advances
+  int max_depth = 0;  // deepest '[' nesting
   glm::dvec3 final_position{0.0};
   glm::dvec3 final_heading{0.0};
 };

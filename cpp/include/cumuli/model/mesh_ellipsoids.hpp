@@ -35,8 +35,7 @@ struct MeshEllipsoidsResult {
 // `threads` threads (0 = all cores); the result does not depend on the thread count.
 MeshEllipsoidsResult ellipsoids_from_mesh(const float* vertices, std::size_t vertex_count,
                                           const std::int64_t* faces, std::size_t face_count,
-                                          float scale, bool rotate, float min_radius,
-                                          int threads);
+                                          float scale, bool rotate, float min_radius, int threads);
 
 // The rotation taking unit vector `from` onto the direction of `to` (Rodrigues, eqs. 27–30),
 // with the degenerate cases above. Exposed for tests.

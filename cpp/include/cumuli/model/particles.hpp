@@ -54,7 +54,9 @@ struct ParticleArrays {
   std::vector<float> radii, tau, albedo;
 
   std::size_t size() const { return radii.size(); }
-  ParticleView view() const { return {centres.data(), radii.data(), tau.data(), albedo.data(), size()}; }
+  ParticleView view() const {
+    return {centres.data(), radii.data(), tau.data(), albedo.data(), size()};
+  }
 };
 
 struct Sphere {
@@ -75,15 +77,16 @@ struct ParticleFillParams {
   float albedo = 0.9f;
   const Noise* noise = nullptr;  // non-null: τ modulated by fBm
   FbmParams fbm;
-  float tau_floor = 1e-3f;       // smallest fBm-modulated τ_k (fBm may be 0 somewhere)
+  float tau_floor = 1e-3f;  // smallest fBm-modulated τ_k (fBm may be 0 somewhere)
   std::uint64_t seed = 0;
 
   static constexpr int kMaxAttempts = 4096;  // rejection attempts per particle before accepting
-  void validate() const;  // throws std::invalid_argument naming the parameter
+  void validate() const;                     // throws std::invalid_argument naming the parameter
 };
 
 // Fill the union of `shape`'s ellipsoids with particles (see the header comment).
-ParticleArrays particle_fill(const CloudShape& shape, const ParticleFillParams& params, int threads);
+ParticleArrays particle_fill(const CloudShape& shape, const ParticleFillParams& params,
+                             int threads);
 
 struct VolumeSampleParams {
   int n = 1000;

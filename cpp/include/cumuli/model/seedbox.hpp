@@ -42,11 +42,11 @@ enum class CountPer {
 struct SeedBoxParams {
   glm::vec3 centre{0.0f};
   glm::vec3 half_size{4.0f, 1.5f, 3.0f};
-  std::vector<glm::vec3> directions;  // D_i, any length > 0 (normalised here)
-  std::vector<float> apertures;       // θ_i, full cone apertures in degrees, [0, 360]
-  int levels = 3;                     // L
-  int boxes_min = 1, boxes_max = 3;   // [n_min, n_max]
-  float reach = 0.0f;                 // λ in world units; 0 = ‖half_size‖
+  std::vector<glm::vec3> directions;         // D_i, any length > 0 (normalised here)
+  std::vector<float> apertures;              // θ_i, full cone apertures in degrees, [0, 360]
+  int levels = 3;                            // L
+  int boxes_min = 1, boxes_max = 3;          // [n_min, n_max]
+  float reach = 0.0f;                        // λ in world units; 0 = ‖half_size‖
   float child_min = 1.0f, child_max = 1.0f;  // child half-size = s·half_size, s ∈ [min, max]
   int billboards_min = 4, billboards_max = 8;
   CountPer count_per = CountPer::Direction;
@@ -77,9 +77,9 @@ struct BillboardCloudData {
   std::vector<glm::vec3> centres;                       // billboard centres (world)
   std::vector<glm::vec2> sizes;                         // (width, height)
   std::vector<int> texture, box;
-  std::vector<float> rotation;                          // degrees about the view axis
-  std::vector<int> boxes_per_level;                     // index = level (0 = seed boxes)
-  std::size_t billboards_drawn = 0;                     // before the min_spacing filter
+  std::vector<float> rotation;       // degrees about the view axis
+  std::vector<int> boxes_per_level;  // index = level (0 = seed boxes)
+  std::size_t billboards_drawn = 0;  // before the min_spacing filter
   std::size_t dropped_by_spacing = 0;
 };
 

@@ -27,8 +27,8 @@ constexpr int kMinAtlasSprite = 8;
 constexpr int kMaxAtlasSprite = 512;
 
 struct SpriteAtlas {
-  int nx = 0, ny = 0;  // grid of sprites
-  int size = 0;        // texels per sprite edge
+  int nx = 0, ny = 0;       // grid of sprites
+  int size = 0;             // texels per sprite edge
   std::vector<float> rgba;  // (ny·size, nx·size, 4) row-major, row 0 on top
 };
 

@@ -40,17 +40,17 @@ namespace cumuli {
 // One variant's geometry (local frame), borrowed from the caller's arrays.
 struct BillboardVariant {
   const glm::vec3* centres = nullptr;
-  const glm::vec2* sizes = nullptr;   // width, height
-  const float* rotation = nullptr;    // degrees about the view axis
+  const glm::vec2* sizes = nullptr;  // width, height
+  const float* rotation = nullptr;   // degrees about the view axis
   const std::int32_t* texture = nullptr;
   const std::int32_t* box = nullptr;  // owning box of each billboard
   std::size_t billboards = 0;
   std::size_t boxes = 0;
-  ShadeFrame frame;                   // from its boxes (directional term, height levels)
-  glm::vec3 sphere_centre{0.0f};      // bounding sphere of its quads at any orientation
+  ShadeFrame frame;               // from its boxes (directional term, height levels)
+  glm::vec3 sphere_centre{0.0f};  // bounding sphere of its quads at any orientation
   float sphere_radius = 0.0f;
   float opacity = 1.0f;
-  std::int32_t texture_base = 0;      // added to texture: the cell in the combined atlas
+  std::int32_t texture_base = 0;  // added to texture: the cell in the combined atlas
 };
 
 struct BillboardInstance {
@@ -62,30 +62,30 @@ struct BillboardInstance {
 };
 
 struct BillboardDrawSettings {
-  bool caf_per_box = true;   // CAF columns are boxes (else billboards)
+  bool caf_per_box = true;  // CAF columns are boxes (else billboards)
   bool global_sort = false;
   SpriteSort sort = SpriteSort::Distance;
   bool cull = true;
   bool fade_near = false;
   float near_start = 0.0f, near_end = 1.0f;  // z0 < z1
   bool fade_far = false;
-  float range = 1.0f;                        // R > 0
-  bool fragment = false;                     // per-pixel shading data instead of vertex colours
+  float range = 1.0f;     // R > 0
+  bool fragment = false;  // per-pixel shading data instead of vertex colours
 
   void validate() const;
 };
 
 struct BillboardSpriteList {
-  std::vector<glm::vec3> centre;       // world
-  std::vector<glm::vec2> half;         // half width, half height
-  std::vector<float> rotation;         // degrees
+  std::vector<glm::vec3> centre;  // world
+  std::vector<glm::vec2> half;    // half width, half height
+  std::vector<float> rotation;    // degrees
   std::vector<float> alpha;
-  std::vector<std::int32_t> texture;   // combined-atlas cell
-  std::vector<float> colour;           // (n, 4, 3) corner colours (vertex mode; zeros otherwise)
-  std::vector<glm::vec4> frame;        // fragment mode: (c_C world, R_C)
-  std::vector<glm::vec2> yrange;       // fragment mode: (y_lo, y_hi) world
-  std::vector<float> caf;              // fragment mode: (n, lights)
-  std::vector<std::uint32_t> instance; // provenance: instance index
+  std::vector<std::int32_t> texture;     // combined-atlas cell
+  std::vector<float> colour;             // (n, 4, 3) corner colours (vertex mode; zeros otherwise)
+  std::vector<glm::vec4> frame;          // fragment mode: (c_C world, R_C)
+  std::vector<glm::vec2> yrange;         // fragment mode: (y_lo, y_hi) world
+  std::vector<float> caf;                // fragment mode: (n, lights)
+  std::vector<std::uint32_t> instance;   // provenance: instance index
   std::vector<std::uint32_t> billboard;  //             billboard index in its variant
 };
 

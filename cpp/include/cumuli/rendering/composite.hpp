@@ -23,8 +23,8 @@ struct Layer {
 };
 
 // out (height·width·4): rgb = Σ_k T_k·C_k + T·background(d), alpha = 1 − T (the background is
-// the ground where the ray meets an enabled ground, else the sky: ground.hpp), with T_k the product of
-// (1 − A_j) over the layers j the ray enters before k (entry max(t_in, 0), ties in layer order)
+// the ground where the ray meets an enabled ground, else the sky: ground.hpp), with T_k the product
+// of (1 − A_j) over the layers j the ray enters before k (entry max(t_in, 0), ties in layer order)
 // and T over all of them. A layer whose box the ray misses (or that lies behind the camera)
 // contributes nothing at that pixel. `solid` (height·width·4: rgb, view depth) may be null.
 // The result does not depend on the thread count.

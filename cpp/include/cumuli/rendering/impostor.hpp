@@ -42,10 +42,10 @@ struct ImpostorView {
   glm::dvec3 eye{0.0}, centre{0.0};
   double radius = 0.0;
   glm::dvec3 forward{0.0}, right{0.0}, up{0.0};  // n̂₀ and the camera's right/up
-  double distance = 0.0;    // d₀
-  double half_angle = 0.0;  // β, radians
-  double fov_degrees = 0.0; // 2β in degrees
-  double half_size = 0.0;   // h
+  double distance = 0.0;                         // d₀
+  double half_angle = 0.0;                       // β, radians
+  double fov_degrees = 0.0;                      // 2β in degrees
+  double half_size = 0.0;                        // h
   glm::dvec3 near_point{0.0}, far_point{0.0};
 };
 

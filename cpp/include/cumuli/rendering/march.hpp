@@ -19,10 +19,10 @@
 #include "cumuli/noise.hpp"
 #include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"
-#include "cumuli/rendering/solid.hpp"
 #include "cumuli/rendering/ground.hpp"
-#include "cumuli/rendering/physical.hpp"
 #include "cumuli/rendering/occupancy.hpp"
+#include "cumuli/rendering/physical.hpp"
+#include "cumuli/rendering/solid.hpp"
 
 namespace cumuli {
 
@@ -76,8 +76,8 @@ struct MarchSettings {
   float step_max = 1.0f;
   float fixed_step = 0.0f;  // > 0 overrides the LOD step
   float hg_g = 0.5f;
-  int max_steps = 4096;      // samples per pixel, all clouds together
-  int max_candidates = 64;   // candidates kept per cloud and ray
+  int max_steps = 4096;     // samples per pixel, all clouds together
+  int max_candidates = 64;  // candidates kept per cloud and ray
   MarchMode march = MarchMode::Paper;
   // Order candidates by t_in (ties: primitive index), as every GL candidate_sort but "none" does;
   // false leaves them unsorted like the GL "none" variant.

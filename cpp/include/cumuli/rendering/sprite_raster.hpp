@@ -1,16 +1,19 @@
-// CPU rasteriser of view-plane-parallel sprites: the CPU twin of shaders/sprites/sprites.{vert,frag}.glsl,
-// shared by Harris 2002 particle splats (§2.3, eq. (5) and (6); spec harris.md §5) and Torchelsen &
-// Musse 2005 billboards (spec torchelsen.md §3–5).
+// CPU rasteriser of view-plane-parallel sprites: the CPU twin of
+// shaders/sprites/sprites.{vert,frag}.glsl, shared by Harris 2002 particle splats (§2.3, eq. (5)
+// and (6); spec harris.md §5) and Torchelsen & Musse 2005 billboards (spec torchelsen.md §3–5).
 //
 // A sprite is a w×h rectangle centred at a world point, parallel to the image plane, rotated by
 // `rotation` about the view axis. Its projection (RENDER_CONTRACT camera: f, r, u, th = tan(fov/2),
 // aspect = W/H) is, with v = centre − eye, Z = v·f, X = v·r, Y = v·u (skipped when Z ≤ near):
-//   j_c = W/2·(X/(Z·th·aspect) + 1),  i_c = H/2·(1 − Y/(Z·th)),  scale = (H/2)/(Z·th)  pixels per unit,
-// a rectangle of half sizes (half.x·scale, half.y·scale) in pixels. At pixel (row i, col j) the sprite
-// coordinates (s, t) ∈ [−1, 1]² (s along the rotated right, t along the rotated up) are
-//   dx = (j + ½) − j_c, dy = (i + ½) − i_c,  s = (dx·cos ψ − dy·sin ψ)/hx,  t = (−dx·sin ψ − dy·cos ψ)/hy.
+//   j_c = W/2·(X/(Z·th·aspect) + 1),  i_c = H/2·(1 − Y/(Z·th)),  scale = (H/2)/(Z·th)  pixels per
+//   unit,
+// a rectangle of half sizes (half.x·scale, half.y·scale) in pixels. At pixel (row i, col j) the
+// sprite coordinates (s, t) ∈ [−1, 1]² (s along the rotated right, t along the rotated up) are
+//   dx = (j + ½) − j_c, dy = (i + ½) − i_c,  s = (dx·cos ψ − dy·sin ψ)/hx,  t = (−dx·sin ψ − dy·cos
+//   ψ)/hy.
 // Corners v0..v3 = (−1,−1), (1,−1), (1,1), (−1,1) (bottom-left, bottom-right, top-right, top-left);
-// per-vertex colours interpolate barycentrically over the triangles (v0,v1,v2) (s ≥ t) and (v0,v2,v3).
+// per-vertex colours interpolate barycentrically over the triangles (v0,v1,v2) (s ≥ t) and
+// (v0,v2,v3).
 //
 // Two fragment modes, chosen per sprite by `texture`:
 //   * texture < 0, analytic splat (Harris): w = K(d), d = √(s² + t²); source (w·colour, w·alpha)
@@ -55,11 +58,12 @@ struct SpriteCamera {
 
 struct Sprite {
   glm::vec3 centre{0.0f};
-  glm::vec2 half_size{1.0f};  // world half width and height (Harris: r_k, r_k)
-  float rotation = 0.0f;      // radians about the view axis, counter-clockwise on screen
+  glm::vec2 half_size{1.0f};          // world half width and height (Harris: r_k, r_k)
+  float rotation = 0.0f;              // radians about the view axis, counter-clockwise on screen
   std::array<glm::vec3, 4> colour{};  // at v0..v3
-  float alpha = 1.0f;         // Harris: 1 − e^{−τ}; billboards: opacity·fade
-  std::int32_t texture = -1;  // −1: analytic splat kernel; ≥ 0: atlas cell (row-major, row 0 on top)
+  float alpha = 1.0f;                 // Harris: 1 − e^{−τ}; billboards: opacity·fade
+  std::int32_t texture =
+      -1;  // −1: analytic splat kernel; ≥ 0: atlas cell (row-major, row 0 on top)
 };
 
 // Straight-alpha RGBA atlas, (height, width, 4) float32, row 0 on top, split into nx × ny cells.
@@ -76,9 +80,9 @@ struct SpriteRasterSettings {
 
 // A sprite on screen (pixels, continuous coordinates: j + ½ is a pixel centre).
 struct ScreenSprite {
-  bool visible = false;   // Z > near and finite
+  bool visible = false;  // Z > near and finite
   float jc = 0.0f, ic = 0.0f, hx = 0.0f, hy = 0.0f, cos_r = 1.0f, sin_r = 0.0f;
-  float depth = 0.0f;     // Z
+  float depth = 0.0f;  // Z
   // Inclusive pixel range the sprite can touch, clipped to the image (empty when j0 > j1).
   int j0 = 0, j1 = -1, i0 = 0, i1 = -1;
 };
@@ -116,7 +120,8 @@ struct ParticleSpriteSettings {
   float hg_g = 0.6f;
   glm::vec3 ambient{0.0f};
   SpriteSort sort = SpriteSort::Distance;
-  bool cull = true;  // drop clouds outside the frustum and particles off screen (never changes pixels)
+  bool cull =
+      true;  // drop clouds outside the frustum and particles off screen (never changes pixels)
 };
 
 // One light as the eye pass sees it: direction towards it, radiance = colour·intensity.

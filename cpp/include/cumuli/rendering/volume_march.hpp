@@ -15,10 +15,10 @@
 
 #include <glm/vec3.hpp>
 
-#include "cumuli/phase.hpp"
 #include "cumuli/light/volume_light.hpp"
-#include "cumuli/rendering/solid.hpp"
+#include "cumuli/phase.hpp"
 #include "cumuli/rendering/physical.hpp"
+#include "cumuli/rendering/solid.hpp"
 
 namespace cumuli {
 
