@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import os
 import threading
+import time
 from collections.abc import Iterable, Iterator
 from contextlib import contextmanager
 from typing import Any
@@ -55,12 +56,17 @@ def core(desc: str, progress: Any = None) -> Iterator[None]:
     if not enabled(progress) or getattr(_local, "core", False):
         yield
         return
-    shown = tqdm(
-        total=1, desc=desc, delay=DELAY, leave=False, dynamic_ncols=True,
-        bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]",
-    )  # fmt: skip
+    started = time.monotonic()
+    shown: Any = None  # the bar, made on the loops' first report
 
     def update(done: int, total: int) -> None:
+        nonlocal shown
+        if shown is None:  # the loops report from 50 ms on: a quick call never builds a bar
+            shown = tqdm(
+                total=total, desc=desc, delay=max(0.0, DELAY - (time.monotonic() - started)),
+                leave=False, dynamic_ncols=True,
+                bar_format="{desc}: {percentage:3.0f}%|{bar}| [{elapsed}<{remaining}]",
+            )  # fmt: skip
         if shown.total != total or done < shown.n:  # a new loop (not tqdm.reset: it would
             shown.total = total  # show the bar before its delay)
             shown.n = shown.last_print_n = 0
@@ -73,4 +79,5 @@ def core(desc: str, progress: Any = None) -> Iterator[None]:
     finally:
         _local.core = False
         _core.set_progress(previous)
-        shown.close()
+        if shown is not None:
+            shown.close()
