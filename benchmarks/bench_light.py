@@ -135,7 +135,7 @@ def fbm_floor(
 def main(argv: list[str] | None = None) -> int:
     args = common.parse_args(__doc__.splitlines()[0], argv)
     resolutions = [8, 12] if args.quick else [20, 40, 64]
-    repeats = {8: 2, 12: 2} if args.quick else {20: 15, 40: 7, 64: 3}
+    repeats = {8: 2, 12: 2} if args.quick else {20: 15, 40: 7, 64: 7}
     noise = cu.Noise(seed=7)
     results: dict[str, Any] = {}
     for name, cloud in clouds().items():
