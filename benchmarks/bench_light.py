@@ -57,7 +57,7 @@ def clouds() -> dict[str, cu.Cloud]:
 def _call(cloud: cu.Cloud, noise: cu.Noise, res: int, method: str, threads: int) -> Any:
     return cu.light_grid(
         cloud, SUN, noise, resolution=res, method=method, step=STEP, threads=threads,
-        return_stats=True,
+        return_stats=True, progress=False,
     )  # fmt: skip
 
 
