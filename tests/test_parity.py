@@ -95,11 +95,13 @@ def compare(renderer, scene: cu.Scene, camera: cu.Camera, min_cover: float = 0.0
     return diff
 
 
+@pytest.mark.parametrize("jitter", [False, True])
 @pytest.mark.parametrize("march", ["paper", "union"])
 @pytest.mark.parametrize("name", sorted(SCENES))
-def test_gl_matches_cpu(renderer, name, march):
+def test_gl_matches_cpu(renderer, name, march, jitter):
     base = SCENES[name]
-    scene = base.replace(settings=base.settings.replace(exact_noise=True, march=march))
+    changes = {"exact_noise": True, "march": march, "jitter": jitter, "jitter_seed": 5}
+    scene = base.replace(settings=base.settings.replace(**changes))
     compare(renderer, scene, scene.default_camera())
 
 

@@ -49,6 +49,7 @@ def camera_for(scene: cu.Scene) -> cu.Camera:
         ("physical_resolution", 2, ValueError),
         ("multiple_scattering", 1, TypeError),
         ("jitter_seed", 5000, ValueError),
+        ("jitter", 1, TypeError),
         ("shadow_resolution", 0, ValueError),
     ],
 )

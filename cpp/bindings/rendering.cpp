@@ -159,7 +159,8 @@ void bind_march(py::module_& m) {
          int octaves, float gain, float lacunarity, float frequency, const Noise* noise,
          int threads, float density_constant, bool sort_candidates, bool with_sky,
          const py::object& solids, const py::object& physical, const py::object& ground,
-         float min_transmittance, bool skip_empty, bool return_stats) -> py::object {
+         float min_transmittance, bool skip_empty, bool jitter, int jitter_seed,
+         bool return_stats) -> py::object {
         if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
           throw py::value_error("width and height must be in [1, " + std::to_string(kMaxEdge) +
                                 "], got " + std::to_string(width) + "x" + std::to_string(height));
@@ -190,6 +191,10 @@ void bind_march(py::module_& m) {
         s.density_constant = density_constant;
         s.min_transmittance = min_transmittance;
         s.skip_empty = skip_empty;
+        s.jitter = jitter;
+        if (jitter_seed < 0 || jitter_seed > 1023)
+          throw py::value_error("jitter_seed must be in [0, 1023]");
+        s.phys.jitter_seed = jitter_seed;
         if (!physical.is_none()) {
           s.physical = true;
           s.phys = physical_of(physical.cast<py::dict>());
@@ -256,7 +261,7 @@ void bind_march(py::module_& m) {
       py::arg("sort_candidates") = true, py::arg("with_sky") = true, py::arg("solids") = py::none(),
       py::arg("physical") = py::none(), py::arg("ground") = py::none(),
       py::arg("min_transmittance") = 1e-6f, py::arg("skip_empty") = false,
-      py::arg("return_stats") = false,
+      py::arg("jitter") = false, py::arg("jitter_seed") = 0, py::arg("return_stats") = false,
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image, row 0 at "
       "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
       "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); "
@@ -265,7 +270,8 @@ void bind_march(py::module_& m) {
       "T); "
       "solids (n, 4) (centre, radius) stop every ray at the nearest solid. min_transmittance: the "
       "paper mode's early exit; skip_empty: empty-space skipping (occupancy grids, the same "
-      "image); return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}).");
+      "image); jitter: the paper mode's samples at xi*step (jitter_seed's pattern) instead of "
+      "step/2; return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}).");
 
   m.def(
       "occupancy_grid",

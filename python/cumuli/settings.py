@@ -92,6 +92,13 @@ class RenderSettings:
         approximation alone).
     jitter_seed:
         Seed of the interleaved-gradient pattern that jitters the camera rays' first sample.
+    jitter:
+        The paper mode's samples at ``ξ·Δ`` into their step, ``ξ`` the per-pixel pattern of
+        ``jitter_seed``, instead of at ``Δ/2`` (the paper). Where a near-opaque cloud (a metaball,
+        a dense cumulus) is entered within one or two steps, the fixed offset makes the first
+        sample's depth jump from pixel to pixel in whole steps, which draws contour rings on the
+        surface; the jitter turns them into a fine pattern that averages out. ``False`` (the
+        default) is the paper's march; the physical mode always jitters.
     shadow_resolution:
         Edge of the ground's sun shadow map (texels), when the scene has a ground.
     empty_space_skipping:
@@ -145,6 +152,7 @@ class RenderSettings:
     shadow_resolution: int = 256
     empty_space_skipping: bool = True
     min_transmittance: float = 1e-6
+    jitter: bool = False
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -235,6 +243,7 @@ class RenderSettings:
             self.min_transmittance, "settings.min_transmittance", 0.0, 1.0, hi_open=True
         )
         s(self, "min_transmittance", t_min)
+        s(self, "jitter", check.flag(self.jitter, "settings.jitter"))
 
     def step_for(self, distance: float) -> float:
         """The march step Δ for a cloud whose centre is ``distance`` from the camera."""

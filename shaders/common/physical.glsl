@@ -2,6 +2,7 @@
 // cpp/src/rendering/physical.cpp): phase function, scattering octaves, the interleaved-gradient
 // jitter, and the lookups of a drawable's physical light (τ_sun on the sun's lattice, the world
 // lattice's diffuse sunlight F and sky light S) in atlases.
+#include "common/jitter.glsl"
 #include "common/phase.glsl"
 #include "common/trilinear.glsl"
 
@@ -39,16 +40,9 @@ int octave_terms(float c, out float w[MAX_OCTAVES], out float k[MAX_OCTAVES]) {
     return n;
 }
 
-// Interleaved gradient noise (Jimenez 2014) of pixel (row, col).
+// The camera ray's jitter of pixel (row, col).
 float phys_jitter(int row, int col) {
-    float s = 5.588238 * float(u_phys_seed);
-    float x = float(col) + s, y = float(row) + s;
-    float a = 0.06711056 * x;
-    float b = 0.00583715 * y;
-    float f = a + b;
-    float inner = f - floor(f);
-    float g = 52.9829189 * inner;
-    return g - floor(g);
+    return ign_jitter(row, col, u_phys_seed);
 }
 
 // Trilinear lookup at texel coordinate q (texel centres at i + ½) of a lattice of size `res`

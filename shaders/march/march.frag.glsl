@@ -11,6 +11,7 @@
 #include "common/sky.glsl"
 #include "common/solid.glsl"
 #include "common/ground.glsl"
+#include "common/jitter.glsl"
 #ifdef PHYSICAL
 // The physical lighting mode (RENDER_CONTRACT "Physical lighting"): union marching with a
 // jittered start, σ = extinction·ρ, physical.glsl's shading; u_absorption, u_g and u_union are
@@ -53,6 +54,8 @@ uniform int u_max_steps;
 uniform int u_max_candidates;
 uniform bool u_union;         // march = "union"
 uniform float u_min_t;        // the paper mode's early exit: stop once T < u_min_t
+uniform bool u_jitter;        // the paper mode's samples at ξ·Δ (the pixel's jitter), not Δ/2
+uniform int u_jitter_seed;    // its pattern's seed
 uniform bool u_with_sky;      // false: the premultiplied layer (colour, 1 − T) for the compositor
 
 out vec4 frag;
@@ -237,6 +240,8 @@ void main() {
     float xi = phys_jitter(i, j);
 #else
     float phase = hg_phase(u_g, cos_theta);
+    // Each sample at ξ·Δ into its step: Δ/2 as the paper, or the pixel's jitter.
+    float xi = u_jitter ? ign_jitter(i, j, u_jitter_seed) : 0.5;
 #endif
     int cap = clamp(u_max_candidates, 1, MAX_CANDIDATES);
     int max_steps = max(u_max_steps, 1);
@@ -295,7 +300,7 @@ void main() {
             }
             while (t < cand_out[k]) {
                 if (samples >= max_steps) { done = true; break; }
-                float s = t + 0.5 * step;
+                float s = t + xi * step;
                 if (!(s < t_solid)) break;
                 vec3 p = o + s * dir;
                 float t_safe;
@@ -303,7 +308,7 @@ void main() {
                     // Pass over the lattice's samples in the empty cell (each one a step).
                     t_safe = min(t_safe, t_solid);
                     do { ++samples; t += step; }
-                    while (samples < max_steps && t < cand_out[k] && t + 0.5 * step < t_safe);
+                    while (samples < max_steps && t < cand_out[k] && t + xi * step < t_safe);
                     continue;
                 }
                 ++samples;

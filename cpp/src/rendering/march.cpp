@@ -238,7 +238,8 @@ class RayMarcher {
     } else {
       st.phase = henyey_greenstein(settings_.hg_g, st.cos_theta);
       for (const BoxHit& h : hits) {
-        if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch, st))
+        if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch, st,
+                         xi))
           break;
       }
     }
@@ -308,25 +309,26 @@ class RayMarcher {
     return true;
   }
 
-  // Marches one cloud; false when the whole ray is done.
+  // Marches one cloud, each sample at ξ·Δ into its step (ξ = ½ unless jittered); false when the
+  // whole ray is done.
   bool march_cloud(const PreparedCloud& pc, const BoxHit& h, glm::vec3 origin, glm::vec3 dir,
-                   Scratch& scratch, State& st) const {
+                   Scratch& scratch, State& st, float xi) const {
     const CloudShape& shape = pc.cloud->shape;
     Candidate* cand = scratch.candidates.data();
     const int n = collect_candidates(shape, origin, dir, h.t_in, h.t_out, cand,
                                      settings_.max_candidates, settings_.sort_candidates);
     const float step = pc.step;
-    const float half = step / 2.0f;
+    const float offset = xi * step;  // Δ/2 exactly when not jittered (the paper)
     if (settings_.march == MarchMode::Paper) {
       // Every candidate interval on its own: overlaps are marched twice, as in the paper.
       for (int k = 0; k < n; ++k) {
         for (float t = cand[k].t_in; t < cand[k].t_out;) {
-          if (!(t + half < st.t_limit)) break;
-          if (skip_empty(pc, t, half, cand[k].t_out, origin, dir, scratch, st)) {
+          if (!(t + offset < st.t_limit)) break;
+          if (skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st)) {
             if (st.steps >= settings_.max_steps) return false;
             continue;
           }
-          if (!sample(pc, cand[k].primitive, t + half, origin, dir, scratch, st)) return false;
+          if (!sample(pc, cand[k].primitive, t + offset, origin, dir, scratch, st)) return false;
           t += step;
         }
       }
@@ -339,9 +341,9 @@ class RayMarcher {
       if (cand[k].t_out <= t) continue;
       t = std::max(t, cand[k].t_in);
       while (t < cand[k].t_out) {
-        const float s = t + half;
+        const float s = t + offset;
         if (!(s < st.t_limit)) break;
-        if (skip_empty(pc, t, half, cand[k].t_out, origin, dir, scratch, st)) {
+        if (skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st)) {
           if (st.steps >= settings_.max_steps) return false;
           continue;
         }
@@ -444,8 +446,9 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
       const std::uint64_t fbm0 = scratch.fbm, skipped0 = scratch.skipped;
       for (int c = 0; c < width; ++c) {
         const glm::vec3 dir = rays.direction(static_cast<int>(r), c);
-        const float xi =
-            settings.physical ? jitter(static_cast<int>(r), c, settings.phys.jitter_seed) : 0.5f;
+        const float xi = settings.physical || settings.jitter
+                             ? jitter(static_cast<int>(r), c, settings.phys.jitter_seed)
+                             : 0.5f;
         const std::uint64_t before = scratch.fbm;
         int steps = 0;
         const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi, steps);

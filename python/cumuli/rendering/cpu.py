@@ -211,6 +211,8 @@ def render_cpu_args(
         "ground": ground_args(scene.ground, scene.sky, lit.shadow),
         "min_transmittance": float(s.min_transmittance),
         "skip_empty": bool(s.empty_space_skipping),
+        "jitter": bool(s.jitter),
+        "jitter_seed": int(s.jitter_seed),
     }
 
 

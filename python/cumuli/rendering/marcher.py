@@ -304,6 +304,8 @@ class MarcherGL:
         set_("u_union", s.march == "union")
         set_("u_exact", s.exact_noise)
         set_("u_min_t", s.min_transmittance)
+        set_("u_jitter", s.jitter)
+        set_("u_jitter_seed", s.jitter_seed)
         set_("u_octaves", s.octaves)
         set_("u_gain", s.gain)
         set_("u_lacunarity", s.lacunarity)

@@ -96,6 +96,10 @@ struct MarchSettings {
   // cannot hold density are passed over without evaluating the density. They still count as
   // steps and keep the sample lattice, so the image is the same bit for bit.
   bool skip_empty = false;
+  // The paper mode's samples at ξ·Δ into their step (ξ = jitter(row, col, phys.jitter_seed))
+  // instead of Δ/2: turns the step rings of near-opaque clouds into a fine pattern. The physical
+  // mode always jitters.
+  bool jitter = false;
 
   static constexpr int kMaxStepsLimit = 1 << 24;
   static constexpr int kMaxCandidatesLimit = 4096;
