@@ -91,7 +91,8 @@ class RenderSettings:
         Switch the multiple-scattering approximation and the sky light off (to study each
         approximation alone).
     jitter_seed:
-        Seed of the interleaved-gradient pattern that jitters the camera rays' first sample.
+        Seed of the interleaved-gradient pattern that jitters the camera rays' samples (the
+        physical mode, and the paper mode with ``jitter``).
     jitter:
         The paper mode's samples at ``ξ·Δ`` into their step, ``ξ`` the per-pixel pattern of
         ``jitter_seed``, instead of at ``Δ/2`` (the paper). Where a near-opaque cloud (a metaball,
