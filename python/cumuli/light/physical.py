@@ -88,6 +88,14 @@ class PhysicalLight:
         return _core.sample_frame(self.sun_depth, self.frame, pts)
 
 
+def cloud_extinction_scale(settings: Any) -> float:
+    """σt per unit of a 2018 cloud's density: the physical mode's ``extinction_scale``, the paper
+    mode's camera-ray ``absorption / step_ref``."""
+    if settings.physical:
+        return float(settings.extinction_scale)
+    return float(settings.absorption / settings.step_ref)
+
+
 def _medium_args(drawable: Any, settings: Any) -> tuple[list, list]:
     if not isinstance(drawable, (Cloud, VolumeCloud)):
         # Particle clouds and billboards keep their own light models (Harris 2002, Torchelsen
@@ -98,12 +106,13 @@ def _medium_args(drawable: Any, settings: Any) -> tuple[list, list]:
     centres, radii, rotations, model, kappa, phi = drawable.core_args()
     if settings.kappa is not None and model == "spheroid":
         kappa = settings.kappa
-    scale = float(settings.extinction_scale)
+    scale = cloud_extinction_scale(settings)
     return [(centres, radii, rotations, model, float(kappa), float(phi), scale)], []
 
 
 def medium_args(drawables: Any, settings: Any) -> tuple[list, list]:
-    """The core's ``(clouds, volumes)`` lists of the drawables' extinction (their medium)."""
+    """The core's ``(clouds, volumes)`` lists of the drawables' extinction (their medium): the 2018
+    clouds' density times :func:`cloud_extinction_scale`, the volumes' ``sigma_t·density``."""
     clouds: list = []
     volumes: list = []
     for d in drawables:

@@ -28,7 +28,7 @@ from cumuli import _validate as check
 from cumuli.light.caf import ground_caf
 from cumuli.light.footprint import box_corners, footprint
 from cumuli.light.particles import ground_shadow
-from cumuli.light.physical import fbm_args
+from cumuli.light.physical import fbm_args, medium_args
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
 from cumuli.model.cloud import Cloud
@@ -51,29 +51,21 @@ class ShadowMap:
     height: float
 
 
-def cloud_extinction_scale(settings: Any) -> float:
-    """σt per unit of a 2018 cloud's density: the physical mode's ``extinction_scale``, the paper
-    mode's camera-ray ``absorption / step_ref``."""
-    if settings.physical:
-        return float(settings.extinction_scale)
-    return float(settings.absorption / settings.step_ref)
-
-
-def _medium(scene: Any) -> tuple[list, list]:
-    s = scene.settings
-    clouds, volumes = [], []
-    for d in scene.clouds:
-        if isinstance(d, Cloud):
-            centres, radii, rotations, model, kappa, phi = d.core_args()
-            if s.kappa is not None and model == "spheroid":
-                kappa = s.kappa
-            clouds.append((centres, radii, rotations, model, float(kappa), float(phi),
-                           cloud_extinction_scale(s)))  # fmt: skip
-        elif isinstance(d, VolumeCloud):
-            volumes.append((d.density, d.box[0], d.box[1], float(d.sigma_t)))
-        # Particle clouds and billboards have no extinction field: they shade the ground with
-        # their own light models (_own_shadows).
-    return clouds, volumes
+def media_transmittance(
+    scene: Any, points: np.ndarray, direction: Any, threads: int = 0
+) -> np.ndarray | None:
+    """``exp(−τ)`` ``(N,)`` float32 from ``(N, 3)`` float32 points towards ``direction`` through
+    the scene's media (its 2018 clouds and volumes, :func:`cumuli.light.physical.medium_args`),
+    in segments of at most ``settings.light_step`` sampled at their midpoints; None when the
+    scene has none."""
+    clouds, volumes = medium_args(scene.clouds, scene.settings)
+    if not (clouds or volumes):
+        return None
+    tau = _core.medium_optical_depth(
+        clouds, volumes, scene.noise._core, *fbm_args(scene.settings), points, direction,
+        float(scene.settings.light_step), threads,
+    )  # fmt: skip
+    return np.exp(-tau.astype(np.float64)).astype(np.float32)
 
 
 #: The drawables that shade the ground.
@@ -153,15 +145,11 @@ def compute_shadow(
     zs = z0 + (np.arange(nz) + 0.5) * (z1 - z0) / nz
     zz, xx = np.meshgrid(zs, xs, indexing="ij")
     pts = np.stack([xx, np.full_like(xx, height), zz], -1).reshape(-1, 3).astype(np.float32)
-    clouds, volumes = _medium(scene)
-    s = scene.settings
     values = np.ones((nz, nx), np.float32)
-    if scene.sun.direction[1] > 0 and (clouds or volumes):
-        tau = _core.medium_optical_depth(
-            clouds, volumes, scene.noise._core, *fbm_args(s), pts, scene.sun.direction,
-            float(s.light_step), threads,
-        )  # fmt: skip
-        values = np.exp(-tau.astype(np.float64)).astype(np.float32).reshape(nz, nx)
+    if scene.sun.direction[1] > 0:
+        t = media_transmittance(scene, pts, scene.sun.direction, threads)
+        if t is not None:
+            values = t.reshape(nz, nx)
     own = _own_shadows(scene, pts, threads, lights) if scene.sun.direction[1] > 0 else None
     if own is not None:
         values = values * own.astype(np.float32).reshape(nz, nx)
