@@ -103,13 +103,15 @@ class ParticleLight:
     ``I₀ = 1``); ``light_dirs`` ``(L, 3)`` the directions it was made for; ``params`` what it
     depends on (settings, particle digest, method); ``buffers`` ``(L, N_L, N_L)`` the final light
     buffers (``[y, x]``, ``y`` along the light frame's up: the cloud's transmittance shadow map
-    seen from each light) when asked for, else None.
+    seen from each light) when asked for, else None; ``unshadowed`` the cloud's own light this
+    one was made from by :meth:`through` (None: this is the cloud's own light).
     """
 
     light: np.ndarray
     light_dirs: np.ndarray
     params: dict[str, Any] = field(default_factory=dict)
     buffers: np.ndarray | None = None
+    unshadowed: ParticleLight | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         light = np.ascontiguousarray(self.light, dtype=np.float32)
@@ -126,6 +128,15 @@ class ParticleLight:
     @property
     def n_lights(self) -> int:
         return int(self.light.shape[1])
+
+    def through(self, transmittance: np.ndarray) -> ParticleLight:
+        """The cloud's own light with particle ``k``'s light ``ℓ`` times ``transmittance[k, ℓ]``:
+        what the light crossed before it reached the cloud (other clouds: the scene's media)."""
+        own = self.unshadowed or self
+        t = np.asarray(transmittance, dtype=np.float32)
+        if t.shape != own.light.shape:
+            raise ValueError(f"transmittance must be {own.light.shape}, got {t.shape}")
+        return ParticleLight(own.light * t, own.light_dirs, own.params, own.buffers, own)
 
 
 def light_params(cloud: ParticleCloud, settings: SpriteSettings) -> dict[str, Any]:

@@ -48,7 +48,7 @@ from cumuli.light.particles import (
     particles_digest,
 )
 from cumuli.light.physical import PhysicalLight, physical_light
-from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
+from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent, media_transmittance
 from cumuli.light.volume import VolumeLighting
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
@@ -354,6 +354,31 @@ def _shadow_digest(drawable: Any) -> tuple:
     return drawable_digest(drawable)
 
 
+def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
+    """``lights`` (aligned with ``scene.clouds``) with every particle cloud's light passed through
+    the scene's media first (beyond Harris 2002, whose clouds light only themselves): particle
+    ``k``'s light ``ℓ`` times ``exp(−τ)`` from its centre towards ``ℓ`` through the 2018 clouds
+    and volumes (:func:`cumuli.light.shadow.media_transmittance`), memoised by content and place.
+    Particle clouds and billboards do not shade one another or the media."""
+    out = list(lights)
+    media = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
+    if not media:
+        return out
+    dirs = light_directions([scene.sun, *scene.lights])
+    for k, cloud in enumerate(scene.clouds):
+        if not isinstance(cloud, ParticleCloud) or not isinstance(out[k], ParticleLight):
+            continue
+
+        def transmittance(cloud: ParticleCloud = cloud) -> np.ndarray:
+            columns = [media_transmittance(scene, cloud.centres, d, threads) for d in dirs]
+            return np.stack(columns, axis=1)
+
+        key = ("through media", media, _shadow_digest(cloud), dirs.tobytes(), scene.noise.seed,
+               scene.noise.size, scene.settings)  # fmt: skip
+        out[k] = out[k].through(_remember(key, transmittance))
+    return out
+
+
 def scene_shadow(
     scene: Scene, threads: int = 0, lights: Sequence[Any] | None = None
 ) -> ShadowMap | None:
@@ -407,6 +432,8 @@ def prepare_light(
         if len(lights) != n:
             raise ValueError(f"lights must hold one entry per cloud ({n}), got {len(lights)}")
         given = list(lights)
+    # A light passed through the media is the cloud's own light underneath: that is what is given.
+    given = [g.unshadowed or g if isinstance(g, ParticleLight) else g for g in given]
     # The physical mode replaces the light pass of the marched kinds; particles and billboards
     # keep their own light models (Harris 2002, Torchelsen & Musse 2005) in either mode.
     passes = {**LIGHT_PASSES, **PHYSICAL_LIGHT_PASSES} if scene.settings.physical else LIGHT_PASSES
@@ -437,4 +464,5 @@ def prepare_light(
                 out[k] = passes[drawable.kind](drawable, scene, given[k], threads)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
+    out = through_media(scene, out, threads)
     return LitScene(scene, tuple(out), scene_shadow(scene, threads, out))
