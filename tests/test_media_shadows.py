@@ -42,7 +42,7 @@ def test_clear_light_stays_the_same_bits_and_is_not_shaded_twice() -> None:
     away = puff(9.0).translated((40.0, 0.0, 0.0))  # no medium between it and the sun
     alone = cu.prepare_light(scene(clouds=[away])).lights[0]
     with_media = cu.prepare_light(scene(clouds=[cumulus, away])).lights[1]
-    assert np.array_equal(with_media.light, alone.light)
+    assert np.array_equal(with_media.light, alone.light) and with_media.unshadowed is None
     below = scene(clouds=[cumulus, puff(9.0)])
     lit = cu.prepare_light(below)
     again = cu.prepare_light(lit)  # its lights are given back: the cloud's own light underneath
@@ -52,7 +52,7 @@ def test_clear_light_stays_the_same_bits_and_is_not_shaded_twice() -> None:
     moved = cu.prepare_light(
         lit.scene.replace(clouds=[cumulus.translated((60.0, 0, 0)), puff(9.0)])
     )
-    assert np.array_equal(moved.lights[1].light, lit.lights[1].unshadowed.light)
+    assert moved.lights[1] is lit.lights[1].unshadowed  # memoised: the very same light
     with pytest.raises(ValueError, match="transmittance"):
         lit.lights[1].through(np.ones((3, 1)))
 

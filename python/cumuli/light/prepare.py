@@ -375,7 +375,9 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
 
         key = ("through media", media, _shadow_digest(cloud), dirs.tobytes(), scene.noise.seed,
                scene.noise.size, scene.settings)  # fmt: skip
-        out[k] = out[k].through(_remember(key, transmittance))
+        t = _remember(key, transmittance)
+        if not (t == 1.0).all():  # in the clear: the cloud's own light object, as without media
+            out[k] = out[k].through(t)
     return out
 
 
