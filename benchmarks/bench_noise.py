@@ -15,9 +15,10 @@ the reference point: a hashed value noise, single-threaded (its CPU time equals 
 the JSON records the ratio).
 
 SIMD (issue 14, item 1): the C++ fBm is also timed on 1 thread at every SIMD level this CPU
-supports (``cpp_1_thread_scalar`` / ``_avx2`` / ``_avx512``, interleaved, selected with
-``cumuli.noise.set_simd_level``); "scalar" is the portable kernel (today's method before the
-hand-written SIMD paths), the others give bit-identical values. Targets, each
+supports (``cpp_1_thread_scalar`` / ``_avx2_gather`` / ``_avx2_loads`` / ``_avx512``, interleaved,
+selected with ``cumuli.noise.set_simd_level`` and, for AVX2, ``set_simd_fetch``: the lattice rows
+read with gather instructions or with plain loads); "scalar" is the portable kernel (today's method
+before the hand-written SIMD paths), the others give bit-identical values. Targets, each
 ``{limit, comparison, reached, met}`` with today's scalar path as ``baseline`` (value and ratio):
 ≥ 100 M samples/s per thread, ≥ 7× pyfastnoiselite per thread (CPU time), ≥ 1.8× from 1 to 2
 threads (only meaningful when two cores are free; the load average is recorded).
@@ -87,25 +88,37 @@ def bench_cpp(
 
 
 def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict[str, Any]]:
-    """The C++ fBm on 1 thread at every supported SIMD level, repeats interleaved across levels."""
-    from cumuli.noise import set_simd_level, simd_levels
+    """The C++ fBm on 1 thread with every kernel this CPU runs, repeats interleaved across them.
 
-    def at(level: str) -> Any:
+    Keys: the SIMD level, and for AVX2 one per lattice fetch (``avx2_gather``, ``avx2_loads``).
+    """
+    from cumuli.noise import SIMD_FETCHES, set_simd_fetch, set_simd_level, simd_levels
+
+    def at(level: str, fetch: str) -> Any:
         def run() -> np.ndarray:
             set_simd_level(level)
+            set_simd_fetch(fetch)
             try:
                 return noise.fbm(pts, octaves=OCTAVES, threads=1)
             finally:
                 set_simd_level("auto")
+                set_simd_fetch("auto")
 
         return run
 
-    levels = simd_levels()
-    timed = common.interleaved_repeats({lvl: at(lvl) for lvl in levels}, repeats)
-    return {
-        lvl: _method(len(pts), wall, cpu, threads=1, simd_level=lvl)
-        for lvl, (wall, cpu) in timed.items()
+    kernels = {
+        (f"{lvl}_{fetch}" if lvl == "avx2" else lvl): (lvl, fetch)
+        for lvl in simd_levels()
+        for fetch in (SIMD_FETCHES if lvl == "avx2" else ("auto",))
     }
+    timed = common.interleaved_repeats({k: at(*v) for k, v in kernels.items()}, repeats)
+    return {
+        k: _method(
+            len(pts), wall, cpu, threads=1, simd_level=kernels[k][0],
+            simd_fetch=kernels[k][1] if kernels[k][0] == "avx2" else None,
+        )
+        for k, (wall, cpu) in timed.items()
+    }  # fmt: skip
 
 
 def bench_glsl(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, Any]:
@@ -273,16 +286,17 @@ def main(argv: list[str] | None = None) -> int:
 
     methods: dict[str, Any] = {}
     skipped: dict[str, str] = {}
-    from cumuli.noise import simd_level
+    from cumuli.noise import simd_fetch, simd_level
 
     cpp = bench_cpp(noise, pts, repeats, [1, 2] + ([0] if machine["cores"] > 2 else []))
     methods["cpp_1_thread"], methods["cpp_2_threads"] = cpp[1], cpp[2]
     if 0 in cpp:
         methods["cpp_all_threads"] = cpp[0]
-    widest = simd_level()
+    widest, fetch = simd_level(), simd_fetch()
     for key in ("cpp_1_thread", "cpp_2_threads", "cpp_all_threads"):
         if key in methods:
             methods[key]["simd_level"] = widest
+            methods[key]["simd_fetch"] = fetch if widest == "avx2" else None
     simd = bench_simd(noise, pts, repeats)
     for lvl, m in simd.items():
         methods[f"cpp_1_thread_{lvl}"] = m
@@ -326,17 +340,24 @@ def main(argv: list[str] | None = None) -> int:
         / methods["cpp_1_thread"]["samples_per_cpu_s"],
     }
     targets: dict[str, Any] = {}
-    best, scalar = methods[f"cpp_1_thread_{widest}"], methods["cpp_1_thread_scalar"]
+    kernel = f"{widest}_{fetch}" if widest == "avx2" else widest  # the default one
+    best, scalar = methods[f"cpp_1_thread_{kernel}"], methods["cpp_1_thread_scalar"]
     ratios["cpp_1_thread_widest_over_scalar"] = (
         best["samples_per_s"]["median"] / scalar["samples_per_s"]["median"]
     )
+    if "cpp_1_thread_avx2_loads" in methods:
+        # The two AVX2 lattice fetches (same bits), per CPU-second: > 1 where loads win.
+        ratios["cpp_1_thread_avx2_loads_over_gather"] = (
+            methods["cpp_1_thread_avx2_loads"]["samples_per_cpu_s_median"]
+            / methods["cpp_1_thread_avx2_gather"]["samples_per_cpu_s_median"]
+        )
     # Per thread: samples per CPU-second of the one thread (median of the repeats), which other
     # processes on a shared machine do not dilute; the wall-time rate is recorded beside it.
     targets["cpp_per_thread_msps"] = common.target(
         TARGET_MSPS,
         best["samples_per_cpu_s_median"] / 1e6,
         ">=",
-        measure=f"M samples per CPU-second, 1 thread, SIMD level {widest}, median of repeats",
+        measure=f"M samples per CPU-second, 1 thread, kernel {kernel}, median of repeats",
         baseline={
             "method": "scalar",
             "reached": scalar["samples_per_cpu_s_median"] / 1e6,
@@ -360,7 +381,7 @@ def main(argv: list[str] | None = None) -> int:
             TARGET_VS_FASTNOISE,
             value,
             ">=",
-            measure=f"samples per CPU-second, 1 thread each, SIMD level {widest}",
+            measure=f"samples per CPU-second, 1 thread each, kernel {kernel}",
             baseline={"method": "scalar", "reached": base, "ratio": value / base},
         )
     targets["cpp_2_threads_over_1"] = common.target(
@@ -393,6 +414,7 @@ def main(argv: list[str] | None = None) -> int:
         "octaves": OCTAVES,
         "llvmpipe_threads": glsl_threads,
         "simd_level": widest,
+        "simd_fetch": fetch,
         "machine": machine,
         "methods": methods,
         "skipped": skipped,

@@ -8,6 +8,9 @@ count, and for lattice sizes that take the 16-bit multiply-add index (≤ 180) o
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from collections.abc import Callable, Iterator
 from typing import Any
 
@@ -15,26 +18,50 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.noise import SIMD_LEVELS, set_simd_level, simd_level, simd_levels
+from cumuli.noise import (
+    SIMD_FETCHES,
+    SIMD_LEVELS,
+    set_simd_fetch,
+    set_simd_level,
+    simd_fetch,
+    simd_level,
+    simd_levels,
+)
 
 F32 = np.float32
 LEVELS = simd_levels()
 WIDE = [lvl for lvl in LEVELS if lvl != "scalar"]
+#: Every kernel this CPU can run: a SIMD level, and for AVX2 each lattice fetch ("level/fetch").
+KERNELS = [
+    f"{lvl}/{fetch}" if lvl == "avx2" else lvl
+    for lvl in LEVELS
+    for fetch in (SIMD_FETCHES if lvl == "avx2" else SIMD_FETCHES[:1])
+]
+WIDE_KERNELS = [k for k in KERNELS if k != "scalar"]
 
 
 @pytest.fixture(autouse=True)
 def _restore_level() -> Iterator[None]:
     yield
     set_simd_level("auto")
+    set_simd_fetch("auto")
 
 
-def _at(level: str, fn: Callable[[], Any]) -> Any:
-    """``fn()`` evaluated with the core at SIMD ``level``."""
+def _use(kernel: str) -> None:
+    """Select a kernel of `KERNELS` ("avx2/loads": level and fetch)."""
+    level, _, fetch = kernel.partition("/")
     set_simd_level(level)
+    set_simd_fetch(fetch or "auto")
+
+
+def _at(kernel: str, fn: Callable[[], Any]) -> Any:
+    """``fn()`` evaluated with the core's ``kernel`` (a level, or "level/fetch")."""
+    _use(kernel)
     try:
         return fn()
     finally:
         set_simd_level("auto")
+        set_simd_fetch("auto")
 
 
 def _edge_points() -> np.ndarray:
@@ -62,7 +89,7 @@ def test_scalar_is_always_available_and_the_default_is_the_widest() -> None:
     assert simd_level() == LEVELS[-1]
 
 
-@pytest.mark.parametrize("level", WIDE)
+@pytest.mark.parametrize("level", WIDE_KERNELS)
 @pytest.mark.parametrize("size", [64, 2, 128, 256, 17])
 def test_wide_paths_equal_the_scalar_path(level: str, size: int) -> None:
     noise = cu.Noise(seed=21, size=size)
@@ -82,20 +109,20 @@ def test_wide_paths_equal_the_scalar_path(level: str, size: int) -> None:
         assert np.isfinite(got).all()
 
 
-@pytest.mark.parametrize("level", LEVELS)
+@pytest.mark.parametrize("level", KERNELS)
 def test_every_tail_length_and_thread_count(level: str) -> None:
     """Counts that leave partial registers (1..40 points) and chunks split across threads."""
     noise = cu.Noise(seed=5)
     pts = np.random.default_rng(9).uniform(-30, 30, (4099, 3)).astype(F32)
     ref = _at("scalar", lambda: noise.fbm(pts, threads=1))
-    set_simd_level(level)
+    _use(level)
     for n in range(1, 41):
         np.testing.assert_array_equal(noise.fbm(pts[:n], threads=1), ref[:n])
     for threads in (1, 2, 3, 0):
         assert noise.fbm(pts, threads=threads).tobytes() == ref.tobytes()
 
 
-@pytest.mark.parametrize("level", WIDE)
+@pytest.mark.parametrize("level", WIDE_KERNELS)
 def test_grid_and_light_pass_do_not_depend_on_the_level(level: str) -> None:
     noise = cu.Noise(seed=7)
     grid = _at("scalar", lambda: noise.fbm_grid(24, (-5, -3, -7), (9, 4, 6)))
@@ -120,3 +147,49 @@ def test_bad_levels_are_refused() -> None:
         with pytest.raises(ValueError, match="not supported"):
             set_simd_level(lvl)
     assert simd_level() == LEVELS[-1]  # a refused level changes nothing
+
+
+def test_fetch_is_chosen_and_refused_like_the_level() -> None:
+    assert simd_fetch() in SIMD_FETCHES
+    for fetch in SIMD_FETCHES:
+        set_simd_fetch(fetch)
+        assert simd_fetch() == fetch
+    set_simd_fetch("gather")
+    with pytest.raises(ValueError, match="fetch"):
+        set_simd_fetch("scatter")
+    with pytest.raises(ValueError, match="fetch"):
+        set_simd_fetch(1)  # type: ignore[arg-type]
+    assert simd_fetch() == "gather"  # a refused fetch changes nothing
+
+
+@pytest.mark.parametrize(
+    ("env", "level", "fetch", "warns"),
+    [
+        ({"CUMULI_SIMD": "scalar"}, "scalar", None, False),
+        ({"CUMULI_SIMD_FETCH": "gather"}, None, "gather", False),
+        ({"CUMULI_SIMD_FETCH": "loads"}, None, "loads", False),
+        ({"CUMULI_SIMD": "sse9"}, LEVELS[-1], None, True),
+        ({"CUMULI_SIMD_FETCH": "scatter"}, None, None, True),
+    ],
+)
+def test_environment_variables_choose_the_kernel(
+    env: dict[str, str], level: str | None, fetch: str | None, warns: bool
+) -> None:
+    """CUMULI_SIMD / CUMULI_SIMD_FETCH are read at first use; an unknown value warns at import."""
+    code = (
+        "import warnings; warnings.simplefilter('always')\n"
+        "with warnings.catch_warnings(record=True) as w:\n"
+        "    import cumuli.noise as n\n"
+        "print(n.simd_level(), n.simd_fetch(), len(w))"
+    )
+    clean = {k: v for k, v in os.environ.items() if not k.startswith("CUMULI_SIMD")}
+    out = subprocess.run(
+        [sys.executable, "-c", code], env={**clean, **env}, capture_output=True, text=True,
+        check=True,
+    ).stdout.split()  # fmt: skip
+    if level is not None:
+        assert out[0] == level
+    if fetch is not None:
+        assert out[1] == fetch
+    assert out[1] in SIMD_FETCHES
+    assert (int(out[2]) > 0) == warns

@@ -63,6 +63,23 @@ void bind_noise(py::module_& m) {
         return out;
       },
       "The SIMD levels this CPU and build support, narrowest first.");
+  m.def(
+      "simd_fetch", [] { return std::string(simd_fetch_name(simd_fetch())); },
+      "How the AVX2 fBm kernel reads the lattice now: 'gather' or 'loads'.");
+  m.def(
+      "set_simd_fetch",
+      [](const std::string& name) {
+        try {
+          if (name == "auto") {
+            reset_simd_fetch();
+          } else {
+            set_simd_fetch(parse_simd_fetch(name));
+          }
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+      },
+      py::arg("fetch"), "Use this lattice fetch ('auto': back to CUMULI_SIMD_FETCH or the CPU's).");
   py::class_<Noise>(m, "Noise")
       .def(py::init<std::uint64_t, int>(), py::arg("seed"), py::arg("size") = 64)
       .def_property_readonly("size", &Noise::size)

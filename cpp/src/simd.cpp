@@ -31,7 +31,51 @@ SimdLevel default_level() {
   return level;
 }
 
+// -1: not chosen yet (the first simd_fetch() reads CUMULI_SIMD_FETCH).
+std::atomic<int> g_fetch{-1};
+
+SimdFetch default_fetch() {
+  if (const char* env = std::getenv("CUMULI_SIMD_FETCH")) {
+    const std::string name(env);
+    if (name == "gather") return SimdFetch::Gather;
+    if (name == "loads") return SimdFetch::Loads;
+    // Empty, "auto" or unknown (the Python layer warns): the CPU's preference.
+  }
+#ifdef CUMULI_X86_DISPATCH
+  if (__builtin_cpu_is("amd")) return SimdFetch::Loads;
+#endif
+  return SimdFetch::Gather;
+}
+
 }  // namespace
+
+const char* simd_fetch_name(SimdFetch fetch) {
+  return fetch == SimdFetch::Loads ? "loads" : "gather";
+}
+
+SimdFetch parse_simd_fetch(const std::string& name) {
+  if (name == "gather") return SimdFetch::Gather;
+  if (name == "loads") return SimdFetch::Loads;
+  throw std::invalid_argument("SIMD fetch must be 'gather' or 'loads', got '" + name + "'");
+}
+
+SimdFetch simd_fetch() {
+  int fetch = g_fetch.load(std::memory_order_relaxed);
+  if (fetch < 0) {
+    int expected = -1;
+    g_fetch.compare_exchange_strong(expected, static_cast<int>(default_fetch()));
+    fetch = g_fetch.load(std::memory_order_relaxed);
+  }
+  return static_cast<SimdFetch>(fetch);
+}
+
+void set_simd_fetch(SimdFetch fetch) {
+  g_fetch.store(static_cast<int>(fetch), std::memory_order_relaxed);
+}
+
+void reset_simd_fetch() {
+  g_fetch.store(static_cast<int>(default_fetch()), std::memory_order_relaxed);
+}
 
 const char* simd_name(SimdLevel level) {
   switch (level) {

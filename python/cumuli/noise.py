@@ -27,6 +27,8 @@ MAX_GRID_EDGE = 2048
 GRID_SLAB_VOXELS = 1 << 22
 #: SIMD levels the core knows, narrowest first (see :func:`simd_level`).
 SIMD_LEVELS = ("scalar", "avx2", "avx512")
+#: How the AVX2 kernel can read the lattice (see :func:`simd_fetch`).
+SIMD_FETCHES = ("gather", "loads")
 
 #: Largest magnitude allowed for the lattice coordinates ``p · f · sⁱ`` and for the fBm sum: the
 #: core works in float32, where they overflow to inf (and the lookup gives NaN) at 3.4e38.
@@ -58,6 +60,36 @@ def set_simd_level(level: str) -> None:
         raise ValueError(f"level must be one of {(*SIMD_LEVELS, 'auto')}, got {level!r}")
     _core.set_simd_level(level)
 
+
+def simd_fetch() -> str:
+    """How the AVX2 fBm kernel reads a cell's lattice rows now: ``"gather"`` or ``"loads"``.
+
+    ``"gather"`` uses the CPU's gather instructions, ``"loads"`` plain 64-bit loads from an index
+    array; both give the same bits. The default is ``"loads"`` on AMD CPUs (where gathers are
+    micro-coded and slower) and ``"gather"`` elsewhere, unless ``CUMULI_SIMD_FETCH`` (read at
+    first use) or :func:`set_simd_fetch` says otherwise. The AVX-512 kernel always gathers.
+    """
+    return str(_core.simd_fetch())
+
+
+def set_simd_fetch(fetch: str) -> None:
+    """Make the AVX2 fBm kernel read the lattice with ``fetch`` from now on (all threads).
+
+    ``"auto"`` goes back to ``CUMULI_SIMD_FETCH`` or the CPU's preference.
+    """
+    if not isinstance(fetch, str) or fetch not in (*SIMD_FETCHES, "auto"):
+        raise ValueError(f"fetch must be one of {(*SIMD_FETCHES, 'auto')}, got {fetch!r}")
+    _core.set_simd_fetch(fetch)
+
+
+_env_fetch = os.environ.get("CUMULI_SIMD_FETCH", "")
+if _env_fetch not in ("", "auto", *SIMD_FETCHES):
+    warnings.warn(
+        f"CUMULI_SIMD_FETCH={_env_fetch!r} is not one of {('auto', *SIMD_FETCHES)}; "
+        f"using {simd_fetch()!r}",
+        RuntimeWarning,
+        stacklevel=2,
+    )
 
 _env_simd = os.environ.get("CUMULI_SIMD", "")
 if _env_simd not in ("", "auto", *SIMD_LEVELS):

@@ -32,4 +32,22 @@ void set_simd_level(SimdLevel level);
 // Back to the default: CUMULI_SIMD if set, else the widest supported level.
 void reset_simd_level();
 
+// How the AVX2 fBm kernel reads a cell's lattice rows: with gather instructions, or with plain
+// 64-bit loads from an index array. Both give the same bits; which is faster depends on the CPU
+// (gathers are micro-coded and slow on AMD Zen 2/3, fast on recent Intel cores). The default is
+// Loads on AMD CPUs and Gather elsewhere, unless CUMULI_SIMD_FETCH (gather | loads | auto), read
+// at first use, or set_simd_fetch() says otherwise. The AVX-512 kernel always gathers.
+enum class SimdFetch : int { Gather = 0, Loads = 1 };
+
+// "gather" or "loads".
+const char* simd_fetch_name(SimdFetch fetch);
+// The fetch of a name (as simd_fetch_name writes it); throws std::invalid_argument otherwise.
+SimdFetch parse_simd_fetch(const std::string& name);
+// The fetch the AVX2 kernel uses now.
+SimdFetch simd_fetch();
+// Use `fetch` from now on (all threads).
+void set_simd_fetch(SimdFetch fetch);
+// Back to the default: CUMULI_SIMD_FETCH if set, else the CPU's preference.
+void reset_simd_fetch();
+
 }  // namespace cumuli
