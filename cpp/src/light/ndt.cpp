@@ -548,16 +548,27 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
   // The layers each line serves form one interval [j_lo, j_hi] (empty: j_hi < j_lo). S of every
   // line at every layer it serves, packed line by line from offset[line] (about one value per
   // voxel, whatever the shear); `beyond`: the samples each value depends on.
-  std::vector<int> served_lo(lines, ra), served_hi(lines, -1);
-  std::vector<std::size_t> offset(lines + 1, 0);
-  for (std::size_t line = 0; line < lines; ++line) {
-    const int lb = b0 + static_cast<int>(line / nc), lc = c0 + static_cast<int>(line % nc);
+  // The layers of line (l_b, l_c) are those of its b index that are also those of its c index:
+  // each is an interval (the bounds move monotonically with j), found once per index.
+  const auto layers_of = [ra](int index, const std::vector<int>& lo, const std::vector<int>& hi,
+                              int& first, int& last) {
+    first = ra, last = -1;
     for (int j = 0; j < ra; ++j) {
-      if (lb >= lob[j] && lb <= hib[j] && lc >= loc[j] && lc <= hic[j]) {
-        served_lo[line] = std::min(served_lo[line], j);
-        served_hi[line] = j;
+      if (index >= lo[j] && index <= hi[j]) {
+        first = std::min(first, j);
+        last = j;
       }
     }
+  };
+  std::vector<int> jb_lo(nb), jb_hi(nb), jc_lo(nc), jc_hi(nc);
+  for (int k = 0; k < nb; ++k) layers_of(b0 + k, lob, hib, jb_lo[k], jb_hi[k]);
+  for (int k = 0; k < nc; ++k) layers_of(c0 + k, loc, hic, jc_lo[k], jc_hi[k]);
+  std::vector<int> served_lo(lines), served_hi(lines);
+  std::vector<std::size_t> offset(lines + 1, 0);
+  for (std::size_t line = 0; line < lines; ++line) {
+    const std::size_t kb = line / nc, kc = line % nc;
+    served_lo[line] = std::max(jb_lo[kb], jc_lo[kc]);
+    served_hi[line] = std::min(jb_hi[kb], jc_hi[kc]);
     offset[line + 1] =
         offset[line] + static_cast<std::size_t>(std::max(0, served_hi[line] - served_lo[line] + 1));
   }
@@ -724,63 +735,77 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
     if (buffers.mid.size() > LineBuffers::kKeepSamples) buffers = LineBuffers{};
   });
 
-  // Resample: each voxel blends the four lines around it on its layer (a few ns a voxel: small
-  // grids are not worth starting threads for).
-  const int stride[3] = {1, res[0], res[0] * res[1]};  // [z][y][x]
-  const std::size_t voxels = static_cast<std::size_t>(ra) * rb * rc;
-  const int resample_threads = voxels < (std::size_t{1} << 16) ? 1 : s.threads;
-  parallel_chunks(
-      static_cast<std::size_t>(ra), resample_threads, [&](std::size_t j0, std::size_t j1) {
-        // Per layer: S (and `beyond`) of the lines serving it, indexed by line, so that a voxel
-        // reads its four lines with plain loads; the c-axis index and weight of each voxel column.
-        std::vector<float> layer_S(lines);
-        std::vector<std::uint32_t> layer_beyond(samples_out ? lines : 0);
-        std::vector<std::size_t> kc(static_cast<std::size_t>(rc));
-        std::vector<float> wcs(static_cast<std::size_t>(rc));
-        for (std::size_t jj = j0; jj < j1; ++jj) {
-          const int j = static_cast<int>(jj);
-          for (int lb = lob[jj]; lb <= hib[jj]; ++lb) {
-            for (int lc = loc[jj]; lc <= hic[jj]; ++lc) {
-              const std::size_t line =
-                  static_cast<std::size_t>(lb - b0) * nc + static_cast<std::size_t>(lc - c0);
-              layer_S[line] = S[at(line, j)];
-              if (samples_out) layer_beyond[line] = beyond[at(line, j)];
-            }
-          }
-          for (int ic = 0; ic < rc; ++ic) {
-            const float uc = static_cast<float>(ic) - sc * j;
-            const float fc_floor = floor_small_light(uc);
-            wcs[static_cast<std::size_t>(ic)] = uc - fc_floor;
-            kc[static_cast<std::size_t>(ic)] =
-                static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
-          }
-          for (int ib = 0; ib < rb; ++ib) {
-            const float ub = static_cast<float>(ib) - sb * j;
-            const float fb_floor = floor_small_light(ub);
-            const float wb = ub - fb_floor;
-            const std::size_t kb = static_cast<std::size_t>(static_cast<int>(fb_floor) - b0);
-            const float* row0 = layer_S.data() + kb * nc;  // lines of b index kb; kb + 1 at + nc
-            const std::size_t v0 =
-                static_cast<std::size_t>(j) * stride[a] + static_cast<std::size_t>(ib) * stride[b];
-            for (std::size_t ic = 0; ic < static_cast<std::size_t>(rc); ++ic) {
-              const std::size_t k = kc[ic];
-              const float wc = wcs[ic];
-              const float v00 = row0[k], v01 = row0[k + 1];
-              const float v10 = row0[nc + k], v11 = row0[nc + k + 1];
-              const float s0 = v00 + wc * (v01 - v00);
-              const float s1 = v10 + wc * (v11 - v10);
-              const std::size_t v = v0 + ic * static_cast<std::size_t>(stride[c]);
-              light[v] = s0 + wb * (s1 - s0);
-              if (samples_out) {
-                const std::size_t near = kb * nc + k +
-                                         (wb < 0.5f ? 0 : static_cast<std::size_t>(nc)) +
-                                         (wc < 0.5f ? 0 : 1);
-                samples_out[v] = layer_beyond[near];
-              }
-            }
-          }
+  // Resample: each voxel blends the four lines around it on its layer (a few ns a voxel; layers
+  // are split between threads, whose pool makes even a small grid's split cheap).
+  const std::size_t stride[3] = {1, static_cast<std::size_t>(res[0]),
+                                 static_cast<std::size_t>(res[0]) * res[1]};  // [z][y][x]
+  const std::size_t nc_lines = static_cast<std::size_t>(nc);
+  parallel_chunks(static_cast<std::size_t>(ra), s.threads, [&](std::size_t j0, std::size_t j1) {
+    // Per layer: S (and `beyond`) of the lines serving it, indexed by line, so that a voxel
+    // reads its four lines with plain loads; the c-axis index and weight of each voxel column.
+    std::vector<float> layer_S(lines);
+    std::vector<std::uint32_t> layer_beyond(samples_out ? lines : 0);
+    std::vector<std::size_t> kc(static_cast<std::size_t>(rc));
+    std::vector<float> wcs(static_cast<std::size_t>(rc));
+    float* const out = light;  // written only here: the reads below come from other arrays
+    for (std::size_t jj = j0; jj < j1; ++jj) {
+      const int j = static_cast<int>(jj);
+      for (int lb = lob[jj]; lb <= hib[jj]; ++lb) {
+        const std::size_t row = static_cast<std::size_t>(lb - b0) * nc_lines;
+        for (int lc = loc[jj]; lc <= hic[jj]; ++lc) {
+          const std::size_t line = row + static_cast<std::size_t>(lc - c0);
+          layer_S[line] = S[at(line, j)];
         }
-      });
+      }
+      for (int ic = 0; ic < rc; ++ic) {
+        const float uc = static_cast<float>(ic) - sc * j;
+        const float fc_floor = floor_small_light(uc);
+        wcs[static_cast<std::size_t>(ic)] = uc - fc_floor;
+        kc[static_cast<std::size_t>(ic)] =
+            static_cast<std::size_t>(static_cast<int>(fc_floor) - c0);
+      }
+      const std::size_t* const k_of = kc.data();
+      const float* const w_of = wcs.data();
+      const std::size_t step_c = stride[c];
+      for (int ib = 0; ib < rb; ++ib) {
+        const float ub = static_cast<float>(ib) - sb * j;
+        const float fb_floor = floor_small_light(ub);
+        const float wb = ub - fb_floor;
+        const std::size_t kb = static_cast<std::size_t>(static_cast<int>(fb_floor) - b0);
+        const float* const row0 = layer_S.data() + kb * nc_lines;  // lines kb; kb + 1 at + nc
+        const float* const row1 = row0 + nc_lines;
+        float* const dst = out + jj * stride[a] + static_cast<std::size_t>(ib) * stride[b];
+        for (std::size_t ic = 0; ic < static_cast<std::size_t>(rc); ++ic) {
+          const std::size_t k = k_of[ic];
+          const float wc = w_of[ic];
+          const float s0 = row0[k] + wc * (row0[k + 1] - row0[k]);
+          const float s1 = row1[k] + wc * (row1[k + 1] - row1[k]);
+          dst[ic * step_c] = s0 + wb * (s1 - s0);
+        }
+      }
+      if (!samples_out) continue;
+      // Samples behind each voxel: those of the line nearest to it.
+      for (int lb = lob[jj]; lb <= hib[jj]; ++lb) {
+        const std::size_t row = static_cast<std::size_t>(lb - b0) * nc_lines;
+        for (int lc = loc[jj]; lc <= hic[jj]; ++lc) {
+          const std::size_t line = row + static_cast<std::size_t>(lc - c0);
+          layer_beyond[line] = beyond[at(line, j)];
+        }
+      }
+      for (int ib = 0; ib < rb; ++ib) {
+        const float ub = static_cast<float>(ib) - sb * j;
+        const float fb_floor = floor_small_light(ub);
+        const std::size_t kb = static_cast<std::size_t>(static_cast<int>(fb_floor) - b0);
+        const std::size_t near_b = kb + (ub - fb_floor < 0.5f ? 0 : 1);
+        std::uint32_t* const dst =
+            samples_out + jj * stride[a] + static_cast<std::size_t>(ib) * stride[b];
+        for (std::size_t ic = 0; ic < static_cast<std::size_t>(rc); ++ic) {
+          const std::size_t near = near_b * nc_lines + k_of[ic] + (w_of[ic] < 0.5f ? 0 : 1);
+          dst[ic * stride[c]] = layer_beyond[near];
+        }
+      }
+    }
+  });
   LightStats stats;
   stats.samples = samples_total.load();
   return stats;
