@@ -1,6 +1,7 @@
-"""Light reaching particle clouds through the scene's media (beyond Harris 2002, whose clouds light
-only themselves): particle k's light ℓ times exp(−τ) from its centre towards ℓ through the 2018
-clouds and volumes, in the light step (`cumuli.light.prepare.through_media`)."""
+"""Light reaching particle and billboard clouds through the scene's media (beyond Harris 2002 and
+Torchelsen & Musse 2005, whose clouds light only themselves): particle k's light ℓ, or a box's
+(billboard's) CAF for ℓ, times exp(−τ) from its centre towards ℓ through the 2018 clouds and
+volumes, in the light step (`cumuli.light.prepare.through_media`)."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import pytest
 from test_ground import SUN, brute_force_transmittance, scene
 
 import cumuli as cu
+from cumuli.light.billboards import BillboardLighting, caf_points
 
 TOWARDS_SUN = np.asarray(SUN.direction, np.float64) / np.linalg.norm(SUN.direction)
 
@@ -77,3 +79,108 @@ def test_the_shadowed_cloud_is_darker_in_both_backends(gl_context) -> None:
     assert cover.sum() > 50
     shaded, own = (images[n][..., :3][cover].mean() for n in ("shaded", "own"))
     assert shaded < 0.6 * own, (shaded, own)
+
+
+#: A fine light step for the march from the boxes (the brute force steps 0.02), exact fBm.
+FINE = cu.RenderSettings(light_step=0.05, exact_noise=True, shadow_resolution=64)
+
+
+def seed_box(offset: tuple[float, float, float] = (14.0, 0.0, -6.0)) -> cu.BillboardCloud:
+    """A seed-box cumulus behind the 2018 cumulus from the sun, half in its shadow."""
+    cloud = cu.seed_box_cloud(cu.seedbox_presets.cumulus(), seed=5)
+    return cloud.translated(tuple((-14.0 * TOWARDS_SUN + np.asarray(offset)).tolist()))
+
+
+@pytest.mark.parametrize("at", ["box", "billboard"])
+def test_a_billboard_cloud_below_a_cumulus_gets_its_shadow(at: str) -> None:
+    below = seed_box()
+    s = scene(FINE, clouds=[scene().clouds[0], below]).replace(
+        ground=None, billboard_shading=cu.BillboardShading(caf_at=at)
+    )
+    light = cu.prepare_light(s).lights[1]
+    own = light.unshadowed
+    assert isinstance(light, BillboardLighting) and isinstance(own, BillboardLighting)
+    points = caf_points(below, at)
+    want_points = below.box_centres if at == "box" else below.centres
+    np.testing.assert_array_equal(points, want_points)
+    want = brute_force_transmittance(s, points.astype(np.float64))
+    assert want.min() < 0.05 and want.max() > 0.99 and ((want > 0.05) & (want < 0.95)).any()
+    caf, own_caf = light.records[0].caf, own.records[0].caf
+    assert caf.dtype == np.float32 and caf.shape == own_caf.shape == (len(points),)
+    lit = own_caf > 1e-3
+    error = np.abs(caf[lit] / own_caf[lit] - want[lit])
+    assert error.mean() < 0.02 and error.max() < 0.2  # the fBm gate at a few grazing rays
+    # What else the records hold is the cloud's own light's.
+    np.testing.assert_array_equal(light.records[0].length, own.records[0].length)
+    assert light.records[0].at == at and light.lights == own.lights
+
+
+def test_each_field_instance_gets_the_shadow_where_it_is() -> None:
+    """A field's instances are placed (turned by yaw, moved by offset) before the media shade
+    them: the shaded one's block follows the media, the one in the clear keeps its CAF."""
+    variant = cu.seed_box_cloud(cu.seedbox_presets.cumulus(), seed=5)
+    place = -14.0 * TOWARDS_SUN + np.array([14.0, 0.0, -6.0])
+    offsets = [tuple(place.tolist()), (80.0, 0.0, 0.0)]
+    field = cu.BillboardField([variant], offsets=offsets, yaw=[30.0, 0.0])
+    s = scene(FINE, clouds=[scene().clouds[0], field]).replace(ground=None)
+    light = cu.prepare_light(s).lights[1]
+    own = light.unshadowed
+    assert own is not None
+    points = caf_points(field, "box")
+    placed = [variant.rotated_y(y, about=(0, 0, 0)).translated(o)
+              for y, o in zip((30.0, 0.0), offsets, strict=True)]  # fmt: skip
+    np.testing.assert_allclose(
+        points, np.concatenate([p.box_centres for p in placed]), rtol=0, atol=1e-5
+    )
+    first = light.records[0].first
+    near, far = slice(first[0], first[1]), slice(first[1], first[2])
+    want = brute_force_transmittance(s, points[near].astype(np.float64))
+    assert want.min() < 0.05 and want.max() > 0.99
+    caf, own_caf = light.records[0].caf, own.records[0].caf
+    lit = own_caf[near] > 1e-3
+    error = np.abs(caf[near][lit] / own_caf[near][lit] - want[lit])
+    assert error.mean() < 0.02 and error.max() < 0.2
+    np.testing.assert_array_equal(caf[far], own_caf[far])  # in the clear
+    # An instance's part keeps its own light underneath.
+    part = light.part(0)
+    np.testing.assert_array_equal(part.records[0].caf, caf[near])
+    np.testing.assert_array_equal(part.unshadowed.records[0].caf, own_caf[near])
+
+
+def test_clear_billboard_light_stays_the_same_and_is_not_shaded_twice() -> None:
+    cumulus = scene().clouds[0]
+    away = seed_box().translated((60.0, 0.0, 0.0))
+    alone = cu.prepare_light(scene(clouds=[away])).lights[0]
+    with_media = cu.prepare_light(scene(clouds=[cumulus, away])).lights[1]
+    assert with_media.unshadowed is None
+    np.testing.assert_array_equal(with_media.records[0].caf, alone.records[0].caf)
+    lit = cu.prepare_light(scene(clouds=[cumulus, seed_box()]))
+    again = cu.prepare_light(lit)  # given back: the cloud's own light is what is given
+    np.testing.assert_array_equal(again.lights[1].records[0].caf, lit.lights[1].records[0].caf)
+    np.testing.assert_array_equal(
+        again.lights[1].unshadowed.records[0].caf, lit.lights[1].unshadowed.records[0].caf
+    )
+    with pytest.raises(ValueError, match="transmittance"):
+        lit.lights[1].through(np.ones((3, 1)))
+
+
+@pytest.mark.gl
+def test_the_shadowed_billboards_are_darker_in_both_backends(gl_context) -> None:
+    below = seed_box()
+    s = scene(clouds=[scene().clouds[0], below]).replace(
+        ground=None, billboard_shading=cu.BillboardShading(exact_textures=True)
+    )
+    light = cu.prepare_light(s).lights[1]
+    only = s.replace(clouds=[below])
+    camera = cu.Camera(position=(-40.0, -10.0, -40.0), target=tuple(below.centre.tolist()), fov=40)
+    images = {}
+    for name, value in (("shaded", light), ("own", light.unshadowed)):
+        lit = cu.LitScene(only, (value,))
+        gl = cu.render(lit, camera, 64, 48)
+        cpu = cu.render(lit, camera, 64, 48, backend="cpu")
+        np.testing.assert_allclose(gl, cpu, atol=1e-4)
+        images[name] = cpu
+    cover = images["own"][..., 3] > 0.3
+    assert cover.sum() > 50
+    shaded, own = (images[n][..., :3][cover].mean() for n in ("shaded", "own"))
+    assert shaded < 0.9 * own, (shaded, own)

@@ -80,8 +80,11 @@ def test_the_nearer_cloud_hides_the_farther(frame, nimbus, backend, billboards_n
 @pytest.mark.parametrize("backend", BACKENDS)
 def test_layers_compose_by_the_over_operator(frame, nimbus, backend) -> None:
     scene = mixed(frame, nimbus, sky=BLACK).replace(clouds=mixed(frame, nimbus).clouds[:2])
-    both = cu.render(scene, CAMERA, W, H, backend=backend).astype(np.float64)
-    bb = cu.render(alone(scene, 1), CAMERA, W, H, backend=backend).astype(np.float64)
+    lit = cu.prepare_light(scene)
+    both = cu.render(lit, CAMERA, W, H, backend=backend).astype(np.float64)
+    # The billboards with the light they have in the scene (the cumulus' shadow on their CAF).
+    bb_alone = cu.LitScene(alone(scene, 1), (lit.lights[1],))
+    bb = cu.render(bb_alone, CAMERA, W, H, backend=backend).astype(np.float64)
     marched = cu.render(alone(scene, 0), CAMERA, W, H, backend=backend).astype(np.float64)
     expect = bb[..., :3] + (1 - bb[..., 3:]) * marched[..., :3]
     np.testing.assert_allclose(both[..., :3], expect, atol=1e-5)

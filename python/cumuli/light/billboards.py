@@ -21,11 +21,12 @@ import math
 import threading
 import weakref
 from collections import OrderedDict
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from cumuli import _core
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.caf import (
     BillboardLight,
@@ -53,13 +54,16 @@ class BillboardLighting:
     them now: the directional term and the colour use these); ``records``: one CAF record per
     light (a `BillboardLight` for a cloud, a `FieldLight` for a field), each made for a direction
     within ``shading.relight_tolerance`` of its light; ``shading``: the scene's
-    `BillboardShading`; ``ambient``: the ambient RGB it resolves to under the scene's sky.
+    `BillboardShading`; ``ambient``: the ambient RGB it resolves to under the scene's sky;
+    ``unshadowed``: the cloud's own light this one was made from by :meth:`through` (None: this
+    is the cloud's own light).
     """
 
     lights: tuple[Sun, ...]
     records: tuple[Any, ...]
     shading: BillboardShading
     ambient: tuple[float, float, float]
+    unshadowed: BillboardLighting | None = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         if len(self.lights) != len(self.records) or not self.lights:
@@ -84,7 +88,22 @@ class BillboardLighting:
             a, b = int(r.first[i]), int(r.first[i + 1])
             first = np.array([0, b - a], dtype=r.first.dtype)
             records.append(FieldLight(r.caf[a:b], r.length[a:b], first, r.sun, r.at, r.params))
-        return replace(self, records=tuple(records))
+        own = self.unshadowed.part(i) if self.unshadowed is not None else None
+        return replace(self, records=tuple(records), unshadowed=own)
+
+    def through(self, transmittance: np.ndarray) -> BillboardLighting:
+        """The cloud's own light with CAF entry ``k`` of light ``ℓ`` times
+        ``transmittance[k, ℓ]``: the light the scene's media let through to that box (or
+        billboard) before the cloud's own absorption; ``(columns, lights)`` as `caf_points`."""
+        own = self.unshadowed or self
+        t = np.asarray(transmittance, dtype=np.float32)
+        want = (own.records[0].caf.size, len(own.records))
+        if t.shape != want:
+            raise ValueError(f"transmittance must be {want}, got {t.shape}")
+        records = tuple(
+            replace(r, caf=(r.caf * t[:, i]).astype(np.float32)) for i, r in enumerate(own.records)
+        )
+        return replace(own, records=records, unshadowed=own)
 
     def same_as(self, other: Any, atol: float = 1e-6) -> bool:
         """Whether ``other`` shades exactly as this light: the same lights, ambient and
@@ -105,6 +124,32 @@ class BillboardLighting:
             if not np.array_equal(a.caf, b.caf) and np.abs(a.caf - b.caf).max() > atol:
                 return False
         return True
+
+
+def caf_points(drawable: BillboardCloud | BillboardField, at: str) -> np.ndarray:
+    """``(columns, 3)`` float32: the world point of each CAF entry of ``drawable`` in the order of
+    its light records — box centres (``at="box"``) or billboard centres (``"billboard"``); a
+    field's instances one after another, each its variant's points turned by its yaw and moved
+    by its offset."""
+    name = "box_centres" if at == "box" else "centres"
+    if isinstance(drawable, BillboardCloud):
+        return np.ascontiguousarray(getattr(drawable, name), dtype=np.float32)
+    if drawable.n == 0:
+        return np.zeros((0, 3), np.float32)
+    # Every (instance, point) pair at once: the variants' points side by side, each instance's
+    # block taken from its variant's, then turned by its yaw and moved by its offset.
+    local = [np.asarray(getattr(v, name), np.float64) for v in drawable.variants]
+    sizes = np.array([p.shape[0] for p in local], np.int64)
+    first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
+    count = sizes[drawable.variant]
+    owner = np.repeat(np.arange(drawable.n), count)
+    within = np.arange(int(count.sum())) - np.repeat(np.cumsum(count) - count, count)
+    points = np.concatenate(local)[first[drawable.variant[owner]] + within]
+    cos_sin = np.array([_core.yaw_cos_sin(float(y)) for y in drawable.yaw], np.float64)
+    c, s = cos_sin[owner, 0], cos_sin[owner, 1]
+    world = np.stack([c * points[:, 0] + s * points[:, 2], points[:, 1],
+                      -s * points[:, 0] + c * points[:, 2]], axis=1)  # fmt: skip
+    return (world + drawable.offsets.astype(np.float64)[owner]).astype(np.float32)
 
 
 def _digest(drawable: Any) -> str:

@@ -355,26 +355,38 @@ def _shadow_digest(drawable: Any) -> tuple:
 
 
 def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
-    """``lights`` (aligned with ``scene.clouds``) with every particle cloud's light passed through
-    the scene's media first (beyond Harris 2002, whose clouds light only themselves): particle
-    ``k``'s light ``ℓ`` times ``exp(−τ)`` from its centre towards ``ℓ`` through the 2018 clouds
-    and volumes (:func:`cumuli.light.shadow.media_transmittance`), memoised by content and place.
-    Particle clouds and billboards do not shade one another or the media."""
+    """``lights`` (aligned with ``scene.clouds``) with the light of every particle cloud and
+    billboard cloud or field passed through the scene's media first (beyond Harris 2002 and
+    Torchelsen & Musse 2005, whose clouds light only themselves): particle ``k``'s light ``ℓ``,
+    or the CAF of a box (billboard) for light ``ℓ``, times ``exp(−τ)`` from its centre towards
+    ``ℓ`` through the 2018 clouds and volumes (:func:`cumuli.light.shadow.media_transmittance`),
+    memoised by content and place. Particle clouds and billboards do not shade one another or
+    the media."""
     out = list(lights)
     media = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
     if not media:
         return out
     dirs = light_directions([scene.sun, *scene.lights])
     for k, cloud in enumerate(scene.clouds):
-        if not isinstance(cloud, ParticleCloud) or not isinstance(out[k], ParticleLight):
+        if isinstance(cloud, ParticleCloud) and isinstance(out[k], ParticleLight):
+            points, place = cloud.centres, _shadow_digest(cloud)
+        elif isinstance(cloud, (BillboardCloud, BillboardField)) and isinstance(
+            out[k], billboard_pass.BillboardLighting
+        ):
+            at = out[k].records[0].at
+            points = billboard_pass.caf_points(cloud, at)
+            place = (_shadow_digest(cloud), at)
+        else:
             continue
 
-        def transmittance(cloud: ParticleCloud = cloud) -> np.ndarray:
-            columns = [media_transmittance(scene, cloud.centres, d, threads) for d in dirs]
+        def transmittance(points: np.ndarray = points) -> np.ndarray:
+            if points.shape[0] == 0:
+                return np.ones((0, dirs.shape[0]), np.float32)
+            columns = [media_transmittance(scene, points, d, threads) for d in dirs]
             return np.stack(columns, axis=1)
 
-        key = ("through media", media, _shadow_digest(cloud), dirs.tobytes(), scene.noise.seed,
-               scene.noise.size, scene.settings)  # fmt: skip
+        key = ("through media", media, place, dirs.tobytes(), scene.noise.seed, scene.noise.size,
+               scene.settings)  # fmt: skip
         t = _remember(key, transmittance)
         if not (t == 1.0).all():  # in the clear: the cloud's own light object, as without media
             out[k] = out[k].through(t)
@@ -435,7 +447,8 @@ def prepare_light(
             raise ValueError(f"lights must hold one entry per cloud ({n}), got {len(lights)}")
         given = list(lights)
     # A light passed through the media is the cloud's own light underneath: that is what is given.
-    given = [g.unshadowed or g if isinstance(g, ParticleLight) else g for g in given]
+    shadowable = (ParticleLight, billboard_pass.BillboardLighting)
+    given = [g.unshadowed or g if isinstance(g, shadowable) else g for g in given]
     # The physical mode replaces the light pass of the marched kinds; particles and billboards
     # keep their own light models (Harris 2002, Torchelsen & Musse 2005) in either mode.
     passes = {**LIGHT_PASSES, **PHYSICAL_LIGHT_PASSES} if scene.settings.physical else LIGHT_PASSES
