@@ -15,6 +15,23 @@ from cumuli.light.billboards import BillboardLighting, caf_points
 TOWARDS_SUN = np.asarray(SUN.direction, np.float64) / np.linalg.norm(SUN.direction)
 
 
+def mean_colour_shaded_and_own(
+    scene_alone: cu.Scene, light: object, camera: cu.Camera, gl_cpu_atol: float, cover: float
+) -> tuple[float, float]:
+    """The mean RGB over the cloud's cover (alpha > ``cover`` lit by its own light) drawn alone
+    with ``light`` and with ``light.unshadowed``; GL and CPU agree within ``gl_cpu_atol``."""
+    images = {}
+    for name, value in (("shaded", light), ("own", light.unshadowed)):
+        lit = cu.LitScene(scene_alone, (value,))
+        gl = cu.render(lit, camera, 64, 48)
+        cpu = cu.render(lit, camera, 64, 48, backend="cpu")
+        np.testing.assert_allclose(gl, cpu, atol=gl_cpu_atol)
+        images[name] = cpu
+    mask = images["own"][..., 3] > cover
+    assert mask.sum() > 50
+    return tuple(float(images[n][..., :3][mask].mean()) for n in ("shaded", "own"))
+
+
 def puff(distance: float) -> cu.ParticleCloud:
     """A particle cloud ``distance`` from the cumulus' centre, away from the sun."""
     centre = tuple((-distance * TOWARDS_SUN).tolist())
@@ -68,16 +85,7 @@ def test_the_shadowed_cloud_is_darker_in_both_backends(gl_context) -> None:
     camera = cu.Camera(
         position=(-30.0, -8.0, -30.0), target=tuple(below.sphere[0].tolist()), fov=30
     )
-    images = {}
-    for name, value in (("shaded", light), ("own", light.unshadowed)):
-        lit = cu.LitScene(only, (value,))
-        gl = cu.render(lit, camera, 64, 48)
-        cpu = cu.render(lit, camera, 64, 48, backend="cpu")
-        np.testing.assert_allclose(gl, cpu, atol=2e-3)
-        images[name] = cpu
-    cover = images["own"][..., 3] > 0.5
-    assert cover.sum() > 50
-    shaded, own = (images[n][..., :3][cover].mean() for n in ("shaded", "own"))
+    shaded, own = mean_colour_shaded_and_own(only, light, camera, gl_cpu_atol=2e-3, cover=0.5)
     assert shaded < 0.6 * own, (shaded, own)
 
 
@@ -173,14 +181,5 @@ def test_the_shadowed_billboards_are_darker_in_both_backends(gl_context) -> None
     light = cu.prepare_light(s).lights[1]
     only = s.replace(clouds=[below])
     camera = cu.Camera(position=(-40.0, -10.0, -40.0), target=tuple(below.centre.tolist()), fov=40)
-    images = {}
-    for name, value in (("shaded", light), ("own", light.unshadowed)):
-        lit = cu.LitScene(only, (value,))
-        gl = cu.render(lit, camera, 64, 48)
-        cpu = cu.render(lit, camera, 64, 48, backend="cpu")
-        np.testing.assert_allclose(gl, cpu, atol=1e-4)
-        images[name] = cpu
-    cover = images["own"][..., 3] > 0.3
-    assert cover.sum() > 50
-    shaded, own = (images[n][..., :3][cover].mean() for n in ("shaded", "own"))
+    shaded, own = mean_colour_shaded_and_own(only, light, camera, gl_cpu_atol=1e-4, cover=0.3)
     assert shaded < 0.9 * own, (shaded, own)

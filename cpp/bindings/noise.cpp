@@ -33,6 +33,21 @@ FbmParams make_params(int octaves, float gain, float lacunarity, float frequency
   return p;
 }
 
+// A setting chosen by name: "auto" calls `reset`, any other name `set(parse(name))`; a bad name
+// is a Python ValueError.
+template <class Parse, class Set>
+void set_by_name(const std::string& name, void (*reset)(), Parse parse, Set set) {
+  try {
+    if (name == "auto") {
+      reset();
+    } else {
+      set(parse(name));
+    }
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+}
+
 }  // namespace
 
 void bind_noise(py::module_& m) {
@@ -43,15 +58,7 @@ void bind_noise(py::module_& m) {
   m.def(
       "set_simd_level",
       [](const std::string& name) {
-        try {
-          if (name == "auto") {
-            reset_simd_level();
-          } else {
-            set_simd_level(parse_simd_level(name));
-          }
-        } catch (const std::invalid_argument& e) {
-          throw py::value_error(e.what());
-        }
+        set_by_name(name, reset_simd_level, parse_simd_level, set_simd_level);
       },
       py::arg("level"), "Use this SIMD level ('auto': back to CUMULI_SIMD or the widest).");
   m.def(
@@ -69,15 +76,7 @@ void bind_noise(py::module_& m) {
   m.def(
       "set_simd_fetch",
       [](const std::string& name) {
-        try {
-          if (name == "auto") {
-            reset_simd_fetch();
-          } else {
-            set_simd_fetch(parse_simd_fetch(name));
-          }
-        } catch (const std::invalid_argument& e) {
-          throw py::value_error(e.what());
-        }
+        set_by_name(name, reset_simd_fetch, parse_simd_fetch, set_simd_fetch);
       },
       py::arg("fetch"), "Use this lattice fetch ('auto': back to CUMULI_SIMD_FETCH or the CPU's).");
   py::class_<Noise>(m, "Noise")

@@ -748,15 +748,20 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
     std::vector<std::size_t> kc(static_cast<std::size_t>(rc));
     std::vector<float> wcs(static_cast<std::size_t>(rc));
     float* const out = light;  // written only here: the reads below come from other arrays
-    for (std::size_t jj = j0; jj < j1; ++jj) {
+    // `values` (S or `beyond`, packed line by line) of the lines serving layer jj, by line.
+    const auto by_line = [&](const auto& values, auto& layer, std::size_t jj) {
       const int j = static_cast<int>(jj);
       for (int lb = lob[jj]; lb <= hib[jj]; ++lb) {
         const std::size_t row = static_cast<std::size_t>(lb - b0) * nc_lines;
         for (int lc = loc[jj]; lc <= hic[jj]; ++lc) {
           const std::size_t line = row + static_cast<std::size_t>(lc - c0);
-          layer_S[line] = S[at(line, j)];
+          layer[line] = values[at(line, j)];
         }
       }
+    };
+    for (std::size_t jj = j0; jj < j1; ++jj) {
+      const int j = static_cast<int>(jj);
+      by_line(S, layer_S, jj);
       for (int ic = 0; ic < rc; ++ic) {
         const float uc = static_cast<float>(ic) - sc * j;
         const float fc_floor = floor_small_light(uc);
@@ -785,13 +790,7 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
       }
       if (!samples_out) continue;
       // Samples behind each voxel: those of the line nearest to it.
-      for (int lb = lob[jj]; lb <= hib[jj]; ++lb) {
-        const std::size_t row = static_cast<std::size_t>(lb - b0) * nc_lines;
-        for (int lc = loc[jj]; lc <= hic[jj]; ++lc) {
-          const std::size_t line = row + static_cast<std::size_t>(lc - c0);
-          layer_beyond[line] = beyond[at(line, j)];
-        }
-      }
+      by_line(beyond, layer_beyond, jj);
       for (int ib = 0; ib < rb; ++ib) {
         const float ub = static_cast<float>(ib) - sb * j;
         const float fb_floor = floor_small_light(ub);

@@ -29,6 +29,7 @@ import weakref
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -368,18 +369,21 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
         return out
     dirs = light_directions([scene.sun, *scene.lights])
     for k, cloud in enumerate(scene.clouds):
+        # Where the cloud's light is received (made only when the memo misses), and its key.
+        points_of: Callable[[], np.ndarray]
         if isinstance(cloud, ParticleCloud) and isinstance(out[k], ParticleLight):
-            points, place = cloud.centres, _shadow_digest(cloud)
+            points_of, place = partial(np.asarray, cloud.centres), _shadow_digest(cloud)
         elif isinstance(cloud, (BillboardCloud, BillboardField)) and isinstance(
             out[k], billboard_pass.BillboardLighting
         ):
             at = out[k].records[0].at
-            points = billboard_pass.caf_points(cloud, at)
+            points_of = partial(billboard_pass.caf_points, cloud, at)
             place = (_shadow_digest(cloud), at)
         else:
             continue
 
-        def transmittance(points: np.ndarray = points) -> np.ndarray:
+        def transmittance(points_of: Callable[[], np.ndarray] = points_of) -> np.ndarray:
+            points = points_of()
             if points.shape[0] == 0:
                 return np.ones((0, dirs.shape[0]), np.float32)
             columns = [media_transmittance(scene, points, d, threads) for d in dirs]
