@@ -14,14 +14,16 @@ pyfastnoiselite (FastNoiseLite, NoiseType_Value, FractalType_FBm, 5 octaves, gen
 the reference point: a hashed value noise, single-threaded (its CPU time equals its wall time;
 the JSON records the ratio).
 
-SIMD (issue 14, item 1): the C++ fBm is also timed on 1 thread at every SIMD level this CPU
-supports (``cpp_1_thread_scalar`` / ``_avx2_gather`` / ``_avx2_loads`` / ``_avx512``, interleaved,
-selected with ``cumuli.noise.set_simd_level`` and, for AVX2, ``set_simd_fetch``: the lattice rows
-read with gather instructions or with plain loads); "scalar" is the portable kernel (today's method
-before the hand-written SIMD paths), the others give bit-identical values. Targets, each
-``{limit, comparison, reached, met}`` with today's scalar path as ``baseline`` (value and ratio):
-≥ 100 M samples/s per thread, ≥ 7× pyfastnoiselite per thread (CPU time), ≥ 1.8× from 1 to 2
-threads (only meaningful when two cores are free; the load average is recorded).
+SIMD (issue 14, item 1): the C++ fBm is also timed on 1 thread with every kernel this CPU runs
+(``cpp_1_thread_scalar``, and ``cpp_1_thread_<level>_<fetch>`` for each wide level, avx2 and
+avx512, and each lattice fetch, gather / loads / quads; interleaved, selected with
+``cumuli.noise.set_simd_level`` and ``set_simd_fetch``); "scalar" is the portable kernel (today's
+method before the hand-written SIMD paths), the others give bit-identical values. The ratios
+``cpp_1_thread_<level>_<fetch>_over_gather`` compare each fetch with the gathers, per CPU-second.
+Targets, each ``{limit, comparison, reached, met}`` with today's scalar path as ``baseline``
+(value and ratio): ≥ 100 M samples/s per thread, ≥ 7× pyfastnoiselite per thread (CPU time),
+≥ 1.8× from 1 to 2 threads (only meaningful when two cores are free; the load average is
+recorded).
 """
 
 from __future__ import annotations
@@ -90,7 +92,8 @@ def bench_cpp(
 def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict[str, Any]]:
     """The C++ fBm on 1 thread with every kernel this CPU runs, repeats interleaved across them.
 
-    Keys: the SIMD level, and for AVX2 one per lattice fetch (``avx2_gather``, ``avx2_loads``).
+    Keys: ``scalar``, and ``<level>_<fetch>`` for each wide level and lattice fetch
+    (``avx2_gather``, ..., ``avx512_quads``).
     """
     from cumuli.noise import SIMD_FETCHES, set_simd_fetch, set_simd_level, simd_levels
 
@@ -106,16 +109,17 @@ def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict
 
         return run
 
-    kernels = {
-        (f"{lvl}_{fetch}" if lvl == "avx2" else lvl): (lvl, fetch)
+    kernels = {"scalar": ("scalar", "auto")} | {
+        f"{lvl}_{fetch}": (lvl, fetch)
         for lvl in simd_levels()
-        for fetch in (SIMD_FETCHES if lvl == "avx2" else ("auto",))
+        if lvl != "scalar"
+        for fetch in SIMD_FETCHES
     }
     timed = common.interleaved_repeats({k: at(*v) for k, v in kernels.items()}, repeats)
     return {
         k: _method(
             len(pts), wall, cpu, threads=1, simd_level=kernels[k][0],
-            simd_fetch=kernels[k][1] if kernels[k][0] == "avx2" else None,
+            simd_fetch=None if k == "scalar" else kernels[k][1],
         )
         for k, (wall, cpu) in timed.items()
     }  # fmt: skip
@@ -296,7 +300,7 @@ def main(argv: list[str] | None = None) -> int:
     for key in ("cpp_1_thread", "cpp_2_threads", "cpp_all_threads"):
         if key in methods:
             methods[key]["simd_level"] = widest
-            methods[key]["simd_fetch"] = fetch if widest == "avx2" else None
+            methods[key]["simd_fetch"] = fetch if widest != "scalar" else None
     simd = bench_simd(noise, pts, repeats)
     for lvl, m in simd.items():
         methods[f"cpp_1_thread_{lvl}"] = m
@@ -340,17 +344,21 @@ def main(argv: list[str] | None = None) -> int:
         / methods["cpp_1_thread"]["samples_per_cpu_s"],
     }
     targets: dict[str, Any] = {}
-    kernel = f"{widest}_{fetch}" if widest == "avx2" else widest  # the default one
+    kernel = f"{widest}_{fetch}" if widest != "scalar" else widest  # the default one
     best, scalar = methods[f"cpp_1_thread_{kernel}"], methods["cpp_1_thread_scalar"]
     ratios["cpp_1_thread_widest_over_scalar"] = (
         best["samples_per_s"]["median"] / scalar["samples_per_s"]["median"]
     )
-    if "cpp_1_thread_avx2_loads" in methods:
-        # The two AVX2 lattice fetches (same bits), per CPU-second: > 1 where loads win.
-        ratios["cpp_1_thread_avx2_loads_over_gather"] = (
-            methods["cpp_1_thread_avx2_loads"]["samples_per_cpu_s_median"]
-            / methods["cpp_1_thread_avx2_gather"]["samples_per_cpu_s_median"]
-        )
+    for lvl in ("avx2", "avx512"):
+        # The lattice fetches of one level (same bits), per CPU-second: > 1 where one beats the
+        # gathers.
+        gather = methods.get(f"cpp_1_thread_{lvl}_gather")
+        for other in ("loads", "quads"):
+            if gather is not None and f"cpp_1_thread_{lvl}_{other}" in methods:
+                ratios[f"cpp_1_thread_{lvl}_{other}_over_gather"] = (
+                    methods[f"cpp_1_thread_{lvl}_{other}"]["samples_per_cpu_s_median"]
+                    / gather["samples_per_cpu_s_median"]
+                )
     # Per thread: samples per CPU-second of the one thread (median of the repeats), which other
     # processes on a shared machine do not dilute; the wall-time rate is recorded beside it.
     targets["cpp_per_thread_msps"] = common.target(

@@ -31,12 +31,9 @@ from cumuli.noise import (
 F32 = np.float32
 LEVELS = simd_levels()
 WIDE = [lvl for lvl in LEVELS if lvl != "scalar"]
-#: Every kernel this CPU can run: a SIMD level, and for AVX2 each lattice fetch ("level/fetch").
-KERNELS = [
-    f"{lvl}/{fetch}" if lvl == "avx2" else lvl
-    for lvl in LEVELS
-    for fetch in (SIMD_FETCHES if lvl == "avx2" else SIMD_FETCHES[:1])
-]
+#: Every kernel this CPU can run: "scalar", and each wide level with each lattice fetch
+#: ("level/fetch").
+KERNELS = ["scalar"] + [f"{lvl}/{fetch}" for lvl in LEVELS[1:] for fetch in SIMD_FETCHES]
 WIDE_KERNELS = [k for k in KERNELS if k != "scalar"]
 
 
@@ -90,8 +87,10 @@ def test_scalar_is_always_available_and_the_default_is_the_widest() -> None:
 
 
 @pytest.mark.parametrize("level", WIDE_KERNELS)
-@pytest.mark.parametrize("size", [64, 2, 128, 256, 17])
+@pytest.mark.parametrize("size", [64, 2, 32, 128, 256, 17])
 def test_wide_paths_equal_the_scalar_path(level: str, size: int) -> None:
+    """Sizes ≤ 64 have the corner quads, 128 and 256 read as "loads", 17 takes the general path;
+    up to 180 the index is the 16-bit multiply-add."""
     noise = cu.Noise(seed=21, size=size)
     rng = np.random.default_rng(size)
     pts = np.concatenate(
@@ -168,6 +167,8 @@ def test_fetch_is_chosen_and_refused_like_the_level() -> None:
         ({"CUMULI_SIMD": "scalar"}, "scalar", None, False),
         ({"CUMULI_SIMD_FETCH": "gather"}, None, "gather", False),
         ({"CUMULI_SIMD_FETCH": "loads"}, None, "loads", False),
+        ({"CUMULI_SIMD_FETCH": "quads"}, None, "quads", False),
+        ({}, None, "quads", False),  # the default
         ({"CUMULI_SIMD": "sse9"}, LEVELS[-1], None, True),
         ({"CUMULI_SIMD_FETCH": "scatter"}, None, None, True),
     ],

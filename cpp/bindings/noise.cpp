@@ -72,7 +72,7 @@ void bind_noise(py::module_& m) {
       "The SIMD levels this CPU and build support, narrowest first.");
   m.def(
       "simd_fetch", [] { return std::string(simd_fetch_name(simd_fetch())); },
-      "How the AVX2 fBm kernel reads the lattice now: 'gather' or 'loads'.");
+      "How the wide fBm kernels read the lattice now: 'gather', 'loads' or 'quads'.");
   m.def(
       "set_simd_fetch",
       [](const std::string& name) {

@@ -39,24 +39,31 @@ SimdFetch default_fetch() {
     const std::string name(env);
     if (name == "gather") return SimdFetch::Gather;
     if (name == "loads") return SimdFetch::Loads;
+    if (name == "quads") return SimdFetch::Quads;
     // Empty, "auto" or unknown (the Python layer warns): the CPU's preference.
   }
-#ifdef CUMULI_X86_DISPATCH
-  if (__builtin_cpu_is("amd")) return SimdFetch::Loads;
-#endif
-  return SimdFetch::Gather;
+  return SimdFetch::Quads;
 }
 
 }  // namespace
 
 const char* simd_fetch_name(SimdFetch fetch) {
-  return fetch == SimdFetch::Loads ? "loads" : "gather";
+  switch (fetch) {
+    case SimdFetch::Loads:
+      return "loads";
+    case SimdFetch::Quads:
+      return "quads";
+    default:
+      return "gather";
+  }
 }
 
 SimdFetch parse_simd_fetch(const std::string& name) {
   if (name == "gather") return SimdFetch::Gather;
   if (name == "loads") return SimdFetch::Loads;
-  throw std::invalid_argument("SIMD fetch must be 'gather' or 'loads', got '" + name + "'");
+  if (name == "quads") return SimdFetch::Quads;
+  throw std::invalid_argument("SIMD fetch must be 'gather', 'loads' or 'quads', got '" + name +
+                              "'");
 }
 
 SimdFetch simd_fetch() {

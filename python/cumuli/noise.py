@@ -27,8 +27,8 @@ MAX_GRID_EDGE = 2048
 GRID_SLAB_VOXELS = 1 << 22
 #: SIMD levels the core knows, narrowest first (see :func:`simd_level`).
 SIMD_LEVELS = ("scalar", "avx2", "avx512")
-#: How the AVX2 kernel can read the lattice (see :func:`simd_fetch`).
-SIMD_FETCHES = ("gather", "loads")
+#: How the wide kernels can read the lattice (see :func:`simd_fetch`).
+SIMD_FETCHES = ("gather", "loads", "quads")
 
 #: Largest magnitude allowed for the lattice coordinates ``p · f · sⁱ`` and for the fBm sum: the
 #: core works in float32, where they overflow to inf (and the lookup gives NaN) at 3.4e38.
@@ -62,20 +62,22 @@ def set_simd_level(level: str) -> None:
 
 
 def simd_fetch() -> str:
-    """How the AVX2 fBm kernel reads a cell's lattice rows now: ``"gather"`` or ``"loads"``.
+    """How the wide fBm kernels read a cell's lattice values now: ``"gather"``, ``"loads"`` or
+    ``"quads"``.
 
-    ``"gather"`` uses the CPU's gather instructions, ``"loads"`` plain 64-bit loads from an index
-    array; both give the same bits. The default is ``"loads"`` on AMD CPUs (where gathers are
-    micro-coded and slower) and ``"gather"`` elsewhere, unless ``CUMULI_SIMD_FETCH`` (read at
-    first use) or :func:`set_simd_fetch` says otherwise. The AVX-512 kernel always gathers.
+    All three give the same bits. ``"gather"`` reads each row's corner pairs with the CPU's gather
+    instructions, ``"loads"`` with plain 64-bit loads from an index array, ``"quads"`` reads two
+    16-byte corner quads per point from a copy of the lattice (4.4 MB at size 64; lattices above
+    64 have none and read as ``"loads"``). The default is ``"quads"``, the fastest where measured,
+    unless ``CUMULI_SIMD_FETCH`` (read at first use) or :func:`set_simd_fetch` says otherwise.
     """
     return str(_core.simd_fetch())
 
 
 def set_simd_fetch(fetch: str) -> None:
-    """Make the AVX2 fBm kernel read the lattice with ``fetch`` from now on (all threads).
+    """Make the wide fBm kernels read the lattice with ``fetch`` from now on (all threads).
 
-    ``"auto"`` goes back to ``CUMULI_SIMD_FETCH`` or the CPU's preference.
+    ``"auto"`` goes back to ``CUMULI_SIMD_FETCH`` or ``"quads"``.
     """
     if not isinstance(fetch, str) or fetch not in (*SIMD_FETCHES, "auto"):
         raise ValueError(f"fetch must be one of {(*SIMD_FETCHES, 'auto')}, got {fetch!r}")

@@ -32,22 +32,28 @@ void set_simd_level(SimdLevel level);
 // Back to the default: CUMULI_SIMD if set, else the widest supported level.
 void reset_simd_level();
 
-// How the AVX2 fBm kernel reads a cell's lattice rows: with gather instructions, or with plain
-// 64-bit loads from an index array. Both give the same bits; which is faster depends on the CPU
-// (gathers are micro-coded and slow on AMD Zen 2/3, fast on recent Intel cores). The default is
-// Loads on AMD CPUs and Gather elsewhere, unless CUMULI_SIMD_FETCH (gather | loads | auto), read
-// at first use, or set_simd_fetch() says otherwise. The AVX-512 kernel always gathers.
-enum class SimdFetch : int { Gather = 0, Loads = 1 };
+// How the wide fBm kernels read a cell's 2×2×2 lattice values. All give the same bits; they
+// differ in speed, which depends on the CPU:
+//   Gather: the four rows' (x0, x1) pairs with 64-bit gather instructions (micro-coded and slow
+//           on AMD Zen 2/3);
+//   Loads:  the same pairs with plain 64-bit loads from the indices stored to memory;
+//   Quads:  two 16-byte loads per point from a copy of the lattice that stores each (x, y)
+//           cell face's four corners together (half the loads, two cache lines instead of four,
+//           four times the memory: 4.4 MB at size 64; lattices above 64 have no copy and read
+//           as Loads). The fastest where measured (AMD Zen 5, both levels; see bench_noise).
+// The default is Quads, unless CUMULI_SIMD_FETCH (gather | loads | quads | auto), read at first
+// use, or set_simd_fetch() says otherwise.
+enum class SimdFetch : int { Gather = 0, Loads = 1, Quads = 2 };
 
-// "gather" or "loads".
+// "gather", "loads" or "quads".
 const char* simd_fetch_name(SimdFetch fetch);
 // The fetch of a name (as simd_fetch_name writes it); throws std::invalid_argument otherwise.
 SimdFetch parse_simd_fetch(const std::string& name);
-// The fetch the AVX2 kernel uses now.
+// The fetch the wide kernels use now.
 SimdFetch simd_fetch();
 // Use `fetch` from now on (all threads).
 void set_simd_fetch(SimdFetch fetch);
-// Back to the default: CUMULI_SIMD_FETCH if set, else the CPU's preference.
+// Back to the default: CUMULI_SIMD_FETCH if set, else Quads.
 void reset_simd_fetch();
 
 }  // namespace cumuli
