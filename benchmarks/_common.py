@@ -127,16 +127,23 @@ def time_repeats(
 
 
 def interleaved_repeats(
-    fns: dict[str, Callable[[], Any]], repeats: int, warmup: int = 1
+    fns: dict[str, Callable[[], Any]], repeats: int, warmup: int = 1, settle: int = 0
 ) -> dict[str, tuple[list[float], list[float]]]:
     """Like :func:`time_repeats` for several functions, run round-robin (A, B, A, B, ...) so that
-    a slow drift of a shared machine touches them alike; ``{name: (wall, cpu)}``."""
+    a slow drift of a shared machine touches them alike; ``{name: (wall, cpu)}``.
+
+    ``settle`` untimed calls precede each timed one: functions whose working sets differ (one
+    kernel's table evicting another's from the caches) are then timed with warm caches, as a user
+    calling one of them alone sees it, not with the caches the previous function left.
+    """
     for fn in fns.values():
         for _ in range(warmup):
             fn()
     out: dict[str, tuple[list[float], list[float]]] = {name: ([], []) for name in fns}
     for _ in range(repeats):
         for name, fn in fns.items():
+            for _ in range(settle):
+                fn()
             c0, w0 = time.process_time(), time.perf_counter()
             fn()
             out[name][0].append(time.perf_counter() - w0)

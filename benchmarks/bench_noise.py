@@ -17,7 +17,8 @@ the JSON records the ratio).
 SIMD (issue 14, item 1): the C++ fBm is also timed on 1 thread with every kernel this CPU runs
 (``cpp_1_thread_scalar``, and ``cpp_1_thread_<level>_<fetch>`` for each wide level, avx2 and
 avx512, and each lattice fetch, gather / loads / quads; interleaved, selected with
-``cumuli.noise.set_simd_level`` and ``set_simd_fetch``); "scalar" is the portable kernel (today's
+``cumuli.noise.set_simd_level`` and ``set_simd_fetch``, each timed call after an untimed one so
+that every kernel runs from its own warm caches); "scalar" is the portable kernel (today's
 method before the hand-written SIMD paths), the others give bit-identical values. The ratios
 ``cpp_1_thread_<level>_<fetch>_over_gather`` compare each fetch with the gathers, per CPU-second.
 Targets, each ``{limit, comparison, reached, met}`` with today's scalar path as ``baseline``
@@ -115,7 +116,9 @@ def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict
         if lvl != "scalar"
         for fetch in SIMD_FETCHES
     }
-    timed = common.interleaved_repeats({k: at(*v) for k, v in kernels.items()}, repeats)
+    # One untimed call before each timed one: the quads fetch reads a 4.4 MB copy of the lattice,
+    # the others the 1.1 MB lattice, and each would otherwise start from the other's caches.
+    timed = common.interleaved_repeats({k: at(*v) for k, v in kernels.items()}, repeats, settle=1)
     return {
         k: _method(
             len(pts), wall, cpu, threads=1, simd_level=kernels[k][0],
