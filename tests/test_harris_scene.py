@@ -144,11 +144,16 @@ def test_mixed_scene_composites_by_the_over_operator(backend: str) -> None:
     # Black sky: each drawable alone renders its layer (C, 1 − T). The cumulus's box is entered
     # before the particles' wherever both are hit from this camera, so the composite is
     # cumulus over particles there.
+    # Each layer is drawn with the light it has in the scene (the particles shade the cumulus).
     scene = mixed(BLACK)
-    pair = scene.replace(clouds=[scene.clouds[0], scene.clouds[2]])
+    pair = cu.prepare_light(scene.replace(clouds=[scene.clouds[0], scene.clouds[2]]))
     both = cu.render(pair, CAMERA, W, H, backend=backend).astype(np.float64)
-    near = cu.render(pair.replace(clouds=[pair.clouds[0]]), CAMERA, W, H, backend=backend)
-    far = cu.render(pair.replace(clouds=[pair.clouds[1]]), CAMERA, W, H, backend=backend)
+    layers = [
+        cu.render(cu.LitScene(pair.scene.replace(clouds=[c]), (light,)), CAMERA, W, H,
+                  backend=backend)
+        for c, light in zip(pair.scene.clouds, pair.lights, strict=True)
+    ]  # fmt: skip
+    near, far = layers
     expect = near[..., :3] + (1 - near[..., 3:]) * far[..., :3]
     np.testing.assert_allclose(both[..., :3], expect, atol=2e-5)
     hidden = (near[..., 3] > 0.995) & (far[..., 3] > 0.3)

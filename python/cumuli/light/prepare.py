@@ -9,6 +9,9 @@ billboard clouds and fields (:mod:`cumuli.light.billboards`) — and returns an 
 :class:`LitScene` that the renderers draw. Nothing is stored on the clouds, and a failed call
 changes no object.
 
+Between kinds: particle clouds and billboards are lit through the media (:func:`through_media`)
+and shade the media's sunlight (:func:`onto_media`), in either mode.
+
 With ``settings.lighting == "physical"`` every drawable gets its :class:`cumuli.PhysicalLight`
 instead (:mod:`cumuli.light.physical`: the sun's optical depth, the sky's visibility and the
 multiple scattering), and a scene with a ground gets the sun's shadow map on it
@@ -38,6 +41,7 @@ from cumuli import _progress
 from cumuli import _validate as check
 from cumuli.ground import ground_radiance_unshadowed
 from cumuli.light import billboards as billboard_pass
+from cumuli.light import onto_media as media_shadows
 from cumuli.light.caf import ground_caf_digest
 from cumuli.light.grid import primitives_digest
 from cumuli.light.ndt import LightGrid, LightRecord, light_grid
@@ -49,7 +53,13 @@ from cumuli.light.particles import (
     particles_digest,
 )
 from cumuli.light.physical import PhysicalLight, physical_light
-from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent, media_transmittance
+from cumuli.light.shadow import (
+    ShadowMap,
+    caster_transmittance,
+    compute_shadow,
+    default_extent,
+    media_transmittance,
+)
 from cumuli.light.volume import VolumeLighting
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
@@ -361,8 +371,8 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
     Torchelsen & Musse 2005, whose clouds light only themselves): particle ``k``'s light ``ℓ``,
     or the CAF of a box (billboard) for light ``ℓ``, times ``exp(−τ)`` from its centre towards
     ``ℓ`` through the 2018 clouds and volumes (:func:`cumuli.light.shadow.media_transmittance`),
-    memoised by content and place. Particle clouds and billboards do not shade one another or
-    the media."""
+    memoised by content and place. Particle clouds and billboards do not shade one another
+    (:func:`onto_media` makes them shade the media)."""
     out = list(lights)
     media = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
     if not media:
@@ -394,6 +404,68 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
         t = _remember(key, transmittance)
         if not (t == 1.0).all():  # in the clear: the cloud's own light object, as without media
             out[k] = out[k].through(t)
+    return out
+
+
+#: Media lights shaded by `onto_media` → the light each was made from, by id with a weak
+#: reference to the shaded one (a light given back to `prepare_light` is unshaded first).
+_own_media_light: dict[int, tuple[weakref.ref, Any]] = {}
+_own_media_lock = threading.Lock()
+
+
+def _own_light_of(light: Any) -> Any:
+    """The light `onto_media` shaded into ``light``, or ``light`` when it shaded none."""
+    with _own_media_lock:
+        entry = _own_media_light.get(id(light))
+    return entry[1] if entry is not None and entry[0]() is light else light
+
+
+def _note_own_light(shaded: Any, own: Any) -> None:
+    key = id(shaded)
+
+    def forget(_: Any, key: int = key) -> None:
+        with _own_media_lock:
+            _own_media_light.pop(key, None)
+
+    with _own_media_lock:
+        _own_media_light[key] = (weakref.ref(shaded, forget), own)
+
+
+def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
+    """``lights`` (aligned with ``scene.clouds``) with the sunlight of every 2018 cloud and
+    volume passed through the scene's particle clouds and billboards first (beyond Harris 2002
+    and Torchelsen & Musse 2005): each of the medium's sun terms times the sun's transmittance
+    through them at its grid points (:mod:`cumuli.light.onto_media`), memoised by content and
+    place. A medium in the clear keeps its own light object."""
+    out = list(lights)
+    casters = (ParticleCloud, BillboardCloud, BillboardField)
+    shade_key = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, casters))
+    if not shade_key:
+        return out
+    # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).
+    own_lights = [getattr(light, "unshadowed", None) or light for light in lights]
+
+    def transmittance(points: np.ndarray) -> np.ndarray | None:
+        return caster_transmittance(scene, points, threads, own_lights)
+
+    for k, medium in enumerate(scene.clouds):
+        if not isinstance(medium, (Cloud, VolumeCloud)):
+            continue
+        own = out[k]
+        box = medium.box if isinstance(medium, VolumeCloud) else None
+        key = ("onto media", shade_key, id(own), scene.sun.direction,
+               tuple(scene.sprite_settings.light_dict().items()),
+               scene.billboard_shading)  # fmt: skip
+        made = _remember(
+            key, lambda own=own, box=box: (own, media_shadows.shade(own, box, transmittance))
+        )
+        if made[0] is not own:  # the id of a light that is gone: make it again
+            made = (own, media_shadows.shade(own, box, transmittance))
+            with _memo_lock:
+                _memo[key] = made
+        if made[1] is not own:
+            _note_own_light(made[1], own)
+            out[k] = made[1]
     return out
 
 
@@ -450,9 +522,10 @@ def prepare_light(
         if len(lights) != n:
             raise ValueError(f"lights must hold one entry per cloud ({n}), got {len(lights)}")
         given = list(lights)
-    # A light passed through the media is the cloud's own light underneath: that is what is given.
+    # A light passed through the media (or a medium's light shaded by particles and billboards)
+    # is the cloud's own light underneath: that is what is given.
     shadowable = (ParticleLight, billboard_pass.BillboardLighting)
-    given = [g.unshadowed or g if isinstance(g, shadowable) else g for g in given]
+    given = [g.unshadowed or g if isinstance(g, shadowable) else _own_light_of(g) for g in given]
     # The physical mode replaces the light pass of the marched kinds; particles and billboards
     # keep their own light models (Harris 2002, Torchelsen & Musse 2005) in either mode.
     passes = {**LIGHT_PASSES, **PHYSICAL_LIGHT_PASSES} if scene.settings.physical else LIGHT_PASSES
@@ -483,5 +556,5 @@ def prepare_light(
                 out[k] = passes[drawable.kind](drawable, scene, given[k], threads)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
-    out = through_media(scene, out, threads)
+    out = onto_media(scene, through_media(scene, out, threads), threads)
     return LitScene(scene, tuple(out), scene_shadow(scene, threads, out))

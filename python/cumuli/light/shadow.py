@@ -72,8 +72,8 @@ def media_transmittance(
 SHADOW_CASTERS = (Cloud, VolumeCloud, ParticleCloud, BillboardCloud, BillboardField)
 
 
-def _own_shadows(
-    scene: Any, points: np.ndarray, threads: int, lights: Sequence[Any] | None
+def caster_transmittance(
+    scene: Any, points: np.ndarray, threads: int = 0, lights: Sequence[Any] | None = None
 ) -> np.ndarray | None:
     """The product over the scene's particle clouds and billboards of the sun's transmittance
     through each at ``points``, by their own light models; None when there are none. A
@@ -150,7 +150,7 @@ def compute_shadow(
         t = media_transmittance(scene, pts, scene.sun.direction, threads)
         if t is not None:
             values = t.reshape(nz, nx)
-    own = _own_shadows(scene, pts, threads, lights) if scene.sun.direction[1] > 0 else None
+    own = caster_transmittance(scene, pts, threads, lights) if scene.sun.direction[1] > 0 else None
     if own is not None:
         values = values * own.astype(np.float32).reshape(nz, nx)
     values.setflags(write=False)

@@ -1,0 +1,147 @@
+"""Particle clouds and billboards shade the media (beyond Harris 2002 and Torchelsen & Musse
+2005): the light step multiplies each 2018 cloud's and volume's sun term by the sun's
+transmittance through them at the term's grid points (`cumuli.light.prepare.onto_media`)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from test_ground import SUN
+
+import cumuli as cu
+from cumuli.light.onto_media import frame_nodes, voxel_centres
+from cumuli.light.shadow import caster_transmittance
+
+TOWARDS_SUN = np.asarray(SUN.direction, np.float64) / np.linalg.norm(SUN.direction)
+SETTINGS = {"exact_noise": True, "physical_resolution": 16}
+
+
+def cumulus() -> cu.Cloud:
+    return cu.gaussian_cumulus(centre=(0, 0, 0), n=8, seed=4)
+
+
+def puff_above(distance: float = 9.0) -> cu.ParticleCloud:
+    """A particle cloud ``distance`` from the cumulus' centre towards the sun."""
+    centre = tuple((distance * TOWARDS_SUN).tolist())
+    return cu.particle_cumulus(centre, 400, seed=3, radius=(2.0, 4.0))
+
+
+def scene(clouds: list, lighting: str = "paper") -> cu.Scene:
+    settings = cu.RenderSettings(lighting=lighting, **SETTINGS)
+    return cu.Scene(clouds, sun=SUN, noise=cu.Noise(seed=5, size=32), settings=settings)
+
+
+def misses_sphere(points: np.ndarray, centre: np.ndarray, radius: float) -> np.ndarray:
+    """Whether the ray from each point towards the sun misses the sphere."""
+    to_centre = centre[None, :] - points.astype(np.float64)
+    along = np.clip(to_centre @ TOWARDS_SUN, 0.0, None)  # nearest approach ahead of the point
+    nearest = points + along[:, None] * TOWARDS_SUN[None, :]
+    return np.linalg.norm(nearest - centre[None, :], axis=1) > radius
+
+
+def test_grid_points_follow_the_grids_conventions() -> None:
+    # Voxel (i, j, k) of a [z, y, x] grid at lo + ((i, j, k) + ½)(hi − lo)/(W, H, D).
+    pts = voxel_centres(((0, 0, 0), (2, 4, 6)), (3, 2, 1))
+    assert pts.shape == (6, 3)
+    np.testing.assert_array_equal(pts[0], [1.0, 1.0, 1.0])
+    np.testing.assert_array_equal(pts[1], [1.0, 3.0, 1.0])  # y next
+    np.testing.assert_array_equal(pts[2], [1.0, 1.0, 3.0])  # then z
+    # The physical light's sun lattice: its own trilinear sampler reads each node's value.
+    light = cu.prepare_light(scene([cumulus()], "physical")).lights[0]
+    nodes = frame_nodes(light.frame, light.sun_depth.shape)
+    np.testing.assert_allclose(
+        light.sample_depth(nodes), light.sun_depth.reshape(-1), rtol=1e-4, atol=1e-4
+    )
+
+
+@pytest.mark.parametrize("lighting", ["paper", "physical"])
+def test_a_cumulus_below_a_particle_cloud_gets_its_shadow(lighting: str) -> None:
+    above = puff_above()
+    s = scene([cumulus(), above], lighting)
+    light = cu.prepare_light(s).lights[0]
+    own = cu.prepare_light(scene([cumulus()], lighting)).lights[0]
+    centre, radius = (np.asarray(above.sphere[0], np.float64), float(above.sphere[1]))
+    if lighting == "paper":
+        assert isinstance(light, cu.LightGrid) and light.box == own.box
+        assert light.record == own.record and light.sun == own.sun
+        points = voxel_centres(light.box, light.shape)
+        ratio = np.divide(light.values, own.values, out=np.ones_like(own.values),
+                          where=own.values > 1e-4).reshape(-1)  # fmt: skip
+        want = caster_transmittance(s, points, 0, None)
+        lit = own.values.reshape(-1) > 1e-4
+        np.testing.assert_allclose(ratio[lit], want[lit], rtol=1e-5, atol=1e-6)
+    else:
+        assert isinstance(light, cu.PhysicalLight)
+        points = frame_nodes(light.frame, light.sun_depth.shape)
+        want = caster_transmittance(s, points, 0, None)
+        extra = (light.sun_depth - own.sun_depth).reshape(-1)
+        np.testing.assert_allclose(extra, -np.log(want), rtol=1e-4, atol=1e-4)
+        ratio = np.exp(-extra)
+        # The diffuse sunlight is shaded at its own voxels; the sky light is left as it is.
+        np.testing.assert_array_equal(light.grid[..., 1:], own.grid[..., 1:])
+        grid_want = caster_transmittance(s, voxel_centres(light.box, light.grid.shape[:3]), 0)
+        np.testing.assert_allclose(
+            light.grid[..., 0].reshape(-1), own.grid[..., 0].reshape(-1) * grid_want, rtol=1e-5
+        )
+    assert ratio.min() < 0.5  # the core of the shadow
+    assert (ratio <= 1.0 + 1e-6).all()
+    clear = misses_sphere(points, centre, 1.05 * radius)
+    assert clear.any() and (~clear).any()
+    np.testing.assert_array_equal(ratio[clear], 1.0)  # rays that miss the particles: unshaded
+
+
+def test_billboards_shade_a_volume_sun_channel_only() -> None:
+    field = cu.light_grid(cumulus(), SUN, cu.Noise(seed=5, size=32), resolution=12)
+    volume = cu.VolumeCloud(density=np.asarray(field.values) * 0.5, box=field.box, sigma_t=2.0)
+    boxes = cu.seed_box_cloud(cu.seedbox_presets.cumulus(), seed=5)
+    centre = (np.asarray(boxes.layer_box()[0]) + np.asarray(boxes.layer_box()[1])) / 2
+    above = boxes.translated(tuple((10.0 * TOWARDS_SUN - centre).tolist()))
+    s = scene([volume, above])
+    light = cu.prepare_light(s).lights[0]
+    own = cu.prepare_light(scene([volume])).lights[0]
+    assert light.shape == own.shape == (*volume.shape, 4)
+    np.testing.assert_array_equal(light[..., 1:], own[..., 1:])
+    want = caster_transmittance(s, voxel_centres(volume.box, volume.shape), 0)
+    np.testing.assert_allclose(light[..., 0].reshape(-1), own[..., 0].reshape(-1) * want,
+                               rtol=1e-6)  # fmt: skip
+    assert want.min() < 0.9 and want.max() == 1.0
+
+
+def test_clear_light_is_the_same_object_and_nothing_is_shaded_twice() -> None:
+    own = cu.prepare_light(scene([cumulus()])).lights[0]
+    far = puff_above().translated((60.0, 0.0, 0.0))  # not between the cumulus and the sun
+    assert cu.prepare_light(scene([cumulus(), far])).lights[0] is own
+    lit = cu.prepare_light(scene([cumulus(), puff_above()]))
+    assert lit.lights[0] is not own
+    again = cu.prepare_light(lit)  # its lights given back: the medium's own light underneath
+    np.testing.assert_array_equal(again.lights[0].values, lit.lights[0].values)
+    lit2 = cu.prepare_light(lit.scene, lights=list(lit.lights))
+    np.testing.assert_array_equal(lit2.lights[0].values, lit.lights[0].values)
+    # The particles move away: the medium's own light again, the very same object.
+    moved = cu.prepare_light(lit.scene.replace(clouds=[cumulus(), far]), lights=list(lit.lights))
+    assert moved.lights[0] is own
+
+
+@pytest.mark.gl
+@pytest.mark.parametrize("lighting", ["paper", "physical"])
+def test_the_shaded_cumulus_is_darker_in_both_backends(gl_context, lighting: str) -> None:
+    above = puff_above()
+    # Across the sun: the particle cloud shows above the cumulus, the shaded top below it.
+    camera = cu.Camera(position=(20.0, 4.0, -34.0), target=(0.0, 2.0, 0.0), fov=45)
+    images = {}
+    for name, clouds in (("with", [cumulus(), above]), ("alone", [cumulus()]),
+                         ("particles", [above])):  # fmt: skip
+        s = scene(clouds, lighting)
+        gl = cu.render(s, camera, 80, 60)
+        cpu = cu.render(s, camera, 80, 60, backend="cpu")
+        np.testing.assert_allclose(gl, cpu, atol=2e-3)
+        images[name] = cpu
+    # The cumulus where the particle cloud does not cover it on screen.
+    mask = (images["alone"][..., 3] > 0.5) & (images["particles"][..., 3] < 1e-3)
+    assert mask.sum() > 100
+    shaded = float(images["with"][..., :3][mask].mean())
+    unshaded = float(images["alone"][..., :3][mask].mean())
+    # Unshaded the two would be equal (nothing else reaches these pixels). The physical mode's
+    # sky light is untouched and its scattering octaves soften every sun shadow (0.96 here),
+    # the paper mode's NDT light drops with the sun's (0.66).
+    assert shaded < (0.98 if lighting == "physical" else 0.8) * unshaded, (shaded, unshaded)
