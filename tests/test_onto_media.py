@@ -1,6 +1,8 @@
-"""Particle clouds and billboards shade the media (beyond Harris 2002 and Torchelsen & Musse
-2005): the light step multiplies each 2018 cloud's and volume's sun term by the sun's
-transmittance through them at the term's grid points (`cumuli.light.prepare.onto_media`)."""
+"""Particle clouds and billboards shade the media and one another (beyond Harris 2002 and
+Torchelsen & Musse 2005): the light step multiplies each 2018 cloud's and volume's sun term by
+the sun's transmittance through them at the term's grid points (`cumuli.light.prepare.onto_media`),
+and each particle's or box's sunlight by the transmittance through the other particle clouds and
+billboards (`cumuli.light.prepare.through_media`)."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ import pytest
 from test_ground import SUN
 
 import cumuli as cu
+from cumuli.light.billboards import caf_points
 from cumuli.light.onto_media import frame_nodes, voxel_centres
 from cumuli.light.shadow import caster_transmittance
 
@@ -145,3 +148,59 @@ def test_the_shaded_cumulus_is_darker_in_both_backends(gl_context, lighting: str
     # sky light is untouched and its scattering octaves soften every sun shadow (0.96 here),
     # the paper mode's NDT light drops with the sun's (0.66).
     assert shaded < (0.98 if lighting == "physical" else 0.8) * unshaded, (shaded, unshaded)
+
+
+def seed_boxes_at(centre: np.ndarray) -> cu.BillboardCloud:
+    boxes = cu.seed_box_cloud(cu.seedbox_presets.cumulus(), seed=5)
+    lo, hi = (np.asarray(v) for v in boxes.layer_box())
+    return boxes.translated(tuple((centre - (lo + hi) / 2).tolist()))
+
+
+def test_particle_clouds_and_billboards_shade_one_another() -> None:
+    low = cu.particle_cumulus((0, 0, 0), 300, seed=2, radius=(2.0, 3.0))
+    across = np.cross(TOWARDS_SUN, (0.0, 1.0, 0.0))
+    across /= np.linalg.norm(across)
+    place = 40 * TOWARDS_SUN + 14 * across  # half over the low cloud, seen from the sun
+    high = cu.particle_cumulus(tuple(place.tolist()), 300, seed=3, radius=(2.0, 3.0))
+    extra = cu.Sun(direction=(-0.6, 0.5, -0.2), intensity=0.5)  # clear of the high cloud
+    s = cu.Scene([low, high], sun=SUN, lights=(extra,))
+    a, b = cu.prepare_light(s).lights
+    assert b.unshadowed is None  # the low cloud lies behind the high one from the sun
+    own = a.unshadowed
+    assert own is not None and a.light.shape == own.light.shape == (300, 2)
+    lit = own.light[:, 0] > 1e-4
+    ratio = np.ones(300)
+    ratio[lit] = a.light[lit, 0] / own.light[lit, 0]
+    want = cu.ground_shadow(high, SUN, low.centres, s.sprite_settings)
+    np.testing.assert_allclose(ratio[lit], want[lit], rtol=1e-5, atol=1e-6)
+    assert ratio.min() < 0.8
+    clear = misses_sphere(low.centres, np.asarray(high.sphere[0], np.float64), high.sphere[1])
+    assert clear.any()
+    np.testing.assert_array_equal(ratio[clear], 1.0)
+    np.testing.assert_array_equal(a.light[:, 1], own.light[:, 1])  # only the sun's column
+    # Given back, nothing is shaded twice.
+    again = cu.prepare_light(cu.prepare_light(s))
+    np.testing.assert_array_equal(again.lights[0].light, a.light)
+
+    # Billboards above particles, and particles above billboards.
+    boxes = seed_boxes_at(30 * TOWARDS_SUN)
+    s2 = cu.Scene([low, boxes], sun=SUN)
+    p_light, b_light = cu.prepare_light(s2).lights
+    assert b_light.unshadowed is None and p_light.unshadowed is not None
+    want = cu.ground_shadow(boxes, SUN, low.centres, s2.billboard_shading)
+    lit = p_light.unshadowed.light[:, 0] > 1e-4
+    np.testing.assert_allclose(
+        p_light.light[lit, 0] / p_light.unshadowed.light[lit, 0], want[lit], rtol=1e-5, atol=1e-6
+    )
+    assert want.min() < 0.9
+    under = seed_boxes_at(-30 * TOWARDS_SUN)
+    s3 = cu.Scene([under, high.translated(tuple((-40 * TOWARDS_SUN - 14 * across).tolist()))],
+                  sun=SUN)  # fmt: skip
+    b_light, p_light = cu.prepare_light(s3).lights
+    assert p_light.unshadowed is None and b_light.unshadowed is not None
+    points = caf_points(under, b_light.records[0].at)
+    want = cu.ground_shadow(s3.clouds[1], SUN, points, s3.sprite_settings)
+    caf, own_caf = b_light.records[0].caf, b_light.unshadowed.records[0].caf
+    lit = own_caf > 1e-4
+    np.testing.assert_allclose(caf[lit] / own_caf[lit], want[lit], rtol=1e-5, atol=1e-6)
+    assert want.min() < 0.9

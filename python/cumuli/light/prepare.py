@@ -9,8 +9,8 @@ billboard clouds and fields (:mod:`cumuli.light.billboards`) — and returns an 
 :class:`LitScene` that the renderers draw. Nothing is stored on the clouds, and a failed call
 changes no object.
 
-Between kinds: particle clouds and billboards are lit through the media (:func:`through_media`)
-and shade the media's sunlight (:func:`onto_media`), in either mode.
+Between kinds: particle clouds and billboards are lit through the media and one another
+(:func:`through_media`) and shade the media's sunlight (:func:`onto_media`), in either mode.
 
 With ``settings.lighting == "physical"`` every drawable gets its :class:`cumuli.PhysicalLight`
 instead (:mod:`cumuli.light.physical`: the sun's optical depth, the sky's visibility and the
@@ -365,19 +365,29 @@ def _shadow_digest(drawable: Any) -> tuple:
     return drawable_digest(drawable)
 
 
+#: The drawables that cast their own shadows on others by their own light models.
+CASTERS = (ParticleCloud, BillboardCloud, BillboardField)
+
+
 def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
     """``lights`` (aligned with ``scene.clouds``) with the light of every particle cloud and
-    billboard cloud or field passed through the scene's media first (beyond Harris 2002 and
-    Torchelsen & Musse 2005, whose clouds light only themselves): particle ``k``'s light ``ℓ``,
-    or the CAF of a box (billboard) for light ``ℓ``, times ``exp(−τ)`` from its centre towards
-    ``ℓ`` through the 2018 clouds and volumes (:func:`cumuli.light.shadow.media_transmittance`),
-    memoised by content and place. Particle clouds and billboards do not shade one another
-    (:func:`onto_media` makes them shade the media)."""
+    billboard cloud or field passed through the rest of the scene first (beyond Harris 2002
+    and Torchelsen & Musse 2005, whose clouds light only themselves): particle ``k``'s light
+    ``ℓ``, or the CAF of a box (billboard) for light ``ℓ``, times ``exp(−τ)`` from its centre
+    towards ``ℓ`` through the 2018 clouds and volumes
+    (:func:`cumuli.light.shadow.media_transmittance`), and its sunlight also times the sun's
+    transmittance through the other particle clouds and billboards
+    (:func:`cumuli.light.shadow.caster_transmittance`), memoised by content and place. The
+    instances of one billboard field do not shade one another. :func:`onto_media` makes the
+    particle clouds and billboards shade the media."""
     out = list(lights)
     media = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
-    if not media:
+    casters = [k for k, d in enumerate(scene.clouds) if isinstance(d, CASTERS)]
+    if not media and len(casters) < 2:
         return out
     dirs = light_directions([scene.sun, *scene.lights])
+    # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).
+    own_lights = [getattr(light, "unshadowed", None) or light for light in lights]
     for k, cloud in enumerate(scene.clouds):
         # Where the cloud's light is received (made only when the memo misses), and its key.
         points_of: Callable[[], np.ndarray]
@@ -391,16 +401,26 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
             place = (_shadow_digest(cloud), at)
         else:
             continue
+        others = tuple(_shadow_digest(scene.clouds[j]) for j in casters if j != k)
 
-        def transmittance(points_of: Callable[[], np.ndarray] = points_of) -> np.ndarray:
-            points = points_of()
+        def transmittance(points_of: Callable[[], np.ndarray] = points_of, k: int = k) -> Any:
+            points = np.asarray(points_of(), np.float32)
+            t = np.ones((points.shape[0], dirs.shape[0]), np.float32)
             if points.shape[0] == 0:
-                return np.ones((0, dirs.shape[0]), np.float32)
-            columns = [media_transmittance(scene, points, d, threads) for d in dirs]
-            return np.stack(columns, axis=1)
+                return t
+            for column, d in enumerate(dirs):
+                through = media_transmittance(scene, points, d, threads)
+                if through is not None:
+                    t[:, column] = through
+            shade = caster_transmittance(scene, points, threads, own_lights, skip=k)
+            if shade is not None:
+                t[:, 0] *= shade  # the sun's column
+            return t
 
-        key = ("through media", media, place, dirs.tobytes(), scene.noise.seed, scene.noise.size,
-               scene.settings)  # fmt: skip
+        key = ("through media", media, others, place, dirs.tobytes(), scene.noise.seed,
+               scene.noise.size, scene.settings,
+               tuple(scene.sprite_settings.light_dict().items()) if others else None,
+               scene.billboard_shading if others else None)  # fmt: skip
         t = _remember(key, transmittance)
         if not (t == 1.0).all():  # in the clear: the cloud's own light object, as without media
             out[k] = out[k].through(t)
@@ -438,8 +458,7 @@ def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[An
     through them at its grid points (:mod:`cumuli.light.onto_media`), memoised by content and
     place. A medium in the clear keeps its own light object."""
     out = list(lights)
-    casters = (ParticleCloud, BillboardCloud, BillboardField)
-    shade_key = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, casters))
+    shade_key = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, CASTERS))
     if not shade_key:
         return out
     # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).

@@ -73,13 +73,20 @@ SHADOW_CASTERS = (Cloud, VolumeCloud, ParticleCloud, BillboardCloud, BillboardFi
 
 
 def caster_transmittance(
-    scene: Any, points: np.ndarray, threads: int = 0, lights: Sequence[Any] | None = None
+    scene: Any,
+    points: np.ndarray,
+    threads: int = 0,
+    lights: Sequence[Any] | None = None,
+    skip: int | None = None,
 ) -> np.ndarray | None:
-    """The product over the scene's particle clouds and billboards of the sun's transmittance
-    through each at ``points``, by their own light models; None when there are none. A
-    particle cloud's light in ``lights`` (aligned with ``scene.clouds``) lends its buffers."""
+    """The product over the scene's particle clouds and billboards (but ``scene.clouds[skip]``)
+    of the sun's transmittance through each at ``points``, by their own light models; None when
+    there are none. A particle cloud's light in ``lights`` (aligned with ``scene.clouds``) lends
+    its buffers."""
     out = None
     for k, d in enumerate(scene.clouds):
+        if k == skip:
+            continue
         if isinstance(d, ParticleCloud):
             light = lights[k] if lights is not None else None
             t = ground_shadow(d, scene.sun, points, scene.sprite_settings, light)
