@@ -1,7 +1,7 @@
 """Light reaching particle and billboard clouds through the scene's media (beyond Harris 2002 and
 Torchelsen & Musse 2005, whose clouds light only themselves): particle k's light ℓ, or a box's
 (billboard's) CAF for ℓ, times exp(−τ) from its centre towards ℓ through the 2018 clouds and
-volumes, in the light step (`cumuli.light.prepare.through_media`)."""
+volumes, in the light step (`cumuli.light.between.through_media`)."""
 
 from __future__ import annotations
 

@@ -1,8 +1,8 @@
 """Particle clouds and billboards shade the media and one another (beyond Harris 2002 and
 Torchelsen & Musse 2005): the light step multiplies each 2018 cloud's and volume's sun term by
-the sun's transmittance through them at the term's grid points (`cumuli.light.prepare.onto_media`),
+the sun's transmittance through them at the term's grid points (`cumuli.light.between.onto_media`),
 and each particle's or box's sunlight by the transmittance through the other particle clouds and
-billboards (`cumuli.light.prepare.through_media`)."""
+billboards (`cumuli.light.between.through_media`)."""
 
 from __future__ import annotations
 
@@ -13,7 +13,7 @@ from test_ground import SUN
 import cumuli as cu
 from cumuli.light.billboards import caf_points
 from cumuli.light.onto_media import frame_nodes, voxel_centres
-from cumuli.light.shadow import caster_transmittance
+from cumuli.light.shadow import Casters, caster_transmittance, points_sphere
 
 TOWARDS_SUN = np.asarray(SUN.direction, np.float64) / np.linalg.norm(SUN.direction)
 SETTINGS = {"exact_noise": True, "physical_resolution": 16}
@@ -204,3 +204,30 @@ def test_particle_clouds_and_billboards_shade_one_another() -> None:
     lit = own_caf > 1e-4
     np.testing.assert_allclose(caf[lit] / own_caf[lit], want[lit], rtol=1e-5, atol=1e-6)
     assert want.min() < 0.9
+
+
+def test_only_casters_up_sun_are_evaluated_and_nothing_is_lost() -> None:
+    """The culling by bounding spheres drops only casters whose shadow is exactly 1 there."""
+    rng = np.random.default_rng(11)
+    clouds = [
+        cu.particle_cumulus(tuple(rng.uniform((-60, 0, -60), (60, 40, 60))), 60, seed=int(k),
+                            radius=(0.5, 1.0))
+        for k in range(14)
+    ] + [seed_boxes_at(rng.uniform((-40, 10, -40), (40, 30, 40))) for _ in range(2)]  # fmt: skip
+    s = cu.Scene(clouds, sun=SUN)
+    casters = Casters.of(s)
+    assert list(casters.index) == list(range(16))
+    kept = 0
+    for k, cloud in enumerate(clouds[:14]):
+        everyone = [j for j in range(16) if j != k]
+        among = casters.towards_sun(SUN.direction, *points_sphere(cloud.centres), skip=k)
+        assert k not in among and set(among) <= set(everyone)
+        kept += len(among)
+        full = caster_transmittance(s, cloud.centres, 0, None, everyone)
+        culled = caster_transmittance(s, cloud.centres, 0, None, among) if among else None
+        np.testing.assert_array_equal(np.ones_like(full) if culled is None else culled, full)
+    assert 0 < kept < 14 * 15 // 2  # some casters matter, most are culled
+    # A caster straight up-sun is kept, one down-sun or far to the side is not.
+    ahead = Casters(np.array([0, 1, 2]), np.array([10 * TOWARDS_SUN, -10 * TOWARDS_SUN,
+                    10 * TOWARDS_SUN + [0.0, 0.0, 50.0]]), np.array([1.0, 1.0, 1.0]))  # fmt: skip
+    assert ahead.towards_sun(SUN.direction, (0, 0, 0), 1.0) == [0]

@@ -1,6 +1,6 @@
 """Shadows of particle clouds and billboards on the media (beyond Harris 2002 and Torchelsen &
 Musse 2005, whose clouds light only themselves; their shadows on one another are applied in
-:func:`cumuli.light.prepare.through_media`).
+:func:`cumuli.light.between.through_media`).
 
 The media — 2018 clouds and volumes — are lit through light fields sampled on grids: the paper
 mode's NDT light grid of a `Cloud` (:class:`cumuli.LightGrid`), channel 0 (``exp(−σ_t f_sun)``)

@@ -10,7 +10,8 @@ billboard clouds and fields (:mod:`cumuli.light.billboards`) — and returns an 
 changes no object.
 
 Between kinds: particle clouds and billboards are lit through the media and one another
-(:func:`through_media`) and shade the media's sunlight (:func:`onto_media`), in either mode.
+(:func:`cumuli.light.between.through_media`) and shade the media's sunlight
+(:func:`cumuli.light.between.onto_media`), in either mode.
 
 With ``settings.lighting == "physical"`` every drawable gets its :class:`cumuli.PhysicalLight`
 instead (:mod:`cumuli.light.physical`: the sun's optical depth, the sky's visibility and the
@@ -26,13 +27,10 @@ same scene again — every frame of a camera path — does not repeat the light 
 
 from __future__ import annotations
 
-import hashlib
-import threading
 import weakref
 from collections import OrderedDict
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, replace
-from functools import partial
 from typing import Any
 
 import numpy as np
@@ -41,25 +39,22 @@ from cumuli import _progress
 from cumuli import _validate as check
 from cumuli.ground import ground_radiance_unshadowed
 from cumuli.light import billboards as billboard_pass
-from cumuli.light import onto_media as media_shadows
-from cumuli.light.caf import ground_caf_digest
-from cumuli.light.grid import primitives_digest
+from cumuli.light.between import onto_media, own_light_of, through_media
+from cumuli.light.digests import content_digest as _digest
+from cumuli.light.digests import drawable_digest
+from cumuli.light.digests import shadow_digest as _shadow_digest
+from cumuli.light.memo import lock as _memo_lock
+from cumuli.light.memo import remember as _remember
+from cumuli.light.memo import store as _memo
 from cumuli.light.ndt import LightGrid, LightRecord, light_grid
 from cumuli.light.particles import (
     ParticleLight,
     light_directions,
     light_is_stale,
     particle_light_many,
-    particles_digest,
 )
 from cumuli.light.physical import PhysicalLight, physical_light
-from cumuli.light.shadow import (
-    ShadowMap,
-    caster_transmittance,
-    compute_shadow,
-    default_extent,
-    media_transmittance,
-)
+from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
 from cumuli.light.volume import VolumeLighting
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
@@ -67,11 +62,6 @@ from cumuli.model.cloud import Cloud
 from cumuli.model.particles import ParticleCloud
 from cumuli.model.volume import VolumeCloud, VolumeDatabase
 from cumuli.scene import Scene
-
-#: Light objects kept by the memo (least recently used dropped first).
-MEMO_SIZE = 64
-_memo: OrderedDict[Any, Any] = OrderedDict()
-_memo_lock = threading.Lock()
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,19 +84,6 @@ class LitScene:
                 f"a LitScene needs one light per cloud: {len(self.scene.clouds)} clouds, "
                 f"{len(self.lights)} lights"
             )
-
-
-def _remember(key: Any, make: Callable[[], Any]) -> Any:
-    with _memo_lock:
-        if key in _memo:
-            _memo.move_to_end(key)
-            return _memo[key]
-    value = make()
-    with _memo_lock:
-        _memo[key] = value
-        while len(_memo) > MEMO_SIZE:
-            _memo.popitem(last=False)
-    return value
 
 
 def clear_memo() -> None:
@@ -143,14 +120,6 @@ def cloud_light(cloud: Cloud, scene: Scene, given: Any = None, threads: int = 0)
         ("cloud", record, sun),
         lambda: light_grid(cloud, scene.sun, scene.noise, params=params, threads=threads),
     )
-
-
-def _digest(*arrays: np.ndarray) -> str:
-    h = hashlib.blake2b(digest_size=16)
-    for a in arrays:
-        h.update(str(a.shape).encode())
-        h.update(np.ascontiguousarray(a).tobytes())
-    return h.hexdigest()
 
 
 def volume_light(
@@ -312,15 +281,6 @@ LIGHT_PASSES: dict[str, Callable[..., Any]] = {
 LIGHT_BATCHES: dict[str, Callable[..., list[Any]]] = {ParticleCloud.kind: particles_light_many}
 
 
-def drawable_digest(drawable: Any) -> tuple:
-    """What a drawable's light depends on, as a hashable key."""
-    if isinstance(drawable, Cloud):
-        return ("cloud", primitives_digest(drawable), drawable.model, drawable.kappa, drawable.phi)
-    if isinstance(drawable, VolumeCloud):
-        return ("volume", _digest(drawable.density), drawable.box, drawable.sigma_t)
-    return (drawable.kind, id(drawable))
-
-
 def light_sky(scene: Scene) -> Any:
     """The sky that lights the clouds: the scene's, with the ground's unshadowed radiance below
     the horizon when the scene has a ground."""
@@ -351,141 +311,6 @@ PHYSICAL_LIGHT_PASSES: dict[str, Callable[..., Any]] = {
     Cloud.kind: physical_pass,
     VolumeCloud.kind: physical_pass,
 }
-
-
-def _shadow_digest(drawable: Any) -> tuple:
-    """What a drawable's shadow on the ground depends on: its light's digest, and for a particle
-    cloud (whose light does not depend on where it is) also its bounding sphere; a billboard
-    cloud's or field's boxes where they are."""
-    if isinstance(drawable, ParticleCloud):
-        centre, radius = drawable.sphere
-        return ("particles", particles_digest(drawable), tuple(centre.tolist()), radius)
-    if isinstance(drawable, (BillboardCloud, BillboardField)):
-        return ("billboards", ground_caf_digest(drawable))
-    return drawable_digest(drawable)
-
-
-#: The drawables that cast their own shadows on others by their own light models.
-CASTERS = (ParticleCloud, BillboardCloud, BillboardField)
-
-
-def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
-    """``lights`` (aligned with ``scene.clouds``) with the light of every particle cloud and
-    billboard cloud or field passed through the rest of the scene first (beyond Harris 2002
-    and Torchelsen & Musse 2005, whose clouds light only themselves): particle ``k``'s light
-    ``ℓ``, or the CAF of a box (billboard) for light ``ℓ``, times ``exp(−τ)`` from its centre
-    towards ``ℓ`` through the 2018 clouds and volumes
-    (:func:`cumuli.light.shadow.media_transmittance`), and its sunlight also times the sun's
-    transmittance through the other particle clouds and billboards
-    (:func:`cumuli.light.shadow.caster_transmittance`), memoised by content and place. The
-    instances of one billboard field do not shade one another. :func:`onto_media` makes the
-    particle clouds and billboards shade the media."""
-    out = list(lights)
-    media = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
-    casters = [k for k, d in enumerate(scene.clouds) if isinstance(d, CASTERS)]
-    if not media and len(casters) < 2:
-        return out
-    dirs = light_directions([scene.sun, *scene.lights])
-    # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).
-    own_lights = [getattr(light, "unshadowed", None) or light for light in lights]
-    for k, cloud in enumerate(scene.clouds):
-        # Where the cloud's light is received (made only when the memo misses), and its key.
-        points_of: Callable[[], np.ndarray]
-        if isinstance(cloud, ParticleCloud) and isinstance(out[k], ParticleLight):
-            points_of, place = partial(np.asarray, cloud.centres), _shadow_digest(cloud)
-        elif isinstance(cloud, (BillboardCloud, BillboardField)) and isinstance(
-            out[k], billboard_pass.BillboardLighting
-        ):
-            at = out[k].records[0].at
-            points_of = partial(billboard_pass.caf_points, cloud, at)
-            place = (_shadow_digest(cloud), at)
-        else:
-            continue
-        others = tuple(_shadow_digest(scene.clouds[j]) for j in casters if j != k)
-
-        def transmittance(points_of: Callable[[], np.ndarray] = points_of, k: int = k) -> Any:
-            points = np.asarray(points_of(), np.float32)
-            t = np.ones((points.shape[0], dirs.shape[0]), np.float32)
-            if points.shape[0] == 0:
-                return t
-            for column, d in enumerate(dirs):
-                through = media_transmittance(scene, points, d, threads)
-                if through is not None:
-                    t[:, column] = through
-            shade = caster_transmittance(scene, points, threads, own_lights, skip=k)
-            if shade is not None:
-                t[:, 0] *= shade  # the sun's column
-            return t
-
-        key = ("through media", media, others, place, dirs.tobytes(), scene.noise.seed,
-               scene.noise.size, scene.settings,
-               tuple(scene.sprite_settings.light_dict().items()) if others else None,
-               scene.billboard_shading if others else None)  # fmt: skip
-        t = _remember(key, transmittance)
-        if not (t == 1.0).all():  # in the clear: the cloud's own light object, as without media
-            out[k] = out[k].through(t)
-    return out
-
-
-#: Media lights shaded by `onto_media` → the light each was made from, by id with a weak
-#: reference to the shaded one (a light given back to `prepare_light` is unshaded first).
-_own_media_light: dict[int, tuple[weakref.ref, Any]] = {}
-_own_media_lock = threading.Lock()
-
-
-def _own_light_of(light: Any) -> Any:
-    """The light `onto_media` shaded into ``light``, or ``light`` when it shaded none."""
-    with _own_media_lock:
-        entry = _own_media_light.get(id(light))
-    return entry[1] if entry is not None and entry[0]() is light else light
-
-
-def _note_own_light(shaded: Any, own: Any) -> None:
-    key = id(shaded)
-
-    def forget(_: Any, key: int = key) -> None:
-        with _own_media_lock:
-            _own_media_light.pop(key, None)
-
-    with _own_media_lock:
-        _own_media_light[key] = (weakref.ref(shaded, forget), own)
-
-
-def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
-    """``lights`` (aligned with ``scene.clouds``) with the sunlight of every 2018 cloud and
-    volume passed through the scene's particle clouds and billboards first (beyond Harris 2002
-    and Torchelsen & Musse 2005): each of the medium's sun terms times the sun's transmittance
-    through them at its grid points (:mod:`cumuli.light.onto_media`), memoised by content and
-    place. A medium in the clear keeps its own light object."""
-    out = list(lights)
-    shade_key = tuple(_shadow_digest(d) for d in scene.clouds if isinstance(d, CASTERS))
-    if not shade_key:
-        return out
-    # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).
-    own_lights = [getattr(light, "unshadowed", None) or light for light in lights]
-
-    def transmittance(points: np.ndarray) -> np.ndarray | None:
-        return caster_transmittance(scene, points, threads, own_lights)
-
-    for k, medium in enumerate(scene.clouds):
-        if not isinstance(medium, (Cloud, VolumeCloud)):
-            continue
-        own = out[k]
-        box = medium.box if isinstance(medium, VolumeCloud) else None
-        key = ("onto media", shade_key, id(own), scene.sun.direction,
-               tuple(scene.sprite_settings.light_dict().items()),
-               scene.billboard_shading)  # fmt: skip
-        made = _remember(
-            key, lambda own=own, box=box: (own, media_shadows.shade(own, box, transmittance))
-        )
-        if made[0] is not own:  # the id of a light that is gone: make it again
-            made = (own, media_shadows.shade(own, box, transmittance))
-            with _memo_lock:
-                _memo[key] = made
-        if made[1] is not own:
-            _note_own_light(made[1], own)
-            out[k] = made[1]
-    return out
 
 
 def scene_shadow(
@@ -544,7 +369,7 @@ def prepare_light(
     # A light passed through the media (or a medium's light shaded by particles and billboards)
     # is the cloud's own light underneath: that is what is given.
     shadowable = (ParticleLight, billboard_pass.BillboardLighting)
-    given = [g.unshadowed or g if isinstance(g, shadowable) else _own_light_of(g) for g in given]
+    given = [g.unshadowed or g if isinstance(g, shadowable) else own_light_of(g) for g in given]
     # The physical mode replaces the light pass of the marched kinds; particles and billboards
     # keep their own light models (Harris 2002, Torchelsen & Musse 2005) in either mode.
     passes = {**LIGHT_PASSES, **PHYSICAL_LIGHT_PASSES} if scene.settings.physical else LIGHT_PASSES

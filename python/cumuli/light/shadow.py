@@ -72,21 +72,79 @@ def media_transmittance(
 SHADOW_CASTERS = (Cloud, VolumeCloud, ParticleCloud, BillboardCloud, BillboardField)
 
 
+#: The drawables that shade others by their own light models (Harris's shadow map, the CAF).
+CASTERS = (ParticleCloud, BillboardCloud, BillboardField)
+
+
+@dataclass(frozen=True, eq=False)
+class Casters:
+    """The particle clouds and billboard clouds or fields of a scene with their bounding
+    spheres, to find the ones the sun's rays from a region can cross."""
+
+    index: np.ndarray  # (M,) indices into scene.clouds
+    centre: np.ndarray  # (M, 3)
+    radius: np.ndarray  # (M,)
+
+    @classmethod
+    def of(cls, scene: Any) -> Casters:
+        index, centres, radii = [], [], []
+        for k, d in enumerate(scene.clouds):
+            if not isinstance(d, CASTERS):
+                continue
+            if isinstance(d, ParticleCloud):
+                c, r = d.sphere
+            else:  # every billboard of the cloud lies in its compositor's box
+                lo, hi = (np.asarray(v, np.float64) for v in d.layer_box())
+                c, r = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
+            index.append(k)
+            centres.append(np.asarray(c, np.float64))
+            radii.append(float(r))
+        return cls(
+            np.asarray(index, np.int64),
+            np.asarray(centres, np.float64).reshape(-1, 3),
+            np.asarray(radii, np.float64),
+        )
+
+    def towards_sun(
+        self, sun: Any, centre: Any, radius: float, skip: int | None = None
+    ) -> list[int]:
+        """Indices (into ``scene.clouds``) of the casters, but ``skip``, that the rays from the
+        sphere ``(centre, radius)`` towards ``sun`` can cross: ahead of it along the sun and
+        within the two radii of its axis."""
+        s = np.asarray(sun, np.float64)
+        s = s / np.linalg.norm(s)
+        d = self.centre - np.asarray(centre, np.float64)[None, :]
+        along = d @ s
+        lateral = np.linalg.norm(d - along[:, None] * s[None, :], axis=1)
+        reach = self.radius + float(radius)
+        near = (along > -reach) & (lateral < reach) & (self.index != (-1 if skip is None else skip))
+        return [int(k) for k in self.index[near]]
+
+
+def points_sphere(points: np.ndarray) -> tuple[np.ndarray, float]:
+    """A sphere holding ``(N, 3)`` points: their box's centre and the farthest point from it."""
+    p = np.asarray(points, np.float64)
+    if p.shape[0] == 0:
+        return np.zeros(3), 0.0
+    centre = (p.min(axis=0) + p.max(axis=0)) / 2
+    return centre, float(np.sqrt(((p - centre) ** 2).sum(axis=1).max()))
+
+
 def caster_transmittance(
     scene: Any,
     points: np.ndarray,
     threads: int = 0,
     lights: Sequence[Any] | None = None,
-    skip: int | None = None,
+    among: Sequence[int] | None = None,
 ) -> np.ndarray | None:
-    """The product over the scene's particle clouds and billboards (but ``scene.clouds[skip]``)
-    of the sun's transmittance through each at ``points``, by their own light models; None when
-    there are none. A particle cloud's light in ``lights`` (aligned with ``scene.clouds``) lends
-    its buffers."""
+    """The product over the scene's particle clouds and billboards (those of ``among``, indices
+    into ``scene.clouds``, when given) of the sun's transmittance through each at ``points``, by
+    their own light models; None when there are none. A particle cloud's light in ``lights``
+    (aligned with ``scene.clouds``) lends its buffers."""
     out = None
-    for k, d in enumerate(scene.clouds):
-        if k == skip:
-            continue
+    chosen = range(len(scene.clouds)) if among is None else among
+    for k in chosen:
+        d = scene.clouds[k]
         if isinstance(d, ParticleCloud):
             light = lights[k] if lights is not None else None
             t = ground_shadow(d, scene.sun, points, scene.sprite_settings, light)

@@ -1,0 +1,212 @@
+"""Light between kinds (beyond Harris 2002 and Torchelsen & Musse 2005, whose clouds light only
+themselves): particle clouds and billboards lit through the media and one another
+(:func:`through_media`), and shading the media's sunlight (:func:`onto_media`). The light step
+runs both after every drawable's own light pass (RENDER_CONTRACT, "Light through the media")."""
+
+from __future__ import annotations
+
+import threading
+import weakref
+from collections.abc import Callable, Sequence
+from functools import partial
+from typing import Any
+
+import numpy as np
+
+from cumuli.light import billboards as billboard_pass
+from cumuli.light import memo
+from cumuli.light import onto_media as media_shadows
+from cumuli.light.digests import shadow_digest
+from cumuli.light.memo import remember
+from cumuli.light.particles import ParticleLight, light_directions
+from cumuli.light.shadow import (
+    CASTERS,
+    Casters,
+    caster_transmittance,
+    media_transmittance,
+    points_sphere,
+)
+from cumuli.model.billboard_field import BillboardField
+from cumuli.model.billboards import BillboardCloud
+from cumuli.model.cloud import Cloud
+from cumuli.model.particles import ParticleCloud
+from cumuli.model.volume import VolumeCloud
+from cumuli.scene import Scene
+
+
+def _receivers(scene: Scene, lights: Sequence[Any]) -> dict[int, tuple[Callable[[], Any], Any]]:
+    """The particle clouds and billboard clouds or fields whose light can be shaded: by index,
+    a function making the world points where the light is received (in the order of its light's
+    rows or CAF entries) and a key for where they are."""
+    out: dict[int, tuple[Callable[[], Any], Any]] = {}
+    for k, cloud in enumerate(scene.clouds):
+        if isinstance(cloud, ParticleCloud) and isinstance(lights[k], ParticleLight):
+            out[k] = (partial(np.asarray, cloud.centres), shadow_digest(cloud))
+        elif isinstance(cloud, (BillboardCloud, BillboardField)) and isinstance(
+            lights[k], billboard_pass.BillboardLighting
+        ):
+            at = lights[k].records[0].at
+            out[k] = (partial(billboard_pass.caf_points, cloud, at), (shadow_digest(cloud), at))
+    return out
+
+
+def _split(values: np.ndarray, parts: dict[int, np.ndarray]) -> dict[int, np.ndarray]:
+    """``values`` computed on the concatenated ``parts``, cut back into one array per part."""
+    ends = np.cumsum([len(p) for p in parts.values()])
+    return dict(zip(parts, np.split(values, ends[:-1]), strict=True))
+
+
+def _between_casters(
+    scene: Scene,
+    points: Callable[[int], np.ndarray],
+    receivers: Sequence[int],
+    casters: Casters,
+    own_lights: Sequence[Any],
+    threads: int,
+) -> dict[int, np.ndarray]:
+    """The sun's transmittance at each receiver's points through the other particle clouds and
+    billboards its bounding sphere's rays towards the sun can cross (receivers in the clear
+    left out): one shadow query per caster over all the points it may shade, the factors of
+    each receiver multiplied in the casters' order."""
+    sun = scene.sun.direction
+    shaded_by: dict[int, list[int]] = {}
+    for k in receivers:
+        me = int(np.flatnonzero(casters.index == k)[0])
+        for j in casters.towards_sun(sun, casters.centre[me], casters.radius[me], skip=k):
+            shaded_by.setdefault(j, []).append(k)
+    out: dict[int, np.ndarray] = {}
+    for j in sorted(shaded_by):
+        parts = {k: points(k) for k in shaded_by[j]}
+        t = caster_transmittance(scene, np.concatenate(list(parts.values())), threads,
+                                 own_lights, [j])  # fmt: skip
+        if t is None:
+            continue
+        for k, part in _split(np.asarray(t, np.float32), parts).items():
+            out[k] = part if k not in out else out[k] * part
+    return out
+
+
+def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
+    """``lights`` (aligned with ``scene.clouds``) with the light of every particle cloud and
+    billboard cloud or field passed through the rest of the scene first (beyond Harris 2002
+    and Torchelsen & Musse 2005, whose clouds light only themselves): particle ``k``'s light
+    ``ℓ``, or the CAF of a box (billboard) for light ``ℓ``, times ``exp(−τ)`` from its centre
+    towards ``ℓ`` through the 2018 clouds and volumes
+    (:func:`cumuli.light.shadow.media_transmittance`), and its sunlight also times the sun's
+    transmittance through the other particle clouds and billboards
+    (:func:`cumuli.light.shadow.caster_transmittance`, only for the casters the rays from its
+    bounding sphere can cross: :meth:`Casters.towards_sun`), each memoised by content and
+    place for the whole scene. The instances of one billboard field do not shade one another.
+    :func:`onto_media` makes the particle clouds and billboards shade the media."""
+    out = list(lights)
+    receivers = _receivers(scene, lights)
+    media = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
+    casters = Casters.of(scene)
+    mutual = len(casters.index) >= 2
+    if not receivers or not (media or mutual):
+        return out
+    dirs = light_directions([scene.sun, *scene.lights])
+    # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).
+    own_lights = [getattr(light, "unshadowed", None) or light for light in lights]
+    places = tuple((k, place) for k, (_, place) in receivers.items())
+    made: dict[int, np.ndarray] = {}
+
+    def points(k: int) -> np.ndarray:  # made once, and only when a memo misses
+        if k not in made:
+            made[k] = np.asarray(receivers[k][0](), np.float32).reshape(-1, 3)
+        return made[k]
+
+    def through_the_media() -> dict[int, np.ndarray]:
+        parts = {k: points(k) for k in receivers}
+        everywhere = np.concatenate(list(parts.values()))
+        columns = [media_transmittance(scene, everywhere, d, threads) for d in dirs]
+        return _split(np.stack(columns, axis=1).astype(np.float32), parts)
+
+    t_media: dict[int, np.ndarray] = {}
+    if media:
+        key = ("through media", media, places, dirs.tobytes(), scene.noise.seed,
+               scene.noise.size, scene.settings)  # fmt: skip
+        t_media = remember(key, through_the_media)
+    t_sun: dict[int, np.ndarray] = {}
+    if mutual:
+        key = ("between casters", tuple(shadow_digest(scene.clouds[j]) for j in casters.index),
+               places, scene.sun.direction, tuple(scene.sprite_settings.light_dict().items()),
+               scene.billboard_shading)  # fmt: skip
+        t_sun = remember(key, lambda: _between_casters(
+            scene, points, list(receivers), casters, own_lights, threads))  # fmt: skip
+    for k in receivers:
+        if k not in t_media and k not in t_sun:
+            continue
+        if k in t_media:
+            t = t_media[k].copy()
+        else:
+            t = np.ones((len(t_sun[k]), dirs.shape[0]), np.float32)
+        if k in t_sun:
+            t[:, 0] *= t_sun[k]  # the sun's column
+        if not (t == 1.0).all():  # in the clear: the cloud's own light object, as without media
+            out[k] = out[k].through(t)
+    return out
+
+
+#: Media lights shaded by `onto_media` → the light each was made from, by id with a weak
+#: reference to the shaded one (a light given back to `prepare_light` is unshaded first).
+_own_media_light: dict[int, tuple[weakref.ref, Any]] = {}
+_own_media_lock = threading.Lock()
+
+
+def own_light_of(light: Any) -> Any:
+    """The light `onto_media` shaded into ``light``, or ``light`` when it shaded none."""
+    with _own_media_lock:
+        entry = _own_media_light.get(id(light))
+    return entry[1] if entry is not None and entry[0]() is light else light
+
+
+def _note_own_light(shaded: Any, own: Any) -> None:
+    key = id(shaded)
+
+    def forget(_: Any, key: int = key) -> None:
+        with _own_media_lock:
+            _own_media_light.pop(key, None)
+
+    with _own_media_lock:
+        _own_media_light[key] = (weakref.ref(shaded, forget), own)
+
+
+def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
+    """``lights`` (aligned with ``scene.clouds``) with the sunlight of every 2018 cloud and
+    volume passed through the scene's particle clouds and billboards first (beyond Harris 2002
+    and Torchelsen & Musse 2005): each of the medium's sun terms times the sun's transmittance
+    through them at its grid points (:mod:`cumuli.light.onto_media`), memoised by content and
+    place. A medium in the clear keeps its own light object."""
+    out = list(lights)
+    shade_key = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, CASTERS))
+    if not shade_key:
+        return out
+    # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).
+    own_lights = [getattr(light, "unshadowed", None) or light for light in lights]
+
+    casters = Casters.of(scene)
+
+    def transmittance(points: np.ndarray) -> np.ndarray | None:
+        among = casters.towards_sun(scene.sun.direction, *points_sphere(points))
+        return caster_transmittance(scene, points, threads, own_lights, among) if among else None
+
+    for k, medium in enumerate(scene.clouds):
+        if not isinstance(medium, (Cloud, VolumeCloud)):
+            continue
+        own = out[k]
+        box = medium.box if isinstance(medium, VolumeCloud) else None
+        key = ("onto media", shade_key, id(own), scene.sun.direction,
+               tuple(scene.sprite_settings.light_dict().items()),
+               scene.billboard_shading)  # fmt: skip
+        made = remember(
+            key, lambda own=own, box=box: (own, media_shadows.shade(own, box, transmittance))
+        )
+        if made[0] is not own:  # the id of a light that is gone: make it again
+            made = (own, media_shadows.shade(own, box, transmittance))
+            with memo.lock:
+                memo.store[key] = made
+        if made[1] is not own:
+            _note_own_light(made[1], own)
+            out[k] = made[1]
+    return out
