@@ -80,6 +80,11 @@ def _huge_points() -> np.ndarray:
     return pts
 
 
+def test_the_corner_quads_exist_for_power_of_two_sizes_up_to_64() -> None:
+    for size, has in ((64, True), (2, True), (32, True), (128, False), (256, False), (17, False)):
+        assert cu.Noise(seed=1, size=size).has_quads is has, size
+
+
 def test_scalar_is_always_available_and_the_default_is_the_widest() -> None:
     assert LEVELS[0] == "scalar"
     assert set(LEVELS) <= set(SIMD_LEVELS)

@@ -13,7 +13,7 @@ from test_ground import SUN
 import cumuli as cu
 from cumuli.light.billboards import caf_points
 from cumuli.light.onto_media import frame_nodes, voxel_centres
-from cumuli.light.shadow import Casters, caster_transmittance, points_sphere
+from cumuli.light.shadow import Casters, caster_transmittance
 
 TOWARDS_SUN = np.asarray(SUN.direction, np.float64) / np.linalg.norm(SUN.direction)
 SETTINGS = {"exact_noise": True, "physical_resolution": 16}
@@ -218,16 +218,59 @@ def test_only_casters_up_sun_are_evaluated_and_nothing_is_lost() -> None:
     casters = Casters.of(s)
     assert list(casters.index) == list(range(16))
     kept = 0
-    for k, cloud in enumerate(clouds[:14]):
-        everyone = [j for j in range(16) if j != k]
-        among = casters.towards_sun(SUN.direction, *points_sphere(cloud.centres), skip=k)
-        assert k not in among and set(among) <= set(everyone)
+    for k, cloud in enumerate(clouds):
+        # The receiver's sphere as through_media takes it (its own caster sphere).
+        points = caf_points(cloud, "box") if k >= 14 else cloud.centres
+        assert np.linalg.norm(points - casters.centre[k], axis=1).max() <= casters.radius[k]
+        among = casters.towards_sun(SUN.direction, casters.centre[k], casters.radius[k], skip=k)
         kept += len(among)
-        full = caster_transmittance(s, cloud.centres, 0, None, everyone)
-        culled = caster_transmittance(s, cloud.centres, 0, None, among) if among else None
+        everyone = [j for j in range(16) if j != k]
+        full = caster_transmittance(s, points, 0, None, everyone)
+        culled = caster_transmittance(s, points, 0, None, among) if among else None
         np.testing.assert_array_equal(np.ones_like(full) if culled is None else culled, full)
-    assert 0 < kept < 14 * 15 // 2  # some casters matter, most are culled
+    assert 0 < kept < 16 * 15 // 2  # some casters matter, most are culled
     # A caster straight up-sun is kept, one down-sun or far to the side is not.
     ahead = Casters(np.array([0, 1, 2]), np.array([10 * TOWARDS_SUN, -10 * TOWARDS_SUN,
                     10 * TOWARDS_SUN + [0.0, 0.0, 50.0]]), np.array([1.0, 1.0, 1.0]))  # fmt: skip
     assert ahead.towards_sun(SUN.direction, (0, 0, 0), 1.0) == [0]
+
+
+def test_a_billboard_box_beyond_its_quads_still_shades() -> None:
+    """The CAF's chords run through the boxes: a caster is bounded by its boxes and its quads."""
+    sun = cu.Sun(direction=(0.0, 1.0, 0.0))
+    wide = cu.BillboardCloud(
+        boxes=np.array([[[-15, 20, -15], [15, 30, 15]]], np.float32), box_level=[0],
+        box_seed=[0], box_direction=[0], centres=np.array([[13, 25, 13]], np.float32),
+        sizes=np.array([[2, 2]], np.float32), texture=[0], box=[0], rotation=[0],
+    )  # fmt: skip
+    pc = cu.particle_cumulus((0, 0, 0), 60, seed=1, radius=(0.5, 1.0))
+    s = cu.Scene([pc, wide], sun=sun)
+    light = cu.prepare_light(s).lights[0]
+    want = cu.ground_shadow(wide, sun, pc.centres, s.billboard_shading)
+    assert want.min() < 0.6 and light.unshadowed is not None
+    lit = light.unshadowed.light[:, 0] > 1e-4
+    np.testing.assert_allclose(light.light[lit, 0] / light.unshadowed.light[lit, 0], want[lit],
+                               rtol=1e-5, atol=1e-6)  # fmt: skip
+
+
+def test_a_moved_volume_given_its_light_back_is_shaded_where_it_is() -> None:
+    field = cu.light_grid(cumulus(), SUN, cu.Noise(seed=5, size=32), resolution=12)
+    volume = cu.VolumeCloud(density=np.asarray(field.values) * 0.5, box=field.box, sigma_t=2.0)
+    lit = cu.prepare_light(scene([volume, puff_above()]))
+    own = cu.prepare_light(scene([volume])).lights[0]
+    assert lit.lights[0][..., 0].min() < own[..., 0].min()  # shaded
+    away = volume.translated((60.0, 0.0, 0.0))  # its own light is the same
+    moved = cu.prepare_light(lit.scene.replace(clouds=[away, puff_above()]), lights=lit.lights)
+    np.testing.assert_array_equal(moved.lights[0], own)  # out of the shadow: its own light
+
+
+def test_particle_shadows_with_gain_stay_transmittances() -> None:
+    gain = cu.SpriteSettings(solid_angle=3.0, allow_gain=True)
+    field = cu.light_grid(cumulus(), SUN, cu.Noise(seed=5, size=32), resolution=12)
+    volume = cu.VolumeCloud(density=np.asarray(field.values) * 0.5, box=field.box, sigma_t=2.0)
+    s = scene([volume, puff_above()]).replace(sprite_settings=gain)
+    t = caster_transmittance(s, voxel_centres(volume.box, volume.shape))
+    assert t is not None and np.isfinite(t).all() and t.min() >= 0.0 and t.max() <= 1.0
+    light = cu.prepare_light(s).lights[0]
+    own = cu.prepare_light(scene([volume])).lights[0]
+    assert np.isfinite(light).all() and (light[..., 0] <= own[..., 0]).all()

@@ -82,6 +82,7 @@ void bind_noise(py::module_& m) {
   py::class_<Noise>(m, "Noise")
       .def(py::init<std::uint64_t, int>(), py::arg("seed"), py::arg("size") = 64)
       .def_property_readonly("size", &Noise::size)
+      .def_property_readonly("has_quads", &Noise::has_quads)
       .def_property_readonly("seed", &Noise::seed)
       .def_property_readonly(
           "lattice",

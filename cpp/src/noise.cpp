@@ -478,7 +478,7 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline __m512 pairs8_
   for (int j = 0; j < 4; ++j) {
     const double* lo = reinterpret_cast<const double*>(row_floats + index[2 * j]);
     const double* hi = reinterpret_cast<const double*>(row_floats + index[2 * j + 1]);
-    q[j] = _mm_loadh_pd(_mm_load_sd(lo), hi);
+    q[j] = _mm_loadh_pd(_mm_loadl_pd(_mm_setzero_pd(), lo), hi);  // no aligned double deref
   }
   const __m256d low = _mm256_insertf128_pd(_mm256_castpd128_pd256(q[0]), q[1], 1);
   const __m256d high = _mm256_insertf128_pd(_mm256_castpd128_pd256(q[2]), q[3], 1);

@@ -40,7 +40,7 @@ SimdFetch default_fetch() {
     if (name == "gather") return SimdFetch::Gather;
     if (name == "loads") return SimdFetch::Loads;
     if (name == "quads") return SimdFetch::Quads;
-    // Empty, "auto" or unknown (the Python layer warns): the CPU's preference.
+    // Empty, "auto" or unknown (the Python layer warns): the default, Quads.
   }
   return SimdFetch::Quads;
 }

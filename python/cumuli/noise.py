@@ -127,6 +127,12 @@ class Noise:
         return int(self._core.size)
 
     @property
+    def has_quads(self) -> bool:
+        """Whether the wide kernels can read this lattice as corner quads (the ``"quads"``
+        fetch, :func:`simd_fetch`): power-of-two sizes up to 64; others read as ``"loads"``."""
+        return bool(self._core.has_quads)
+
+    @property
     def lattice(self) -> np.ndarray:
         """The lattice as a read-only float32 ``(size, size, size)`` view, indexed ``[z, y, x]``."""
         return self._core.lattice

@@ -30,6 +30,9 @@ class Noise {
   Noise(std::uint64_t seed, int size = 64);
 
   int size() const { return size_; }
+  // Whether the lattice has its corner quads (power-of-two sizes up to kMaxQuadsSize), which the
+  // wide kernels' Quads fetch reads; without them that fetch reads the rows (Loads).
+  bool has_quads() const { return !quads_.empty(); }
   std::uint64_t seed() const { return seed_; }
   const std::vector<float>& lattice() const { return lattice_; }  // [z][y][x]
 

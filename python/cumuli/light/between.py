@@ -14,7 +14,6 @@ from typing import Any
 import numpy as np
 
 from cumuli.light import billboards as billboard_pass
-from cumuli.light import memo
 from cumuli.light import onto_media as media_shadows
 from cumuli.light.digests import shadow_digest
 from cumuli.light.memo import remember
@@ -163,21 +162,30 @@ def own_light_of(light: Any) -> Any:
 
 def _note_own_light(shaded: Any, own: Any) -> None:
     key = id(shaded)
+    with _own_media_lock:
+        entry = _own_media_light.get(key)
+        if entry is not None and entry[0]() is shaded:
+            return
 
     def forget(_: Any, key: int = key) -> None:
-        with _own_media_lock:
-            _own_media_light.pop(key, None)
+        # No lock: a garbage collection may run this inside a locked block of this thread, and
+        # one dict.pop is atomic. The entry goes when its light dies, before its id is reused.
+        _own_media_light.pop(key, None)
 
+    ref = weakref.ref(shaded, forget)
     with _own_media_lock:
-        _own_media_light[key] = (weakref.ref(shaded, forget), own)
+        _own_media_light[key] = (ref, own)
 
 
 def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[Any]:
     """``lights`` (aligned with ``scene.clouds``) with the sunlight of every 2018 cloud and
     volume passed through the scene's particle clouds and billboards first (beyond Harris 2002
     and Torchelsen & Musse 2005): each of the medium's sun terms times the sun's transmittance
-    through them at its grid points (:mod:`cumuli.light.onto_media`), memoised by content and
-    place. A medium in the clear keeps its own light object."""
+    through them at its grid points (:mod:`cumuli.light.onto_media`), memoised by the medium's
+    own light and place and the casters' content and place. A medium in the clear keeps its own
+    light object. A shaded light given back to `prepare_light` in this process is replaced by the
+    light it was made from (the registry holds it by the shaded light's identity); a copy of one
+    (pickled, saved and loaded) is taken as the medium's own light."""
     out = list(lights)
     shade_key = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, CASTERS))
     if not shade_key:
@@ -196,16 +204,14 @@ def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[An
             continue
         own = out[k]
         box = medium.box if isinstance(medium, VolumeCloud) else None
-        key = ("onto media", shade_key, id(own), scene.sun.direction,
+        # id(own) cannot name another light while the entry holds `own`; the medium's digest
+        # holds where it is (a volume's light, given back, does not change when it moves).
+        key = ("onto media", shade_key, id(own), shadow_digest(medium), scene.sun.direction,
                tuple(scene.sprite_settings.light_dict().items()),
                scene.billboard_shading)  # fmt: skip
         made = remember(
             key, lambda own=own, box=box: (own, media_shadows.shade(own, box, transmittance))
         )
-        if made[0] is not own:  # the id of a light that is gone: make it again
-            made = (own, media_shadows.shade(own, box, transmittance))
-            with memo.lock:
-                memo.store[key] = made
         if made[1] is not own:
             _note_own_light(made[1], own)
             out[k] = made[1]

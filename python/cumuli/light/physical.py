@@ -99,7 +99,8 @@ def cloud_extinction_scale(settings: Any) -> float:
 def _medium_args(drawable: Any, settings: Any) -> tuple[list, list]:
     if not isinstance(drawable, (Cloud, VolumeCloud)):
         # Particle clouds and billboards keep their own light models (Harris 2002, Torchelsen
-        # & Musse 2005): they have no extinction field and cast no shadow into the media.
+        # & Musse 2005): they have no extinction field; their shadows on the media are added
+        # after the light passes (cumuli.light.between.onto_media).
         return [], []
     if isinstance(drawable, VolumeCloud):
         return [], [(drawable.density, drawable.box[0], drawable.box[1], float(drawable.sigma_t))]

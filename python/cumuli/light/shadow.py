@@ -76,6 +76,34 @@ SHADOW_CASTERS = (Cloud, VolumeCloud, ParticleCloud, BillboardCloud, BillboardFi
 CASTERS = (ParticleCloud, BillboardCloud, BillboardField)
 
 
+def caster_sphere(d: Any) -> tuple[np.ndarray, float]:
+    """A sphere outside which a caster's shadow is exactly 1 and which holds the points where
+    its own light is received: for a particle cloud its bounding sphere widened by √2 (Harris's
+    shadow map is the square around it, sampled bilinearly); for a billboard cloud the sphere
+    around its quads' and its boxes' bounds (the CAF's chords run through the boxes); for a
+    field, the sphere around its instances' such spheres."""
+    if isinstance(d, ParticleCloud):
+        c, r = d.sphere
+        return np.asarray(c, np.float64), float(r) * math.sqrt(2.0)
+    if isinstance(d, BillboardCloud):
+        (lo_q, hi_q), (lo_b, hi_b) = d.layer_box(), d.box_bounds()
+        lo = np.minimum(np.asarray(lo_q, np.float64), lo_b)
+        hi = np.maximum(np.asarray(hi_q, np.float64), hi_b)
+        return (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
+    if d.n == 0:
+        return np.zeros(3), 0.0
+    centres, radii = d.instance_spheres()
+    reach = []  # per variant: the farthest box corner from its quads' sphere centre
+    for v in d.variants:
+        c = np.asarray(v.sphere()[0], np.float64)
+        far = np.maximum(np.abs(v.boxes[:, 0] - c), np.abs(v.boxes[:, 1] - c))  # farthest corner
+        reach.append(float(np.linalg.norm(far, axis=1).max()) if len(far) else 0.0)
+    radii = np.maximum(radii, np.asarray(reach)[d.variant])
+    lo, hi = (centres - radii[:, None]).min(axis=0), (centres + radii[:, None]).max(axis=0)
+    centre = (lo + hi) / 2
+    return centre, float((np.linalg.norm(centres - centre, axis=1) + radii).max())
+
+
 @dataclass(frozen=True, eq=False)
 class Casters:
     """The particle clouds and billboard clouds or fields of a scene with their bounding
@@ -91,11 +119,7 @@ class Casters:
         for k, d in enumerate(scene.clouds):
             if not isinstance(d, CASTERS):
                 continue
-            if isinstance(d, ParticleCloud):
-                c, r = d.sphere
-            else:  # every billboard of the cloud lies in its compositor's box
-                lo, hi = (np.asarray(v, np.float64) for v in d.layer_box())
-                c, r = (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
+            c, r = caster_sphere(d)
             index.append(k)
             centres.append(np.asarray(c, np.float64))
             radii.append(float(r))
@@ -139,8 +163,8 @@ def caster_transmittance(
 ) -> np.ndarray | None:
     """The product over the scene's particle clouds and billboards (those of ``among``, indices
     into ``scene.clouds``, when given) of the sun's transmittance through each at ``points``, by
-    their own light models; None when there are none. A particle cloud's light in ``lights``
-    (aligned with ``scene.clouds``) lends its buffers."""
+    their own light models, each clipped to [0, 1]; None when there are none. A particle
+    cloud's light in ``lights`` (aligned with ``scene.clouds``) lends its buffers."""
     out = None
     chosen = range(len(scene.clouds)) if among is None else among
     for k in chosen:
@@ -152,6 +176,8 @@ def caster_transmittance(
             t = ground_caf(d, scene.sun, points, scene.billboard_shading, threads)
         else:
             continue
+        # A transmittance: a particle light with allow_gain can exceed 1 (or overflow).
+        t = np.clip(np.nan_to_num(np.asarray(t, np.float32), nan=1.0, posinf=1.0), 0.0, 1.0)
         out = t if out is None else out * t
     return out
 
