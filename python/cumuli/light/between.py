@@ -99,10 +99,12 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
     :func:`onto_media` makes the particle clouds and billboards shade the media."""
     out = list(lights)
     receivers = _receivers(scene, lights)
+    if not receivers:
+        return out
     media = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
     casters = Casters.of(scene)
     mutual = len(casters.index) >= 2
-    if not receivers or not (media or mutual):
+    if not (media or mutual):
         return out
     dirs = light_directions([scene.sun, *scene.lights])
     # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).
@@ -136,15 +138,30 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
     for k in receivers:
         if k not in t_media and k not in t_sun:
             continue
+        # The same factors (memoised arrays) on the same own light give the same shaded light
+        # object as last frame: no new arrays, and the impostor cache sees it unchanged at once.
+        factors = (t_media.get(k), t_sun.get(k))
+        last = _shaded_lights.get(out[k])
+        if last is not None and last[0] is factors[0] and last[1] is factors[1]:
+            if last[2] is not None:
+                out[k] = last[2]
+            continue
         if k in t_media:
             t = t_media[k].copy()
         else:
             t = np.ones((len(t_sun[k]), dirs.shape[0]), np.float32)
         if k in t_sun:
             t[:, 0] *= t_sun[k]  # the sun's column
-        if not (t == 1.0).all():  # in the clear: the cloud's own light object, as without media
-            out[k] = out[k].through(t)
+        shaded = None if (t == 1.0).all() else out[k].through(t)  # clear: the own light object
+        _shaded_lights[out[k]] = (*factors, shaded)
+        if shaded is not None:
+            out[k] = shaded
     return out
+
+
+#: A particle or billboard cloud's own light → (its media factors, its casters' factors, the
+#: shaded light made from them), reused while the factors are the same memoised arrays.
+_shaded_lights: weakref.WeakKeyDictionary[Any, tuple[Any, Any, Any]] = weakref.WeakKeyDictionary()
 
 
 #: Media lights shaded by `onto_media` → the light each was made from, by id with a weak
@@ -187,6 +204,8 @@ def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[An
     light it was made from (the registry holds it by the shaded light's identity); a copy of one
     (pickled, saved and loaded) is taken as the medium's own light."""
     out = list(lights)
+    if not any(isinstance(d, (Cloud, VolumeCloud)) for d in scene.clouds):
+        return out
     shade_key = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, CASTERS))
     if not shade_key:
         return out
