@@ -17,6 +17,8 @@ from cumuli.light.shadow import Casters, caster_transmittance
 
 TOWARDS_SUN = np.asarray(SUN.direction, np.float64) / np.linalg.norm(SUN.direction)
 SETTINGS = {"exact_noise": True, "physical_resolution": 16}
+#: Particle clouds and billboards shading one another (off by default).
+ON = cu.RenderSettings(sprite_shadows=True)
 
 
 def cumulus() -> cu.Cloud:
@@ -163,7 +165,9 @@ def test_particle_clouds_and_billboards_shade_one_another() -> None:
     place = 40 * TOWARDS_SUN + 14 * across  # half over the low cloud, seen from the sun
     high = cu.particle_cumulus(tuple(place.tolist()), 300, seed=3, radius=(2.0, 3.0))
     extra = cu.Sun(direction=(-0.6, 0.5, -0.2), intensity=0.5)  # clear of the high cloud
-    s = cu.Scene([low, high], sun=SUN, lights=(extra,))
+    off = cu.Scene([low, high], sun=SUN, lights=(extra,))
+    assert all(light.unshadowed is None for light in cu.prepare_light(off).lights)  # default
+    s = off.replace(settings=ON)
     a, b = cu.prepare_light(s).lights
     assert b.unshadowed is None  # the low cloud lies behind the high one from the sun
     own = a.unshadowed
@@ -184,7 +188,7 @@ def test_particle_clouds_and_billboards_shade_one_another() -> None:
 
     # Billboards above particles, and particles above billboards.
     boxes = seed_boxes_at(30 * TOWARDS_SUN)
-    s2 = cu.Scene([low, boxes], sun=SUN)
+    s2 = cu.Scene([low, boxes], sun=SUN, settings=ON)
     p_light, b_light = cu.prepare_light(s2).lights
     assert b_light.unshadowed is None and p_light.unshadowed is not None
     want = cu.ground_shadow(boxes, SUN, low.centres, s2.billboard_shading)
@@ -195,7 +199,7 @@ def test_particle_clouds_and_billboards_shade_one_another() -> None:
     assert want.min() < 0.9
     under = seed_boxes_at(-30 * TOWARDS_SUN)
     s3 = cu.Scene([under, high.translated(tuple((-40 * TOWARDS_SUN - 14 * across).tolist()))],
-                  sun=SUN)  # fmt: skip
+                  sun=SUN, settings=ON)  # fmt: skip
     b_light, p_light = cu.prepare_light(s3).lights
     assert p_light.unshadowed is None and b_light.unshadowed is not None
     points = caf_points(under, b_light.records[0].at)
@@ -244,7 +248,7 @@ def test_a_billboard_box_beyond_its_quads_still_shades() -> None:
         sizes=np.array([[2, 2]], np.float32), texture=[0], box=[0], rotation=[0],
     )  # fmt: skip
     pc = cu.particle_cumulus((0, 0, 0), 60, seed=1, radius=(0.5, 1.0))
-    s = cu.Scene([pc, wide], sun=sun)
+    s = cu.Scene([pc, wide], sun=sun, settings=ON)
     light = cu.prepare_light(s).lights[0]
     want = cu.ground_shadow(wide, sun, pc.centres, s.billboard_shading)
     assert want.min() < 0.6 and light.unshadowed is not None

@@ -100,6 +100,11 @@ class RenderSettings:
         sample's depth jump from pixel to pixel in whole steps, which draws contour rings on the
         surface; the jitter turns them into a fine pattern that averages out. ``False`` (the
         default) is the paper's march; the physical mode always jitters.
+    sprite_shadows:
+        Particle clouds and billboards shade one another's sunlight (beyond Harris 2002 and
+        Torchelsen & Musse 2005). Off by default: in a field whose clouds move, their light then
+        changes every frame, which costs the light step and regenerates impostors (the Fig. 8
+        gain fell from ×4.1 to ×2.7 with it on). They shade the media and the ground either way.
     shadow_resolution:
         Edge of the ground's sun shadow map (texels), when the scene has a ground.
     empty_space_skipping:
@@ -154,6 +159,7 @@ class RenderSettings:
     empty_space_skipping: bool = True
     min_transmittance: float = 1e-6
     jitter: bool = False
+    sprite_shadows: bool = False
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -245,6 +251,7 @@ class RenderSettings:
         )
         s(self, "min_transmittance", t_min)
         s(self, "jitter", check.flag(self.jitter, "settings.jitter"))
+        s(self, "sprite_shadows", check.flag(self.sprite_shadows, "settings.sprite_shadows"))
 
     def step_for(self, distance: float) -> float:
         """The march step Δ for a cloud whose centre is ``distance`` from the camera."""

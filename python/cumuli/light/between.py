@@ -91,8 +91,9 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
     and Torchelsen & Musse 2005, whose clouds light only themselves): particle ``k``'s light
     ``ℓ``, or the CAF of a box (billboard) for light ``ℓ``, times ``exp(−τ)`` from its centre
     towards ``ℓ`` through the 2018 clouds and volumes
-    (:func:`cumuli.light.shadow.media_transmittance`), and its sunlight also times the sun's
-    transmittance through the other particle clouds and billboards
+    (:func:`cumuli.light.shadow.media_transmittance`), and, with ``settings.sprite_shadows``,
+    its sunlight also times the sun's transmittance through the other particle clouds and
+    billboards
     (:func:`cumuli.light.shadow.caster_transmittance`, only for the casters the rays from its
     bounding sphere can cross: :meth:`Casters.towards_sun`), each memoised by content and
     place for the whole scene. The instances of one billboard field do not shade one another.
@@ -103,7 +104,7 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
         return out
     media = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
     casters = Casters.of(scene)
-    mutual = len(casters.index) >= 2
+    mutual = scene.settings.sprite_shadows and len(casters.index) >= 2
     if not (media or mutual):
         return out
     dirs = light_directions([scene.sun, *scene.lights])
