@@ -103,8 +103,9 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
     if not receivers:
         return out
     media = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
-    casters = Casters.of(scene)
-    mutual = scene.settings.sprite_shadows and len(casters.index) >= 2
+    # The casters' spheres only when they shade one another (each frame of a field pays them).
+    casters = Casters.of(scene) if scene.settings.sprite_shadows else None
+    mutual = casters is not None and len(casters.index) >= 2
     if not (media or mutual):
         return out
     dirs = light_directions([scene.sun, *scene.lights])
@@ -131,6 +132,7 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
         t_media = remember(key, through_the_media)
     t_sun: dict[int, np.ndarray] = {}
     if mutual:
+        assert casters is not None
         key = ("between casters", tuple(shadow_digest(scene.clouds[j]) for j in casters.index),
                places, scene.sun.direction, tuple(scene.sprite_settings.light_dict().items()),
                scene.billboard_shading)  # fmt: skip
