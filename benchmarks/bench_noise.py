@@ -116,7 +116,7 @@ def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict
         if lvl != "scalar"
         for fetch in SIMD_FETCHES
     }
-    # One untimed call before each timed one: the quads fetch reads a 4.4 MB copy of the lattice,
+    # One untimed call before each timed one: the quads fetch reads a 2.2 MB copy of the lattice,
     # the others the 1.1 MB lattice, and each would otherwise start from the other's caches.
     timed = common.interleaved_repeats({k: at(*v) for k, v in kernels.items()}, repeats, settle=1)
     return {
@@ -293,7 +293,7 @@ def main(argv: list[str] | None = None) -> int:
 
     methods: dict[str, Any] = {}
     skipped: dict[str, str] = {}
-    from cumuli.noise import simd_fetch, simd_level
+    from cumuli.noise import preferred_simd_fetch, simd_fetch, simd_level
 
     cpp = bench_cpp(noise, pts, repeats, [1, 2] + ([0] if machine["cores"] > 2 else []))
     methods["cpp_1_thread"], methods["cpp_2_threads"] = cpp[1], cpp[2]
@@ -362,6 +362,18 @@ def main(argv: list[str] | None = None) -> int:
                     methods[f"cpp_1_thread_{lvl}_{other}"]["samples_per_cpu_s_median"]
                     / gather["samples_per_cpu_s_median"]
                 )
+    # The default fetch (the CPU's preferred one) against the fastest fetch of the widest level
+    # in this run, per CPU-second: 1 where the preference holds on this machine.
+    fetch_rates = {
+        f: methods[f"cpp_1_thread_{widest}_{f}"]["samples_per_cpu_s_median"]
+        for f in ("gather", "loads", "quads")
+        if f"cpp_1_thread_{widest}_{f}" in methods
+    }
+    if fetch_rates:
+        fastest = max(fetch_rates.values())
+        ratios["cpp_1_thread_default_fetch_over_fastest"] = (
+            best["samples_per_cpu_s_median"] / fastest
+        )
     # Per thread: samples per CPU-second of the one thread (median of the repeats), which other
     # processes on a shared machine do not dilute; the wall-time rate is recorded beside it.
     targets["cpp_per_thread_msps"] = common.target(
@@ -426,6 +438,7 @@ def main(argv: list[str] | None = None) -> int:
         "llvmpipe_threads": glsl_threads,
         "simd_level": widest,
         "simd_fetch": fetch,
+        "simd_fetch_preferred": preferred_simd_fetch(),
         "machine": machine,
         "methods": methods,
         "skipped": skipped,

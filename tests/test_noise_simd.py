@@ -21,6 +21,7 @@ import cumuli as cu
 from cumuli.noise import (
     SIMD_FETCHES,
     SIMD_LEVELS,
+    preferred_simd_fetch,
     set_simd_fetch,
     set_simd_level,
     simd_fetch,
@@ -153,6 +154,30 @@ def test_bad_levels_are_refused() -> None:
     assert simd_level() == LEVELS[-1]  # a refused level changes nothing
 
 
+def _cpu_vendor() -> str | None:
+    """The ``vendor_id`` of /proc/cpuinfo (Linux), else None."""
+    try:
+        with open("/proc/cpuinfo", encoding="ascii", errors="replace") as f:
+            for line in f:
+                if line.startswith("vendor_id"):
+                    return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return None
+
+
+def test_the_preferred_fetch_is_quads_on_amd_and_gather_elsewhere() -> None:
+    """bench_noise measured quads fastest on AMD, gathers on Intel; "auto" goes back to it."""
+    vendor = _cpu_vendor()
+    if vendor is not None and len(LEVELS) > 1:  # an x86 CPU with the wide kernels
+        assert preferred_simd_fetch() == ("quads" if vendor == "AuthenticAMD" else "gather")
+    assert preferred_simd_fetch() in SIMD_FETCHES
+    set_simd_fetch("loads")
+    set_simd_fetch("auto")
+    env = os.environ.get("CUMULI_SIMD_FETCH", "")
+    assert simd_fetch() == (env if env in SIMD_FETCHES else preferred_simd_fetch())
+
+
 def test_fetch_is_chosen_and_refused_like_the_level() -> None:
     assert simd_fetch() in SIMD_FETCHES
     for fetch in SIMD_FETCHES:
@@ -173,7 +198,7 @@ def test_fetch_is_chosen_and_refused_like_the_level() -> None:
         ({"CUMULI_SIMD_FETCH": "gather"}, None, "gather", False),
         ({"CUMULI_SIMD_FETCH": "loads"}, None, "loads", False),
         ({"CUMULI_SIMD_FETCH": "quads"}, None, "quads", False),
-        ({}, None, "quads", False),  # the default
+        ({}, None, preferred_simd_fetch(), False),  # the default: the CPU's preferred fetch
         ({"CUMULI_SIMD": "sse9"}, LEVELS[-1], None, True),
         ({"CUMULI_SIMD_FETCH": "scatter"}, None, None, True),
     ],

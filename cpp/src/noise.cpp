@@ -26,8 +26,9 @@
 //     ones in which the lattice gathers, trilinear weights and the octave sum stay in registers.
 //     The wide kernels fetch the two x-neighbours of a cell row as one 64-bit element (they are
 //     adjacent in the padded lattice), so a point costs 4 fetched rows per octave instead of 8
-//     corners, then split the pairs with a permute. AVX2 fetches them with gathers or, where
-//     gathers are micro-coded (AMD Zen 2/3: ≈ 1.3× faster so), with plain loads (SimdFetch).
+//     corners, then split the pairs with a permute. They fetch them with gathers or, where
+//     gathers are micro-coded (AMD Zen 2/3: ≈ 1.3× faster so), with plain loads; or read a
+//     cell face as one 16-byte load from a copy whose rows are interleaved (SimdFetch).
 // Why intrinsics behind a dispatch table rather than Highway or xsimd: the kernel is ~40 lines per
 // width, needs only gathers, floor, and/mul/add, and must keep the exact operation order of the
 // scalar path; GCC/Clang `target` attributes give runtime dispatch in one translation unit with no
@@ -99,19 +100,16 @@ Noise::Noise(std::uint64_t seed, int size) : seed_(seed), size_(size), mask_(-1)
     for (std::size_t y = 0; y < p; ++y)
       for (std::size_t x = 0; x < p; ++x)
         padded_[(z * p + y) * p + x] = lattice_[((z % s) * s + (y % s)) * s + (x % s)];
-  // 4.4 MB at the default size 64; larger lattices (and sizes that are not powers of two, which
+  // 2.2 MB at the default size 64; larger lattices (and sizes that are not powers of two, which
   // never reach the SIMD kernels) go without, and their Quads fetch reads the rows (Loads).
   if (mask_ < 0 || size > kMaxQuadsSize) return;
-  quads_.assign(4 * p * p * p, 0.0f);
+  quads_.assign(2 * p * p * p, 0.0f);
   for (std::size_t z = 0; z < p; ++z)
     for (std::size_t y = 0; y < s; ++y)
-      for (std::size_t x = 0; x < s; ++x) {
+      for (std::size_t x = 0; x < p; ++x) {
         const std::size_t i = (z * p + y) * p + x;
-        float* q = quads_.data() + 4 * i;
-        q[0] = padded_[i];
-        q[1] = padded_[i + 1];
-        q[2] = padded_[i + p];
-        q[3] = padded_[i + p + 1];
+        quads_[2 * i] = padded_[i];
+        quads_[2 * i + 1] = padded_[i + p];
       }
 }
 
@@ -277,18 +275,18 @@ struct Avx2Consts {
   std::ptrdiff_t quad_layer;     // floats from a cell's z0 quad to its z1 quad
 };
 
-// Quads q[j] = (c00, c10, c01, c11) of points j and j + 4 (one per 128-bit half) to one register
-// per corner, points in order. Two rounds of unpacks, within each 128-bit half.
+// Quads q[j] = (e0, e1, e2, e3) of points j and j + 4 (one per 128-bit half) to one register per
+// element, points in order. Two rounds of unpacks, within each 128-bit half.
 __attribute__((target("avx2"), always_inline)) inline void transpose_quads_avx2(
-    const __m256 q[4], __m256& c00, __m256& c10, __m256& c01, __m256& c11) {
+    const __m256 q[4], __m256& e0, __m256& e1, __m256& e2, __m256& e3) {
   const __m256 t0 = _mm256_unpacklo_ps(q[0], q[1]), t1 = _mm256_unpackhi_ps(q[0], q[1]);
   const __m256 t2 = _mm256_unpacklo_ps(q[2], q[3]), t3 = _mm256_unpackhi_ps(q[2], q[3]);
   const __m256d d0 = _mm256_castps_pd(t0), d1 = _mm256_castps_pd(t1);
   const __m256d d2 = _mm256_castps_pd(t2), d3 = _mm256_castps_pd(t3);
-  c00 = _mm256_castpd_ps(_mm256_unpacklo_pd(d0, d2));
-  c10 = _mm256_castpd_ps(_mm256_unpackhi_pd(d0, d2));
-  c01 = _mm256_castpd_ps(_mm256_unpacklo_pd(d1, d3));
-  c11 = _mm256_castpd_ps(_mm256_unpackhi_pd(d1, d3));
+  e0 = _mm256_castpd_ps(_mm256_unpacklo_pd(d0, d2));
+  e1 = _mm256_castpd_ps(_mm256_unpackhi_pd(d0, d2));
+  e2 = _mm256_castpd_ps(_mm256_unpacklo_pd(d1, d3));
+  e3 = _mm256_castpd_ps(_mm256_unpackhi_pd(d1, d3));
 }
 
 // One octave of 8 points at lattice scale `sc`: kernel_scalar's arithmetic, operation for
@@ -323,9 +321,10 @@ __attribute__((target("avx2"), always_inline)) inline __m256 octave_avx2(const A
   __m256 k0[4], k1[4];  // lower / upper x corner of rows (y0,z0), (y1,z0), (y0,z1), (y1,z1)
   alignas(32) int index[8];
   if (Fetch == SimdFetch::Quads) {
-    // Float offsets of the points' quads; quad j of layer z0 / z1 holds rows 0, 1 / 2, 3.
+    // Float offsets of the points' quads. A quad of layer z0 / z1 holds, in order, the lower
+    // and upper x corners of rows 0, 1 / 2, 3 interleaved: (x0 y0, x0 y1, x1 y0, x1 y1).
     alignas(32) std::uint32_t offset[8];  // unsigned: no sign extension in the addresses
-    _mm256_store_si256(reinterpret_cast<__m256i*>(offset), _mm256_slli_epi32(base, 2));
+    _mm256_store_si256(reinterpret_cast<__m256i*>(offset), _mm256_slli_epi32(base, 1));
     // q[layer][j]: the z0 / z1 quads of points j | j + 4; each point's two quads are read
     // together, so its offset is used once and then dead.
     __m256 q[2][4];
@@ -336,7 +335,7 @@ __attribute__((target("avx2"), always_inline)) inline __m256 octave_avx2(const A
                                            _mm_loadu_ps(quads + offset[j + 4]), 1);
       }
     for (int layer = 0; layer < 2; ++layer)
-      transpose_quads_avx2(q[layer], k0[2 * layer], k1[2 * layer], k0[2 * layer + 1],
+      transpose_quads_avx2(q[layer], k0[2 * layer], k0[2 * layer + 1], k1[2 * layer],
                            k1[2 * layer + 1]);
   }
   if (Fetch == SimdFetch::Loads) _mm256_store_si256(reinterpret_cast<__m256i*>(index), base);
@@ -449,7 +448,7 @@ __attribute__((target("avx2"))) void kernel_avx2(const Lattice& lat, const FbmTa
                      _mm256_set1_epi32((pp << 16) | lat.p),
                      {0, lat.p, pp, pp + lat.p},
                      lat.quads,
-                     4 * static_cast<std::ptrdiff_t>(pp)};
+                     2 * static_cast<std::ptrdiff_t>(pp)};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
   // Two registers (16 points) at a time; a tail of at most 8 points takes one, not two.
   for (std::size_t first = 0; first < count; first += 16) {
@@ -487,15 +486,15 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline __m512 pairs8_
 
 // As transpose_quads_avx2 for 16 points: q[j] holds the quads of points j, j + 4, j + 8, j + 12.
 __attribute__((target("avx512f,avx512bw"), always_inline)) inline void transpose_quads_avx512(
-    const __m512 q[4], __m512& c00, __m512& c10, __m512& c01, __m512& c11) {
+    const __m512 q[4], __m512& e0, __m512& e1, __m512& e2, __m512& e3) {
   const __m512 t0 = _mm512_unpacklo_ps(q[0], q[1]), t1 = _mm512_unpackhi_ps(q[0], q[1]);
   const __m512 t2 = _mm512_unpacklo_ps(q[2], q[3]), t3 = _mm512_unpackhi_ps(q[2], q[3]);
   const __m512d d0 = _mm512_castps_pd(t0), d1 = _mm512_castps_pd(t1);
   const __m512d d2 = _mm512_castps_pd(t2), d3 = _mm512_castps_pd(t3);
-  c00 = _mm512_castpd_ps(_mm512_unpacklo_pd(d0, d2));
-  c10 = _mm512_castpd_ps(_mm512_unpackhi_pd(d0, d2));
-  c01 = _mm512_castpd_ps(_mm512_unpacklo_pd(d1, d3));
-  c11 = _mm512_castpd_ps(_mm512_unpackhi_pd(d1, d3));
+  e0 = _mm512_castpd_ps(_mm512_unpacklo_pd(d0, d2));
+  e1 = _mm512_castpd_ps(_mm512_unpackhi_pd(d0, d2));
+  e2 = _mm512_castpd_ps(_mm512_unpacklo_pd(d1, d3));
+  e3 = _mm512_castpd_ps(_mm512_unpackhi_pd(d1, d3));
 }
 
 // As octave_avx2 for 16 points: the floor comes straight from a round-down conversion; Gather and
@@ -531,7 +530,7 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline __m512 octave_
   __m512 k0[4], k1[4];
   if (Fetch == SimdFetch::Quads) {
     alignas(64) std::uint32_t offset[16];  // unsigned: no sign extension in the addresses
-    _mm512_store_si512(offset, _mm512_slli_epi32(base, 2));
+    _mm512_store_si512(offset, _mm512_slli_epi32(base, 1));
     // q[layer][j]: the z0 / z1 quads of points j, j + 4, j + 8, j + 12 (one per 128-bit lane;
     // masked broadcasts from memory, which need no shuffle unit). Each point's two quads are
     // read together, so its offset is used once and then dead.
@@ -551,7 +550,7 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline __m512 octave_
       }
     }
     for (int layer = 0; layer < 2; ++layer)
-      transpose_quads_avx512(q[layer], k0[2 * layer], k1[2 * layer], k0[2 * layer + 1],
+      transpose_quads_avx512(q[layer], k0[2 * layer], k0[2 * layer + 1], k1[2 * layer],
                              k1[2 * layer + 1]);
   }
   if (Fetch == SimdFetch::Loads) _mm512_store_si512(index, base);
@@ -654,7 +653,7 @@ __attribute__((target("avx512f,avx512bw"))) void kernel_avx512(const Lattice& la
       _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31),
       {0, lat.p, pp, pp + lat.p},
       lat.quads,
-      4 * static_cast<std::ptrdiff_t>(pp)};
+      2 * static_cast<std::ptrdiff_t>(pp)};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
   // Two registers (32 points) at a time; a tail of at most 16 points takes one, not two.
   for (std::size_t first = 0; first < count; first += 32) {

@@ -66,18 +66,26 @@ def simd_fetch() -> str:
     ``"quads"``.
 
     All three give the same bits. ``"gather"`` reads each row's corner pairs with the CPU's gather
-    instructions, ``"loads"`` with plain 64-bit loads from an index array, ``"quads"`` reads two
-    16-byte corner quads per point from a copy of the lattice (4.4 MB at size 64; lattices above
-    64 have none and read as ``"loads"``). The default is ``"quads"``, the fastest where measured,
-    unless ``CUMULI_SIMD_FETCH`` (read at first use) or :func:`set_simd_fetch` says otherwise.
+    instructions, ``"loads"`` with plain 64-bit loads from an index array, ``"quads"`` reads each
+    cell face as one 16-byte load from a copy of the lattice whose rows are interleaved (2.2 MB at
+    size 64; lattices above 64 have none and read as ``"loads"``). The default is
+    :func:`preferred_simd_fetch` (``"quads"`` on AMD, ``"gather"`` elsewhere), unless
+    ``CUMULI_SIMD_FETCH`` (read at first use) or :func:`set_simd_fetch` says otherwise.
     """
     return str(_core.simd_fetch())
+
+
+def preferred_simd_fetch() -> str:
+    """The lattice fetch this CPU runs fastest where measured (``benchmarks/bench_noise.py``):
+    ``"quads"`` on AMD (slow gathers, near L3), ``"gather"`` elsewhere (Intel: fast gathers from a
+    lattice that stays in L2)."""
+    return str(_core.simd_fetch_preferred())
 
 
 def set_simd_fetch(fetch: str) -> None:
     """Make the wide fBm kernels read the lattice with ``fetch`` from now on (all threads).
 
-    ``"auto"`` goes back to ``CUMULI_SIMD_FETCH`` or ``"quads"``.
+    ``"auto"`` goes back to ``CUMULI_SIMD_FETCH`` or :func:`preferred_simd_fetch`.
     """
     if not isinstance(fetch, str) or fetch not in (*SIMD_FETCHES, "auto"):
         raise ValueError(f"fetch must be one of {(*SIMD_FETCHES, 'auto')}, got {fetch!r}")

@@ -25,7 +25,7 @@ struct FbmParams {
 class Noise {
  public:
   static constexpr int kMaxSize = 512;      // 512³ floats = 512 MiB; anything larger is refused
-  static constexpr int kMaxQuadsSize = 64;  // largest lattice with corner quads (4.4 MB at 64)
+  static constexpr int kMaxQuadsSize = 64;  // largest lattice with corner quads (2.2 MB at 64)
 
   Noise(std::uint64_t seed, int size = 64);
 
@@ -69,10 +69,11 @@ class Noise {
   // (size+1)³ copy whose last x, y and z planes repeat the first ones, so that the upper corner
   // of a trilinear cell is always at index + 1 / + stride and never needs a second wrap.
   std::vector<float> padded_;
-  // The padded lattice's 2×2 (x, y) corner quads: entry i = (z·p + y)·p + x holds padded
-  // (x, y), (x+1, y), (x, y+1), (x+1, y+1) at z, so a cell is two 16-byte loads (z and z+1) for
-  // the SIMD kernels' Quads fetch. Entries at x = size or y = size are never read (zero). Empty
-  // unless size is a power of two ≤ kMaxQuadsSize.
+  // The padded lattice with each row interleaved with the next: floats 2i and 2i + 1, for
+  // i = (z·p + y)·p + x, hold padded (x, y) and (x, y + 1) at z. So the 16 bytes at 2i are the
+  // cell face (x, y), (x, y+1), (x+1, y), (x+1, y+1), and a cell is two 16-byte loads (z and z+1)
+  // for the SIMD kernels' Quads fetch. Entries at y = size are never read (zero). Empty unless
+  // size is a power of two ≤ kMaxQuadsSize.
   std::vector<float> quads_;
 };
 

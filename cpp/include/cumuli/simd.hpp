@@ -34,26 +34,28 @@ void reset_simd_level();
 
 // How the wide fBm kernels read a cell's 2×2×2 lattice values. All give the same bits; they
 // differ in speed, which depends on the CPU:
-//   Gather: the four rows' (x0, x1) pairs with 64-bit gather instructions (micro-coded and slow
-//           on AMD Zen 2/3);
+//   Gather: the four rows' (x0, x1) pairs with 64-bit gather instructions from the 1.1 MB padded
+//           lattice (fast on Intel; micro-coded and slow on AMD Zen 2/3);
 //   Loads:  the same pairs with plain 64-bit loads from the indices stored to memory;
-//   Quads:  two 16-byte loads per point from a copy of the lattice that stores each (x, y)
-//           cell face's four corners together (half the loads, two cache lines instead of four,
-//           four times the memory: 4.4 MB at size 64; lattices above 64 have no copy and read
-//           as Loads). The fastest where measured (AMD Zen 5, both levels; see bench_noise).
-// The default is Quads, unless CUMULI_SIMD_FETCH (gather | loads | quads | auto), read at first
-// use, or set_simd_fetch() says otherwise.
+//   Quads:  two 16-byte loads per point (z0, z1), each one cell face's four corners, from a copy
+//           of the lattice that interleaves every row with the next (twice the memory: 2.2 MB at
+//           size 64; lattices above 64 have no copy and read as Loads).
+// The default is the CPU's preferred fetch (simd_fetch_preferred: Quads on AMD, Gather
+// elsewhere, as measured by bench_noise), unless CUMULI_SIMD_FETCH (gather | loads | quads |
+// auto), read at first use, or set_simd_fetch() says otherwise.
 enum class SimdFetch : int { Gather = 0, Loads = 1, Quads = 2 };
 
 // "gather", "loads" or "quads".
 const char* simd_fetch_name(SimdFetch fetch);
 // The fetch of a name (as simd_fetch_name writes it); throws std::invalid_argument otherwise.
 SimdFetch parse_simd_fetch(const std::string& name);
+// The fetch this CPU runs fastest where measured: Quads on AMD, Gather elsewhere.
+SimdFetch simd_fetch_preferred();
 // The fetch the wide kernels use now.
 SimdFetch simd_fetch();
 // Use `fetch` from now on (all threads).
 void set_simd_fetch(SimdFetch fetch);
-// Back to the default: CUMULI_SIMD_FETCH if set, else Quads.
+// Back to the default: CUMULI_SIMD_FETCH if set, else simd_fetch_preferred().
 void reset_simd_fetch();
 
 }  // namespace cumuli
