@@ -210,6 +210,43 @@ def test_particle_clouds_and_billboards_shade_one_another() -> None:
     assert want.min() < 0.9
 
 
+def test_extra_lights_are_shaded_by_the_other_sprites_too() -> None:
+    """With sprite_shadows, light ℓ of scene.lights is shaded like the sun: by the casters its
+    rays cross, each by its own light model (a particle cloud's pass towards ℓ lends its
+    buffer), and the sun's column stays as it is when the caster is off the sun's rays."""
+    extra = cu.Sun(direction=(-0.6, 0.5, -0.2), intensity=0.5)
+    towards = np.asarray(extra.direction, np.float64) / np.linalg.norm(extra.direction)
+    across = np.cross(towards, (0.0, 1.0, 0.0))
+    across /= np.linalg.norm(across)
+    low = cu.particle_cumulus((0, 0, 0), 300, seed=2, radius=(2.0, 3.0))
+    place = 40 * towards + 14 * across  # half over the low cloud, seen from the extra light
+    high = cu.particle_cumulus(tuple(place.tolist()), 300, seed=3, radius=(2.0, 3.0))
+    s = cu.Scene([low, high], sun=SUN, lights=(extra,), settings=ON)
+    a, b = cu.prepare_light(s).lights
+    own = a.unshadowed
+    assert own is not None and b.unshadowed is None
+    np.testing.assert_array_equal(a.light[:, 0], own.light[:, 0])  # the sun's column
+    lit = own.light[:, 1] > 1e-4
+    want = cu.ground_shadow(high, extra, low.centres, s.sprite_settings)
+    np.testing.assert_allclose(a.light[lit, 1] / own.light[lit, 1], want[lit], rtol=1e-5, atol=1e-6)
+    assert want[lit].min() < 0.8
+    # The buffer of the caster's own pass towards the extra light gives the same shadow.
+    assert b.buffers is not None and len(b.buffers) == 2
+    lent = cu.ground_shadow(high, extra, low.centres, s.sprite_settings, b)
+    np.testing.assert_allclose(lent, want, rtol=1e-5, atol=1e-5)  # float32 passes
+    # Without sprite_shadows neither column is shaded; billboards shade light ℓ too.
+    assert cu.prepare_light(s.replace(settings=cu.RenderSettings())).lights[0].unshadowed is None
+    boxes = seed_boxes_at(30 * towards)
+    p_light = cu.prepare_light(cu.Scene([low, boxes], sun=SUN, lights=(extra,), settings=ON))
+    p_light = p_light.lights[0]
+    want = cu.ground_shadow(boxes, extra, low.centres, cu.Scene([boxes]).billboard_shading)
+    lit = p_light.unshadowed.light[:, 1] > 1e-4
+    np.testing.assert_allclose(
+        p_light.light[lit, 1] / p_light.unshadowed.light[lit, 1], want[lit], rtol=1e-5, atol=1e-6
+    )
+    assert want.min() < 0.9
+
+
 def test_only_casters_up_sun_are_evaluated_and_nothing_is_lost() -> None:
     """The culling by bounding spheres drops only casters whose shadow is exactly 1 there."""
     rng = np.random.default_rng(11)

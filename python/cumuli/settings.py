@@ -101,10 +101,11 @@ class RenderSettings:
         surface; the jitter turns them into a fine pattern that averages out. ``False`` (the
         default) is the paper's march; the physical mode always jitters.
     sprite_shadows:
-        Particle clouds and billboards shade one another's sunlight (beyond Harris 2002 and
-        Torchelsen & Musse 2005). Off by default: in a field whose clouds move, their light then
-        changes every frame, which costs the light step and regenerates impostors (the Fig. 8
-        gain fell from ×4.1 to ×2.7 with it on). They shade the media and the ground either way.
+        Particle clouds and billboards shade one another's light, the sun's and each extra
+        light's (beyond Harris 2002 and Torchelsen & Musse 2005). Off by default: in a field
+        whose clouds move, their light then changes every frame, which costs the light step and
+        regenerates impostors (the Fig. 8 gain fell from ×4.1 to ×2.7 with it on). They shade
+        the media and the ground either way.
     shadow_resolution:
         Edge of the ground's sun shadow map (texels), when the scene has a ground.
     empty_space_skipping:

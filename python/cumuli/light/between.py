@@ -63,25 +63,29 @@ def _between_casters(
     own_lights: Sequence[Any],
     threads: int,
 ) -> dict[int, np.ndarray]:
-    """The sun's transmittance at each receiver's points through the other particle clouds and
-    billboards its bounding sphere's rays towards the sun can cross (receivers in the clear
-    left out): one shadow query per caster over all the points it may shade, the factors of
-    each receiver multiplied in the casters' order."""
-    sun = scene.sun.direction
-    shaded_by: dict[int, list[int]] = {}
-    for k in receivers:
-        me = int(np.flatnonzero(casters.index == k)[0])
-        for j in casters.towards_sun(sun, casters.centre[me], casters.radius[me], skip=k):
-            shaded_by.setdefault(j, []).append(k)
+    """Per receiver, ``(M, L)``: the transmittance of each light (the sun, then
+    ``scene.lights``) at its ``M`` points through the other particle clouds and billboards its
+    bounding sphere's rays towards that light can cross (receivers in the clear of every light
+    left out): one shadow query per caster and light over all the points it may shade, the
+    factors of each receiver multiplied in the casters' order."""
+    suns = (scene.sun, *scene.lights)
     out: dict[int, np.ndarray] = {}
-    for j in sorted(shaded_by):
-        parts = {k: points(k) for k in shaded_by[j]}
-        t = caster_transmittance(scene, np.concatenate(list(parts.values())), threads,
-                                 own_lights, [j])  # fmt: skip
-        if t is None:
-            continue
-        for k, part in _split(np.asarray(t, np.float32), parts).items():
-            out[k] = part if k not in out else out[k] * part
+    for ell, sun in enumerate(suns):
+        shaded_by: dict[int, list[int]] = {}
+        for k in receivers:
+            me = int(np.flatnonzero(casters.index == k)[0])
+            for j in casters.towards_sun(sun.direction, casters.centre[me], casters.radius[me], k):
+                shaded_by.setdefault(j, []).append(k)
+        for j in sorted(shaded_by):
+            parts = {k: points(k) for k in shaded_by[j]}
+            t = caster_transmittance(scene, np.concatenate(list(parts.values())), threads,
+                                     own_lights, [j], sun)  # fmt: skip
+            if t is None:
+                continue
+            for k, part in _split(np.asarray(t, np.float32), parts).items():
+                if k not in out:
+                    out[k] = np.ones((len(part), len(suns)), np.float32)
+                out[k][:, ell] *= part
     return out
 
 
@@ -92,12 +96,12 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
     ``ℓ``, or the CAF of a box (billboard) for light ``ℓ``, times ``exp(−τ)`` from its centre
     towards ``ℓ`` through the 2018 clouds and volumes
     (:func:`cumuli.light.shadow.media_transmittance`), and, with ``settings.sprite_shadows``,
-    its sunlight also times the sun's transmittance through the other particle clouds and
-    billboards
-    (:func:`cumuli.light.shadow.caster_transmittance`, only for the casters the rays from its
-    bounding sphere can cross: :meth:`Casters.towards_sun`), each memoised by content and
-    place for the whole scene. The instances of one billboard field do not shade one another.
-    :func:`onto_media` makes the particle clouds and billboards shade the media."""
+    also times the transmittance of light ``ℓ`` (the sun and each of ``scene.lights``) through
+    the other particle clouds and billboards (:func:`cumuli.light.shadow.caster_transmittance`,
+    only for the casters the rays from its bounding sphere towards ``ℓ`` can cross:
+    :meth:`Casters.towards_sun`), each memoised by content and place for the whole scene. The
+    instances of one billboard field do not shade one another. :func:`onto_media` makes the
+    particle clouds and billboards shade the media."""
     out = list(lights)
     receivers = _receivers(scene, lights)
     if not receivers:
@@ -130,20 +134,20 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
         key = ("through media", media, places, dirs.tobytes(), scene.noise.seed,
                scene.noise.size, scene.settings)  # fmt: skip
         t_media = remember(key, through_the_media)
-    t_sun: dict[int, np.ndarray] = {}
+    t_casters: dict[int, np.ndarray] = {}
     if mutual:
         assert casters is not None
         key = ("between casters", tuple(shadow_digest(scene.clouds[j]) for j in casters.index),
-               places, scene.sun.direction, tuple(scene.sprite_settings.light_dict().items()),
+               places, dirs.tobytes(), tuple(scene.sprite_settings.light_dict().items()),
                scene.billboard_shading)  # fmt: skip
-        t_sun = remember(key, lambda: _between_casters(
+        t_casters = remember(key, lambda: _between_casters(
             scene, points, list(receivers), casters, own_lights, threads))  # fmt: skip
     for k in receivers:
-        if k not in t_media and k not in t_sun:
+        if k not in t_media and k not in t_casters:
             continue
         # The same factors (memoised arrays) on the same own light give the same shaded light
         # object as last frame: no new arrays, and the impostor cache sees it unchanged at once.
-        factors = (t_media.get(k), t_sun.get(k))
+        factors = (t_media.get(k), t_casters.get(k))
         last = _shaded_lights.get(out[k])
         if last is not None and last[0] is factors[0] and last[1] is factors[1]:
             if last[2] is not None:
@@ -152,9 +156,9 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
         if k in t_media:
             t = t_media[k].copy()
         else:
-            t = np.ones((len(t_sun[k]), dirs.shape[0]), np.float32)
-        if k in t_sun:
-            t[:, 0] *= t_sun[k]  # the sun's column
+            t = np.ones((len(t_casters[k]), dirs.shape[0]), np.float32)
+        if k in t_casters:
+            t *= t_casters[k]  # every light's column
         shaded = None if (t == 1.0).all() else out[k].through(t)  # clear: the own light object
         _shaded_lights[out[k]] = (*factors, shaded)
         if shaded is not None:

@@ -257,7 +257,8 @@ def ground_shadow(
     """Transmittance ``(M,)`` of ``sun``'s light through ``cloud`` at world ``points`` ``(M, 3)``:
     the light pass's final buffer — the cloud's shadow map seen from the sun (spec §4 step 6) —
     sampled bilinearly where each point projects (1 outside it or in front of the cloud). Pass a
-    ``light`` made with ``return_buffers=True`` for this sun (first light) to reuse its buffer.
+    ``light`` made with ``return_buffers=True`` for this sun (any of its lights) to reuse its
+    buffer.
 
     A billboard cloud or field (with a :class:`BillboardShading` as ``settings``) gives the CAF
     its own billboards would get at each point (:func:`cumuli.light.caf.ground_caf`, beyond
@@ -275,18 +276,22 @@ def ground_shadow(
         )
     pts = check.points3(points, "points", bound=check.MAX_COORD)
     settings = as_settings(settings)
-    buffers = None
+    buffer = None
     if light is not None:
         if not isinstance(light, ParticleLight):
             raise TypeError(f"light must be a ParticleLight or None, got {type(light).__name__}")
-        same_sun = np.allclose(light.light_dirs[0], light_directions([sun])[0], atol=1e-6)
-        if light.buffers is not None and same_sun:
-            buffers = light.buffers
-    if buffers is None:
+        if light.buffers is not None:
+            # The final buffer of the light's own pass towards this sun, whichever light it was.
+            here = light_directions([sun])[0]
+            same = np.flatnonzero(np.abs(light.light_dirs - here[None, :]).max(axis=1) <= 1e-6)
+            if len(same):
+                buffer = light.buffers[int(same[0])]
+    if buffer is None:
         buffers = particle_light(cloud, sun, settings, return_buffers=True).buffers
-    assert buffers is not None
+        assert buffers is not None
+        buffer = buffers[0]
     return _core.particle_shadow(
-        *cloud.core_args(), sun.direction, np.ascontiguousarray(buffers[0]), pts
+        *cloud.core_args(), sun.direction, np.ascontiguousarray(buffer), pts
     )
 
 

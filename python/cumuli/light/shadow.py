@@ -160,20 +160,23 @@ def caster_transmittance(
     threads: int = 0,
     lights: Sequence[Any] | None = None,
     among: Sequence[int] | None = None,
+    sun: Any = None,
 ) -> np.ndarray | None:
     """The product over the scene's particle clouds and billboards (those of ``among``, indices
-    into ``scene.clouds``, when given) of the sun's transmittance through each at ``points``, by
-    their own light models, each clipped to [0, 1]; None when there are none. A particle
-    cloud's light in ``lights`` (aligned with ``scene.clouds``) lends its buffers."""
+    into ``scene.clouds``, when given) of the transmittance of ``sun``'s light (a `Sun`; the
+    scene's sun by default) through each at ``points``, by their own light models, each clipped
+    to [0, 1]; None when there are none. A particle cloud's light in ``lights`` (aligned with
+    ``scene.clouds``) lends its buffers."""
     out = None
+    sun = scene.sun if sun is None else sun
     chosen = range(len(scene.clouds)) if among is None else among
     for k in chosen:
         d = scene.clouds[k]
         if isinstance(d, ParticleCloud):
             light = lights[k] if lights is not None else None
-            t = ground_shadow(d, scene.sun, points, scene.sprite_settings, light)
+            t = ground_shadow(d, sun, points, scene.sprite_settings, light)
         elif isinstance(d, (BillboardCloud, BillboardField)):
-            t = ground_caf(d, scene.sun, points, scene.billboard_shading, threads)
+            t = ground_caf(d, sun, points, scene.billboard_shading, threads)
         else:
             continue
         # A transmittance: a particle light with allow_gain can exceed 1 (or overflow).
