@@ -105,7 +105,8 @@ class RenderSettings:
         light's (beyond Harris 2002 and Torchelsen & Musse 2005). Off by default: in a field
         whose clouds move, their light then changes every frame, which costs the light step and
         regenerates impostors (the Fig. 8 gain fell from ×4.1 to ×2.7 with it on). They shade
-        the media and the ground either way.
+        the media and the ground either way. The instances of one billboard field shade one
+        another with ``BillboardShading(shadow_between_clouds=True)``.
     shadow_resolution:
         Edge of the ground's sun shadow map (texels), when the scene has a ground.
     empty_space_skipping:

@@ -100,8 +100,9 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
     the other particle clouds and billboards (:func:`cumuli.light.shadow.caster_transmittance`,
     only for the casters the rays from its bounding sphere towards ``ℓ`` can cross:
     :meth:`Casters.towards_sun`), each memoised by content and place for the whole scene. The
-    instances of one billboard field do not shade one another. :func:`onto_media` makes the
-    particle clouds and billboards shade the media."""
+    instances of one billboard field shade one another in the field's own light pass instead,
+    with ``BillboardShading(shadow_between_clouds=True)``. :func:`onto_media` makes the particle
+    clouds and billboards shade the media."""
     out = list(lights)
     receivers = _receivers(scene, lights)
     if not receivers:
