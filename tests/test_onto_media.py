@@ -6,6 +6,8 @@ billboards (`cumuli.light.between.through_media`)."""
 
 from __future__ import annotations
 
+import pickle
+
 import numpy as np
 import pytest
 from test_ground import SUN
@@ -125,6 +127,34 @@ def test_clear_light_is_the_same_object_and_nothing_is_shaded_twice() -> None:
     # The particles move away: the medium's own light again, the very same object.
     moved = cu.prepare_light(lit.scene.replace(clouds=[cumulus(), far]), lights=list(lit.lights))
     assert moved.lights[0] is own
+
+
+@pytest.mark.parametrize("lighting", ["paper", "physical"])
+def test_a_copy_of_a_shaded_light_given_back_is_not_shaded_twice(lighting: str, tmp_path) -> None:
+    """A pickled (or, for a grid, saved and loaded) shaded light carries the mark of its
+    shading: given back, the medium's own light is shaded once, as the scene is."""
+    lit = cu.prepare_light(scene([cumulus(), puff_above()], lighting))
+    shaded = lit.lights[0]
+    copies = [pickle.loads(pickle.dumps(shaded))]
+    if lighting == "paper":
+        assert shaded.record is not None and shaded.record.shaded
+        copies.append(cu.load_light_grid(shaded.save(tmp_path / "shaded.npz")))
+    else:
+        assert shaded.shaded_from is not None
+    for copy in copies:
+        again = cu.prepare_light(lit.scene, lights=[copy, None]).lights[0]
+        if lighting == "paper":
+            np.testing.assert_array_equal(again.values, shaded.values)
+        else:
+            np.testing.assert_array_equal(again.sun_depth, shaded.sun_depth)
+            np.testing.assert_array_equal(again.grid, shaded.grid)
+    # The particles gone: the own light again, not the copy's shaded values.
+    alone = cu.prepare_light(scene([cumulus()], lighting), lights=[copies[0]]).lights[0]
+    own = cu.prepare_light(scene([cumulus()], lighting)).lights[0]
+    if lighting == "paper":
+        np.testing.assert_array_equal(alone.values, own.values)
+    else:
+        np.testing.assert_array_equal(alone.sun_depth, own.sun_depth)
 
 
 @pytest.mark.gl

@@ -125,8 +125,10 @@ class LightParams:
 class LightRecord:
     """What a light grid was made from: its :class:`LightParams`, the noise lattice (seed, size),
     the density model with its parameter (κ for spheroids, φ for metaballs) and a digest of the
-    primitives. Two grids with equal records and suns are equal; the renderer recomputes a grid
-    whose record differs from the one its settings give."""
+    primitives; ``shaded``: whether the grid also holds the shadows of the scene's particle clouds
+    and billboards (the light step's `onto_media`), so that a copy of one (pickled, saved) given
+    back is not shaded twice. Two grids with equal records and suns are equal; the renderer
+    recomputes a grid whose record differs from the one its settings give."""
 
     params: LightParams
     noise: tuple[int, int] | None
@@ -134,6 +136,7 @@ class LightRecord:
     kappa: float | None
     phi: float | None
     primitives: str
+    shaded: bool = False
 
     @classmethod
     def of(cls, cloud: Cloud, noise: Noise | None, params: LightParams) -> LightRecord:

@@ -71,7 +71,8 @@ def shade(light: Any, box: Any, transmittance: Transmittance) -> Any:
         if t is None or (t == 1.0).all():
             return light
         values = light.values * t.reshape(light.shape)
-        return LightGrid(values, light.box, light.sun, light.record)
+        record = None if light.record is None else replace(light.record, shaded=True)
+        return LightGrid(values, light.box, light.sun, record)
     if isinstance(light, PhysicalLight):
         t_sun = transmittance(frame_nodes(light.frame, light.sun_depth.shape))
         t_grid = transmittance(voxel_centres(light.box, light.grid.shape[:3]))
@@ -86,7 +87,7 @@ def shade(light: Any, box: Any, transmittance: Transmittance) -> Any:
         if not unchanged[1]:
             grid = grid.copy()
             grid[..., 0] *= t_grid.reshape(grid.shape[:3])
-        return replace(light, sun_depth=depth, grid=grid)
+        return replace(light, sun_depth=depth, grid=grid, shaded_from=light)
     if isinstance(light, np.ndarray) and light.ndim == 4 and light.shape[-1] == 4:
         t = transmittance(voxel_centres(box, light.shape[:3]))
         if t is None or (t == 1.0).all():

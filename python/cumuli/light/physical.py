@@ -73,7 +73,10 @@ class PhysicalLight:
     of ``p`` being ``(p·u, p·v, p·w)``); ``sun_depth`` ``(nw, nv, nu)`` its optical depths;
     ``grid`` ``(D, H, W, 4)`` over ``box``: the diffuse sunlight per unit sun irradiance
     (channel 0) and the diffuse sky light (RGB), both fluences already multiplied by the gain
-    the drawers use; ``octaves`` how many scattering orders the drawers draw from ``τ_sun``.
+    the drawers use; ``octaves`` how many scattering orders the drawers draw from ``τ_sun``;
+    ``shaded_from``: the drawable's own light when this one also holds the shadows of the
+    scene's particle clouds and billboards (the light step's `onto_media`; a copy given back is
+    replaced by it, so nothing is shaded twice), else None.
     """
 
     frame: tuple
@@ -81,6 +84,7 @@ class PhysicalLight:
     grid: np.ndarray
     box: tuple[tuple[float, float, float], tuple[float, float, float]]
     octaves: int
+    shaded_from: PhysicalLight | None = None
 
     def sample_depth(self, points: Any) -> np.ndarray:
         """``τ_sun`` at world ``(N, 3)`` points (trilinear in the sun's lattice)."""

@@ -298,7 +298,9 @@ def physical_pass(drawable: Any, scene: Scene, given: Any = None, threads: int =
                 f"the physical light of a drawable must be a cumuli.PhysicalLight, got "
                 f"{type(given).__name__}"
             )
-        return given
+        # A light shaded by particles and billboards (a copy, whose registry entry is gone):
+        # the drawable's own light underneath; the light step shades it again as the scene is.
+        return given.shaded_from or given
     sky = light_sky(scene)
     others = tuple(drawable_digest(d) for d in scene.clouds if d is not drawable)
     key = ("physical", drawable_digest(drawable), others, scene.noise.seed, scene.noise.size,
