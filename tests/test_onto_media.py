@@ -7,6 +7,7 @@ billboards (`cumuli.light.between.through_media`)."""
 from __future__ import annotations
 
 import pickle
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -70,7 +71,7 @@ def test_a_cumulus_below_a_particle_cloud_gets_its_shadow(lighting: str) -> None
     centre, radius = (np.asarray(above.sphere[0], np.float64), float(above.sphere[1]))
     if lighting == "paper":
         assert isinstance(light, cu.LightGrid) and light.box == own.box
-        assert light.record == own.record and light.sun == own.sun
+        assert light.record == replace(own.record, shaded=True) and light.sun == own.sun
         points = voxel_centres(light.box, light.shape)
         ratio = np.divide(light.values, own.values, out=np.ones_like(own.values),
                           where=own.values > 1e-4).reshape(-1)  # fmt: skip
@@ -112,6 +113,14 @@ def test_billboards_shade_a_volume_sun_channel_only() -> None:
     np.testing.assert_allclose(light[..., 0].reshape(-1), own[..., 0].reshape(-1) * want,
                                rtol=1e-6)  # fmt: skip
     assert want.min() < 0.9 and want.max() == 1.0
+    # A pickled copy carries its own light: given back, it is shaded once, as the scene is.
+    copy = pickle.loads(pickle.dumps(light))
+    assert copy.shaded_from is not None
+    again = cu.prepare_light(s, lights=[copy, None]).lights[0]
+    np.testing.assert_array_equal(again, light)
+    alone = cu.prepare_light(scene([volume]), lights=[copy]).lights[0]
+    np.testing.assert_array_equal(alone, own)
+    assert getattr(light * 1.0, "shaded_from", None) is None  # arithmetic gives plain arrays
 
 
 def test_clear_light_is_the_same_object_and_nothing_is_shaded_twice() -> None:

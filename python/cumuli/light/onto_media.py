@@ -61,6 +61,34 @@ def frame_nodes(frame: tuple, shape: tuple[int, int, int]) -> np.ndarray:
 Transmittance = Callable[[np.ndarray], np.ndarray | None]
 
 
+class ShadedVolumeLight(np.ndarray):
+    """A `VolumeCloud`'s ``(D, H, W, 4)`` float32 light with the shadows of the scene's particle
+    clouds and billboards in its channel 0, holding the volume's own light as ``shaded_from``
+    (kept by pickling; views and arithmetic results are plain arrays), so that a copy given
+    back to the light step is replaced by the own light and not shaded twice."""
+
+    shaded_from: np.ndarray | None
+
+    def __new__(cls, values: np.ndarray, own: np.ndarray) -> ShadedVolumeLight:
+        light = np.asarray(values, np.float32).view(cls)
+        light.shaded_from = own
+        light.setflags(write=False)
+        return light
+
+    def __array_finalize__(self, obj: Any) -> None:
+        self.shaded_from = None  # only what __new__ makes carries the mark
+
+    def __array_wrap__(self, out: Any, context: Any = None, return_scalar: bool = False) -> Any:
+        return np.asarray(out) if not return_scalar else out[()]
+
+    def __reduce__(self) -> Any:
+        return (_rebuild_shaded, (np.asarray(self).copy(), self.shaded_from))
+
+
+def _rebuild_shaded(values: np.ndarray, own: Any) -> Any:
+    return values if own is None else ShadedVolumeLight(values, own)
+
+
 def shade(light: Any, box: Any, transmittance: Transmittance) -> Any:
     """``light`` (a medium's light, see the module docstring) with its sun terms multiplied by
     ``transmittance(points)`` (``(N,)`` in [0, 1] at ``(N, 3)`` world points, or None for all
@@ -94,5 +122,5 @@ def shade(light: Any, box: Any, transmittance: Transmittance) -> Any:
             return light
         out = np.array(light, np.float32)
         out[..., 0] *= t.reshape(light.shape[:3])
-        return out
+        return ShadedVolumeLight(out, light)
     raise TypeError(f"no sun term to shade in a {type(light).__name__}")

@@ -128,7 +128,9 @@ def volume_light(
     """The ``(D, H, W, 4)`` light of a `VolumeCloud` under the scene's sun and sky: its own
     precomputed light (or ``given``) when made for them, else computed by `VolumeLighting`."""
     if given is not None:
-        light = np.asarray(given, dtype=np.float32)
+        # A copy of a light shaded by particles and billboards: the volume's own underneath.
+        own = getattr(given, "shaded_from", None)
+        light = np.asarray(given if own is None else own, dtype=np.float32)
         if light.shape != (*volume.shape, 4) or not np.isfinite(light).all():
             raise ValueError(
                 f"the light of a VolumeCloud must be a finite {(*volume.shape, 4)} array"
