@@ -210,9 +210,8 @@ def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[An
     own light and place and the casters' content and place. A medium in the clear keeps its own
     light object. A shaded light given back to `prepare_light` in this process is replaced by the
     light it was made from (the registry holds it by the shaded light's identity). A copy of a
-    shaded grid or physical light is marked (``LightRecord.shaded``, ``PhysicalLight.shaded_from``)
-    and the light step goes back to the own light; a copy of a volume's shaded light (a plain
-    array) is taken as the volume's own light."""
+    shaded light is marked (``LightRecord.shaded``, ``PhysicalLight.shaded_from``,
+    ``ShadedVolumeLight.shaded_from``) and the light step goes back to the own light."""
     out = list(lights)
     if not any(isinstance(d, (Cloud, VolumeCloud)) for d in scene.clouds):
         return out
