@@ -6,6 +6,7 @@ billboards (`cumuli.light.between.through_media`)."""
 
 from __future__ import annotations
 
+import copy
 import pickle
 from dataclasses import replace
 
@@ -114,11 +115,14 @@ def test_billboards_shade_a_volume_sun_channel_only() -> None:
                                rtol=1e-6)  # fmt: skip
     assert want.min() < 0.9 and want.max() == 1.0
     # A pickled copy carries its own light: given back, it is shaded once, as the scene is.
-    copy = pickle.loads(pickle.dumps(light))
-    assert copy.shaded_from is not None
-    again = cu.prepare_light(s, lights=[copy, None]).lights[0]
-    np.testing.assert_array_equal(again, light)
-    alone = cu.prepare_light(scene([volume]), lights=[copy]).lights[0]
+    copies = [pickle.loads(pickle.dumps(light)), copy.deepcopy(light), light.copy()]
+    for duplicate in copies:
+        assert duplicate.shaded_from is not None
+        again = cu.prepare_light(s, lights=[duplicate, None]).lights[0]
+        np.testing.assert_array_equal(again, light)
+    assert light[..., 0].shaded_from is None  # a part of the light is not the light
+    pickled = copies[0]
+    alone = cu.prepare_light(scene([volume]), lights=[pickled]).lights[0]
     np.testing.assert_array_equal(alone, own)
     assert getattr(light * 1.0, "shaded_from", None) is None  # arithmetic gives plain arrays
 
@@ -144,14 +148,14 @@ def test_a_copy_of_a_shaded_light_given_back_is_not_shaded_twice(lighting: str, 
     shading: given back, the medium's own light is shaded once, as the scene is."""
     lit = cu.prepare_light(scene([cumulus(), puff_above()], lighting))
     shaded = lit.lights[0]
-    copies = [pickle.loads(pickle.dumps(shaded))]
+    copies = [pickle.loads(pickle.dumps(shaded)), copy.deepcopy(shaded)]
     if lighting == "paper":
         assert shaded.record is not None and shaded.record.shaded
         copies.append(cu.load_light_grid(shaded.save(tmp_path / "shaded.npz")))
     else:
         assert shaded.shaded_from is not None
-    for copy in copies:
-        again = cu.prepare_light(lit.scene, lights=[copy, None]).lights[0]
+    for duplicate in copies:
+        again = cu.prepare_light(lit.scene, lights=[duplicate, None]).lights[0]
         if lighting == "paper":
             np.testing.assert_array_equal(again.values, shaded.values)
         else:

@@ -231,6 +231,8 @@ class LightGrid(np.ndarray):
         if not path.parent.is_dir():
             raise FileNotFoundError(f"folder of path does not exist: {str(path.parent)!r}")
         record = None if self.record is None else asdict(self.record)
+        if record is not None and not record["shaded"]:
+            del record["shaded"]  # the files of grids as they were before the mark, readable alike
         meta = {
             "format": GRID_FORMAT,
             "version": 1,

@@ -64,8 +64,8 @@ Transmittance = Callable[[np.ndarray], np.ndarray | None]
 class ShadedVolumeLight(np.ndarray):
     """A `VolumeCloud`'s ``(D, H, W, 4)`` float32 light with the shadows of the scene's particle
     clouds and billboards in its channel 0, holding the volume's own light as ``shaded_from``
-    (kept by pickling; views and arithmetic results are plain arrays), so that a copy given
-    back to the light step is replaced by the own light and not shaded twice."""
+    (kept by copies and pickling; parts of it and arithmetic results do not carry it), so that a
+    copy given back to the light step is replaced by the own light and not shaded twice."""
 
     shaded_from: np.ndarray | None
 
@@ -76,7 +76,9 @@ class ShadedVolumeLight(np.ndarray):
         return light
 
     def __array_finalize__(self, obj: Any) -> None:
-        self.shaded_from = None  # only what __new__ makes carries the mark
+        # Whole copies (copy, deepcopy, .copy()) keep the mark; parts of the light do not.
+        whole = isinstance(obj, ShadedVolumeLight) and obj.shape == self.shape
+        self.shaded_from = obj.shaded_from if whole else None
 
     def __array_wrap__(self, out: Any, context: Any = None, return_scalar: bool = False) -> Any:
         return np.asarray(out) if not return_scalar else out[()]
