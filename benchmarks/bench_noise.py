@@ -16,7 +16,7 @@ the JSON records the ratio).
 
 SIMD (issue 14, item 1): the C++ fBm is also timed on 1 thread with every kernel this CPU runs
 (``cpp_1_thread_scalar``, and ``cpp_1_thread_<level>_<fetch>`` for each wide level, avx2 and
-avx512, and each lattice fetch, gather / loads / quads; interleaved, selected with
+avx512, and each lattice fetch, gather / loads / cells; interleaved, selected with
 ``cumuli.noise.set_simd_level`` and ``set_simd_fetch``, each timed call after an untimed one so
 that every kernel runs from its own warm caches); "scalar" is the portable kernel (today's
 method before the hand-written SIMD paths), the others give bit-identical values. The ratios
@@ -45,6 +45,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import _common as common  # noqa: E402
 
 import cumuli as cu  # noqa: E402
+from cumuli.noise import SIMD_FETCHES  # noqa: E402
 
 OCTAVES = 5
 TARGET_MSPS = 100.0
@@ -94,9 +95,9 @@ def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict
     """The C++ fBm on 1 thread with every kernel this CPU runs, repeats interleaved across them.
 
     Keys: ``scalar``, and ``<level>_<fetch>`` for each wide level and lattice fetch
-    (``avx2_gather``, ..., ``avx512_quads``).
+    (``avx2_gather``, ..., ``avx512_cells``).
     """
-    from cumuli.noise import SIMD_FETCHES, set_simd_fetch, set_simd_level, simd_levels
+    from cumuli.noise import set_simd_fetch, set_simd_level, simd_levels
 
     def at(level: str, fetch: str) -> Any:
         def run() -> np.ndarray:
@@ -116,7 +117,7 @@ def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict
         if lvl != "scalar"
         for fetch in SIMD_FETCHES
     }
-    # One untimed call before each timed one: the quads fetch reads a 2.2 MB copy of the lattice,
+    # One untimed call before each timed one: the cells fetch reads a 4.4 MB table of the cells,
     # the others the 1.1 MB lattice, and each would otherwise start from the other's caches.
     timed = common.interleaved_repeats({k: at(*v) for k, v in kernels.items()}, repeats, settle=1)
     return {
@@ -356,7 +357,7 @@ def main(argv: list[str] | None = None) -> int:
         # The lattice fetches of one level (same bits), per CPU-second: > 1 where one beats the
         # gathers.
         gather = methods.get(f"cpp_1_thread_{lvl}_gather")
-        for other in ("loads", "quads"):
+        for other in SIMD_FETCHES[1:]:
             if gather is not None and f"cpp_1_thread_{lvl}_{other}" in methods:
                 ratios[f"cpp_1_thread_{lvl}_{other}_over_gather"] = (
                     methods[f"cpp_1_thread_{lvl}_{other}"]["samples_per_cpu_s_median"]
@@ -366,7 +367,7 @@ def main(argv: list[str] | None = None) -> int:
     # in this run, per CPU-second: 1 where the preference holds on this machine.
     fetch_rates = {
         f: methods[f"cpp_1_thread_{widest}_{f}"]["samples_per_cpu_s_median"]
-        for f in ("gather", "loads", "quads")
+        for f in SIMD_FETCHES
         if f"cpp_1_thread_{widest}_{f}" in methods
     }
     if fetch_rates:

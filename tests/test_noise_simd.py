@@ -81,9 +81,9 @@ def _huge_points() -> np.ndarray:
     return pts
 
 
-def test_the_corner_quads_exist_for_power_of_two_sizes_up_to_64() -> None:
+def test_the_cell_table_exists_for_power_of_two_sizes_up_to_64() -> None:
     for size, has in ((64, True), (2, True), (32, True), (128, False), (256, False), (17, False)):
-        assert cu.Noise(seed=1, size=size).has_quads is has, size
+        assert cu.Noise(seed=1, size=size).has_cells is has, size
 
 
 def test_scalar_is_always_available_and_the_default_is_the_widest() -> None:
@@ -95,7 +95,7 @@ def test_scalar_is_always_available_and_the_default_is_the_widest() -> None:
 @pytest.mark.parametrize("level", WIDE_KERNELS)
 @pytest.mark.parametrize("size", [64, 2, 32, 128, 256, 17])
 def test_wide_paths_equal_the_scalar_path(level: str, size: int) -> None:
-    """Sizes ≤ 64 have the corner quads, 128 and 256 read as "loads", 17 takes the general path;
+    """Sizes ≤ 64 have the cell table, 128 and 256 read as "loads", 17 takes the general path;
     up to 180 the index is the 16-bit multiply-add."""
     noise = cu.Noise(seed=21, size=size)
     rng = np.random.default_rng(size)
@@ -166,11 +166,11 @@ def _cpu_vendor() -> str | None:
     return None
 
 
-def test_the_preferred_fetch_is_quads_on_amd_and_gather_elsewhere() -> None:
-    """bench_noise measured quads fastest on AMD, gathers on Intel; "auto" goes back to it."""
+def test_the_preferred_fetch_is_cells_on_amd_and_gather_elsewhere() -> None:
+    """bench_noise measured cells fastest on AMD, gathers on Intel; "auto" goes back to it."""
     vendor = _cpu_vendor()
     if vendor is not None and len(LEVELS) > 1:  # an x86 CPU with the wide kernels
-        assert preferred_simd_fetch() == ("quads" if vendor == "AuthenticAMD" else "gather")
+        assert preferred_simd_fetch() == ("cells" if vendor == "AuthenticAMD" else "gather")
     assert preferred_simd_fetch() in SIMD_FETCHES
     set_simd_fetch("loads")
     set_simd_fetch("auto")
@@ -197,7 +197,7 @@ def test_fetch_is_chosen_and_refused_like_the_level() -> None:
         ({"CUMULI_SIMD": "scalar"}, "scalar", None, False),
         ({"CUMULI_SIMD_FETCH": "gather"}, None, "gather", False),
         ({"CUMULI_SIMD_FETCH": "loads"}, None, "loads", False),
-        ({"CUMULI_SIMD_FETCH": "quads"}, None, "quads", False),
+        ({"CUMULI_SIMD_FETCH": "cells"}, None, "cells", False),
         ({}, None, preferred_simd_fetch(), False),  # the default: the CPU's preferred fetch
         ({"CUMULI_SIMD": "sse9"}, LEVELS[-1], None, True),
         ({"CUMULI_SIMD_FETCH": "scatter"}, None, None, True),

@@ -72,10 +72,10 @@ void bind_noise(py::module_& m) {
       "The SIMD levels this CPU and build support, narrowest first.");
   m.def(
       "simd_fetch", [] { return std::string(simd_fetch_name(simd_fetch())); },
-      "How the wide fBm kernels read the lattice now: 'gather', 'loads' or 'quads'.");
+      "How the wide fBm kernels read the lattice now: 'gather', 'loads' or 'cells'.");
   m.def(
       "simd_fetch_preferred", [] { return std::string(simd_fetch_name(simd_fetch_preferred())); },
-      "The fetch this CPU runs fastest where measured: 'quads' on AMD, 'gather' elsewhere.");
+      "The fetch this CPU runs fastest where measured: 'cells' on AMD, 'gather' elsewhere.");
   m.def(
       "set_simd_fetch",
       [](const std::string& name) {
@@ -85,7 +85,7 @@ void bind_noise(py::module_& m) {
   py::class_<Noise>(m, "Noise")
       .def(py::init<std::uint64_t, int>(), py::arg("seed"), py::arg("size") = 64)
       .def_property_readonly("size", &Noise::size)
-      .def_property_readonly("has_quads", &Noise::has_quads)
+      .def_property_readonly("has_cells", &Noise::has_cells)
       .def_property_readonly("seed", &Noise::seed)
       .def_property_readonly(
           "lattice",

@@ -27,8 +27,8 @@
 //     The wide kernels fetch the two x-neighbours of a cell row as one 64-bit element (they are
 //     adjacent in the padded lattice), so a point costs 4 fetched rows per octave instead of 8
 //     corners, then split the pairs with a permute. They fetch them with gathers or, where
-//     gathers are micro-coded (AMD Zen 2/3: ≈ 1.3× faster so), with plain loads; or read a
-//     cell face as one 16-byte load from a copy whose rows are interleaved (SimdFetch).
+//     gathers are micro-coded (AMD Zen 2/3: ≈ 1.3× faster so), with plain loads; or read the
+//     whole cell from a table that stores each cell's eight corners together (SimdFetch).
 // Why intrinsics behind a dispatch table rather than Highway or xsimd: the kernel is ~40 lines per
 // width, needs only gathers, floor, and/mul/add, and must keep the exact operation order of the
 // scalar path; GCC/Clang `target` attributes give runtime dispatch in one translation unit with no
@@ -100,16 +100,19 @@ Noise::Noise(std::uint64_t seed, int size) : seed_(seed), size_(size), mask_(-1)
     for (std::size_t y = 0; y < p; ++y)
       for (std::size_t x = 0; x < p; ++x)
         padded_[(z * p + y) * p + x] = lattice_[((z % s) * s + (y % s)) * s + (x % s)];
-  // 2.2 MB at the default size 64; larger lattices (and sizes that are not powers of two, which
-  // never reach the SIMD kernels) go without, and their Quads fetch reads the rows (Loads).
-  if (mask_ < 0 || size > kMaxQuadsSize) return;
-  quads_.assign(2 * p * p * p, 0.0f);
-  for (std::size_t z = 0; z < p; ++z)
+  // 4.4 MB at the default size 64; larger lattices (and sizes that are not powers of two, which
+  // never reach the SIMD kernels) go without, and their Cells fetch reads the rows (Loads).
+  if (mask_ < 0 || size > kMaxCellsSize) return;
+  const std::size_t pp = p * p;
+  cells_.assign(4 * pp * p, 0.0f);
+  for (std::size_t z = 0; z < s; ++z)
     for (std::size_t y = 0; y < s; ++y)
       for (std::size_t x = 0; x < p; ++x) {
         const std::size_t i = (z * p + y) * p + x;
-        quads_[2 * i] = padded_[i];
-        quads_[2 * i + 1] = padded_[i + p];
+        cells_[4 * i] = padded_[i];
+        cells_[4 * i + 1] = padded_[i + p];
+        cells_[4 * i + 2] = padded_[i + pp];
+        cells_[4 * i + 3] = padded_[i + pp + p];
       }
 }
 
@@ -198,7 +201,7 @@ FbmTables make_tables(const FbmParams& params) {
 // What a kernel needs of the lattice: the padded (size+1)³ copy, its edge and the wrap mask.
 struct Lattice {
   const float* padded;
-  const float* quads;  // Noise::quads_
+  const float* cells;  // Noise::cells_
   int p;               // size + 1
   int mask;            // size − 1 (power-of-two sizes only reach the kernels)
 };
@@ -271,13 +274,12 @@ struct Avx2Consts {
   __m256 half;
   __m256i mask, p, pmul;
   std::ptrdiff_t row_offset[4];  // floats from a cell's lower corner to rows y1, z1 and y1z1
-  const float* quads;            // Lattice::quads
-  std::ptrdiff_t quad_layer;     // floats from a cell's z0 quad to its z1 quad
+  const float* cells;            // Lattice::cells
 };
 
-// Quads q[j] = (e0, e1, e2, e3) of points j and j + 4 (one per 128-bit half) to one register per
-// element, points in order. Two rounds of unpacks, within each 128-bit half.
-__attribute__((target("avx2"), always_inline)) inline void transpose_quads_avx2(
+// Cell faces q[j] = (e0, e1, e2, e3) of points j and j + 4 (one per 128-bit half) to one register
+// per element, points in order. Two rounds of unpacks, within each 128-bit half.
+__attribute__((target("avx2"), always_inline)) inline void transpose_faces_avx2(
     const __m256 q[4], __m256& e0, __m256& e1, __m256& e2, __m256& e3) {
   const __m256 t0 = _mm256_unpacklo_ps(q[0], q[1]), t1 = _mm256_unpackhi_ps(q[0], q[1]);
   const __m256 t2 = _mm256_unpacklo_ps(q[2], q[3]), t3 = _mm256_unpackhi_ps(q[2], q[3]);
@@ -290,8 +292,8 @@ __attribute__((target("avx2"), always_inline)) inline void transpose_quads_avx2(
 }
 
 // One octave of 8 points at lattice scale `sc`: kernel_scalar's arithmetic, operation for
-// operation. The cell's corners are read as Fetch says (see SimdFetch): Quads loads the two
-// 16-byte corner quads (z0, z1) of each point and transposes them; Gather and Loads fetch, per
+// operation. The cell's corners are read as Fetch says (see SimdFetch): Cells loads the two
+// 16-byte faces (x0, x1) of each point's cell and transposes them; Gather and Loads fetch, per
 // row of the cell (y0/y1 × z0/z1), the pairs (c[x0], c[x0 + 1]) of the 8 points as 64-bit
 // elements (two 4-element gathers, or eight plain loads from the indices stored to memory) and
 // split the pairs into the two corners with shuffles.
@@ -320,26 +322,25 @@ __attribute__((target("avx2"), always_inline)) inline __m256 octave_avx2(const A
   // row's offset (a scalar base address) instead of adding the offset to every index.
   __m256 k0[4], k1[4];  // lower / upper x corner of rows (y0,z0), (y1,z0), (y0,z1), (y1,z1)
   alignas(32) int index[8];
-  if (Fetch == SimdFetch::Quads) {
-    // Float offsets of the points' quads. A quad of layer z0 / z1 holds, in order, the lower
-    // and upper x corners of rows 0, 1 / 2, 3 interleaved: (x0 y0, x0 y1, x1 y0, x1 y1).
+  if (Fetch == SimdFetch::Cells) {
+    // Float offsets of the points' cells. A cell is its x0 face then its x1 face, each the rows
+    // (y0,z0), (y1,z0), (y0,z1), (y1,z1) in order.
     alignas(32) std::uint32_t offset[8];  // unsigned: no sign extension in the addresses
-    _mm256_store_si256(reinterpret_cast<__m256i*>(offset), _mm256_slli_epi32(base, 1));
-    // q[layer][j]: the z0 / z1 quads of points j | j + 4; each point's two quads are read
-    // together, so its offset is used once and then dead.
+    _mm256_store_si256(reinterpret_cast<__m256i*>(offset), _mm256_slli_epi32(base, 2));
+    // q[side][j]: the x0 / x1 faces of points j | j + 4; each point's two faces are read
+    // together (adjacent 16 bytes), so its offset is used once and then dead.
     __m256 q[2][4];
     for (int j = 0; j < 4; ++j)
-      for (int layer = 0; layer < 2; ++layer) {
-        const float* quads = k.quads + layer * k.quad_layer;
-        q[layer][j] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(quads + offset[j])),
-                                           _mm_loadu_ps(quads + offset[j + 4]), 1);
+      for (int side = 0; side < 2; ++side) {
+        const float* faces = k.cells + 4 * side;
+        q[side][j] = _mm256_insertf128_ps(_mm256_castps128_ps256(_mm_loadu_ps(faces + offset[j])),
+                                          _mm_loadu_ps(faces + offset[j + 4]), 1);
       }
-    for (int layer = 0; layer < 2; ++layer)
-      transpose_quads_avx2(q[layer], k0[2 * layer], k0[2 * layer + 1], k1[2 * layer],
-                           k1[2 * layer + 1]);
+    transpose_faces_avx2(q[0], k0[0], k0[1], k0[2], k0[3]);
+    transpose_faces_avx2(q[1], k1[0], k1[1], k1[2], k1[3]);
   }
   if (Fetch == SimdFetch::Loads) _mm256_store_si256(reinterpret_cast<__m256i*>(index), base);
-  for (int r = 0; r < 4 && Fetch != SimdFetch::Quads; ++r) {
+  for (int r = 0; r < 4 && Fetch != SimdFetch::Cells; ++r) {
     const float* row_floats = reinterpret_cast<const float*>(lattice) + k.row_offset[r];
     // a: pairs of points 0..3, b: of points 4..7, as [p0 p1 | p2 p3] in 128-bit halves.
     __m256 a, b;
@@ -442,13 +443,9 @@ __attribute__((target("avx2"))) void kernel_avx2(const Lattice& lat, const FbmTa
                                                  const float* points, std::size_t count,
                                                  float* out) {
   const int pp = lat.p * lat.p;
-  const Avx2Consts k{_mm256_set1_ps(0.5f),
-                     _mm256_set1_epi32(lat.mask),
-                     _mm256_set1_epi32(lat.p),
-                     _mm256_set1_epi32((pp << 16) | lat.p),
-                     {0, lat.p, pp, pp + lat.p},
-                     lat.quads,
-                     2 * static_cast<std::ptrdiff_t>(pp)};
+  const Avx2Consts k{_mm256_set1_ps(0.5f),       _mm256_set1_epi32(lat.mask),
+                     _mm256_set1_epi32(lat.p),   _mm256_set1_epi32((pp << 16) | lat.p),
+                     {0, lat.p, pp, pp + lat.p}, lat.cells};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
   // Two registers (16 points) at a time; a tail of at most 8 points takes one, not two.
   for (std::size_t first = 0; first < count; first += 16) {
@@ -465,8 +462,7 @@ struct Avx512Consts {
   __m512 half;
   __m512i mask, p, pmul, even, odd;
   std::ptrdiff_t row_offset[4];  // as Avx2Consts'
-  const float* quads;
-  std::ptrdiff_t quad_layer;
+  const float* cells;
 };
 
 // The (c[i], c[i + 1]) pairs of a row at the 8 float indices i = index[0..7], in index order, as
@@ -484,17 +480,27 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline __m512 pairs8_
   return _mm512_castpd_ps(_mm512_insertf64x4(_mm512_castpd256_pd512(low), high, 1));
 }
 
-// As transpose_quads_avx2 for 16 points: q[j] holds the quads of points j, j + 4, j + 8, j + 12.
-__attribute__((target("avx512f,avx512bw"), always_inline)) inline void transpose_quads_avx512(
-    const __m512 q[4], __m512& e0, __m512& e1, __m512& e2, __m512& e3) {
-  const __m512 t0 = _mm512_unpacklo_ps(q[0], q[1]), t1 = _mm512_unpackhi_ps(q[0], q[1]);
-  const __m512 t2 = _mm512_unpacklo_ps(q[2], q[3]), t3 = _mm512_unpackhi_ps(q[2], q[3]);
-  const __m512d d0 = _mm512_castps_pd(t0), d1 = _mm512_castps_pd(t1);
-  const __m512d d2 = _mm512_castps_pd(t2), d3 = _mm512_castps_pd(t3);
-  e0 = _mm512_castpd_ps(_mm512_unpacklo_pd(d0, d2));
-  e1 = _mm512_castpd_ps(_mm512_unpackhi_pd(d0, d2));
-  e2 = _mm512_castpd_ps(_mm512_unpacklo_pd(d1, d3));
-  e3 = _mm512_castpd_ps(_mm512_unpackhi_pd(d1, d3));
+// Eight registers of two whole cells each (see octave_avx512's Cells fetch) to one register per
+// corner. Two rounds of unpacks within 128-bit lanes leave, in u[e] (e < 4), corner e of four
+// rows in lanes 0 and 2 and corner e + 4 in lanes 1 and 3; a lane shuffle of u[e] and u[e + 4]
+// gathers each corner of all 16 points.
+__attribute__((target("avx512f,avx512bw"), always_inline)) inline void transpose_cells_avx512(
+    const __m512 row[8], __m512 k0[4], __m512 k1[4]) {
+  __m512 u[8];
+  for (int h = 0; h < 8; h += 4) {
+    const __m512d t0 = _mm512_castps_pd(_mm512_unpacklo_ps(row[h], row[h + 1]));
+    const __m512d t1 = _mm512_castps_pd(_mm512_unpackhi_ps(row[h], row[h + 1]));
+    const __m512d t2 = _mm512_castps_pd(_mm512_unpacklo_ps(row[h + 2], row[h + 3]));
+    const __m512d t3 = _mm512_castps_pd(_mm512_unpackhi_ps(row[h + 2], row[h + 3]));
+    u[h] = _mm512_castpd_ps(_mm512_unpacklo_pd(t0, t2));
+    u[h + 1] = _mm512_castpd_ps(_mm512_unpackhi_pd(t0, t2));
+    u[h + 2] = _mm512_castpd_ps(_mm512_unpacklo_pd(t1, t3));
+    u[h + 3] = _mm512_castpd_ps(_mm512_unpackhi_pd(t1, t3));
+  }
+  for (int e = 0; e < 4; ++e) {
+    k0[e] = _mm512_shuffle_f32x4(u[e], u[e + 4], _MM_SHUFFLE(2, 0, 2, 0));
+    k1[e] = _mm512_shuffle_f32x4(u[e], u[e + 4], _MM_SHUFFLE(3, 1, 3, 1));
+  }
 }
 
 // As octave_avx2 for 16 points: the floor comes straight from a round-down conversion; Gather and
@@ -528,33 +534,25 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline __m512 octave_
   }
   alignas(64) int index[16];
   __m512 k0[4], k1[4];
-  if (Fetch == SimdFetch::Quads) {
+  if (Fetch == SimdFetch::Cells) {
     alignas(64) std::uint32_t offset[16];  // unsigned: no sign extension in the addresses
-    _mm512_store_si512(offset, _mm512_slli_epi32(base, 1));
-    // q[layer][j]: the z0 / z1 quads of points j, j + 4, j + 8, j + 12 (one per 128-bit lane;
-    // masked broadcasts from memory, which need no shuffle unit). Each point's two quads are
-    // read together, so its offset is used once and then dead.
-    __m512 q[2][4];
-    for (int j = 0; j < 4; ++j) {
-      for (int layer = 0; layer < 2; ++layer) {
-        const float* quads = k.quads + layer * k.quad_layer;
-        q[layer][j] = _mm512_castps128_ps512(_mm_loadu_ps(quads + offset[j]));
-      }
-      for (int lane = 1; lane < 4; ++lane) {
-        const __mmask16 in_lane = static_cast<__mmask16>(0xFu << (4 * lane));
-        for (int layer = 0; layer < 2; ++layer) {
-          const float* quads = k.quads + layer * k.quad_layer;
-          q[layer][j] = _mm512_mask_broadcast_f32x4(q[layer][j], in_lane,
-                                                    _mm_loadu_ps(quads + offset[j + 4 * lane]));
-        }
-      }
+    _mm512_store_si512(offset, _mm512_slli_epi32(base, 2));
+    // One 32-byte load per point (its whole cell), two points a register: row r holds points
+    // (r, r + 4) for r < 4 and (r + 4, r + 8) after, the order in which the transpose leaves the
+    // points in lane order. The upper half is a masked broadcast from memory (no shuffle unit).
+    __m512 row[8];
+    for (int r = 0; r < 8; ++r) {
+      const int a = r < 4 ? r : r + 4;
+      const __m256d low = _mm256_loadu_pd(reinterpret_cast<const double*>(k.cells + offset[a]));
+      const __m256d high =
+          _mm256_loadu_pd(reinterpret_cast<const double*>(k.cells + offset[a + 4]));
+      row[r] =
+          _mm512_castpd_ps(_mm512_mask_broadcast_f64x4(_mm512_castpd256_pd512(low), 0xF0, high));
     }
-    for (int layer = 0; layer < 2; ++layer)
-      transpose_quads_avx512(q[layer], k0[2 * layer], k0[2 * layer + 1], k1[2 * layer],
-                             k1[2 * layer + 1]);
+    transpose_cells_avx512(row, k0, k1);
   }
   if (Fetch == SimdFetch::Loads) _mm512_store_si512(index, base);
-  for (int r = 0; r < 4 && Fetch != SimdFetch::Quads; ++r) {
+  for (int r = 0; r < 4 && Fetch != SimdFetch::Cells; ++r) {
     const float* row_floats = reinterpret_cast<const float*>(lattice) + k.row_offset[r];
     // a: pairs of points 0..7, b: of points 8..15, in point order.
     __m512 a, b;
@@ -652,8 +650,7 @@ __attribute__((target("avx512f,avx512bw"))) void kernel_avx512(const Lattice& la
       _mm512_setr_epi32(0, 2, 4, 6, 8, 10, 12, 14, 16, 18, 20, 22, 24, 26, 28, 30),
       _mm512_setr_epi32(1, 3, 5, 7, 9, 11, 13, 15, 17, 19, 21, 23, 25, 27, 29, 31),
       {0, lat.p, pp, pp + lat.p},
-      lat.quads,
-      2 * static_cast<std::ptrdiff_t>(pp)};
+      lat.cells};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
   // Two registers (32 points) at a time; a tail of at most 16 points takes one, not two.
   for (std::size_t first = 0; first < count; first += 32) {
@@ -701,29 +698,29 @@ MaxAbsBits max_abs_bits_for(SimdLevel level) {
   return max_abs_bits_baseline;
 }
 
-Kernel kernel_for(SimdLevel level, SimdFetch fetch, int size, bool has_quads) {
+Kernel kernel_for(SimdLevel level, SimdFetch fetch, int size, bool has_cells) {
 #ifdef CUMULI_X86_KERNELS
   const bool madd = size <= kMaxMaddSize;
-  if (fetch == SimdFetch::Quads && !has_quads) fetch = SimdFetch::Loads;
+  if (fetch == SimdFetch::Cells && !has_cells) fetch = SimdFetch::Loads;
   // The kernels of one level: [fetch][madd].
   using F = SimdFetch;
   if (level == SimdLevel::Avx512) {
     const Kernel kernels[3][2] = {{kernel_avx512<false, F::Gather>, kernel_avx512<true, F::Gather>},
                                   {kernel_avx512<false, F::Loads>, kernel_avx512<true, F::Loads>},
-                                  {kernel_avx512<false, F::Quads>, kernel_avx512<true, F::Quads>}};
+                                  {kernel_avx512<false, F::Cells>, kernel_avx512<true, F::Cells>}};
     return kernels[static_cast<int>(fetch)][madd];
   }
   if (level == SimdLevel::Avx2) {
     const Kernel kernels[3][2] = {{kernel_avx2<false, F::Gather>, kernel_avx2<true, F::Gather>},
                                   {kernel_avx2<false, F::Loads>, kernel_avx2<true, F::Loads>},
-                                  {kernel_avx2<false, F::Quads>, kernel_avx2<true, F::Quads>}};
+                                  {kernel_avx2<false, F::Cells>, kernel_avx2<true, F::Cells>}};
     return kernels[static_cast<int>(fetch)][madd];
   }
 #endif
   (void)level;
   (void)fetch;
   (void)size;
-  (void)has_quads;
+  (void)has_cells;
   return kernel_scalar;
 }
 
@@ -733,8 +730,8 @@ void Noise::fbm_many(const float* points, std::size_t count, float* out, const F
                      int threads, PointScan* scan) const {
   params.validate();
   const FbmTables tables = make_tables(params);
-  const Kernel kernel = kernel_for(simd_level(), simd_fetch(), size_, !quads_.empty());
-  const Lattice lat{padded_.data(), quads_.data(), size_ + 1, mask_};
+  const Kernel kernel = kernel_for(simd_level(), simd_fetch(), size_, !cells_.empty());
+  const Lattice lat{padded_.data(), cells_.data(), size_ + 1, mask_};
   const MaxAbsBits scan_block = max_abs_bits_for(simd_level());
   // Threads take whole blocks: the loop hands out up to 32 chunks per thread, which on a short
   // call (a light ray's 64 queued samples) would otherwise be a kernel call per two points.

@@ -39,7 +39,7 @@ SimdFetch default_fetch() {
     const std::string name(env);
     if (name == "gather") return SimdFetch::Gather;
     if (name == "loads") return SimdFetch::Loads;
-    if (name == "quads") return SimdFetch::Quads;
+    if (name == "cells") return SimdFetch::Cells;
     // Empty, "auto" or unknown (the Python layer warns): this CPU's preferred fetch.
   }
   return simd_fetch_preferred();
@@ -51,8 +51,8 @@ const char* simd_fetch_name(SimdFetch fetch) {
   switch (fetch) {
     case SimdFetch::Loads:
       return "loads";
-    case SimdFetch::Quads:
-      return "quads";
+    case SimdFetch::Cells:
+      return "cells";
     default:
       return "gather";
   }
@@ -61,17 +61,17 @@ const char* simd_fetch_name(SimdFetch fetch) {
 SimdFetch parse_simd_fetch(const std::string& name) {
   if (name == "gather") return SimdFetch::Gather;
   if (name == "loads") return SimdFetch::Loads;
-  if (name == "quads") return SimdFetch::Quads;
-  throw std::invalid_argument("SIMD fetch must be 'gather', 'loads' or 'quads', got '" + name +
+  if (name == "cells") return SimdFetch::Cells;
+  throw std::invalid_argument("SIMD fetch must be 'gather', 'loads' or 'cells', got '" + name +
                               "'");
 }
 
 SimdFetch simd_fetch_preferred() {
 #ifdef CUMULI_X86_DISPATCH
-  // Measured (bench_noise): AMD's gathers are slow and its L3 is near, so the quads win there
+  // Measured (bench_noise): AMD's gathers are slow and its L3 is near, so whole cells win there
   // (Zen 5); Intel's gathers are fast and its L3 far, so the gathers from the 1.1 MB lattice,
-  // which stays in L2, win on every point set tried (Xeon with AVX-512).
-  if (__builtin_cpu_is("amd")) return SimdFetch::Quads;
+  // which stays in L2, won on every point set tried (Xeon with AVX-512).
+  if (__builtin_cpu_is("amd")) return SimdFetch::Cells;
 #endif
   return SimdFetch::Gather;
 }

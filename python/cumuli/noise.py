@@ -28,7 +28,7 @@ GRID_SLAB_VOXELS = 1 << 22
 #: SIMD levels the core knows, narrowest first (see :func:`simd_level`).
 SIMD_LEVELS = ("scalar", "avx2", "avx512")
 #: How the wide kernels can read the lattice (see :func:`simd_fetch`).
-SIMD_FETCHES = ("gather", "loads", "quads")
+SIMD_FETCHES = ("gather", "loads", "cells")
 
 #: Largest magnitude allowed for the lattice coordinates ``p · f · sⁱ`` and for the fBm sum: the
 #: core works in float32, where they overflow to inf (and the lookup gives NaN) at 3.4e38.
@@ -63,13 +63,13 @@ def set_simd_level(level: str) -> None:
 
 def simd_fetch() -> str:
     """How the wide fBm kernels read a cell's lattice values now: ``"gather"``, ``"loads"`` or
-    ``"quads"``.
+    ``"cells"``.
 
     All three give the same bits. ``"gather"`` reads each row's corner pairs with the CPU's gather
-    instructions, ``"loads"`` with plain 64-bit loads from an index array, ``"quads"`` reads each
-    cell face as one 16-byte load from a copy of the lattice whose rows are interleaved (2.2 MB at
+    instructions, ``"loads"`` with plain 64-bit loads from an index array, ``"cells"`` reads a
+    cell's eight corners as one 32-byte load from a table that stores every cell whole (4.4 MB at
     size 64; lattices above 64 have none and read as ``"loads"``). The default is
-    :func:`preferred_simd_fetch` (``"quads"`` on AMD, ``"gather"`` elsewhere), unless
+    :func:`preferred_simd_fetch` (``"cells"`` on AMD, ``"gather"`` elsewhere), unless
     ``CUMULI_SIMD_FETCH`` (read at first use) or :func:`set_simd_fetch` says otherwise.
     """
     return str(_core.simd_fetch())
@@ -77,7 +77,7 @@ def simd_fetch() -> str:
 
 def preferred_simd_fetch() -> str:
     """The lattice fetch this CPU runs fastest where measured (``benchmarks/bench_noise.py``):
-    ``"quads"`` on AMD (slow gathers, near L3), ``"gather"`` elsewhere (Intel: fast gathers from a
+    ``"cells"`` on AMD (slow gathers, near L3), ``"gather"`` elsewhere (Intel: fast gathers from a
     lattice that stays in L2)."""
     return str(_core.simd_fetch_preferred())
 
@@ -135,10 +135,10 @@ class Noise:
         return int(self._core.size)
 
     @property
-    def has_quads(self) -> bool:
-        """Whether the wide kernels can read this lattice as corner quads (the ``"quads"``
-        fetch, :func:`simd_fetch`): power-of-two sizes up to 64; others read as ``"loads"``."""
-        return bool(self._core.has_quads)
+    def has_cells(self) -> bool:
+        """Whether the wide kernels can read this lattice's cells whole (the ``"cells"`` fetch,
+        :func:`simd_fetch`): power-of-two sizes up to 64; others read as ``"loads"``."""
+        return bool(self._core.has_cells)
 
     @property
     def lattice(self) -> np.ndarray:

@@ -25,14 +25,14 @@ struct FbmParams {
 class Noise {
  public:
   static constexpr int kMaxSize = 512;      // 512³ floats = 512 MiB; anything larger is refused
-  static constexpr int kMaxQuadsSize = 64;  // largest lattice with corner quads (2.2 MB at 64)
+  static constexpr int kMaxCellsSize = 64;  // largest lattice with a cell table (4.4 MB at 64)
 
   Noise(std::uint64_t seed, int size = 64);
 
   int size() const { return size_; }
-  // Whether the lattice has its corner quads (power-of-two sizes up to kMaxQuadsSize), which the
-  // wide kernels' Quads fetch reads; without them that fetch reads the rows (Loads).
-  bool has_quads() const { return !quads_.empty(); }
+  // Whether the lattice has its cell table (power-of-two sizes up to kMaxCellsSize), which the
+  // wide kernels' Cells fetch reads; without it that fetch reads the rows (Loads).
+  bool has_cells() const { return !cells_.empty(); }
   std::uint64_t seed() const { return seed_; }
   const std::vector<float>& lattice() const { return lattice_; }  // [z][y][x]
 
@@ -69,12 +69,12 @@ class Noise {
   // (size+1)³ copy whose last x, y and z planes repeat the first ones, so that the upper corner
   // of a trilinear cell is always at index + 1 / + stride and never needs a second wrap.
   std::vector<float> padded_;
-  // The padded lattice with each row interleaved with the next: floats 2i and 2i + 1, for
-  // i = (z·p + y)·p + x, hold padded (x, y) and (x, y + 1) at z. So the 16 bytes at 2i are the
-  // cell face (x, y), (x, y+1), (x+1, y), (x+1, y+1), and a cell is two 16-byte loads (z and z+1)
-  // for the SIMD kernels' Quads fetch. Entries at y = size are never read (zero). Empty unless
-  // size is a power of two ≤ kMaxQuadsSize.
-  std::vector<float> quads_;
+  // The cell table: floats 4i .. 4i + 3, for i = (z·p + y)·p + x, hold padded (x, y, z),
+  // (x, y+1, z), (x, y, z+1) and (x, y+1, z+1), the corners of the cell's x face at x. Entry
+  // i + 1 holds the face at x + 1, so the 32 bytes at 4i are the whole cell whose lower corner is
+  // (x, y, z): one load for the SIMD kernels' Cells fetch. Entries at y = size or z = size are
+  // never read (zero). Empty unless size is a power of two ≤ kMaxCellsSize.
+  std::vector<float> cells_;
 };
 
 }  // namespace cumuli

@@ -37,19 +37,19 @@ void reset_simd_level();
 //   Gather: the four rows' (x0, x1) pairs with 64-bit gather instructions from the 1.1 MB padded
 //           lattice (fast on Intel; micro-coded and slow on AMD Zen 2/3);
 //   Loads:  the same pairs with plain 64-bit loads from the indices stored to memory;
-//   Quads:  two 16-byte loads per point (z0, z1), each one cell face's four corners, from a copy
-//           of the lattice that interleaves every row with the next (twice the memory: 2.2 MB at
-//           size 64; lattices above 64 have no copy and read as Loads).
-// The default is the CPU's preferred fetch (simd_fetch_preferred: Quads on AMD, Gather
-// elsewhere, as measured by bench_noise), unless CUMULI_SIMD_FETCH (gather | loads | quads |
+//   Cells:  one 32-byte load per point, the cell's eight corners, from a table that stores every
+//           cell whole (four times the memory: 4.4 MB at size 64; lattices above 64 have no
+//           table and read as Loads).
+// The default is the CPU's preferred fetch (simd_fetch_preferred: Cells on AMD, Gather
+// elsewhere, as measured by bench_noise), unless CUMULI_SIMD_FETCH (gather | loads | cells |
 // auto), read at first use, or set_simd_fetch() says otherwise.
-enum class SimdFetch : int { Gather = 0, Loads = 1, Quads = 2 };
+enum class SimdFetch : int { Gather = 0, Loads = 1, Cells = 2 };
 
-// "gather", "loads" or "quads".
+// "gather", "loads" or "cells".
 const char* simd_fetch_name(SimdFetch fetch);
 // The fetch of a name (as simd_fetch_name writes it); throws std::invalid_argument otherwise.
 SimdFetch parse_simd_fetch(const std::string& name);
-// The fetch this CPU runs fastest where measured: Quads on AMD, Gather elsewhere.
+// The fetch this CPU runs fastest where measured: Cells on AMD, Gather elsewhere.
 SimdFetch simd_fetch_preferred();
 // The fetch the wide kernels use now.
 SimdFetch simd_fetch();
