@@ -24,7 +24,9 @@ method before the hand-written SIMD paths), the others give bit-identical values
 Targets, each ``{limit, comparison, reached, met}`` with today's scalar path as ``baseline``
 (value and ratio): ≥ 100 M samples/s per thread, ≥ 7× pyfastnoiselite per thread (CPU time),
 ≥ 1.8× from 1 to 2 threads (only meaningful when two cores are free; the load average is
-recorded).
+recorded). The thread counts are interleaved with each timed call after an untimed one of its own
+(the pool's helper thread awake, as in a run of calls); the "cold" ratio beside it times each
+2-thread call right after a 1-thread one, so it includes waking the helper from sleep.
 """
 
 from __future__ import annotations
@@ -81,12 +83,19 @@ def _method(count: int, wall: list[float], cpu: list[float], **extra: Any) -> di
 
 
 def bench_cpp(
-    noise: cu.Noise, pts: np.ndarray, repeats: int, thread_counts: list[int]
+    noise: cu.Noise, pts: np.ndarray, repeats: int, thread_counts: list[int], settle: int = 1
 ) -> dict[int, dict[str, Any]]:
-    """The C++ fBm on each thread count, repeats interleaved across the counts."""
+    """The C++ fBm on each thread count, repeats interleaved across the counts.
+
+    With ``settle=1`` each timed call follows an untimed one on the same thread count, as in a
+    user's run of calls (a light pass, a sweep): the core's pool thread is then awake. With
+    ``settle=0`` every 2-thread call follows a 1-thread one, so its helper starts from ≥ 8 ms
+    asleep, and waking an idle vCPU can take milliseconds on a shared VM (the "cold" figures).
+    """
     timed = common.interleaved_repeats(
         {n: (lambda n=n: noise.fbm(pts, octaves=OCTAVES, threads=n)) for n in thread_counts},
         repeats,
+        settle=settle,
     )
     return {n: _method(len(pts), wall, cpu, threads=n) for n, (wall, cpu) in timed.items()}
 
@@ -300,6 +309,8 @@ def main(argv: list[str] | None = None) -> int:
     methods["cpp_1_thread"], methods["cpp_2_threads"] = cpp[1], cpp[2]
     if 0 in cpp:
         methods["cpp_all_threads"] = cpp[0]
+    cold = bench_cpp(noise, pts, repeats, [1, 2], settle=0)
+    methods["cpp_1_thread_cold"], methods["cpp_2_threads_cold"] = cold[1], cold[2]
     widest, fetch = simd_level(), simd_fetch()
     for key in ("cpp_1_thread", "cpp_2_threads", "cpp_all_threads"):
         if key in methods:
@@ -339,6 +350,8 @@ def main(argv: list[str] | None = None) -> int:
 
     ratios: dict[str, float] = {
         "cpp_2_threads_over_1": med("cpp_2_threads") / med("cpp_1_thread"),
+        # Each 2-thread call right after a 1-thread one (its helper thread woken from sleep).
+        "cpp_2_threads_over_1_cold": med("cpp_2_threads_cold") / med("cpp_1_thread_cold"),
         # Best of the interleaved repeats: what the two cores give when nothing else runs.
         "cpp_2_threads_over_1_best": methods["cpp_2_threads"]["samples_per_s"]["best"]
         / methods["cpp_1_thread"]["samples_per_s"]["best"],
@@ -412,7 +425,9 @@ def main(argv: list[str] | None = None) -> int:
         TARGET_2_THREADS,
         ratios["cpp_2_threads_over_1"],
         ">=",
-        measure="wall-time throughput, median of repeats (1 and 2 threads interleaved)",
+        measure="wall-time throughput, median of repeats (1 and 2 threads interleaved, each "
+        "timed call after an untimed one of its own)",
+        reached_cold=ratios["cpp_2_threads_over_1_cold"],
         reached_best=ratios["cpp_2_threads_over_1_best"],
         note="needs two idle cores; see machine.load_average and cpp_2_threads_cpu_efficiency",
     )
