@@ -12,7 +12,8 @@ started with the variable set): ``glsl_*_1_thread`` / ``glsl_*_2_threads`` and t
 
 pyfastnoiselite (FastNoiseLite, NoiseType_Value, FractalType_FBm, 5 octaves, gen_from_coords) is
 the reference point: a hashed value noise, single-threaded (its CPU time equals its wall time;
-the JSON records the ratio).
+the JSON records the ratio), timed interleaved with the C++ kernels so that both see the same
+machine.
 
 SIMD (issue 14, item 1): the C++ fBm is also timed on 1 thread with every kernel this CPU runs
 (``cpp_1_thread_scalar``, and ``cpp_1_thread_<level>_<fetch>`` for each wide level, avx2 and
@@ -37,6 +38,7 @@ import os
 import subprocess
 import sys
 import tempfile
+from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
@@ -100,11 +102,18 @@ def bench_cpp(
     return {n: _method(len(pts), wall, cpu, threads=n) for n, (wall, cpu) in timed.items()}
 
 
-def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict[str, Any]]:
-    """The C++ fBm on 1 thread with every kernel this CPU runs, repeats interleaved across them.
+def bench_simd(
+    noise: cu.Noise,
+    pts: np.ndarray,
+    repeats: int,
+    others: dict[str, Callable[[], Any]] | None = None,
+) -> dict[str, dict[str, Any]]:
+    """The C++ fBm on 1 thread with every kernel this CPU runs, repeats interleaved across them
+    and with ``others`` (single-threaded methods to compare with, e.g. pyfastnoiselite), so that
+    a shared machine's drift touches all alike.
 
     Keys: ``scalar``, and ``<level>_<fetch>`` for each wide level and lattice fetch
-    (``avx2_gather``, ..., ``avx512_cells``).
+    (``avx2_gather``, ..., ``avx512_cells``), then the keys of ``others``.
     """
     from cumuli.noise import set_simd_fetch, set_simd_level, simd_levels
 
@@ -128,12 +137,13 @@ def bench_simd(noise: cu.Noise, pts: np.ndarray, repeats: int) -> dict[str, dict
     }
     # One untimed call before each timed one: the cells fetch reads a 4.4 MB table of the cells,
     # the others the 1.1 MB lattice, and each would otherwise start from the other's caches.
-    timed = common.interleaved_repeats({k: at(*v) for k, v in kernels.items()}, repeats, settle=1)
+    fns = {k: at(*v) for k, v in kernels.items()} | (others or {})
+    timed = common.interleaved_repeats(fns, repeats, settle=1)
     return {
         k: _method(
             len(pts), wall, cpu, threads=1, simd_level=kernels[k][0],
             simd_fetch=None if k == "scalar" else kernels[k][1],
-        )
+        ) if k in kernels else _method(len(pts), wall, cpu)
         for k, (wall, cpu) in timed.items()
     }  # fmt: skip
 
@@ -244,7 +254,8 @@ def bench_glsl_llvmpipe_threads(
     return methods
 
 
-def bench_fastnoise(pts: np.ndarray, repeats: int) -> dict[str, Any]:
+def fastnoise_call(pts: np.ndarray) -> Callable[[], Any]:
+    """pyfastnoiselite's value fBm at ``pts``, as a call to time (ImportError without it)."""
     from pyfastnoiselite.pyfastnoiselite import FastNoiseLite, FractalType, NoiseType
 
     fnl = FastNoiseLite(7)
@@ -255,8 +266,7 @@ def bench_fastnoise(pts: np.ndarray, repeats: int) -> dict[str, Any]:
     fnl.fractal_lacunarity = 2.0
     fnl.frequency = 1.0
     coords = np.ascontiguousarray(pts.T, dtype=np.float32)  # it wants (3, N)
-    wall, cpu = common.time_repeats(lambda: fnl.gen_from_coords(coords), repeats)
-    return _method(len(pts), wall, cpu, noise="FastNoiseLite value fBm, gen_from_coords")
+    return lambda: fnl.gen_from_coords(coords)
 
 
 def plot(result: dict[str, Any], path: Path) -> None:
@@ -316,13 +326,17 @@ def main(argv: list[str] | None = None) -> int:
         if key in methods:
             methods[key]["simd_level"] = widest
             methods[key]["simd_fetch"] = fetch if widest != "scalar" else None
-    simd = bench_simd(noise, pts, repeats)
-    for lvl, m in simd.items():
-        methods[f"cpp_1_thread_{lvl}"] = m
+    others: dict[str, Callable[[], Any]] = {}
     try:
-        methods["pyfastnoiselite"] = bench_fastnoise(pts, repeats)
+        others["pyfastnoiselite"] = fastnoise_call(pts)
     except ImportError as exc:
         skipped["pyfastnoiselite"] = f"not installed ({exc})"
+    simd = bench_simd(noise, pts, repeats, others)
+    for name, m in simd.items():
+        if name in others:
+            methods[name] = m | {"noise": "FastNoiseLite value fBm, gen_from_coords"}
+        else:
+            methods[f"cpp_1_thread_{name}"] = m
     glsl_threads: list[int] = []
     if machine["gl_renderer"]:
         methods.update(bench_glsl(noise, pts, repeats))

@@ -14,6 +14,20 @@ namespace cumuli {
 
 namespace {
 
+// Spins until done() or `limit` has passed; true if done() came true.
+template <class Done>
+bool spin_until(const Done& done, std::chrono::microseconds limit) {
+  const auto until = std::chrono::steady_clock::now() + limit;
+  for (unsigned i = 0;; ++i) {
+    if (done()) return true;
+    // Read the clock every 64 rounds; a pause between reads yields the core's pipeline.
+    if ((i & 63u) == 63u && std::chrono::steady_clock::now() >= until) return false;
+#if defined(__x86_64__) || defined(__i386__)
+    __builtin_ia32_pause();
+#endif
+  }
+}
+
 // A pool and the process it belongs to: after fork() the child sees its parent's pool, whose
 // threads it does not have.
 struct OwnedPool {
@@ -62,17 +76,18 @@ unsigned WorkerPool::start(unsigned helpers, const std::function<void()>& job) {
   }
   job_ = &job;
   wanted_ = n;
-  running_ = n;
-  ++generation_;
+  running_.store(n, std::memory_order_relaxed);
+  generation_.fetch_add(1, std::memory_order_release);
   guard.unlock();
   wake_.notify_all();
   return n;
 }
 
 void WorkerPool::finish() {
+  spin_until([this] { return running_.load(std::memory_order_acquire) == 0; }, kSpin);
   {
     std::unique_lock<std::mutex> guard(lock_);
-    done_.wait(guard, [this] { return running_ == 0; });
+    done_.wait(guard, [this] { return running_.load(std::memory_order_relaxed) == 0; });
     job_ = nullptr;
   }
   busy_.store(false, std::memory_order_release);
@@ -80,16 +95,17 @@ void WorkerPool::finish() {
 
 void WorkerPool::work(unsigned index) {
   std::uint64_t seen = 0;
-  std::unique_lock<std::mutex> guard(lock_);
   for (;;) {
-    wake_.wait(guard, [&] { return generation_ != seen; });
-    seen = generation_;
+    spin_until([&] { return generation_.load(std::memory_order_acquire) != seen; }, kSpin);
+    std::unique_lock<std::mutex> guard(lock_);
+    wake_.wait(guard, [&] { return generation_.load(std::memory_order_relaxed) != seen; });
+    seen = generation_.load(std::memory_order_relaxed);
     if (index >= wanted_) continue;
     const std::function<void()>* job = job_;
     guard.unlock();
     (*job)();  // parallel_chunks' worker: it catches what its chunks throw
     guard.lock();
-    if (--running_ == 0) done_.notify_one();
+    if (running_.fetch_sub(1, std::memory_order_acq_rel) == 1) done_.notify_one();
   }
 }
 
