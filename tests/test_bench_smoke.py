@@ -72,6 +72,20 @@ def test_bench_noise_quick_writes_json_and_plot(
         assert "cpp_1_thread_over_fastnoise" in data["ratios"]
         assert data["targets"]["cpp_per_thread_vs_fastnoise"]["met"] in (True, False)
     assert data["ratios"]["cpp_2_threads_over_1"] > 0
+    # The thread counts timed warm (the target) and cold (each 2-thread call after a 1-thread one).
+    assert {"cpp_1_thread_cold", "cpp_2_threads_cold"} <= set(methods)
+    cold = data["ratios"]["cpp_2_threads_over_1_cold"]
+    assert cold == pytest.approx(
+        methods["cpp_2_threads_cold"]["samples_per_s"]["median"]
+        / methods["cpp_1_thread_cold"]["samples_per_s"]["median"]
+    )
+    assert data["targets"]["cpp_2_threads_over_1"]["reached_cold"] == cold
+    # Every kernel this CPU runs, each fetch of each wide level.
+    from cumuli.noise import SIMD_FETCHES, simd_levels
+
+    for level in simd_levels()[1:]:
+        for fetch in SIMD_FETCHES:
+            assert methods[f"cpp_1_thread_{level}_{fetch}"]["simd_fetch"] == fetch
     assert "target" in stdout and "noise.json" in stdout
 
 
