@@ -76,7 +76,6 @@ unsigned WorkerPool::start(unsigned helpers, const std::function<void()>& job) {
   }
   job_ = &job;
   wanted_ = n;
-  running_.store(n, std::memory_order_relaxed);
   generation_.fetch_add(1, std::memory_order_release);
   guard.unlock();
   wake_.notify_all();
@@ -84,11 +83,17 @@ unsigned WorkerPool::start(unsigned helpers, const std::function<void()>& job) {
 }
 
 void WorkerPool::finish() {
+  // Close the job: a helper that wakes from now on does not join it. The caller has run out of
+  // chunks, so one that has not joined yet has nothing left to do, and waiting for it to wake
+  // (milliseconds for an idle vCPU) would only delay the caller.
+  {
+    std::lock_guard<std::mutex> guard(lock_);
+    job_ = nullptr;
+  }
   spin_until([this] { return running_.load(std::memory_order_acquire) == 0; }, kSpin);
   {
     std::unique_lock<std::mutex> guard(lock_);
     done_.wait(guard, [this] { return running_.load(std::memory_order_relaxed) == 0; });
-    job_ = nullptr;
   }
   busy_.store(false, std::memory_order_release);
 }
@@ -100,8 +105,9 @@ void WorkerPool::work(unsigned index) {
     std::unique_lock<std::mutex> guard(lock_);
     wake_.wait(guard, [&] { return generation_.load(std::memory_order_relaxed) != seen; });
     seen = generation_.load(std::memory_order_relaxed);
-    if (index >= wanted_) continue;
+    if (job_ == nullptr || index >= wanted_) continue;  // closed already, or not asked
     const std::function<void()>* job = job_;
+    running_.fetch_add(1, std::memory_order_relaxed);  // joined: finish() waits for it
     guard.unlock();
     (*job)();  // parallel_chunks' worker: it catches what its chunks throw
     guard.lock();

@@ -89,9 +89,11 @@ class WorkerPool {
   // pool (the inherited one is abandoned, never touched).
   static WorkerPool& instance();
 
-  // Runs job() on up to `helpers` pool threads and returns how many run it, or 0 when the pool is
-  // busy (the caller then starts threads itself). The caller must call finish() after doing its own
-  // share of the work, and only then may the job's captures go out of scope.
+  // Offers job() to up to `helpers` pool threads and returns how many were asked, or 0 when the
+  // pool is busy (the caller then starts threads itself). The caller must call finish() after
+  // doing its own share of the work, and only then may the job's captures go out of scope. A
+  // helper joins when it wakes, if finish() has not closed the job by then, so a job must be one
+  // that the caller alone can complete (parallel_chunks' shared chunk counter is).
   unsigned start(unsigned helpers, const std::function<void()>& job);
   void finish();
 
@@ -110,9 +112,9 @@ class WorkerPool {
   std::mutex lock_;
   std::condition_variable wake_, done_;
   unsigned threads_ = 0;  // started so far
-  unsigned wanted_ = 0;   // pool threads with index < wanted_ run the current job
+  unsigned wanted_ = 0;   // pool threads with index < wanted_ may join the current job
   // Written under lock_; also read without it by the spins (then checked again under lock_).
-  std::atomic<unsigned> running_{0};  // of those, not finished yet
+  std::atomic<unsigned> running_{0};  // of those, joined and not finished yet
   std::atomic<std::uint64_t> generation_{0};
   const std::function<void()>* job_ = nullptr;
 };
