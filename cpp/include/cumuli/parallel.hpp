@@ -82,7 +82,9 @@ class InterruptPoll {
 // sleeps on a condition variable. A sleeping thread's CPU may go idle, and on a virtual machine an
 // idle vCPU can take milliseconds to be scheduled again (0.1 ms median, 2.4 ms at the 90th
 // percentile measured on a 2-vCPU VM), against a few ms for a whole fBm call of 1 M points; the
-// spin keeps a run of calls (a light pass, a sweep, a benchmark's repeats) on awake threads.
+// spin keeps a run of calls (a light pass, a sweep, a benchmark's repeats) on awake threads. A
+// helper that wakes only after the caller has done every chunk does not hold the caller up:
+// finish() closes the job and waits only for the helpers that joined it.
 class WorkerPool {
  public:
   // The process's pool. A child made by fork() has none of its parent's threads: it gets a new
