@@ -7,7 +7,7 @@
 3. Candidate sort: insertion sort (the paper's) against iterative quicksort (which the paper found
    slower), Batcher's odd-even mergesort (which it suggests) and no sort (a cost floor; its image
    is wrong where candidates overlap). The three sorts give the same images
-   (tests/test_candidate_sort.py).
+   (tests/rendering/test_candidate_sort.py).
 4. LOD step (Algorithm 1, line 50) against the fixed reference step 0.1 (the paper's Fig. 16b
    "LOD bypassed to force higher quality"), with the image difference it costs.
 5. ``march="paper"`` against ``march="union"`` (each point of overlapping candidates once).

@@ -1,5 +1,9 @@
-"""Shared pytest fixtures: a GL context when EGL works here (tests marked `gl` skip otherwise),
-a runner for the benchmark smoke tests, and the GL-against-C++ check of exact-mode impostors."""
+"""Shared pytest fixtures of every test folder (model/, light/, rendering/, anim/, io/, package/):
+a GL context when EGL works here (tests marked `gl` skip otherwise), a renderer on it, a runner
+for the benchmark smoke tests, and the GL-against-C++ check of exact-mode impostors.
+
+The golden images (``data/``) and the Mitsuba references (``references/``) stay in this folder:
+a test file one level down finds them as ``Path(__file__).resolve().parents[1] / "data"``."""
 
 from __future__ import annotations
 
@@ -36,6 +40,14 @@ def gl_context() -> Iterator[cgl.GLContext]:
     """One GL context for the whole session (tests needing it are marked `gl`)."""
     with cgl.GLContext() as ctx:
         yield ctx
+
+
+@pytest.fixture(scope="module")
+def renderer(gl_context: cgl.GLContext) -> Iterator[cu.Renderer]:
+    """A `Renderer` on the session's GL context, one per test module (tests needing it are
+    marked `gl`)."""
+    with cu.Renderer(context=gl_context) as r:
+        yield r
 
 
 @pytest.fixture(scope="session")

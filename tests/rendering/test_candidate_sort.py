@@ -8,8 +8,6 @@ intervals overlap, and the CPU marcher reproduces it.
 
 from __future__ import annotations
 
-from collections.abc import Iterator
-
 import numpy as np
 import pytest
 
@@ -41,12 +39,6 @@ def overlapping_scene(**settings) -> cu.Scene:
 
 
 CAMERA = cu.Camera(position=(0.5, 0.3, -25.0), target=(0, 0, 0), fov=30.0)
-
-
-@pytest.fixture(scope="module")
-def renderer(gl_context) -> Iterator[Renderer]:
-    with Renderer(context=gl_context) as r:
-        yield r
 
 
 def render(renderer: Renderer, **settings) -> np.ndarray:

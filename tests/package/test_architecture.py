@@ -11,7 +11,7 @@ from cumuli.light.prepare import LIGHT_PASSES
 from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS
 from cumuli.scene import KINDS
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "python" / "cumuli"
 STAGES = ("model", "light", "rendering", "anim", "io")
 

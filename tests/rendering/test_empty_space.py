@@ -14,7 +14,7 @@ import pytest
 import cumuli as cu
 from cumuli import _core
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
 import bench_render_cpu  # noqa: E402
 
@@ -189,15 +189,6 @@ def _args(scene: cu.Scene, cam: cu.Camera) -> dict:
     return render_cpu_args(scene, cam, 8, 6)
 
 
-@pytest.fixture(scope="module")
-def renderer(gl_context):
-    from cumuli.rendering.compositor import Renderer
-
-    r = Renderer(context=gl_context)
-    yield r
-    r.close()
-
-
 @pytest.mark.gl
 @pytest.mark.parametrize("lighting", ["paper", "physical"])
 @pytest.mark.parametrize("name", sorted(SCENES))
@@ -210,7 +201,7 @@ def test_gl_skipping_is_exact_and_matches_cpu(renderer, name, lighting):
     np.testing.assert_array_equal(on, off)  # measured: bit for bit on llvmpipe
     cpu = cu.render_cpu(scene, cam, W, H)
     diff = np.abs(on.astype(np.float64) - cpu)
-    assert (diff.reshape(-1, 4).mean(0) <= 1e-3).all()  # tests/test_parity.py's tolerance
+    assert (diff.reshape(-1, 4).mean(0) <= 1e-3).all()  # test_gl_cpu_parity.py's tolerance
     assert ((diff > 5e-2).any(axis=-1)).sum() <= int(1e-3 * W * H)
     fast = _with(scene, **FAST)
     gl_fast = renderer.render(fast, cam, W, H)

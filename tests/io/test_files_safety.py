@@ -27,7 +27,7 @@ import cumuli as cu
 import cumuli.io.images as cio
 from cumuli import _atomic
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _noisy(h: int, w: int, seed: int = 0) -> np.ndarray:

@@ -12,7 +12,16 @@ import math
 
 import numpy as np
 import pytest
-from test_light import C_DEFAULT, _analytic, _candidates, _density, _grid_box, _local, _rot, spheres
+from test_light_grid import (
+    C_DEFAULT,
+    _analytic,
+    _candidates,
+    _density,
+    _grid_box,
+    _local,
+    _rot,
+    spheres,
+)
 
 import cumuli as cu
 from cumuli.light.ndt import DEFAULT_EXTINCTION

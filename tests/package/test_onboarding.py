@@ -15,7 +15,7 @@ import pytest
 import cumuli as cu
 from cumuli import _progress
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def test_cumuli_version() -> None:

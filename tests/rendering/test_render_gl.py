@@ -9,7 +9,6 @@ import gc
 import math
 import os
 import weakref
-from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -21,8 +20,8 @@ from cumuli.rendering.compositor import MAX_PIXELS, Renderer
 
 pytestmark = pytest.mark.gl
 
-DATA = Path(__file__).parent / "data"
-FAILURES = Path(__file__).parent / "_failures"
+DATA = Path(__file__).resolve().parents[1] / "data"
+FAILURES = Path(__file__).resolve().parents[1] / "_failures"
 W, H = 96, 72
 BLACK_SKY = cu.Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0)
 
@@ -49,9 +48,9 @@ class HandLitRenderer:
 
 
 @pytest.fixture(scope="module")
-def renderer(gl_context) -> Iterator[HandLitRenderer]:
-    with Renderer(context=gl_context) as r:
-        yield HandLitRenderer(r)
+def hand_lit(renderer: Renderer) -> HandLitRenderer:
+    """The module's renderer, drawing scenes with their clouds' hand-made grids."""
+    return HandLitRenderer(renderer)
 
 
 def sphere_cloud(
@@ -160,9 +159,9 @@ def golden_metrics(img: np.ndarray, ref: np.ndarray) -> dict[str, float]:
 
 
 @pytest.mark.parametrize("name", ["cumulus", "sunset", "mixed"])
-def test_golden_images(name: str, renderer: Renderer, regen_references: bool) -> None:
+def test_golden_images(name: str, hand_lit: HandLitRenderer, regen_references: bool) -> None:
     scene, camera = golden_scenes()[name]
-    img = renderer.render(scene, camera, W, H)
+    img = hand_lit.render(scene, camera, W, H)
     path = DATA / f"render_{name}.exr"
     if regen_references or not path.exists():
         if not regen_references:
@@ -182,16 +181,16 @@ def test_golden_images(name: str, renderer: Renderer, regen_references: bool) ->
     assert ((ref[..., 3] > 0) & (ref[..., 3] <= CLOUD_ALPHA)).mean() < 0.01
 
 
-def test_golden_metrics_catch_small_changes(renderer: HandLitRenderer) -> None:
+def test_golden_metrics_catch_small_changes(hand_lit: HandLitRenderer) -> None:
     """The tolerances are tight enough to see a slightly different phase or absorption."""
     scene, camera = golden_scenes()["cumulus"]
-    ref = renderer.render(scene, camera, W, H)
+    ref = hand_lit.render(scene, camera, W, H)
     assert golden_metrics(ref, ref)["ok"]
     for change in (
         {"hg_g": scene.settings.hg_g + 0.02},
         {"absorption": 1.02 * scene.settings.absorption},
     ):
-        img = renderer.render(
+        img = hand_lit.render(
             scene.replace(settings=scene.settings.replace(**change)), camera, W, H
         )
         m = golden_metrics(img, ref)
@@ -212,11 +211,11 @@ def test_golden_tolerances_admit_another_float_implementation(name: str) -> None
 
 
 # --- invariants ---------------------------------------------------------------------------------
-def test_no_cloud_gives_exactly_the_sky(renderer: HandLitRenderer) -> None:
+def test_no_cloud_gives_exactly_the_sky(hand_lit: HandLitRenderer) -> None:
     sun = cu.Sun(direction=(0.1, 0.05, 1))
     scene = cu.Scene(sun=sun, sky=cu.Sky.sunset())
     cam = cu.Camera(position=(0, 1, 0), target=(0, 1.2, 10), fov=60)
-    img = renderer.render(scene, cam, W, H)
+    img = hand_lit.render(scene, cam, W, H)
     assert (img[..., 3] == 0).all()
     dirs = cam.ray_directions(W, H)
     ref = scene.sky.colour(dirs, sun)
@@ -232,12 +231,12 @@ def test_no_cloud_gives_exactly_the_sky(renderer: HandLitRenderer) -> None:
     assert img[..., :3].max() > 5  # the sun disc is in view
 
 
-def test_cloud_in_front_covers_only_its_pixels(renderer: HandLitRenderer) -> None:
+def test_cloud_in_front_covers_only_its_pixels(hand_lit: HandLitRenderer) -> None:
     cloud = sphere_cloud([[0, 0, 0]], [3.0])
     scene = cu.Scene(clouds=[cloud], settings=cu.RenderSettings(absorption=5.0))
     cam = front_camera()
-    img = renderer.render(scene, cam, W, H)
-    empty = renderer.render(cu.Scene(), cam, W, H)
+    img = hand_lit.render(scene, cam, W, H)
+    empty = hand_lit.render(cu.Scene(), cam, W, H)
     assert img[H // 2, W // 2, 3] > 0.9
     # The sphere subtends asin(3/20) ≈ 8.6° of a 50° vertical field: outside a disc of radius
     # ≈ 0.16·H around the centre every pixel is the sky.
@@ -248,7 +247,7 @@ def test_cloud_in_front_covers_only_its_pixels(renderer: HandLitRenderer) -> Non
     assert (img[..., 3] > 0).sum() > 50
 
 
-def test_forward_scattering_is_brighter_towards_the_sun(renderer: HandLitRenderer) -> None:
+def test_forward_scattering_is_brighter_towards_the_sun(hand_lit: HandLitRenderer) -> None:
     cloud = sphere_cloud([[0, 0, 0]], [3.0])
     settings = cu.RenderSettings(absorption=0.05, hg_g=0.7)  # thin: single scattering dominates
     cam = front_camera()
@@ -256,56 +255,56 @@ def test_forward_scattering_is_brighter_towards_the_sun(renderer: HandLitRendere
         clouds=[cloud], sun=cu.Sun(direction=(0, 0, 1)), sky=BLACK_SKY, settings=settings
     )
     away = toward.replace(sun=cu.Sun(direction=(0, 0, -1)))
-    a = renderer.render(toward, cam, W, H)[..., :3].sum()
-    b = renderer.render(away, cam, W, H)[..., :3].sum()
+    a = hand_lit.render(toward, cam, W, H)[..., :3].sum()
+    b = hand_lit.render(away, cam, W, H)[..., :3].sum()
     # aL·(1 + HG·γ): HG(0.7, 1) ≈ 1.5 against HG(0.7, −1) ≈ 0.008, with γ ≤ 1.
     assert a > 1.3 * b > 0
     iso = toward.replace(settings=settings.replace(hg_g=0.0))
-    c = renderer.render(iso, cam, W, H)[..., :3].sum()
-    d = renderer.render(iso.replace(sun=cu.Sun(direction=(0, 0, -1))), cam, W, H)[..., :3].sum()
+    c = hand_lit.render(iso, cam, W, H)[..., :3].sum()
+    d = hand_lit.render(iso.replace(sun=cu.Sun(direction=(0, 0, -1))), cam, W, H)[..., :3].sum()
     assert math.isclose(c, d, rel_tol=1e-4)  # g = 0: no preferred direction
 
 
-def test_moving_the_sun_recomputes_the_light_grid(renderer: HandLitRenderer) -> None:
+def test_moving_the_sun_recomputes_the_light_grid(hand_lit: HandLitRenderer) -> None:
     scene = cumulus_scene(seed=2)
     cam = scene.default_camera()
-    a = renderer.render(scene, cam, 48, 36)
+    a = hand_lit.render(scene, cam, 48, 36)
     grid_a = cu.prepare_light(scene).lights[0]
     moved = scene.replace(sun=cu.Sun(direction=(-0.6, 0.5, -0.4)))
-    b = renderer.render(moved, cam, 48, 36)
+    b = hand_lit.render(moved, cam, 48, 36)
     assert not np.array_equal(cu.prepare_light(moved).lights[0], grid_a)
     assert np.abs(a - b).mean() > 1e-3
     # Changing how the grid is made (here its resolution) also recomputes it.
     finer = scene.replace(settings=scene.settings.replace(light_resolution=12))
-    renderer.render(finer, cam, 48, 36)
+    hand_lit.render(finer, cam, 48, 36)
     assert cu.prepare_light(finer).lights[0].shape == (12, 12, 12)
     # Rendering the first scene again gives the first grid and image.
-    again = renderer.render(scene, cam, 48, 36)
+    again = hand_lit.render(scene, cam, 48, 36)
     np.testing.assert_array_equal(cu.prepare_light(scene).lights[0], grid_a)
     np.testing.assert_array_equal(again, a)
 
 
-def test_cloud_without_light_grid_gets_one_on_demand(renderer: HandLitRenderer) -> None:
+def test_cloud_without_light_grid_gets_one_on_demand(hand_lit: HandLitRenderer) -> None:
     cloud = cu.Cloud(np.array([[0, 0, 0]], np.float32), np.array([3.0], np.float32))
-    img = renderer.render(cu.Scene(clouds=[cloud]), front_camera(), 32, 24)
+    img = hand_lit.render(cu.Scene(clouds=[cloud]), front_camera(), 32, 24)
     assert not hasattr(cloud, "light")  # the grid was made for the render, not stored
     assert img[12, 16, 3] > 0
 
 
-def test_camera_inside_a_cloud_gives_finite_values(renderer: HandLitRenderer) -> None:
+def test_camera_inside_a_cloud_gives_finite_values(hand_lit: HandLitRenderer) -> None:
     scene = cumulus_scene(seed=1)
     lo, hi = scene.bounds()
     centre = (lo + hi) / 2
     cam = cu.Camera(position=tuple(centre), target=tuple(centre + [0, 0, 10]), fov=70)
     for march in ("paper", "union"):
         s = scene.replace(settings=scene.settings.replace(march=march))
-        img = renderer.render(s, cam, 48, 36)
+        img = hand_lit.render(s, cam, 48, 36)
         assert np.isfinite(img).all()
         assert img[..., 3].mean() > 0.5  # surrounded by cloud
         assert (img[..., 3] >= 0).all() and (img[..., 3] <= 1).all()
 
 
-def test_halving_the_step_barely_changes_the_image(renderer: HandLitRenderer) -> None:
+def test_halving_the_step_barely_changes_the_image(hand_lit: HandLitRenderer) -> None:
     # Δτ = exp(−φρΔ/Δ_ref) makes the result step-size independent up to discretisation. Measured
     # on the cloud pixels (alpha > 0.05 in either image; ~10 % of the frame), halving a 0.2 step:
     # - the mean signed change (bias) of alpha is 1.9e-4 and of RGB −2.2e-3 (0.1 → 0.05: 4.3e-4
@@ -317,10 +316,10 @@ def test_halving_the_step_barely_changes_the_image(renderer: HandLitRenderer) ->
     # (measured by hand on llvmpipe by rendering the 0.2 step with φ·Δ_ref/Δ).
     scene = cumulus_scene(seed=1)
     cam = scene.default_camera()
-    coarse = renderer.render(
+    coarse = hand_lit.render(
         scene.replace(settings=scene.settings.replace(fixed_step=0.2)), cam, W, H
     ).astype(np.float64)
-    fine = renderer.render(
+    fine = hand_lit.render(
         scene.replace(settings=scene.settings.replace(fixed_step=0.1)), cam, W, H
     ).astype(np.float64)
     cloud = (coarse[..., 3] > CLOUD_ALPHA) | (fine[..., 3] > CLOUD_ALPHA)
@@ -335,23 +334,23 @@ def test_halving_the_step_barely_changes_the_image(renderer: HandLitRenderer) ->
 
 
 def test_paper_and_union_agree_without_overlaps_and_differ_with_them(
-    renderer: HandLitRenderer,
+    hand_lit: HandLitRenderer,
 ) -> None:
     apart = sphere_cloud([[-4, 0, 0], [4, 0, 0]], [2.5, 2.5])
     cam = front_camera()
     paper = cu.Scene(clouds=[apart], settings=cu.RenderSettings(march="paper", absorption=0.05))
     union = paper.replace(settings=paper.settings.replace(march="union"))
     np.testing.assert_allclose(
-        renderer.render(paper, cam, W, H), renderer.render(union, cam, W, H), atol=1e-6
+        hand_lit.render(paper, cam, W, H), hand_lit.render(union, cam, W, H), atol=1e-6
     )
     overlap = sphere_cloud([[-1, 0, 0], [1, 0, 0]], [2.5, 2.5], kappa=0.0)
-    p = renderer.render(paper.replace(clouds=[overlap]), cam, W, H)
-    u = renderer.render(union.replace(clouds=[overlap]), cam, W, H)
+    p = hand_lit.render(paper.replace(clouds=[overlap]), cam, W, H)
+    u = hand_lit.render(union.replace(clouds=[overlap]), cam, W, H)
     # The paper marches the lens where both spheres overlap twice: more opacity there.
     assert p[H // 2, W // 2, 3] > u[H // 2, W // 2, 3]
 
 
-def test_each_cloud_uses_its_own_light_grid(renderer: HandLitRenderer) -> None:
+def test_each_cloud_uses_its_own_light_grid(hand_lit: HandLitRenderer) -> None:
     dim = sphere_cloud([[-5, 0, 0]], [2.5], light=0.2)
     bright = sphere_cloud([[5, 0, 0]], [2.5], light=1.0)
     ramp = sphere_cloud(
@@ -360,27 +359,27 @@ def test_each_cloud_uses_its_own_light_grid(renderer: HandLitRenderer) -> None:
         light=np.linspace(0, 1, 8, dtype=np.float32)[None, None].repeat(8, 0).repeat(8, 1),
     )
     scene = cu.Scene(clouds=[dim, bright], sky=BLACK_SKY, settings=cu.RenderSettings(hg_g=0.0))
-    img = renderer.render(scene, front_camera(), W, H)
+    img = hand_lit.render(scene, front_camera(), W, H)
     # Looking along +z, world +x is on the image's left (r = f × up = −x).
     left, right = img[:, : W // 2, :3].sum(), img[:, W // 2 :, :3].sum()
     assert math.isclose(left / right, 5.0, rel_tol=0.05)  # colour ∝ pL for the same density
     # A grid ramping up along x: brighter on the image's left.
-    img = renderer.render(scene.replace(clouds=[ramp]), front_camera(), W, H)
+    img = hand_lit.render(scene.replace(clouds=[ramp]), front_camera(), W, H)
     row = img[H // 2, :, 0]
     assert row[W // 2 - 8] > row[W // 2 + 8]
 
 
-def test_metaballs_and_rotated_ellipsoids(renderer: HandLitRenderer) -> None:
+def test_metaballs_and_rotated_ellipsoids(hand_lit: HandLitRenderer) -> None:
     # An ellipsoid long along its own x axis, turned 90° about z, stands upright on screen.
     rot = np.array([[[0, -1, 0], [1, 0, 0], [0, 0, 1]]], np.float32)
     tall = sphere_cloud([[0, 0, 0]], [[5, 1, 1]], rotations=rot)
-    img = renderer.render(
+    img = hand_lit.render(
         cu.Scene(clouds=[tall], settings=cu.RenderSettings(absorption=5)), front_camera(), W, H
     )
     rows, cols = np.nonzero(img[..., 3] > 0.01)
     assert np.ptp(rows) > 2.5 * np.ptp(cols)
     balls = sphere_cloud([[-1.5, 0, 0], [1.5, 0, 0]], [1.5, 1.5], model="metaball")
-    img = renderer.render(cu.Scene(clouds=[balls]), front_camera(), W, H)
+    img = hand_lit.render(cu.Scene(clouds=[balls]), front_camera(), W, H)
     # The metaball surface bridges the two centres: the midpoint is cloud.
     assert img[H // 2, W // 2, 3] > 0.2
 
@@ -394,11 +393,11 @@ def test_tiles_give_the_same_image(gl_context) -> None:
     np.testing.assert_array_equal(a, b)
 
 
-def test_max_steps_bounds_the_march(renderer: HandLitRenderer) -> None:
+def test_max_steps_bounds_the_march(hand_lit: HandLitRenderer) -> None:
     scene = cumulus_scene(seed=1)
     cam = scene.default_camera()
-    full = renderer.render(scene, cam, 48, 36)
-    capped = renderer.render(
+    full = hand_lit.render(scene, cam, 48, 36)
+    capped = hand_lit.render(
         scene.replace(settings=scene.settings.replace(max_steps=3)), cam, 48, 36
     )
     assert np.isfinite(capped).all()
@@ -427,14 +426,14 @@ def test_render_convenience_and_backends() -> None:
         ((16384, 16384), ValueError, "larger than the limit"),
     ],
 )
-def test_bad_sizes(renderer: Renderer, size, exc, message) -> None:
+def test_bad_sizes(hand_lit: HandLitRenderer, size, exc, message) -> None:
     with pytest.raises(exc, match=message):
-        renderer.render(cu.Scene(), front_camera(), *size)
+        hand_lit.render(cu.Scene(), front_camera(), *size)
     assert 16384 * 16384 > MAX_PIXELS
 
 
 @pytest.mark.parametrize(("model", "limit"), [("metaball", 1024), ("spheroid", 65536)])
-def test_primitive_limits_per_cloud(renderer: Renderer, model: str, limit: int) -> None:
+def test_primitive_limits_per_cloud(hand_lit: HandLitRenderer, model: str, limit: int) -> None:
     from cumuli.rendering.marcher import MAX_GL_PRIMITIVES
 
     assert MAX_GL_PRIMITIVES[model] == limit
@@ -446,14 +445,14 @@ def test_primitive_limits_per_cloud(renderer: Renderer, model: str, limit: int) 
 
     # Few samples per pixel: the test is about the limit, not the image.
     settings = cu.RenderSettings(max_steps=16)
-    img = renderer.render(cu.Scene(clouds=[cloud(limit)], settings=settings), front_camera(), 8, 6)
+    img = hand_lit.render(cu.Scene(clouds=[cloud(limit)], settings=settings), front_camera(), 8, 6)
     assert np.isfinite(img).all()
     big = cloud(limit + 1)
     del HAND_GRIDS[big]  # the refusal must come before any light pass
     scene = cu.Scene(clouds=[sphere_cloud([[9, 0, 0]], [1.0]), big], settings=settings)
     before = cu.light.prepare._memo.copy()
     with pytest.raises(ValueError, match=r"clouds\[1\] has .* backend='cpu' or fewer primitives"):
-        renderer.renderer.render(scene, front_camera(), 8, 6)
+        hand_lit.renderer.render(scene, front_camera(), 8, 6)
     with pytest.raises(ValueError, match=f"at most {limit} per {model} cloud"):
         cu.render(scene, front_camera(), 8, 6)
     assert cu.light.prepare._memo.keys() == before.keys()  # no light pass ran
@@ -464,15 +463,15 @@ def test_primitive_limits_per_cloud(renderer: Renderer, model: str, limit: int) 
     assert np.isfinite(cpu).all()
 
 
-def test_bad_arguments(renderer: Renderer, gl_context) -> None:
+def test_bad_arguments(hand_lit: HandLitRenderer, gl_context) -> None:
     with pytest.raises(TypeError, match="scene"):
-        renderer.render("scene.json", front_camera(), 8, 8)
+        hand_lit.render("scene.json", front_camera(), 8, 8)
     with pytest.raises(TypeError, match="camera"):
-        renderer.render(cu.Scene(), (0, 0, -5), 8, 8)
+        hand_lit.render(cu.Scene(), (0, 0, -5), 8, 8)
     with pytest.raises(ValueError, match="NaN"):
         cu.LightGrid(np.full((2, 2, 2), np.nan, np.float32), ((0, 0, 0), (1, 1, 1)))
     with pytest.raises(TypeError, match="LightGrid"):
-        renderer.render(
+        hand_lit.render(
             cu.prepare_light(cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [1.0])]), lights=["x"]),
             front_camera(), 8, 8,
         )  # fmt: skip

@@ -217,7 +217,7 @@ def test_render_contract_is_where_the_code_cites_it() -> None:
     # the repository root and hold the sections they refer to.
     from pathlib import Path
 
-    root = Path(__file__).resolve().parents[1]
+    root = Path(__file__).resolve().parents[2]
     text = (root / "RENDER_CONTRACT.md").read_text(encoding="utf-8")
     for part in (
         "## Camera",

@@ -44,15 +44,6 @@ MAX_TOL = 5e-2
 OUTLIER_FRACTION = 1e-3
 
 
-@pytest.fixture(scope="module")
-def renderer(gl_context):
-    from cumuli.rendering.compositor import Renderer
-
-    r = Renderer(context=gl_context)
-    yield r
-    r.close()
-
-
 def _scenes() -> dict[str, cu.Scene]:
     cumulus = cu.gaussian_cumulus(seed=1)
     metaball = cu.metaball_cumulus(seed=2)

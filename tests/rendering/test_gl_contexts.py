@@ -26,7 +26,7 @@ import cumuli.gl as cgl
 
 pytestmark = pytest.mark.gl
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _scene() -> cu.Scene:

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from test_torchelsen_caf import reference_lengths  # the numpy slab-test reference
+from test_billboard_caf import reference_lengths  # the numpy slab-test reference
 
 import cumuli as cu
 from cumuli.ground import sky_irradiance

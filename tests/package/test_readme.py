@@ -1,8 +1,8 @@
 """The README runs: every ```python block is executed on its own in an empty folder, every
 `cumuli ...` line of the ```sh blocks is run, and the size-limit table matches the code.
 
-(The `make` lines of the README are the suite's own entry points; tests/test_makefile.py and
-test_first_hour.py check them without recursing into them.)
+(The `make` lines of the README are the suite's own entry points; test_makefile.py and
+test_onboarding.py, beside this file, check them without recursing into them.)
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
 
 pytestmark = pytest.mark.gl  # the examples render with GL, as a reader's would

@@ -18,7 +18,7 @@ import pytest
 
 import cumuli as cu
 
-REFS = Path(__file__).parent / "references"
+REFS = Path(__file__).resolve().parents[1] / "references"
 sys.path.insert(0, str(REFS))
 import mitsuba_reference as ref  # noqa: E402
 
