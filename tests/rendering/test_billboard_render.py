@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
+from cumuli.gl.sprites import draw_sprites_cpu
 from cumuli.light.caf import (
     BillboardShading,
     absorption_factors,
@@ -25,7 +26,6 @@ from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud, cloud_variants, seed_box_cloud
 from cumuli.rendering.billboards import billboard_frame, cloud_spheres
 from cumuli.rendering.compositor import plan
-from cumuli.sprites import draw_sprites_cpu
 
 W, H = 48, 36
 SUN = cu.Sun(direction=(0.4, 0.8, 0.3), intensity=1.5)
@@ -413,8 +413,8 @@ def test_combined_atlas_layout_and_limit(monkeypatch) -> None:
 
 
 def test_fragment_shading_bad_input() -> None:
-    from cumuli.sprite_shading import FragmentShading
-    from cumuli.sprites import Sprites
+    from cumuli.gl.sprite_shading import FragmentShading
+    from cumuli.gl.sprites import Sprites
 
     params = {"d_min": 0.2, "d_max": 1.0, "k_dir": 1.0, "directional": "linear",
               "ambient": (0.1, 0.1, 0.1), "k_amb": 0.5, "height_levels": []}  # fmt: skip

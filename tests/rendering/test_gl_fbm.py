@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-import cumuli.gl as cgl
+import cumuli.gl.context as cgl
 
 pytestmark = pytest.mark.gl
 

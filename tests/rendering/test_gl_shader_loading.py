@@ -11,7 +11,7 @@ from pathlib import Path
 import moderngl
 import pytest
 
-import cumuli.gl as cgl
+import cumuli.gl.context as cgl
 
 
 @pytest.fixture

@@ -9,6 +9,7 @@ import pytest
 
 import cumuli as cu
 from cumuli import _core
+from cumuli.gl.sprites import camera_dict
 from cumuli.rendering.impostors import (
     ImpostorSettings,
     ImpostorState,
@@ -19,7 +20,6 @@ from cumuli.rendering.impostors import (
     required_resolution,
     translation_error,
 )
-from cumuli.sprites import camera_dict
 
 W, H = 640, 480
 

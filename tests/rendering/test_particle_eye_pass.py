@@ -11,15 +11,15 @@ import pytest
 
 import cumuli as cu
 from cumuli import _core
-from cumuli.light.particles import ParticleLight, SpriteSettings, particle_light
-from cumuli.model.particles import ParticleCloud, particle_cumulus
-from cumuli.rendering.particles import draw_particles_cpu, draw_particles_gl, particle_sprites
-from cumuli.sprites import (
+from cumuli.gl.sprites import (
     SpriteLayerRenderer,
     Sprites,
     camera_dict,
     draw_sprites_cpu,
 )
+from cumuli.light.particles import ParticleLight, SpriteSettings, particle_light
+from cumuli.model.particles import ParticleCloud, particle_cumulus
+from cumuli.rendering.particles import draw_particles_cpu, draw_particles_gl, particle_sprites
 
 EYE = cu.Camera((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), fov=60.0)
 W = H = 33  # odd: the optical axis hits the centre of pixel (16, 16)

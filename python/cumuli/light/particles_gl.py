@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli.gl import GLContext, _resolve_context, load_shader, with_defines
+from cumuli.gl.context import GLContext, _resolve_context, load_shader, with_defines
 from cumuli.light.sprite_settings import PHASES, SpriteSettings
 from cumuli.model.particles import ParticleCloud
 
@@ -201,7 +201,7 @@ def _readback(
     context: GLContext, n: int, splats: tuple, settings: SpriteSettings, return_buffers: bool
 ) -> tuple[np.ndarray, np.ndarray | None]:
     global last_seconds
-    from cumuli.sprites import SpriteLayerRenderer, Sprites
+    from cumuli.gl.sprites import SpriteLayerRenderer, Sprites
 
     geom, index, patch, _frames, _radius = splats
     lights = geom.shape[0]

@@ -9,7 +9,7 @@ fades), ordered back to front (clouds by the distance of their centre, then thei
 with the CAF of `cumuli.light.billboards` and the scene's `BillboardShading`) or per pixel
 (``shading="fragment"``). The atlases of the pass become one texture (:func:`combined_atlas`).
 :class:`BillboardGL` draws the batch with the shared GL sprite pipeline
-(:class:`cumuli.sprites.SpriteLayerRenderer`), :func:`draw_billboards_cpu` with its C++ twin;
+(:class:`cumuli.gl.sprites.SpriteLayerRenderer`), :func:`draw_billboards_cpu` with its C++ twin;
 over the sky, the layer goes through the C++ compositor with the pass's box, so both backends
 add the same sky. Billboard clouds and fields group (``groups = True``): a scene of only
 billboards is one pass, one sort.
@@ -38,6 +38,14 @@ import numpy as np
 
 from cumuli import _core
 from cumuli.camera import Camera
+from cumuli.gl.sprite_shading import MAX_SHADE_LIGHTS, FragmentShading
+from cumuli.gl.sprites import (
+    MAX_SPRITES,
+    SpriteLayerRenderer,
+    Sprites,
+    camera_dict,
+    draw_sprites_cpu,
+)
 from cumuli.light.billboards import BillboardLighting
 from cumuli.light.prepare import LitScene
 from cumuli.model.atlas import SpriteAtlas
@@ -45,8 +53,6 @@ from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
 from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
 from cumuli.sky import sky_args
-from cumuli.sprite_shading import MAX_SHADE_LIGHTS, FragmentShading
-from cumuli.sprites import MAX_SPRITES, SpriteLayerRenderer, Sprites, camera_dict, draw_sprites_cpu
 
 #: Largest combined atlas edge (texels) — the common GL_MAX_TEXTURE_SIZE floor.
 MAX_ATLAS_EDGE = 16384

@@ -25,7 +25,7 @@ import numpy as np
 from cumuli import _core, _progress
 from cumuli import _validate as check
 from cumuli.camera import Camera
-from cumuli.gl import GLContext, _thread_default, default_context
+from cumuli.gl.context import GLContext, _thread_default, default_context
 from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud

@@ -46,6 +46,7 @@ import numpy as np
 
 from cumuli import _core
 from cumuli.camera import Camera
+from cumuli.gl.sprites import camera_dict
 from cumuli.light.prepare import LitScene
 from cumuli.rendering.impostor_units import (
     Unit,
@@ -58,7 +59,6 @@ from cumuli.rendering.impostor_units import (
 from cumuli.rendering.impostors import ImpostorState, view_reason
 from cumuli.rendering.kinds import SPLIT_KEYS
 from cumuli.rendering.solids import composite_split, solids_inside
-from cumuli.sprites import camera_dict
 
 __all__ = ["Impostor", "ImpostorCache", "drawable_sphere", "same_content"]
 

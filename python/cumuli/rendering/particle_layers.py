@@ -28,19 +28,19 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
-from cumuli.light.particles import light_directions
-from cumuli.light.prepare import LitScene
-from cumuli.rendering.particles import _check_light as check_light
-from cumuli.rendering.particles import particle_sprites
-from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
-from cumuli.sky import sky_args
-from cumuli.sprites import (
+from cumuli.gl.sprites import (
     MAX_SPRITES,
     SpriteLayerRenderer,
     Sprites,
     camera_dict,
     draw_sprites_cpu,
 )
+from cumuli.light.particles import light_directions
+from cumuli.light.prepare import LitScene
+from cumuli.rendering.particles import _check_light as check_light
+from cumuli.rendering.particles import particle_sprites
+from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
+from cumuli.sky import sky_args
 
 #: Sprites splatted by the CPU twin since import (GL drawers count their own).
 cpu_sprites_drawn = [0]

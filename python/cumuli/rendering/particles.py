@@ -1,7 +1,7 @@
 """Eye pass of Harris 2002 particle clouds (§2.2.2, §2.3, eq. (5); spec harris.md §5).
 
 :func:`particle_sprites` turns a lit :class:`~cumuli.model.particles.ParticleCloud` into a
-:class:`~cumuli.sprites.Sprites` batch for a camera, in the C++ core: colour per
+:class:`~cumuli.gl.sprites.Sprites` batch for a camera, in the C++ core: colour per
 particle ``C_k = ambient + Σ_ℓ c_{k,ℓ}·p(cos θ_ℓ)`` with ``c_{k,ℓ} = a_k τ_k γ/(4π)·i_{k,ℓ}·
 radiance_ℓ`` and ``cos θ_ℓ = normalize(p_k − eye)·s_ℓ``, alpha ``1 − e^{−τ_k}``, back-to-front
 order (distance or depth, ties by index), culling of a cloud outside the frustum and of
@@ -21,6 +21,7 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
+from cumuli.gl.sprites import SpriteLayerRenderer, Sprites, camera_dict, draw_sprites_cpu
 from cumuli.light.particles import (
     ParticleLight,
     SpriteSettings,
@@ -30,7 +31,6 @@ from cumuli.light.particles import (
 )
 from cumuli.model.particles import ParticleCloud
 from cumuli.sky import Sun
-from cumuli.sprites import SpriteLayerRenderer, Sprites, camera_dict, draw_sprites_cpu
 
 #: Most a light direction may differ from the one the light was made for (component-wise).
 DIRECTION_TOLERANCE = 1e-4
@@ -147,7 +147,7 @@ def draw_particles_gl(
 ) -> np.ndarray:
     """The premultiplied layer ``(height, width, 4)`` of the cloud, by the GL sprite pipeline.
 
-    Pass a :class:`~cumuli.sprites.SpriteLayerRenderer` to reuse its compiled program
+    Pass a :class:`~cumuli.gl.sprites.SpriteLayerRenderer` to reuse its compiled program
     across frames; otherwise one is made on ``context`` (default: the process-wide context) and
     released.
     """

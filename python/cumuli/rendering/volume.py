@@ -30,7 +30,7 @@ import numpy as np
 from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
-from cumuli.gl import GLContext, _resolve_context
+from cumuli.gl.context import GLContext, _resolve_context
 from cumuli.light.physical import PhysicalLight
 from cumuli.light.prepare import LitScene
 from cumuli.model.solid import Solid, as_solids, solid_arrays

@@ -1,7 +1,7 @@
 """Per-pixel billboard shading for the shared sprite pipeline (Torchelsen & Musse 2005 §3.2;
 spec torchelsen.md §4.2, ``shading="fragment"``): :class:`FragmentShading` carries what
-:func:`cumuli.sprites.draw_sprites_cpu` (C++ ``shade_point`` in ``rasterise_sprites``) and
-:class:`cumuli.sprites.SpriteLayerRenderer` (``shaders/common/billboard_shade.glsl``) evaluate at
+:func:`cumuli.gl.sprites.draw_sprites_cpu` (C++ ``shade_point`` in ``rasterise_sprites``) and
+:class:`cumuli.gl.sprites.SpriteLayerRenderer` (``shaders/common/billboard_shade.glsl``) evaluate at
 each pixel in place of the interpolated vertex colours."""
 
 from __future__ import annotations

@@ -25,8 +25,8 @@ import numpy as np
 from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
-from cumuli.gl import GLContext, _resolve_context
-from cumuli.sprite_shading import _SHADE_ATTRS, _SHADE_FORMAT, FragmentShading
+from cumuli.gl.context import GLContext, _resolve_context
+from cumuli.gl.sprite_shading import _SHADE_ATTRS, _SHADE_FORMAT, FragmentShading
 
 KERNELS = ("gaussian", "hermite")
 #: Largest tile drawn per GL draw (like the marcher) and most sprites per draw call.

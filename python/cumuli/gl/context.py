@@ -96,7 +96,7 @@ def shader_dir() -> Path:
     packaged = Path(str(resources.files("cumuli"))) / "shaders"
     if packaged.is_dir():
         return packaged
-    repo = Path(__file__).resolve().parents[2] / "shaders"
+    repo = Path(__file__).resolve().parents[3] / "shaders"
     if repo.is_dir():
         return repo
     raise FileNotFoundError("cumuli's shaders/ folder was not found next to the package")
