@@ -1,4 +1,5 @@
-"""Iwasaki 2011 §2: similarity D, transition P, the endless walk and its cross-dissolves."""
+"""Iwasaki 2011 §2: similarity D, transition P, the endless walk and its cross-dissolves, and
+the validation of its frames."""
 
 from __future__ import annotations
 
@@ -191,3 +192,39 @@ def test_walk_bad_input() -> None:
         cu.blend_volumes(np.zeros(3), np.zeros(4), 0.5)
     with pytest.raises(ValueError, match="w"):
         cu.blend_volumes(np.zeros(3), np.zeros(3), 1.5)
+
+
+# --- animation frames -------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def anim() -> cu.EndlessAnimation:
+    vols = np.random.default_rng(0).uniform(0, 1, (6, 4, 4, 4)).astype(np.float32)
+    return cu.EndlessAnimation(cu.VolumeDatabase(vols, (0, 0, 0), (1, 1, 1)), crossfade_frames=1)
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "name"),
+    [
+        ({"source": -1, "weight": 5.0}, "source"),
+        ({"weight": 5.0}, "weight"),
+        ({"weight": float("nan")}, "weight"),
+        ({"target": -2}, "target"),
+        ({"index": -1}, "index"),
+        ({"crossfade": "yes"}, "crossfade"),
+        ({"source": 1.5}, "source"),
+    ],
+)
+def test_animation_frames_are_validated(kwargs: dict, name: str) -> None:
+    args = {"index": 0, "source": 0, "target": 1, "weight": 0.5, "crossfade": True, **kwargs}
+    with pytest.raises((ValueError, TypeError), match=name):
+        cu.AnimationFrame(**args)
+
+
+def test_a_frame_outside_the_database_is_refused(anim: cu.EndlessAnimation) -> None:
+    frame = cu.AnimationFrame(0, 99, 0, 1.0, False)
+    with pytest.raises(ValueError, match="source"):
+        anim.density(frame)
+    frame = cu.AnimationFrame(0, 0, 6, 0.5, True)
+    with pytest.raises(ValueError, match="target"):
+        anim.density(frame)
+    d = anim.density(cu.AnimationFrame(0, 0, 1, 0.25, True))
+    assert d.max() <= anim.database.volumes.max()

@@ -171,3 +171,38 @@ def test_cli_render_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
         main(["render", str(good), "-o", "x.png", "--size", "0x5"])
     assert main(["demo", "-o", str(tmp_path / "demo.jpg"), "--width", "8", "--height", "8"]) == 1
     assert "extension" in capsys.readouterr().err
+
+
+def _scene() -> cu.Scene:
+    return cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], noise=cu.Noise(seed=2, size=16))
+
+
+# --- arguments that are not iterable ----------------------------------------------------------
+@pytest.mark.parametrize(
+    ("call", "name"),
+    [
+        (lambda: cu.render_frames(_scene(), 5, "out", progress=False), "cameras"),
+        (lambda: cu.merge(5), "clouds"),
+        (lambda: cu.fly_towards((0, 0, -10), (0, 0, 0), 3, up=None), "up"),
+        (lambda: cu.orbit(5, 10, 3), "centre"),
+    ],
+)
+def test_non_iterable_arguments_are_named(call, name: str) -> None:
+    with pytest.raises(TypeError, match=name):
+        call()
+
+
+def test_render_frames_checks_the_pattern_before_rendering(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    from cumuli.rendering import compositor
+
+    def never(*args: object, **kwargs: object) -> None:
+        raise AssertionError("a frame was rendered")
+
+    monkeypatch.setattr(compositor, "render", never)
+    for pattern in ("{:04d}.jpg", "{:04d}", "f{:02d}.PNG.bak"):
+        with pytest.raises(ValueError, match="extension"):
+            render_frames(_scene(), cu.orbit((0, 0, 0), 30, 2), tmp_path, pattern=pattern,
+                                  progress=False)  # fmt: skip
+    assert list(tmp_path.iterdir()) == []

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 import zipfile
 from pathlib import Path
 
@@ -167,3 +168,56 @@ def test_bbox_of_rotated_ellipsoids_is_tight() -> None:
     assert (flat >= lo - 1e-4).all() and (flat <= hi + 1e-4).all()
     np.testing.assert_allclose(flat.min(axis=0), lo, atol=2e-2)
     np.testing.assert_allclose(flat.max(axis=0), hi, atol=2e-2)
+
+
+# --- cloud files ------------------------------------------------------------------------------
+def _npz_with(tmp_path: Path, name: str, patch) -> Path:
+    path = tmp_path / name
+    cumuli.gaussian_cumulus(n=6, seed=1).save(path)
+    data = bytearray(path.read_bytes())
+    patch(data)
+    path.write_bytes(bytes(data))
+    return path
+
+
+def _set_all_headers(data: bytearray, offset_in_header: int, value: int, fmt: str) -> None:
+    """Patch a field of every local (PK\\3\\4) and central (PK\\1\\2) zip header."""
+    for sig, field in ((b"PK\x03\x04", offset_in_header), (b"PK\x01\x02", offset_in_header + 2)):
+        start = 0
+        while (at := data.find(sig, start)) >= 0:
+            struct.pack_into(fmt, data, at + field, value)
+            start = at + 4
+
+
+@pytest.mark.parametrize(
+    "corrupt",
+    [
+        "method",  # an unsupported compression method: zipfile raises NotImplementedError
+        "encrypted",  # the encryption flag: zipfile raises RuntimeError (password required)
+        "magic",  # a member that is not .npy: numpy raises a ValueError without the file name
+    ],
+)
+@pytest.mark.parametrize("loader", ["cloud", "grid"])
+def test_corrupt_npz_files_raise_value_error_naming_the_file(
+    tmp_path: Path, corrupt: str, loader: str
+) -> None:
+    path = tmp_path / f"bad-{corrupt}.npz"
+    if loader == "cloud":
+        cumuli.gaussian_cumulus(n=6, seed=1).save(path)
+    else:
+        cloud, noise = cumuli.gaussian_cumulus(n=6, seed=1), cumuli.Noise(seed=1, size=8)
+        cumuli.light_grid(cloud, cumuli.Sun(), noise, resolution=4).save(path)
+    data = bytearray(path.read_bytes())
+    if corrupt == "method":
+        _set_all_headers(data, 8, 97, "<H")  # compression method field
+    elif corrupt == "encrypted":
+        _set_all_headers(data, 6, 1, "<H")  # general-purpose flags: bit 0 = encrypted
+    else:
+        with zipfile.ZipFile(path, "w") as zf:
+            for member in ("centres", "radii", "rotations", "meta", "values"):
+                zf.writestr(member + ".npy", b"NOTNUMPY" + b"\0" * 120)
+        data = bytearray(path.read_bytes())
+    path.write_bytes(bytes(data))
+    load = cumuli.load_cloud if loader == "cloud" else cumuli.load_light_grid
+    with pytest.raises(ValueError, match=path.name):
+        load(path)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -147,3 +149,14 @@ def test_expansion_over_limit_refused_before_allocating() -> None:
 def test_bad_arguments(call, exc: type, word: str) -> None:
     with pytest.raises(exc, match=word):
         call()
+
+
+# --- lsystem_length ---------------------------------------------------------------------------
+def test_lsystem_length_is_exact_beyond_two_to_the_64() -> None:
+    rules = {"X": "X+Y", "Y": "X&Y"}  # length 2^(n+1) − 1 after n iterations
+    for n in (2, 10, 62, 63, 64, 65, 200, 5000):
+        assert cumuli.lsystem_length("X", rules, n) == 2 ** (n + 1) - 1, n
+    odd = {"A": "AB[C]", "B": "A", "C": "CC-"}
+    for n in range(8):
+        assert cumuli.lsystem_length("AC", odd, n) == len(cumuli.lsystem_expand("AC", odd, n))
+    assert math.log2(cumuli.lsystem_length("AC", odd, 100)) > 64

@@ -1,9 +1,14 @@
-"""Scene description: validation of Camera, Sky, RenderSettings, Scene and the JSON round trip."""
+"""Scene description: validation of Camera, Sky, RenderSettings, Scene and the JSON round trip;
+scene files that are missing, not regular files (a FIFO), or hold unknown keys or strings for
+numbers are refused, and so are strings and non-bools for parameters, naming them."""
 
 from __future__ import annotations
 
 import json
 import math
+import os
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -236,3 +241,101 @@ def test_render_contract_is_where_the_code_cites_it() -> None:
         if "RENDER_CONTRACT" in p.read_text(encoding="utf-8")
     ]
     assert len(cited) >= 3
+
+
+def _scene() -> cu.Scene:
+    return cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], noise=cu.Noise(seed=2, size=16))
+
+
+# --- scene files ------------------------------------------------------------------------------
+def test_load_scene_of_a_missing_file_raises_file_not_found(tmp_path: Path) -> None:
+    with pytest.raises(FileNotFoundError, match="nope.json"):
+        cu.load_scene(tmp_path / "nope.json")
+
+
+_FIFO_SCRIPT = """
+import sys
+import cumuli as cu
+try:
+    cu.load_scene(sys.argv[1])
+except OSError as exc:
+    print("REFUSED", type(exc).__name__, exc)
+"""
+
+
+def test_load_scene_and_cumuli_render_refuse_a_fifo_instead_of_hanging(tmp_path: Path) -> None:
+    fifo = tmp_path / "scene.json"
+    os.mkfifo(fifo)
+    script = tmp_path / "load.py"
+    script.write_text(_FIFO_SCRIPT)
+    try:
+        done = subprocess.run(
+            [sys.executable, str(script), str(fifo)], capture_output=True, text=True, timeout=60
+        )
+        cli = subprocess.run(
+            [sys.executable, "-m", "cumuli", "render", str(fifo), "-o", str(tmp_path / "x.png")],
+            capture_output=True, text=True, timeout=60,
+        )  # fmt: skip
+    except subprocess.TimeoutExpired:
+        pytest.fail("reading a FIFO hung")
+    assert "REFUSED OSError" in done.stdout and "regular file" in done.stdout, done.stderr
+    assert cli.returncode == 1 and "regular file" in cli.stderr
+
+
+@pytest.mark.parametrize(
+    ("where", "edit"),
+    [
+        ("scene", lambda d: d.update(colour=1)),
+        ("scene.clouds[0]", lambda d: d["clouds"][0].update(colour=1)),
+        ("scene.noise", lambda d: d["noise"].update(octaves=3)),
+        ("scene.settings", lambda d: d["settings"].update(colour=1)),
+        ("scene.sun", lambda d: d["sun"].update(size=1)),
+    ],
+)
+def test_unknown_keys_in_a_scene_file_are_refused(tmp_path: Path, where: str, edit) -> None:
+    data = _scene().to_dict()
+    edit(data)
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(ValueError, match="unknown field") as err:
+        cu.load_scene(path)
+    assert where in str(err.value)
+
+
+def test_strings_do_not_pass_as_numbers_in_scene_files(tmp_path: Path) -> None:
+    data = _scene().to_dict()
+    data["clouds"][0]["kappa"] = "0.9"
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(data))
+    with pytest.raises(TypeError, match="kappa"):
+        cu.load_scene(path)
+
+
+# --- strings, bools ---------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("make", "name"),
+    [
+        (lambda: cu.Sun(direction="123"), "sun.direction"),
+        (lambda: cu.Sun(intensity="2"), "sun.intensity"),
+        (lambda: cu.Camera((0, 0, -5), (0, 0, 0), fov="45"), "camera.fov"),
+        (lambda: cu.Camera("012", (0, 0, 0)), "camera.position"),
+        (lambda: cu.RenderSettings(hg_g="0.5"), "settings.hg_g"),
+        (lambda: cu.gaussian_cumulus(centre="000"), "centre"),
+        (lambda: cu.gaussian_cumulus(hollow=float("nan")), "hollow"),
+        (lambda: cu.gaussian_cumulus(remove_contained="no"), "remove_contained"),
+        (lambda: cu.mesh_cloud(cu.meshes.icosphere(0), rotate=None), "rotate"),
+        (lambda: cu.ellipsoids_from_mesh(*cu.meshes.icosphere(0), rotate=2), "rotate"),
+    ],
+)
+def test_strings_and_non_bools_are_refused_naming_the_parameter(make, name: str) -> None:
+    with pytest.raises(TypeError, match=name):
+        make()
+
+
+def test_render_settings_refuse_the_fbm_that_noise_refuses() -> None:
+    with pytest.raises(ValueError, match="gain"):
+        cu.Noise(seed=1).fbm(np.zeros((1, 3)), octaves=16, gain=1e3)
+    with pytest.raises(ValueError, match="settings.*gain"):
+        cu.RenderSettings(gain=1e3, octaves=16)
+    with pytest.raises(ValueError, match="settings.*frequency"):
+        cu.RenderSettings(frequency=1e30, lacunarity=10.0, octaves=16)

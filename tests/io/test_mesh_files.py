@@ -1,8 +1,10 @@
-"""OBJ face indices are checked before trimesh reads the file (`cumuli.io.meshes.load_mesh`).
+"""Mesh files (`cumuli.io.meshes.load_mesh`): OBJ face indices are checked before trimesh reads
+the file, and files that are no mesh at all say so.
 
 trimesh accepts ``f 0 1 2`` (0 is not a valid 1-based index) and silently builds a wrong
 triangle from it; it fails on indices past the vertices without saying where. `load_mesh`
-refuses both with a ValueError naming the file and the line.
+refuses both with a ValueError naming the file and the line. Garbage (binary or text) with a
+mesh extension is "not a mesh", naming the file; binary STL and OFF still load.
 """
 
 from __future__ import annotations
@@ -107,3 +109,29 @@ def test_exported_meshes_still_load(tmp_path: Path) -> None:
     v, f = meshes.load_mesh(path)
     assert f.shape == tf.shape
     np.testing.assert_allclose(v[f], tv[tf], atol=1e-5)
+
+
+# --- garbage meshes ---------------------------------------------------------------------------
+@pytest.mark.parametrize("ext", [".obj", ".stl", ".off"])
+@pytest.mark.parametrize("content", ["binary", "text"])
+def test_garbage_mesh_files_say_not_a_mesh(tmp_path: Path, ext: str, content: str) -> None:
+    path = tmp_path / f"junk{ext}"
+    if content == "binary":
+        path.write_bytes(np.random.default_rng(0).integers(0, 256, 3000, np.uint8).tobytes())
+    else:
+        path.write_text("hello world\nthis is not a mesh\n")
+    with pytest.raises(ValueError, match="not a mesh") as err:
+        cumuli.mesh_cloud(path)
+    assert path.name in str(err.value) and "charset" not in str(err.value)
+
+
+def test_a_binary_stl_still_loads(tmp_path: Path) -> None:
+    import trimesh
+
+    v, f = cumuli.meshes.icosphere(1)
+    path = tmp_path / "ball.stl"
+    trimesh.Trimesh(v, f).export(path)
+    assert cumuli.mesh_cloud(path).n == len(f)
+    off = tmp_path / "ball.off"
+    trimesh.Trimesh(v, f).export(off)
+    assert cumuli.mesh_cloud(off).n == len(f)
