@@ -7,6 +7,7 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 
 from __future__ import annotations
 
+from cumuli import registry
 from cumuli._version import __version__
 from cumuli.anim import frames, weather_presets
 from cumuli.anim.cluster import sweep
@@ -72,6 +73,10 @@ from cumuli.scene import Scene, load_scene
 from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
 
+# isort: off
+from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of drawable)
+# isort: on
+
 __all__ = [
     "BasisModel",
     "BillboardCloud",
@@ -134,6 +139,7 @@ __all__ = [
     "PhysicalLight",
     "prepare_light",
     "read_image",
+    "registry",
     "render",
     "render_cpu",
     "render_frames",
