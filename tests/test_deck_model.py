@@ -4,7 +4,9 @@ weather map and the wind, scene-file round trips, baking to a VolumeCloud and ba
 
 from __future__ import annotations
 
+import copy
 import json
+import pickle
 
 import numpy as np
 import pytest
@@ -244,6 +246,14 @@ def test_round_trip_with_an_array_map() -> None:
     np.testing.assert_array_equal(back.coverage_map(), m)
     assert back.to_dict() == d.to_dict()
     np.testing.assert_array_equal(back.density_lattice(), d.density_lattice())
+
+
+def test_copies_and_pickles_are_the_same_deck() -> None:
+    d = deck(coverage=0.5, wind=(2.0, 1.0), time=10.0)
+    lat = d.density_lattice()
+    for other in (copy.deepcopy(d), pickle.loads(pickle.dumps(d)), copy.copy(d)):
+        assert other.to_dict() == d.to_dict()
+        np.testing.assert_array_equal(other.density_lattice(), lat)
 
 
 def test_from_dict_refuses_unknown_fields() -> None:

@@ -294,18 +294,20 @@ class CloudDeck:
         return self._cache["map"]
 
     def _shape(self) -> Any:
-        """The core's ``DeckShape`` (kept)."""
-        if "shape" not in self._cache:
-            shape = _core.DeckShape()
-            shape.base, shape.top = self.base, self.top
-            shape.cloud_type = self.cloud_type
-            shape.density, shape.detail = self.density, self.detail
-            shape.fbm = self.detail_fbm
-            shape.offset = self.offset
-            shape.extent = self.extent
-            shape.validate()
-            self._cache["shape"] = shape
-        return self._cache["shape"]
+        """The core's ``DeckShape`` (built per call: it costs microseconds and is not picklable)."""
+        shape = _core.DeckShape()
+        shape.base, shape.top = self.base, self.top
+        shape.cloud_type = self.cloud_type
+        shape.density, shape.detail = self.density, self.detail
+        shape.fbm = self.detail_fbm
+        shape.offset = self.offset
+        shape.extent = self.extent
+        shape.validate()
+        return shape
+
+    def __getstate__(self) -> dict[str, Any]:
+        """Pickled and copied without the memoised map and lattice (they are recomputed)."""
+        return {**self.__dict__, "_cache": {}}
 
     # --- the drawable protocol ----------------------------------------------------------------
     def bounds(self) -> tuple[np.ndarray, np.ndarray]:
