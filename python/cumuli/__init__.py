@@ -52,6 +52,7 @@ from cumuli.model.billboards import (
     seed_box_cloud,
 )
 from cumuli.model.cloud import Cloud, load_cloud, merge
+from cumuli.model.deck import CloudDeck
 from cumuli.model.gaussian import gaussian_cumulus, metaball_cumulus
 from cumuli.model.lsystem import lsystem_cloud, lsystem_expand, lsystem_length
 from cumuli.model.mesh import ellipsoids_from_mesh, mesh_cloud
@@ -108,6 +109,7 @@ __all__ = [
     "transition_matrix",
     "Camera",
     "Cloud",
+    "CloudDeck",
     "density_volume",
     "ellipsoids_from_mesh",
     "ExtinctionField",
