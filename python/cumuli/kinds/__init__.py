@@ -8,4 +8,5 @@ from cumuli.kinds import cloud  # noqa: F401 (registers the kind)
 from cumuli.kinds import volume  # noqa: F401
 from cumuli.kinds import particles  # noqa: F401
 from cumuli.kinds import billboards  # noqa: F401
+from cumuli.kinds import deck  # noqa: F401
 # isort: on
