@@ -32,12 +32,15 @@ class Medium:
     (``resolution=None``: its own lattice, where it has one); ``own_lattice(drawable)``: the
     ``(x, y, z)`` shape of its own lattice, or None (the physical pass keeps a lattice no finer
     than its own resolution); ``light_box(drawable)``: the box of its light array where the light
-    value does not carry one (a volume's), else None."""
+    value does not carry one (a volume's), else None; ``step(drawable)``: the step its medium is
+    marched at by shadow and light rays, where it is at a scale of its own (None: the settings'
+    ``light_step``)."""
 
     core_args: Callable[[Any, Any], tuple[list, list]]
     extinction: Callable[..., Any]
     own_lattice: Callable[[Any], tuple[int, int, int] | None] = lambda d: None
     light_box: Callable[[Any], Any] = lambda d: None
+    step: Callable[[Any], float] | None = None
 
 
 @dataclass(frozen=True)

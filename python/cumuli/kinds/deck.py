@@ -28,11 +28,20 @@ def light(deck: CloudDeck, scene: Any, given: Any = None, threads: int = 0) -> A
     return volume_light(deck.to_volume(threads), scene, given, threads)
 
 
+def step(deck: CloudDeck) -> float:
+    """Shadow and light rays march a deck at half its lattice's smallest cell edge: its density
+    is trilinear in the lattice, and the deck is at a scale of its own (kilometres, where the
+    settings' ``light_step`` suits clouds tens of units wide)."""
+    (lo, hi), n = deck.box, deck.resolution
+    return 0.5 * min((hi[a] - lo[a]) / n[a] for a in range(3))
+
+
 MEDIUM = registry.Medium(
     core_args=lambda deck, settings: volume_core_args(deck.to_volume(), settings),
     extinction=lambda deck, *args: volume_extinction(deck.to_volume(), *args),
     own_lattice=lambda deck: tuple(deck.to_volume().shape[::-1]),
     light_box=lambda deck: deck.box,
+    step=step,
 )
 
 KIND = registry.register(

@@ -115,6 +115,37 @@ def fbm_args(settings: Any) -> tuple[int, float, float, float]:
     return settings.octaves, settings.gain, settings.lacunarity, settings.frequency
 
 
+def march_step(drawable: Any, step: float) -> float:
+    """The step a drawable's medium is marched at where ``step`` is asked: its own
+    (:attr:`cumuli.registry.Medium.step`: a lattice at a scale of its own, like a deck kilometres
+    wide) or ``step``."""
+    medium = registry.of(drawable).medium
+    own = None if medium is None or medium.step is None else medium.step(drawable)
+    return float(step) if own is None else float(own)
+
+
+def optical_depth(
+    drawables: Any, scene: Any, points: np.ndarray, direction: Any, step: float, threads: int
+) -> np.ndarray | None:
+    """``τ`` ``(N,)`` from world ``points`` towards ``direction`` through the media of
+    ``drawables``, in segments of at most ``step`` (or a medium's own, :func:`march_step`)
+    sampled at their midpoints; None when none is a medium. Media marched at the same step share
+    one C++ call; the optical depths of the others add."""
+    groups: dict[float, list[Any]] = {}
+    for d in drawables:
+        if registry.of(d).medium is not None:
+            groups.setdefault(march_step(d, step), []).append(d)
+    tau = None
+    for at, group in groups.items():
+        clouds, volumes = medium_args(group, scene.settings)
+        part = _core.medium_optical_depth(
+            clouds, volumes, scene.noise._core, *fbm_args(scene.settings), points, direction,
+            at, threads,
+        )  # fmt: skip
+        tau = part if tau is None else tau + part
+    return tau
+
+
 def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight:
     """The :class:`PhysicalLight` of a drawable with a medium (a `Cloud`, a `VolumeCloud`, ...)
     under ``scene``'s sun and sky."""
@@ -131,7 +162,7 @@ def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight
     across = ACROSS * n
     frame = _core.light_frame(lo, hi, to_sun, (across, across, ALONG * n))
     clouds, volumes = medium_args([drawable], s)
-    step = float(min(s.light_step, (frame[4][2] - frame[3][2]) / (ALONG * n)))
+    step = float(min(march_step(drawable, s.light_step), (frame[4][2] - frame[3][2]) / (ALONG * n)))
     depth = _core.light_space_depth(
         clouds, volumes, scene.noise._core, *fbm_args(s), frame, step, threads
     )
@@ -171,12 +202,8 @@ def _upstream_depth(others: Any, scene: Any, frame: tuple, step: float, threads:
     gv, gu = np.meshgrid(fv, fu, indexing="ij")
     pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
            + lo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
-    clouds, volumes = medium_args(others, scene.settings)
-    tau = _core.medium_optical_depth(
-        clouds, volumes, scene.noise._core, *fbm_args(scene.settings), pts, scene.sun.direction,
-        step, threads,
-    )  # fmt: skip
-    return tau.reshape(nv, nu)
+    tau = optical_depth(others, scene, pts, scene.sun.direction, step, threads)
+    return np.zeros((nv, nu), np.float32) if tau is None else tau.reshape(nv, nu)
 
 
 def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarray:

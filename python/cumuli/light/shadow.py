@@ -23,10 +23,10 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core, registry
 from cumuli import _validate as check
+from cumuli import registry
 from cumuli.light.footprint import box_corners, footprint
-from cumuli.light.physical import fbm_args, medium_args
+from cumuli.light.physical import optical_depth
 
 #: Largest shadow-map edge.
 MAX_RESOLUTION = 4096
@@ -51,13 +51,9 @@ def media_transmittance(
     the scene's media (its 2018 clouds and volumes, :func:`cumuli.light.physical.medium_args`),
     in segments of at most ``settings.light_step`` sampled at their midpoints; None when the
     scene has none."""
-    clouds, volumes = medium_args(scene.clouds, scene.settings)
-    if not (clouds or volumes):
+    tau = optical_depth(scene.clouds, scene, points, direction, scene.settings.light_step, threads)
+    if tau is None:
         return None
-    tau = _core.medium_optical_depth(
-        clouds, volumes, scene.noise._core, *fbm_args(scene.settings), points, direction,
-        float(scene.settings.light_step), threads,
-    )  # fmt: skip
     return np.exp(-tau.astype(np.float64)).astype(np.float32)
 
 
