@@ -1,7 +1,8 @@
 // Bindings of the model stage (python/cumuli/model): the cloud-shape generators (Gaussian
 // cumulus, L-system, metaballs, mesh → ellipsoids), cloud density, the voxelised evolving
-// clouds of the endless-animation database (anim/endless.hpp), and the seed-and-box billboard
-// clouds with their sprite atlas (model/seedbox.hpp, model/sprite_atlas.hpp).
+// clouds of the endless-animation database (anim/endless.hpp), the seed-and-box billboard
+// clouds with their sprite atlas (model/seedbox.hpp, model/sprite_atlas.hpp) and the cloud
+// decks (model/deck.hpp).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -17,6 +18,7 @@
 #include "common.hpp"
 #include "cumuli/anim/endless.hpp"
 #include "cumuli/model/cloud.hpp"
+#include "cumuli/model/deck.hpp"
 #include "cumuli/model/gaussian.hpp"
 #include "cumuli/model/lsystem.hpp"
 #include "cumuli/model/mesh_ellipsoids.hpp"
@@ -698,6 +700,132 @@ void bind_particles(py::module_& m) {
         return out;
       },
       "Sample the particles' Gaussian-blob extinction on a (nz, ny, nx) grid [z, y, x].");
+}
+
+}  // namespace cumuli::bind
+
+namespace cumuli::bind {
+
+namespace {
+
+DeckType parse_deck_type(const std::string& s) {
+  if (s == "stratus") return DeckType::Stratus;
+  if (s == "stratocumulus") return DeckType::Stratocumulus;
+  if (s == "altostratus") return DeckType::Altostratus;
+  throw py::value_error(
+      "cloud_type must be one of 'stratus', 'stratocumulus', 'altostratus', got '" + s + "'");
+}
+
+const char* deck_type_name(DeckType t) {
+  switch (t) {
+    case DeckType::Stratus:
+      return "stratus";
+    case DeckType::Stratocumulus:
+      return "stratocumulus";
+    case DeckType::Altostratus:
+      return "altostratus";
+  }
+  return "?";
+}
+
+// A weather map (nz, nx) float32 as a DeckMap view (kept alive by the caller).
+DeckMap deck_map(const FloatArray& map) {
+  if (map.ndim() != 2) throw py::value_error("coverage map must be a (nz, nx) array");
+  DeckMap m{map.data(), static_cast<int>(map.shape(1)), static_cast<int>(map.shape(0))};
+  if (map.shape(0) > kMaxDeckMapEdge || map.shape(1) > kMaxDeckMapEdge)
+    throw py::value_error("coverage map edges must be at most " + std::to_string(kMaxDeckMapEdge));
+  m.validate();
+  return m;
+}
+
+}  // namespace
+
+// Cloud decks (model/deck.hpp): the shape struct, density at points and on the slab's lattice.
+void bind_deck(py::module_& m) {
+  m.attr("DECK_MAX_MAP_EDGE") = kMaxDeckMapEdge;
+  m.attr("DECK_MAX_LATTICE_EDGE") = kMaxDeckLatticeEdge;
+  m.attr("DECK_MAX_VOXELS") = static_cast<py::ssize_t>(kMaxDeckVoxels);
+  m.attr("DECK_DETAIL_CONTRAST") = kDeckDetailContrast;
+  py::class_<DeckShape>(m, "DeckShape",
+                        "A cloud deck's heights, type, density, erosion, fBm, wind offset and "
+                        "extent (everything but its weather map).")
+      .def(py::init<>())
+      .def_readwrite("base", &DeckShape::base)
+      .def_readwrite("top", &DeckShape::top)
+      .def_property(
+          "cloud_type", [](const DeckShape& s) { return std::string(deck_type_name(s.type)); },
+          [](DeckShape& s, const std::string& v) { s.type = parse_deck_type(v); })
+      .def_readwrite("density", &DeckShape::density)
+      .def_readwrite("detail", &DeckShape::detail)
+      .def_property(
+          "fbm",
+          [](const DeckShape& s) {
+            return py::make_tuple(s.fbm.octaves, s.fbm.gain, s.fbm.lacunarity, s.fbm.frequency);
+          },
+          [](DeckShape& s, std::tuple<int, float, float, float> f) {
+            s.fbm = FbmParams{std::get<0>(f), std::get<1>(f), std::get<2>(f), std::get<3>(f)};
+          },
+          "(octaves, gain, lacunarity, frequency) of the detail fBm.")
+      .def_property(
+          "offset", [](const DeckShape& s) { return py::make_tuple(s.offset_x, s.offset_z); },
+          [](DeckShape& s, std::array<float, 2> o) {
+            s.offset_x = o[0];
+            s.offset_z = o[1];
+          },
+          "(ox, oz): the map's and the fBm's shift, wind · time.")
+      .def_property(
+          "extent", [](const DeckShape& s) { return py::make_tuple(s.x0, s.z0, s.x1, s.z1); },
+          [](DeckShape& s, std::array<double, 4> e) {
+            s.x0 = e[0];
+            s.z0 = e[1];
+            s.x1 = e[2];
+            s.z1 = e[3];
+          },
+          "(x0, z0, x1, z1): the weather map's extent and the slab's in x and z.")
+      .def("validate", [](const DeckShape& s) { s.validate(); });
+
+  m.def(
+      "deck_density",
+      [](const DeckShape& shape, const FloatArray& map, const Noise& noise,
+         const FloatArray& points, int threads) {
+        require_points(points, "points");
+        const DeckMap view = deck_map(map);
+        shape.validate();
+        const auto n = static_cast<std::size_t>(points.shape(0));
+        auto out = new_array({static_cast<py::ssize_t>(n)});
+        float* dst = out.mutable_data();
+        const float* src = points.data();
+        {
+          py::gil_scoped_release release;
+          deck_density_many(shape, view, noise, src, n, dst, threads);
+        }
+        return out;
+      },
+      py::arg("shape"), py::arg("map"), py::arg("noise"), py::arg("points"), py::arg("threads"),
+      "A cloud deck's density at (N, 3) points: (N,) float32.");
+  m.def(
+      "deck_lattice",
+      [](const DeckShape& shape, const FloatArray& map, const Noise& noise,
+         std::array<int, 3> resolution, int threads) {
+        const DeckMap view = deck_map(map);
+        shape.validate();
+        const auto [nx, ny, nz] = resolution;
+        for (const int e : resolution)
+          if (e < 1 || e > kMaxDeckLatticeEdge)
+            throw py::value_error("resolution must be in [1, " +
+                                  std::to_string(kMaxDeckLatticeEdge) + "] per axis");
+        if (static_cast<double>(nx) * ny * nz > static_cast<double>(kMaxDeckVoxels))
+          throw py::value_error("resolution has more than 2^27 voxels");
+        auto out = new_array({nz, ny, nx});
+        float* dst = out.mutable_data();
+        {
+          py::gil_scoped_release release;
+          deck_lattice(shape, view, noise, nx, ny, nz, dst, threads);
+        }
+        return out;
+      },
+      py::arg("shape"), py::arg("map"), py::arg("noise"), py::arg("resolution"), py::arg("threads"),
+      "A cloud deck's density at the texel centres of its slab: (nz, ny, nx) float32 [z, y, x].");
 }
 
 }  // namespace cumuli::bind

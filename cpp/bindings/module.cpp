@@ -40,6 +40,7 @@ bool python_interrupt(std::size_t done, std::size_t total) {
 namespace cumuli::bind {
 void bind_noise(py::module_& m);
 void bind_shapes(py::module_& m);
+void bind_deck(py::module_& m);
 void bind_volumes(py::module_& m);
 void bind_light(py::module_& m);
 void bind_volume_light(py::module_& m);
@@ -89,6 +90,7 @@ PYBIND11_MODULE(_core, m) {
   });
   cumuli::bind::bind_noise(m);
   cumuli::bind::bind_shapes(m);
+  cumuli::bind::bind_deck(m);
   cumuli::bind::bind_volumes(m);
   cumuli::bind::bind_particles(m);
   cumuli::bind::bind_particle_light(m);

@@ -7,6 +7,7 @@ GLSL shaders run in a headless moderngl context render them. See DESIGN.md for c
 
 from __future__ import annotations
 
+from cumuli import registry
 from cumuli._version import __version__
 from cumuli.anim import frames, weather_presets
 from cumuli.anim.cluster import sweep
@@ -51,6 +52,7 @@ from cumuli.model.billboards import (
     seed_box_cloud,
 )
 from cumuli.model.cloud import Cloud, load_cloud, merge
+from cumuli.model.deck import CloudDeck
 from cumuli.model.gaussian import gaussian_cumulus, metaball_cumulus
 from cumuli.model.lsystem import lsystem_cloud, lsystem_expand, lsystem_length
 from cumuli.model.mesh import ellipsoids_from_mesh, mesh_cloud
@@ -71,6 +73,10 @@ from cumuli.rendering.volume import VolumeRenderer
 from cumuli.scene import Scene, load_scene
 from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
+
+# isort: off
+from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of drawable)
+# isort: on
 
 __all__ = [
     "BasisModel",
@@ -103,6 +109,7 @@ __all__ = [
     "transition_matrix",
     "Camera",
     "Cloud",
+    "CloudDeck",
     "density_volume",
     "ellipsoids_from_mesh",
     "ExtinctionField",
@@ -134,6 +141,7 @@ __all__ = [
     "PhysicalLight",
     "prepare_light",
     "read_image",
+    "registry",
     "render",
     "render_cpu",
     "render_frames",

@@ -130,12 +130,14 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         paths = _write_pair(args.output, img, *_display(args, 1.0, "none"))
         print(f"wrote {' and '.join(map(str, paths))} (Torchelsen & Musse Fig. 14, CV 0 → 1)")
         return 0
-    from cumuli.demo import DEMO_EXPOSURE, DEMO_TONEMAP, harris_scene, sunset_scene
+    from cumuli.demo import DEMO_EXPOSURE, DEMO_TONEMAP, deck_scene, harris_scene, sunset_scene
     from cumuli.rendering.compositor import render
 
     _check_output(args.output)
     if args.harris:
         scene, display = harris_scene(), _display(args, 1.0, "none")
+    elif args.deck:
+        scene, display = deck_scene(), _display(args, DEMO_EXPOSURE, DEMO_TONEMAP)
     else:
         scene, display = sunset_scene(), _display(args, DEMO_EXPOSURE, DEMO_TONEMAP)
     img = render(scene, scene.default_camera(), args.width, args.height, backend=args.backend)
@@ -252,7 +254,9 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--width", type=_positive(4096), default=640, help="pixels (default 640)")
     demo.add_argument("--height", type=_positive(4096), default=480, help="pixels (default 480)")
     demo.add_argument("--backend", choices=("gl", "cpu"), default="gl", help="default gl")
-    demo.add_argument(
+    # One figure per call: asking for two is an error, not a silent choice.
+    figure = demo.add_mutually_exclusive_group()
+    figure.add_argument(
         "--noise",
         action="store_true",
         help="instead render the noise figure (lattice | fBm, paper Figs. 2-3); one file",
@@ -263,17 +267,22 @@ def build_parser() -> argparse.ArgumentParser:
         default=7,
         help="noise seed for --noise, weather seed for --torchelsen (default 7)",
     )
-    demo.add_argument(
+    figure.add_argument(
         "--torchelsen",
         action="store_true",
         help="instead render Torchelsen & Musse Fig. 14: the Table 1 billboard sky at CV 0, 1/3, "
         "2/3, 1 (2x2 frames)",
     )
-    demo.add_argument(
+    figure.add_argument(
         "--harris",
         action="store_true",
         help="instead render Harris 2002 Fig. 13: particle clouds at sunset under two coloured "
         "lights (orange sun, pink light)",
+    )
+    figure.add_argument(
+        "--deck",
+        action="store_true",
+        help="instead render a stratocumulus deck over a plain (a CloudDeck, physically lit)",
     )
     _display_args(
         demo, "0.7; 1 with --harris, --torchelsen", "aces; none with --harris, --torchelsen"

@@ -1,7 +1,8 @@
 """Ready-made scenes: the demo of ``cumuli demo`` (cumuli at sunset in the physical lighting mode,
 with their shadows on the ground), the paper's Fig. 10, a single daylight cumulus, Harris 2002's
 Fig. 13 (``cumuli demo --harris``: particle clouds at sunset under two coloured lights) and the
-climatic-variation sequence of ``cumuli demo --torchelsen`` (Torchelsen & Musse 2005, Fig. 14)."""
+climatic-variation sequence of ``cumuli demo --torchelsen`` (Torchelsen & Musse 2005, Fig. 14)
+and a stratocumulus deck over a plain (``cumuli demo --deck``)."""
 
 from __future__ import annotations
 
@@ -11,6 +12,7 @@ import numpy as np
 
 from cumuli.camera import Camera
 from cumuli.ground import Ground
+from cumuli.model.deck import CloudDeck
 from cumuli.model.gaussian import gaussian_cumulus
 from cumuli.noise import Noise
 from cumuli.scene import Scene
@@ -99,6 +101,25 @@ def sunset_scene(settings: RenderSettings | None = None) -> Scene:
         settings=settings or RenderSettings(lighting="physical"),
         camera=Camera(position=(0.0, 4.0, -40.0), target=(0.0, 12.0, 30.0), fov=55.0),
         ground=Ground(height=-20.0, albedo=(0.22, 0.2, 0.17)),
+    )
+
+
+def deck_scene(settings: RenderSettings | None = None, seed: int = 4) -> Scene:
+    """A stratocumulus deck (:class:`cumuli.CloudDeck`) 1.2–1.9 km up over a plain, seen from
+    60 m above the ground in the physical lighting mode: rounded cells with blue gaps, lit from
+    above by a mid-morning sun, their shadows patching the ground. Display like the demo
+    (:data:`DEMO_EXPOSURE`, ACES)."""
+    deck = CloudDeck(
+        base=1200.0, top=1900.0, extent=(-12000.0, -4000.0, 12000.0, 20000.0), coverage=0.5,
+        cloud_type="stratocumulus", seed=seed,
+    )  # fmt: skip
+    return Scene(
+        clouds=[deck],
+        sun=Sun(direction=(0.35, 0.6, 0.7), colour=(1.0, 0.93, 0.85), intensity=9.0),
+        sky=Sky(),
+        settings=settings or RenderSettings(lighting="physical"),
+        camera=Camera(position=(0.0, 60.0, -3000.0), target=(0.0, 1100.0, 6000.0), fov=65.0),
+        ground=Ground(height=0.0, albedo=(0.2, 0.22, 0.15)),
     )
 
 

@@ -24,17 +24,13 @@ from typing import Any
 
 import numpy as np
 
+from cumuli import registry
 from cumuli._atomic import atomic_target
 from cumuli.camera import Camera
 from cumuli.ground import Ground
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.sprite_settings import SpriteSettings
-from cumuli.model.billboard_field import BillboardField
-from cumuli.model.billboards import BillboardCloud
-from cumuli.model.cloud import Cloud
-from cumuli.model.particles import ParticleCloud
 from cumuli.model.solid import Solid, as_solids
-from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise
 from cumuli.rendering.impostors import ImpostorSettings
 from cumuli.settings import RenderSettings
@@ -71,33 +67,9 @@ MAX_LIGHTS = 16
 MAX_SCENE_BYTES = 1 << 30
 
 
-#: Drawable kinds a scene holds, by their scene-file tag (see ARCHITECTURE.md, "a new kind").
-KINDS: dict[str, type] = {
-    Cloud.kind: Cloud,
-    VolumeCloud.kind: VolumeCloud,
-    ParticleCloud.kind: ParticleCloud,
-    BillboardCloud.kind: BillboardCloud,
-    BillboardField.kind: BillboardField,
-}
-
-
-def register_kind(cls: type) -> type:
-    """Let scenes hold (and scene files carry) drawables of class ``cls``: it needs a ``kind``
-    tag, ``bounds()``, ``layer_box()``, ``to_dict()`` and a ``from_dict(data, where)``
-    classmethod. Returns ``cls`` (usable as a decorator)."""
-    kind = getattr(cls, "kind", None)
-    if not isinstance(kind, str) or not kind:
-        raise TypeError(f"{cls.__name__} needs a string class attribute 'kind'")
-    for name in ("bounds", "layer_box", "to_dict", "from_dict"):
-        if not callable(getattr(cls, name, None)):
-            raise TypeError(f"{cls.__name__} needs a {name}() method to be a drawable kind")
-    KINDS[kind] = cls
-    return cls
-
-
 def is_drawable(obj: Any) -> bool:
-    """Whether ``obj`` is an instance of a registered drawable kind."""
-    return isinstance(obj, tuple(KINDS.values()))
+    """Whether ``obj`` is an instance of a registered drawable kind (:mod:`cumuli.registry`)."""
+    return registry.is_drawable(obj)
 
 
 def _sun_dict(sun: Sun) -> dict[str, Any]:
@@ -112,10 +84,11 @@ def _drawable_from_dict(data: Any, where: str) -> Any:
     """A drawable from its scene-file dict; version-1 clouds carry no kind (2018 clouds)."""
     if not isinstance(data, Mapping):
         raise ValueError(f"{where} must be a JSON object, got {type(data).__name__}")
-    kind = data.get("kind", Cloud.kind)
-    cls = KINDS.get(kind)
+    kind = data.get("kind", "cloud")  # version 1: 2018 clouds only
+    classes = registry.model_classes()
+    cls = classes.get(kind) if isinstance(kind, str) else None
     if cls is None:
-        raise ValueError(f"{where}.kind {kind!r} is not one of {sorted(KINDS)}")
+        raise ValueError(f"{where}.kind {kind!r} is not one of {sorted(classes)}")
     return cls.from_dict(dict(data), where)
 
 
@@ -163,7 +136,7 @@ class Scene:
         clouds = self.clouds
         if is_drawable(clouds):
             clouds = (clouds,)
-        kinds = ", ".join(f"cumuli.{c.__name__}" for c in KINDS.values())
+        kinds = ", ".join(f"cumuli.{c.__name__}" for c in registry.model_classes().values())
         if not isinstance(clouds, (list, tuple)):
             raise TypeError(
                 f"scene.clouds must be a list of drawables ({kinds}), got {type(clouds).__name__}"

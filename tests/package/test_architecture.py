@@ -7,9 +7,7 @@ import ast
 from pathlib import Path
 
 import cumuli as cu
-from cumuli.light.prepare import LIGHT_PASSES
-from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS
-from cumuli.scene import KINDS
+from cumuli import registry
 
 ROOT = Path(__file__).resolve().parents[2]
 PACKAGE = ROOT / "python" / "cumuli"
@@ -93,11 +91,62 @@ def test_bindings_mirror_the_python_stages() -> None:
 
 
 def test_every_kind_is_wired_through_every_stage() -> None:
-    for kind, cls in KINDS.items():
-        assert cls.kind == kind and kind in LIGHT_PASSES, kind
-        assert kind in GL_DRAWERS and kind in CPU_DRAWERS, kind
+    for kind in registry.kinds():
+        assert kind.model.kind == kind.name and callable(kind.light), kind.name
+        assert isinstance(kind.gl_drawer, type) and callable(kind.cpu_drawer), kind.name
         for method in ("bounds", "layer_box", "to_dict", "from_dict"):
-            assert callable(getattr(cls, method)), (kind, method)
+            assert callable(getattr(kind.model, method)), (kind.name, method)
+        for module in kind.modules:  # its own modules exist
+            assert (PACKAGE / (module.replace(".", "/") + ".py")).is_file(), (kind.name, module)
+        assert (PACKAGE / "kinds" / f"{kind.modules[-1].split('.')[-1]}.py").is_file()
+        if kind.medium is not None:  # takes part in the physical mode
+            assert kind.physical_light is not None, kind.name
+        assert (kind.cpu_split is None) == (kind.split_key is None), kind.name
+
+
+#: ``isinstance`` tests on a concrete kind's class outside that kind's own modules allowed in
+#: the whole package (stage code asks the registry instead).
+MAX_FOREIGN_ISINSTANCE = 5
+
+
+def foreign_isinstance(root: Path = PACKAGE) -> list[str]:
+    """``module:line class`` of every ``isinstance(x, C)`` with ``C`` a registered kind's model
+    class in a module that is not one of that kind's own (``Kind.modules``)."""
+    owners: dict[str, set[str]] = {}
+    for kind in registry.kinds():
+        owners.setdefault(kind.model.__name__, set()).update(kind.modules)
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        module = ".".join(path.relative_to(root).with_suffix("").parts)
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not (
+                isinstance(node, ast.Call)
+                and isinstance(node.func, ast.Name)
+                and node.func.id == "isinstance"
+                and len(node.args) == 2
+            ):
+                continue
+            arg = node.args[1]
+            names = arg.elts if isinstance(arg, ast.Tuple) else [arg]
+            for n in names:
+                name = n.id if isinstance(n, ast.Name) else getattr(n, "attr", None)
+                if name in owners and module not in owners[name]:
+                    found.append(f"{module}:{node.lineno} {name}")
+    return found
+
+
+def test_stage_code_asks_the_registry_not_the_class() -> None:
+    found = foreign_isinstance()
+    assert len(found) <= MAX_FOREIGN_ISINSTANCE, found
+
+
+def test_the_foreign_isinstance_count_sees_an_offender(tmp_path: Path) -> None:
+    # The check above can fail: a stage module testing a kind's class is counted, its own not.
+    (tmp_path / "light").mkdir()
+    code = "def f(d, Cloud):\n    return isinstance(d, (int, Cloud))\n"
+    (tmp_path / "light" / "probe.py").write_text(code, encoding="utf-8")
+    (tmp_path / "light" / "ndt.py").write_text(code, encoding="utf-8")
+    assert foreign_isinstance(tmp_path) == ["light.probe:2 Cloud"]
 
 
 def test_the_public_names_stay() -> None:

@@ -5,6 +5,7 @@ values that would overflow float32 in the renderers are refused when the object 
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import subprocess
 import sys
@@ -116,7 +117,8 @@ def test_the_light_atlas_limit_is_checked_before_the_light_pass(
     def never(*args: object) -> None:
         raise AssertionError("a light grid was computed")
 
-    monkeypatch.setitem(prepare.LIGHT_PASSES, "cloud", never)
+    kind = cu.registry.get("cloud")
+    monkeypatch.setitem(cu.registry._KINDS, "cloud", dataclasses.replace(kind, light=never))
     prepare.clear_memo()
     with pytest.raises(ValueError, match="GL_MAX_3D_TEXTURE_SIZE") as err:
         cu.render(scene, scene.default_camera(), 8, 8)

@@ -142,7 +142,9 @@ def test_render_frames_films_a_weather(tmp_path: Path, sky_weather) -> None:
     with pytest.raises(ValueError, match="locally"):
         cu.render_frames(sky_weather, [cam], tmp_path, 8, 8, dt=1.0, client=object())
     with pytest.raises(ValueError, match="Weather only"):
-        cu.render_frames(cu.Scene(), [cam], tmp_path, 8, 8, dt=1.0)
+        cu.render_frames(cu.Scene(), [cam], tmp_path, 8, 8, dt=1.0, frames=2)
+    with pytest.raises(ValueError, match="dt"):
+        cu.render_frames(cu.Scene(), [cam], tmp_path, 8, 8, dt=float("nan"))
     assert sky_weather.t == pytest.approx(8.0)  # refused calls did not step it
 
 

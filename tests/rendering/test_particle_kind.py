@@ -10,10 +10,8 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.light.prepare import LIGHT_PASSES, clear_memo
+from cumuli.light.prepare import clear_memo
 from cumuli.rendering.compositor import plan
-from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUPED_KINDS
-from cumuli.scene import KINDS
 
 W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, 0.3), intensity=2.0)
@@ -33,9 +31,10 @@ def trio(sky: cu.Sky = BLACK) -> cu.Scene:
 
 def test_particle_cloud_is_wired_through_every_stage() -> None:
     pc = puff((0, 0, 0), 1)
-    assert KINDS["particles"] is cu.ParticleCloud and pc.kind == "particles"
-    assert "particles" in LIGHT_PASSES and "particles" in GL_DRAWERS and "particles" in CPU_DRAWERS
-    assert "particles" in GROUPED_KINDS
+    kind = cu.registry.get("particles")
+    assert kind.model is cu.ParticleCloud and pc.kind == "particles"
+    assert kind.light is not None and kind.gl_drawer is not None and kind.cpu_drawer is not None
+    assert kind.groups and kind.caster is not None and kind.medium is None
     lo, hi = pc.layer_box()
     np.testing.assert_array_equal(lo, pc.bounds()[0])
     c, r = pc.sphere

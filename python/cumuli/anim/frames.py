@@ -11,6 +11,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _validate as check
+from cumuli import registry
 from cumuli.anim.weather import Weather
 from cumuli.camera import Camera
 from cumuli.scene import Scene
@@ -85,6 +86,19 @@ def orbit(
     return cams
 
 
+def scene_after(scene: Scene, seconds: float) -> Scene:
+    """``scene`` ``seconds`` later: every drawable whose kind changes by itself (its registered
+    ``advance``: a `CloudDeck`'s wind moves its weather map) moved on; the others as they are."""
+    seconds = check.real(seconds, "seconds", -1e9, 1e9)
+    if seconds == 0.0:
+        return scene
+    clouds = []
+    for d in scene.clouds:
+        advance = registry.of(d).advance
+        clouds.append(d if advance is None else advance(d, seconds))
+    return scene.replace(clouds=tuple(clouds))
+
+
 def render_frames(
     scene: Scene | Weather,
     cameras: Sequence[Camera] | Camera,
@@ -108,7 +122,9 @@ def render_frames(
     renders ``weather.scene_at(base)`` as the weather is, and before each later frame the
     weather steps ``dt`` seconds (required), so n frames leave it ``(n − 1)·dt`` later.
     ``cameras`` is then a list (one per frame) or one camera with ``frames`` the number of
-    frames. Weathers are filmed locally (no client).
+    frames. Weathers are filmed locally (no client). For a `Scene`, ``dt`` (optional) moves the
+    drawables that change by themselves (a `CloudDeck`'s wind, :func:`scene_after`): frame ``k``
+    shows the scene ``k·dt`` seconds later.
 
     ``pattern`` is a ``str.format`` pattern taking the frame number; its extension picks the
     format (``.png`` sRGB8 or ``.exr`` float32). ``out_dir`` is created if missing. A tqdm bar
@@ -141,8 +157,10 @@ def render_frames(
             cameras = [cameras] * _count(frames)
     elif not isinstance(scene, Scene):
         raise TypeError(f"scene must be a cumuli.Scene or a Weather, got {type(scene).__name__}")
-    elif dt is not None or frames is not None or base is not None:
-        raise ValueError("dt, frames and base apply to a Weather only")
+    elif frames is not None or base is not None:
+        raise ValueError("frames and base apply to a Weather only")
+    elif dt is not None:
+        dt = check.real(dt, "dt", 0.0, 1e9)
     if isinstance(cameras, Camera):
         raise TypeError("cameras must be a sequence of cumuli.Camera; wrap one camera in a list")
     try:
@@ -196,11 +214,11 @@ def render_frames(
         from cumuli.anim.cluster import _check_client, render_task, run
 
         _check_client(client, backend)
-        data = scene.to_dict()
         tasks = [
-            (render_task, (data, cam.to_dict(), width, height, backend, str(folder / n), alpha))
-            for cam, n in zip(cams, names, strict=True)
-        ]
+            (render_task, (scene_after(scene, k * (dt or 0.0)).to_dict(), cam.to_dict(), width,
+                           height, backend, str(folder / n), alpha))
+            for k, (cam, n) in enumerate(zip(cams, names, strict=True))
+        ]  # fmt: skip
         return [Path(p) for p in run(tasks, client, progress)]
     from tqdm.auto import tqdm
 
@@ -213,7 +231,7 @@ def render_frames(
                 weather.step(dt)  # type: ignore[arg-type]
             frame_scene = weather.scene_at(base)
         else:
-            frame_scene = scene
+            frame_scene = scene_after(scene, k * dt) if dt else scene
         img = render(frame_scene, cam, width=width, height=height, backend=backend, impostors=cache)
         paths.append(write_image(folder / name, img, alpha=alpha))
     return paths

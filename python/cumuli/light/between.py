@@ -8,28 +8,16 @@ from __future__ import annotations
 import threading
 import weakref
 from collections.abc import Callable, Sequence
-from functools import partial
 from typing import Any
 
 import numpy as np
 
-from cumuli.light import billboards as billboard_pass
+from cumuli import registry
 from cumuli.light import onto_media as media_shadows
 from cumuli.light.digests import shadow_digest
 from cumuli.light.memo import remember
-from cumuli.light.particles import ParticleLight, light_directions
-from cumuli.light.shadow import (
-    CASTERS,
-    Casters,
-    caster_transmittance,
-    media_transmittance,
-    points_sphere,
-)
-from cumuli.model.billboard_field import BillboardField
-from cumuli.model.billboards import BillboardCloud
-from cumuli.model.cloud import Cloud
-from cumuli.model.particles import ParticleCloud
-from cumuli.model.volume import VolumeCloud
+from cumuli.light.particles import light_directions
+from cumuli.light.shadow import Casters, caster_transmittance, media_transmittance, points_sphere
 from cumuli.scene import Scene
 
 
@@ -39,14 +27,16 @@ def _receivers(scene: Scene, lights: Sequence[Any]) -> dict[int, tuple[Callable[
     rows or CAF entries) and a key for where they are."""
     out: dict[int, tuple[Callable[[], Any], Any]] = {}
     for k, cloud in enumerate(scene.clouds):
-        if isinstance(cloud, ParticleCloud) and isinstance(lights[k], ParticleLight):
-            out[k] = (partial(np.asarray, cloud.centres), shadow_digest(cloud))
-        elif isinstance(cloud, (BillboardCloud, BillboardField)) and isinstance(
-            lights[k], billboard_pass.BillboardLighting
-        ):
-            at = lights[k].records[0].at
-            out[k] = (partial(billboard_pass.caf_points, cloud, at), (shadow_digest(cloud), at))
+        caster = registry.of(cloud).caster
+        received = None if caster is None else caster.receiver(cloud, lights[k])
+        if received is not None:
+            out[k] = received
     return out
+
+
+def _medium(d: Any) -> Any:
+    """The drawable's :class:`cumuli.registry.Medium`, or None."""
+    return registry.of(d).medium
 
 
 def _split(values: np.ndarray, parts: dict[int, np.ndarray]) -> dict[int, np.ndarray]:
@@ -107,7 +97,7 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
     receivers = _receivers(scene, lights)
     if not receivers:
         return out
-    media = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, (Cloud, VolumeCloud)))
+    media = tuple(shadow_digest(d) for d in scene.clouds if _medium(d) is not None)
     # The casters' spheres only when they shade one another (each frame of a field pays them).
     casters = Casters.of(scene) if scene.settings.sprite_shadows else None
     mutual = casters is not None and len(casters.index) >= 2
@@ -213,9 +203,9 @@ def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[An
     shaded light is marked (``LightRecord.shaded``, ``PhysicalLight.shaded_from``,
     ``ShadedVolumeLight.shaded_from``) and the light step goes back to the own light."""
     out = list(lights)
-    if not any(isinstance(d, (Cloud, VolumeCloud)) for d in scene.clouds):
+    if not any(_medium(d) is not None for d in scene.clouds):
         return out
-    shade_key = tuple(shadow_digest(d) for d in scene.clouds if isinstance(d, CASTERS))
+    shade_key = tuple(shadow_digest(d) for d in scene.clouds if registry.of(d).caster is not None)
     if not shade_key:
         return out
     # The casters' own lights lend their shadow buffers (a shaded particle light keeps its own).
@@ -228,10 +218,11 @@ def onto_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list[An
         return caster_transmittance(scene, points, threads, own_lights, among) if among else None
 
     for k, medium in enumerate(scene.clouds):
-        if not isinstance(medium, (Cloud, VolumeCloud)):
+        of = _medium(medium)
+        if of is None:
             continue
         own = out[k]
-        box = medium.box if isinstance(medium, VolumeCloud) else None
+        box = of.light_box(medium)
         # id(own) cannot name another light while the entry holds `own`; the medium's digest
         # holds where it is (a volume's light, given back, does not change when it moves).
         key = ("onto media", shade_key, id(own), shadow_digest(medium), scene.sun.direction,

@@ -1,7 +1,7 @@
 """The light pass of billboard clouds and fields (Torchelsen & Musse 2005 §3.2; spec §4, §13.5).
 
-`billboard_light` (registered in `cumuli.light.prepare.LIGHT_PASSES` for the kinds
-``"billboards"`` and ``"billboard_field"``) computes the CAF of every box (or billboard) of a
+`billboard_light` (the light pass the kinds ``"billboards"`` and ``"billboard_field"``
+register, :mod:`cumuli.kinds.billboards`) computes the CAF of every box (or billboard) of a
 `BillboardCloud` — `absorption_factors` — or of every instance of a `BillboardField` —
 `field_absorption_factors` — for the scene's sun and each of ``scene.lights``, with the CAF
 options of ``scene.billboard_shading``, and returns a `BillboardLighting` value. Nothing is

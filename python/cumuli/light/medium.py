@@ -17,7 +17,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, registry
 from cumuli import _validate as check
 from cumuli.model.cloud import Cloud
 from cumuli.model.volume import VolumeCloud
@@ -96,6 +96,62 @@ def _volume_grid(
     return (acc / supersample**3 * volume.sigma_t).astype(np.float32)
 
 
+def cloud_extinction(
+    cloud: Cloud, noise: Noise, settings: RenderSettings, resolution: Any, supersample: int,
+    threads: int,
+) -> ExtinctionField:  # fmt: skip
+    """A 2018 cloud's extinction field over its ``layer_box()`` (its density times
+    ``settings.extinction_scale``)."""
+    lo, hi = (np.asarray(b, np.float32) for b in cloud.layer_box())
+    box = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
+    if not isinstance(noise, Noise):
+        raise TypeError(f"noise must be a cumuli.Noise, got {type(noise).__name__}")
+    if resolution is None:
+        raise ValueError("resolution=None keeps a lattice's own; give one for a cumuli.Cloud")
+    shape = lattice_shape(box, resolution)
+    if math.prod(shape) * supersample**3 > MAX_VOXELS:
+        raise ValueError(f"resolution {shape} × supersample³ exceeds {MAX_VOXELS} samples")
+    return ExtinctionField(_cloud_grid(cloud, noise, settings, (lo, hi), shape, supersample,
+                                       threads), box)  # fmt: skip
+
+
+def volume_extinction(
+    volume: VolumeCloud, noise: Any, settings: Any, resolution: Any, supersample: int,
+    threads: int,
+) -> ExtinctionField:  # fmt: skip
+    """A volume's ``sigma_t·density`` over its box: its own lattice (``resolution=None``) or
+    resampled, each voxel the mean of ``supersample³`` trilinear samples."""
+    lo, hi = (np.asarray(b, np.float32) for b in volume.layer_box())
+    box = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
+    shape = None if resolution is None else lattice_shape(box, resolution)
+    if shape is not None and math.prod(shape) > MAX_VOXELS:
+        raise ValueError(f"resolution {shape} has more than {MAX_VOXELS} voxels")
+    return ExtinctionField(_volume_grid(volume, shape, supersample), box)
+
+
+def cloud_core_args(cloud: Cloud, settings: Any) -> tuple[list, list]:
+    """A 2018 cloud's entry of the core's medium lists: its primitives, density model and the
+    extinction per unit density of the mode (:func:`cloud_extinction_scale`)."""
+    centres, radii, rotations, model, kappa, phi = cloud.core_args()
+    if settings.kappa is not None and model == "spheroid":
+        kappa = settings.kappa
+    scale = cloud_extinction_scale(settings)
+    return [(centres, radii, rotations, model, float(kappa), float(phi), scale)], []
+
+
+def volume_core_args(volume: VolumeCloud, settings: Any) -> tuple[list, list]:
+    """A volume's entry of the core's medium lists: ``(density, lo, hi, σt)``."""
+    return [], [(volume.density, volume.box[0], volume.box[1], float(volume.sigma_t))]
+
+
+def cloud_extinction_scale(settings: Any) -> float:
+    """σt per unit of a 2018 cloud's density: the physical mode's ``extinction_scale``, the paper
+    mode's camera-ray ``absorption / step_ref``."""
+    if settings.physical:
+        return float(settings.extinction_scale)
+    return float(settings.absorption / settings.step_ref)
+
+
 def extinction_grid(
     drawable: Any,
     noise: Noise,
@@ -104,29 +160,18 @@ def extinction_grid(
     supersample: int = 1,
     threads: int = 0,
 ) -> ExtinctionField:
-    """The extinction field of a `Cloud` or a `VolumeCloud` over its ``layer_box()``, each voxel
-    the mean of ``supersample³`` points (1: the texel centre). A `VolumeCloud` with
-    ``resolution=None`` gives its own lattice."""
-    if not isinstance(drawable, (Cloud, VolumeCloud)):
-        raise TypeError(
-            f"cloud must be a cumuli.Cloud or cumuli.VolumeCloud, got {type(drawable).__name__}"
-        )
+    """The extinction field of a drawable with a medium (:attr:`cumuli.registry.Kind.medium`)
+    over its ``layer_box()``, each voxel the mean of ``supersample³`` points (1: the texel
+    centre). A kind with a lattice of its own (a `VolumeCloud`) gives it for
+    ``resolution=None``."""
+    kind = registry.get(getattr(type(drawable), "kind", "")) if drawable is not None else None
+    medium = kind.medium if kind is not None and isinstance(drawable, kind.model) else None
+    if medium is None:
+        names = ", ".join(f"cumuli.{k.model.__name__}" for k in registry.kinds() if k.medium)
+        raise TypeError(f"cloud must be one of {names}, got {type(drawable).__name__}")
     threads = check.threads(threads)
     supersample = check.integer(supersample, "supersample", 1, 8)
-    lo, hi = (np.asarray(b, np.float32) for b in drawable.layer_box())
-    box = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
-    if isinstance(drawable, VolumeCloud):
-        shape = None if resolution is None else lattice_shape(box, resolution)
-        if shape is not None and math.prod(shape) > MAX_VOXELS:
-            raise ValueError(f"resolution {shape} has more than {MAX_VOXELS} voxels")
-        return ExtinctionField(_volume_grid(drawable, shape, supersample), box)
-    if not isinstance(noise, Noise):
-        raise TypeError(f"noise must be a cumuli.Noise, got {type(noise).__name__}")
-    shape = lattice_shape(box, resolution)
-    if math.prod(shape) * supersample**3 > MAX_VOXELS:
-        raise ValueError(f"resolution {shape} × supersample³ exceeds {MAX_VOXELS} samples")
-    return ExtinctionField(_cloud_grid(drawable, noise, settings, (lo, hi), shape, supersample,
-                                       threads), box)  # fmt: skip
+    return medium.extinction(drawable, noise, settings, resolution, supersample, threads)
 
 
 def density_volume(
@@ -149,8 +194,6 @@ def density_volume(
     settings = RenderSettings() if settings is None else settings
     if not isinstance(settings, RenderSettings):
         raise TypeError(f"settings must be a cumuli.RenderSettings, got {type(settings).__name__}")
-    if isinstance(cloud, Cloud) and noise is None:
+    if noise is None and getattr(type(cloud), "kind", None) == "cloud":
         raise ValueError("noise is required for a cumuli.Cloud (its density is fBm)")
-    if resolution is None and not isinstance(cloud, VolumeCloud):
-        raise ValueError("resolution=None keeps a VolumeCloud's lattice; give one for a Cloud")
     return extinction_grid(cloud, noise, settings, resolution, 1, threads)  # type: ignore[arg-type]

@@ -3,10 +3,13 @@ first), so rendering the same scene again does not repeat its light passes."""
 
 from __future__ import annotations
 
+import hashlib
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
 from typing import Any
+
+import numpy as np
 
 #: Light objects kept by the memo (least recently used dropped first).
 MEMO_SIZE = 64
@@ -27,3 +30,12 @@ def remember(key: Any, make: Callable[[], Any]) -> Any:
         while len(store) > MEMO_SIZE:
             store.popitem(last=False)
     return value
+
+
+def content_digest(*arrays: np.ndarray) -> str:
+    """A short hash of arrays (their shapes and bytes), for memo keys."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        h.update(str(a.shape).encode())
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.hexdigest()

@@ -35,15 +35,16 @@ drawable when ``settings.lighting == "physical"``.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
-from cumuli import _core
-from cumuli.light.medium import extinction_grid
-from cumuli.model.cloud import Cloud
-from cumuli.model.volume import VolumeCloud
+from cumuli import _core, registry
+from cumuli.ground import ground_radiance_unshadowed
+from cumuli.light.digests import drawable_digest
+from cumuli.light.medium import cloud_extinction_scale, extinction_grid  # noqa: F401 (public)
+from cumuli.light.memo import remember
 from cumuli.sky import sky_args
 
 #: Scattering orders drawn as octaves (order 0 is single scattering), and their constants.
@@ -92,38 +93,21 @@ class PhysicalLight:
         return _core.sample_frame(self.sun_depth, self.frame, pts)
 
 
-def cloud_extinction_scale(settings: Any) -> float:
-    """σt per unit of a 2018 cloud's density: the physical mode's ``extinction_scale``, the paper
-    mode's camera-ray ``absorption / step_ref``."""
-    if settings.physical:
-        return float(settings.extinction_scale)
-    return float(settings.absorption / settings.step_ref)
-
-
-def _medium_args(drawable: Any, settings: Any) -> tuple[list, list]:
-    if not isinstance(drawable, (Cloud, VolumeCloud)):
-        # Particle clouds and billboards keep their own light models (Harris 2002, Torchelsen
-        # & Musse 2005): they have no extinction field; their shadows on the media are added
-        # after the light passes (cumuli.light.between.onto_media).
-        return [], []
-    if isinstance(drawable, VolumeCloud):
-        return [], [(drawable.density, drawable.box[0], drawable.box[1], float(drawable.sigma_t))]
-    centres, radii, rotations, model, kappa, phi = drawable.core_args()
-    if settings.kappa is not None and model == "spheroid":
-        kappa = settings.kappa
-    scale = cloud_extinction_scale(settings)
-    return [(centres, radii, rotations, model, float(kappa), float(phi), scale)], []
-
-
 def medium_args(drawables: Any, settings: Any) -> tuple[list, list]:
-    """The core's ``(clouds, volumes)`` lists of the drawables' extinction (their medium): the 2018
-    clouds' density times :func:`cloud_extinction_scale`, the volumes' ``sigma_t·density``."""
+    """The core's ``(clouds, volumes)`` lists of the drawables' extinction (their medium, each
+    kind's :attr:`cumuli.registry.Medium.core_args`): the 2018 clouds' density times
+    :func:`cloud_extinction_scale`, a lattice's ``sigma_t·density``."""
     clouds: list = []
     volumes: list = []
     for d in drawables:
-        c, v = _medium_args(d, settings)
-        clouds += c
-        volumes += v
+        # Particle clouds and billboards keep their own light models (Harris 2002, Torchelsen &
+        # Musse 2005): they have no extinction field; their shadows on the media are added after
+        # the light passes (cumuli.light.between.onto_media).
+        medium = registry.of(d).medium
+        if medium is not None:
+            c, v = medium.core_args(d, settings)
+            clouds += c
+            volumes += v
     return clouds, volumes
 
 
@@ -131,20 +115,54 @@ def fbm_args(settings: Any) -> tuple[int, float, float, float]:
     return settings.octaves, settings.gain, settings.lacunarity, settings.frequency
 
 
+def march_step(drawable: Any, step: float) -> float:
+    """The step a drawable's medium is marched at where ``step`` is asked: its own
+    (:attr:`cumuli.registry.Medium.step`: a lattice at a scale of its own, like a deck kilometres
+    wide) or ``step``."""
+    medium = registry.of(drawable).medium
+    own = None if medium is None or medium.step is None else medium.step(drawable)
+    return float(step) if own is None else float(own)
+
+
+def optical_depth(
+    drawables: Any, scene: Any, points: np.ndarray, direction: Any, step: float, threads: int
+) -> np.ndarray | None:
+    """``τ`` ``(N,)`` from world ``points`` towards ``direction`` through the media of
+    ``drawables``, in segments of at most ``step`` (or a medium's own, :func:`march_step`)
+    sampled at their midpoints; None when none is a medium. Media marched at the same step share
+    one C++ call; the optical depths of the others add."""
+    groups: dict[float, list[Any]] = {}
+    for d in drawables:
+        if registry.of(d).medium is not None:
+            groups.setdefault(march_step(d, step), []).append(d)
+    tau = None
+    for at, group in groups.items():
+        clouds, volumes = medium_args(group, scene.settings)
+        part = _core.medium_optical_depth(
+            clouds, volumes, scene.noise._core, *fbm_args(scene.settings), points, direction,
+            at, threads,
+        )  # fmt: skip
+        tau = part if tau is None else tau + part
+    return tau
+
+
 def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight:
-    """The :class:`PhysicalLight` of a `Cloud` or `VolumeCloud` under ``scene``'s sun and sky."""
-    if not isinstance(drawable, (Cloud, VolumeCloud)):
+    """The :class:`PhysicalLight` of a drawable with a medium (a `Cloud`, a `VolumeCloud`, ...)
+    under ``scene``'s sun and sky."""
+    medium = registry.of(drawable).medium
+    if medium is None:
         raise TypeError(f"no physical light pass for {type(drawable).__name__}")
     s = scene.settings
     n = s.physical_resolution
-    own = isinstance(drawable, VolumeCloud) and max(drawable.shape) <= n
+    lattice = medium.own_lattice(drawable)
+    own = lattice is not None and max(lattice) <= n
     field = extinction_grid(drawable, scene.noise, s, None if own else n, SUPERSAMPLE, threads)
     lo, hi = field.box
     to_sun = scene.sun.direction
     across = ACROSS * n
     frame = _core.light_frame(lo, hi, to_sun, (across, across, ALONG * n))
     clouds, volumes = medium_args([drawable], s)
-    step = float(min(s.light_step, (frame[4][2] - frame[3][2]) / (ALONG * n)))
+    step = float(min(march_step(drawable, s.light_step), (frame[4][2] - frame[3][2]) / (ALONG * n)))
     depth = _core.light_space_depth(
         clouds, volumes, scene.noise._core, *fbm_args(s), frame, step, threads
     )
@@ -184,12 +202,8 @@ def _upstream_depth(others: Any, scene: Any, frame: tuple, step: float, threads:
     gv, gu = np.meshgrid(fv, fu, indexing="ij")
     pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
            + lo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
-    clouds, volumes = medium_args(others, scene.settings)
-    tau = _core.medium_optical_depth(
-        clouds, volumes, scene.noise._core, *fbm_args(scene.settings), pts, scene.sun.direction,
-        step, threads,
-    )  # fmt: skip
-    return tau.reshape(nv, nu)
+    tau = optical_depth(others, scene, pts, scene.sun.direction, step, threads)
+    return np.zeros((nv, nu), np.float32) if tau is None else tau.reshape(nv, nu)
 
 
 def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarray:
@@ -225,3 +239,31 @@ def phase(settings: Any, cos_theta: float, g_scale: float = 1.0) -> float:
         w = settings.hg_blend
         return (1.0 - w) * hg(settings.hg_g * g_scale) + w * hg(settings.hg_g2 * g_scale)
     return hg(settings.hg_g * g_scale)
+
+
+# --- the light pass of the media in the physical mode -------------------------------------
+def light_sky(scene: Any) -> Any:
+    """The sky that lights the clouds: the scene's, with the ground's unshadowed radiance below
+    the horizon when the scene has a ground."""
+    if scene.ground is None:
+        return scene.sky
+    return replace(scene.sky, ground=ground_radiance_unshadowed(scene.ground, scene.sky, scene.sun))
+
+
+def physical_pass(drawable: Any, scene: Any, given: Any = None, threads: int = 0) -> Any:
+    """The physical mode's light pass of every kind with a medium (:func:`physical_light`),
+    memoised by content; a :class:`PhysicalLight` given is used as it is."""
+    if given is not None:
+        if not isinstance(given, PhysicalLight):
+            raise TypeError(
+                f"the physical light of a drawable must be a cumuli.PhysicalLight, got "
+                f"{type(given).__name__}"
+            )
+        # A light shaded by particles and billboards (a copy, whose registry entry is gone):
+        # the drawable's own light underneath; the light step shades it again as the scene is.
+        return given.shaded_from or given
+    sky = light_sky(scene)
+    others = tuple(drawable_digest(d) for d in scene.clouds if d is not drawable)
+    key = ("physical", drawable_digest(drawable), others, scene.noise.seed, scene.noise.size,
+           scene.settings, scene.sun, sky)  # fmt: skip
+    return remember(key, lambda: physical_light(drawable, replace(scene, sky=sky), threads))

@@ -27,40 +27,20 @@ same scene again — every frame of a camera path — does not repeat the light 
 
 from __future__ import annotations
 
-import weakref
-from collections import OrderedDict
-from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, replace
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from cumuli import _progress
+from cumuli import _progress, registry
 from cumuli import _validate as check
-from cumuli.ground import ground_radiance_unshadowed
-from cumuli.light import billboards as billboard_pass
 from cumuli.light.between import onto_media, own_light_of, through_media
-from cumuli.light.digests import content_digest as _digest
-from cumuli.light.digests import drawable_digest
 from cumuli.light.digests import shadow_digest as _shadow_digest
 from cumuli.light.memo import lock as _memo_lock
 from cumuli.light.memo import remember as _remember
 from cumuli.light.memo import store as _memo
-from cumuli.light.ndt import LightGrid, LightRecord, light_grid
-from cumuli.light.particles import (
-    ParticleLight,
-    light_directions,
-    light_is_stale,
-    particle_light_many,
-)
-from cumuli.light.physical import PhysicalLight, physical_light
 from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
-from cumuli.light.volume import VolumeLighting
-from cumuli.model.billboard_field import BillboardField
-from cumuli.model.billboards import BillboardCloud
-from cumuli.model.cloud import Cloud
-from cumuli.model.particles import ParticleCloud
-from cumuli.model.volume import VolumeCloud, VolumeDatabase
 from cumuli.scene import Scene
 
 
@@ -88,233 +68,11 @@ class LitScene:
 
 def clear_memo() -> None:
     """Forget every memoised light (they are recomputed on demand)."""
-    global _particle_floats
     with _memo_lock:
         _memo.clear()
-        _particle_memo.clear()
-        _resolved.clear()
-        _particle_floats = 0
-    billboard_pass.clear_memo()
-
-
-# --- light passes, one per kind ----------------------------------------------------------------
-def cloud_light(cloud: Cloud, scene: Scene, given: Any = None, threads: int = 0) -> LightGrid:
-    """The NDT light grid `cloud` renders with in ``scene`` (see the module docstring)."""
-    params = scene.settings.light_params()
-    sun = scene.sun.direction
-    if given is not None:
-        if not isinstance(given, LightGrid):
-            raise TypeError(
-                f"the light of a Cloud must be a cumuli.LightGrid, got {type(given).__name__}"
-            )
-        if given.record is None:
-            # Made by hand: trusted as it is, unless it says it was made for another sun.
-            if given.sun is None or np.allclose(given.sun, sun, rtol=0, atol=1e-6):
-                return given
-        elif np.allclose(given.sun, sun, rtol=0, atol=1e-6) and given.record == LightRecord.of(
-            cloud, scene.noise, params
-        ):
-            return given
-    record = LightRecord.of(cloud, scene.noise, params)
-    return _remember(
-        ("cloud", record, sun),
-        lambda: light_grid(cloud, scene.sun, scene.noise, params=params, threads=threads),
-    )
-
-
-def volume_light(
-    volume: VolumeCloud, scene: Scene, given: Any = None, threads: int = 0
-) -> np.ndarray:
-    """The ``(D, H, W, 4)`` light of a `VolumeCloud` under the scene's sun and sky: its own
-    precomputed light (or ``given``) when made for them, else computed by `VolumeLighting`."""
-    if given is not None:
-        # A copy of a light shaded by particles and billboards: the volume's own underneath.
-        own = getattr(given, "shaded_from", None)
-        light = np.asarray(given if own is None else own, dtype=np.float32)
-        if light.shape != (*volume.shape, 4) or not np.isfinite(light).all():
-            raise ValueError(
-                f"the light of a VolumeCloud must be a finite {(*volume.shape, 4)} array"
-            )
-        return light
-    if volume.light is not None and (volume.light_sun, volume.light_sky) == (scene.sun, scene.sky):
-        return volume.light
-    key = (
-        "volume",
-        _digest(volume.density),
-        volume.box,
-        volume.sigma_t,
-        volume.albedo,
-        tuple(sorted(volume.lighting.items())),
-        scene.sun,
-        scene.sky,
-    )
-
-    def make() -> np.ndarray:
-        database = VolumeDatabase(volume.density[None], *volume.box)
-        lighting = VolumeLighting(
-            database, scene.sun, scene.sky, sigma_t=volume.sigma_t, albedo=volume.albedo,
-            threads=threads, **volume.lighting,
-        )  # fmt: skip
-        light = lighting.light(0, threads=threads)
-        light.setflags(write=False)
-        return light
-
-    return _remember(key, make)
-
-
-# Particle light is small ((N, L) floats) and a field of clouds has many: its own memo, bounded
-# by the floats it holds rather than by entries. A translated cloud (wind) finds the light of the
-# original: entries are keyed by what translation leaves exactly unchanged (radii, τ, albedo,
-# directions, settings) and matched by the centres relative to the bounding sphere's centre
-# within 1e−5·R (float32 rounding of a translation moves them by ~1e−7·|coordinates|).
-PARTICLE_MEMO_FLOATS = 1 << 25
-_particle_memo: OrderedDict[Any, list[tuple[np.ndarray, float, ParticleLight]]] = OrderedDict()
-_particle_floats = 0
-_exact: weakref.WeakKeyDictionary[ParticleCloud, tuple[str, np.ndarray, float]] = (
-    weakref.WeakKeyDictionary()
-)
-
-
-def _invariants(cloud: ParticleCloud) -> tuple[str, np.ndarray, float]:
-    """(digest of radii, τ, albedo; centres relative to the sphere centre; R), per cloud object."""
-    known = _exact.get(cloud)
-    if known is None:
-        centre, radius = cloud.sphere
-        rel = cloud.centres.astype(np.float64) - centre.astype(np.float64)
-        known = (_digest(cloud.radii, cloud.tau, cloud.albedo), rel, radius)
-        _exact[cloud] = known
-    return known
-
-
-# The light each cloud object was last given, by the scene part of the key: the frames of a
-# camera path find it without comparing particles again.
-_resolved: weakref.WeakKeyDictionary[ParticleCloud, tuple[Any, ParticleLight]] = (
-    weakref.WeakKeyDictionary()
-)
-
-
-def _particle_lookup(cloud: ParticleCloud, common: Any) -> tuple[Any, ParticleLight | None]:
-    digest, rel, radius = _invariants(cloud)
-    key = (digest, *common)
-    known = _resolved.get(cloud)
-    if known is not None and known[0] == key:
-        return key, known[1]
-    with _memo_lock:
-        for rel_e, radius_e, light in _particle_memo.get(key, ()):
-            if rel_e.shape == rel.shape and np.abs(rel_e - rel).max() <= 1e-5 * max(
-                radius, radius_e
-            ):
-                _particle_memo.move_to_end(key)
-                _resolved[cloud] = (key, light)
-                return key, light
-    return key, None
-
-
-def _particle_remember(key: Any, cloud: ParticleCloud, light: ParticleLight) -> None:
-    global _particle_floats
-    _, rel, radius = _invariants(cloud)
-    with _memo_lock:
-        _particle_memo.setdefault(key, []).append((rel, radius, light))
-        _particle_memo.move_to_end(key)
-        _particle_floats += light.light.size
-        while _particle_floats > PARTICLE_MEMO_FLOATS and len(_particle_memo) > 1:
-            _, old = _particle_memo.popitem(last=False)
-            _particle_floats -= sum(entry[2].light.size for entry in old)
-
-
-def particles_light(
-    cloud: ParticleCloud, scene: Scene, given: Any = None, threads: int = 0
-) -> ParticleLight:
-    """The light of a `ParticleCloud` for ``scene.sun`` and ``scene.lights`` (in that order) with
-    ``scene.sprite_settings``: ``given`` when it is a current :class:`ParticleLight`
-    (:func:`cumuli.light.particles.light_is_stale` says None), else memoised or computed."""
-    return particles_light_many([cloud], scene, [given], threads)[0]
-
-
-def particles_light_many(
-    clouds: Sequence[ParticleCloud], scene: Scene, given: Sequence[Any], threads: int = 0
-) -> list[ParticleLight]:
-    """:func:`particles_light` of several clouds; those to compute share one C++ call (clouds ×
-    lights over the threads)."""
-    lights = [scene.sun, *scene.lights]
-    common = (
-        light_directions(lights).tobytes(),
-        tuple(scene.sprite_settings.light_dict().items()),
-    )
-    out: list[Any] = [None] * len(clouds)
-    todo: list[tuple[Any, int]] = []
-    for i, (cloud, g) in enumerate(zip(clouds, given, strict=True)):
-        if g is not None:
-            if not isinstance(g, ParticleLight):
-                raise TypeError(
-                    f"the light of a ParticleCloud must be a ParticleLight, got {type(g).__name__}"
-                )
-            if light_is_stale(g, cloud, lights, scene.sprite_settings) is None:
-                out[i] = g
-                continue
-        key, hit = _particle_lookup(cloud, common)
-        if hit is not None:
-            out[i] = hit
-        else:
-            todo.append((key, i))
-    if todo:
-        # With their final buffers: the sun's is the cloud's shadow map on the ground.
-        made = particle_light_many(
-            [clouds[i] for _, i in todo], lights, scene.sprite_settings, threads=threads,
-            return_buffers=True,
-        )  # fmt: skip
-        for (key, i), light in zip(todo, made, strict=True):
-            _particle_remember(key, clouds[i], light)
-            _resolved[clouds[i]] = (key, light)
-            out[i] = light
-    return out
-
-
-#: The light pass of each kind of drawable: ``(drawable, scene, given, threads) -> light``.
-LIGHT_PASSES: dict[str, Callable[..., Any]] = {
-    Cloud.kind: cloud_light,
-    VolumeCloud.kind: volume_light,
-    ParticleCloud.kind: particles_light,
-    BillboardCloud.kind: billboard_pass.billboard_light,
-    BillboardField.kind: billboard_pass.billboard_light,
-}
-#: Kinds whose light pass also runs on all the scene's drawables of the kind at once:
-#: ``(drawables, scene, given, threads) -> lights`` (same results as one by one, faster).
-LIGHT_BATCHES: dict[str, Callable[..., list[Any]]] = {ParticleCloud.kind: particles_light_many}
-
-
-def light_sky(scene: Scene) -> Any:
-    """The sky that lights the clouds: the scene's, with the ground's unshadowed radiance below
-    the horizon when the scene has a ground."""
-    if scene.ground is None:
-        return scene.sky
-    return replace(scene.sky, ground=ground_radiance_unshadowed(scene.ground, scene.sky, scene.sun))
-
-
-def physical_pass(drawable: Any, scene: Scene, given: Any = None, threads: int = 0) -> Any:
-    """The physical mode's light of a `Cloud` or a `VolumeCloud` (:func:`physical_light`),
-    memoised by content; a :class:`PhysicalLight` given is used as it is."""
-    if given is not None:
-        if not isinstance(given, PhysicalLight):
-            raise TypeError(
-                f"the physical light of a drawable must be a cumuli.PhysicalLight, got "
-                f"{type(given).__name__}"
-            )
-        # A light shaded by particles and billboards (a copy, whose registry entry is gone):
-        # the drawable's own light underneath; the light step shades it again as the scene is.
-        return given.shaded_from or given
-    sky = light_sky(scene)
-    others = tuple(drawable_digest(d) for d in scene.clouds if d is not drawable)
-    key = ("physical", drawable_digest(drawable), others, scene.noise.seed, scene.noise.size,
-           scene.settings, scene.sun, sky)  # fmt: skip
-    return _remember(key, lambda: physical_light(drawable, replace(scene, sky=sky), threads))
-
-
-#: The physical mode's light pass of each kind.
-PHYSICAL_LIGHT_PASSES: dict[str, Callable[..., Any]] = {
-    Cloud.kind: physical_pass,
-    VolumeCloud.kind: physical_pass,
-}
+    for kind in registry.kinds():
+        if kind.forget is not None:
+            kind.forget()
 
 
 def scene_shadow(
@@ -334,6 +92,14 @@ def scene_shadow(
            scene.noise.size, scene.settings, tuple(scene.sprite_settings.light_dict().items()),
            scene.billboard_shading, scene.sun.direction, height)  # fmt: skip
     return _remember(key, lambda: compute_shadow(scene, extent, (n, n), height, threads, lights))
+
+
+def _own_light(given: Any) -> Any:
+    """The own light of a drawable under ``given``: a particle or billboard light shaded by the
+    others keeps it as ``unshadowed``, a medium's light shaded by them is found by
+    :func:`cumuli.light.between.own_light_of`."""
+    unshadowed = getattr(given, "unshadowed", None)
+    return unshadowed if unshadowed is not None else own_light_of(given)
 
 
 def prepare_light(
@@ -372,24 +138,29 @@ def prepare_light(
         given = list(lights)
     # A light passed through the media (or a medium's light shaded by particles and billboards)
     # is the cloud's own light underneath: that is what is given.
-    shadowable = (ParticleLight, billboard_pass.BillboardLighting)
-    given = [g.unshadowed or g if isinstance(g, shadowable) else own_light_of(g) for g in given]
-    # The physical mode replaces the light pass of the marched kinds; particles and billboards
-    # keep their own light models (Harris 2002, Torchelsen & Musse 2005) in either mode.
-    passes = {**LIGHT_PASSES, **PHYSICAL_LIGHT_PASSES} if scene.settings.physical else LIGHT_PASSES
+    given = [_own_light(g) for g in given]
+    # The physical mode replaces the light pass of the media; particles and billboards keep
+    # their own light models (Harris 2002, Torchelsen & Musse 2005) in either mode.
+    kinds = []
     for k, drawable in enumerate(scene.clouds):  # every kind known before any work
-        if passes.get(drawable.kind) is None:
-            raise TypeError(f"scene.clouds[{k}]: no light pass for kind {drawable.kind!r}")
+        try:
+            kinds.append(registry.of(drawable))
+        except TypeError:
+            raise TypeError(
+                f"scene.clouds[{k}]: no light pass for {type(drawable).__name__}"
+            ) from None
+    physical = scene.settings.physical
     out: list[Any] = [None] * n
-    for kind, batch in LIGHT_BATCHES.items():  # kinds whose light passes share one C++ call
-        idx = [k for k, d in enumerate(scene.clouds) if d.kind == kind]
-        if len(idx) > 1:
+    for kind in {k.name: k for k in kinds}.values():  # kinds whose passes share one C++ call
+        batch = kind.light_batch
+        idx = [k for k, d in enumerate(scene.clouds) if d.kind == kind.name]
+        if batch is not None and len(idx) > 1:
             try:
                 made = batch(
                     [scene.clouds[k] for k in idx], scene, [given[k] for k in idx], threads
                 )
             except (TypeError, ValueError) as exc:
-                raise type(exc)(f"scene.clouds ({kind}): {exc}") from None
+                raise type(exc)(f"scene.clouds ({kind.name}): {exc}") from None
             for k, light in zip(idx, made, strict=True):
                 out[k] = light
     todo = [k for k in range(n) if out[k] is None]
@@ -401,7 +172,7 @@ def prepare_light(
         drawable = scene.clouds[k]
         try:
             with _progress.core(f"light of cloud {k}", progress):
-                out[k] = passes[drawable.kind](drawable, scene, given[k], threads)
+                out[k] = kinds[k].light_pass(physical)(drawable, scene, given[k], threads)
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
     out = onto_media(scene, through_media(scene, out, threads), threads)

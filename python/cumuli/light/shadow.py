@@ -23,17 +23,10 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core
 from cumuli import _validate as check
-from cumuli.light.caf import ground_caf
+from cumuli import registry
 from cumuli.light.footprint import box_corners, footprint
-from cumuli.light.particles import ground_shadow
-from cumuli.light.physical import fbm_args, medium_args
-from cumuli.model.billboard_field import BillboardField
-from cumuli.model.billboards import BillboardCloud
-from cumuli.model.cloud import Cloud
-from cumuli.model.particles import ParticleCloud
-from cumuli.model.volume import VolumeCloud
+from cumuli.light.physical import optical_depth
 
 #: Largest shadow-map edge.
 MAX_RESOLUTION = 4096
@@ -58,50 +51,25 @@ def media_transmittance(
     the scene's media (its 2018 clouds and volumes, :func:`cumuli.light.physical.medium_args`),
     in segments of at most ``settings.light_step`` sampled at their midpoints; None when the
     scene has none."""
-    clouds, volumes = medium_args(scene.clouds, scene.settings)
-    if not (clouds or volumes):
+    tau = optical_depth(scene.clouds, scene, points, direction, scene.settings.light_step, threads)
+    if tau is None:
         return None
-    tau = _core.medium_optical_depth(
-        clouds, volumes, scene.noise._core, *fbm_args(scene.settings), points, direction,
-        float(scene.settings.light_step), threads,
-    )  # fmt: skip
     return np.exp(-tau.astype(np.float64)).astype(np.float32)
 
 
-#: The drawables that shade the ground.
-SHADOW_CASTERS = (Cloud, VolumeCloud, ParticleCloud, BillboardCloud, BillboardField)
-
-
-#: The drawables that shade others by their own light models (Harris's shadow map, the CAF).
-CASTERS = (ParticleCloud, BillboardCloud, BillboardField)
+def shades(d: Any) -> bool:
+    """Whether a drawable casts shadows: a medium, or a caster by its own light model."""
+    kind = registry.of(d)
+    return kind.medium is not None or kind.caster is not None
 
 
 def caster_sphere(d: Any) -> tuple[np.ndarray, float]:
     """A sphere outside which a caster's shadow is exactly 1 and which holds the points where
-    its own light is received: for a particle cloud its bounding sphere widened by √2 (Harris's
-    shadow map is the square around it, sampled bilinearly); for a billboard cloud the sphere
-    around its quads' and its boxes' bounds (the CAF's chords run through the boxes); for a
-    field, the sphere around its instances' such spheres."""
-    if isinstance(d, ParticleCloud):
-        c, r = d.sphere
-        return np.asarray(c, np.float64), float(r) * math.sqrt(2.0)
-    if isinstance(d, BillboardCloud):
-        (lo_q, hi_q), (lo_b, hi_b) = d.layer_box(), d.box_bounds()
-        lo = np.minimum(np.asarray(lo_q, np.float64), lo_b)
-        hi = np.maximum(np.asarray(hi_q, np.float64), hi_b)
-        return (lo + hi) / 2, float(np.linalg.norm(hi - lo)) / 2
-    if d.n == 0:
-        return np.zeros(3), 0.0
-    centres, radii = d.instance_spheres()
-    reach = []  # per variant: the farthest box corner from its quads' sphere centre
-    for v in d.variants:
-        c = np.asarray(v.sphere()[0], np.float64)
-        far = np.maximum(np.abs(v.boxes[:, 0] - c), np.abs(v.boxes[:, 1] - c))  # farthest corner
-        reach.append(float(np.linalg.norm(far, axis=1).max()) if len(far) else 0.0)
-    radii = np.maximum(radii, np.asarray(reach)[d.variant])
-    lo, hi = (centres - radii[:, None]).min(axis=0), (centres + radii[:, None]).max(axis=0)
-    centre = (lo + hi) / 2
-    return centre, float((np.linalg.norm(centres - centre, axis=1) + radii).max())
+    its own light is received (:attr:`cumuli.registry.Caster.sphere`)."""
+    caster = registry.of(d).caster
+    if caster is None:
+        raise TypeError(f"a {type(d).__name__} is not a caster")
+    return caster.sphere(d)
 
 
 @dataclass(frozen=True, eq=False)
@@ -117,7 +85,7 @@ class Casters:
     def of(cls, scene: Any) -> Casters:
         index, centres, radii = [], [], []
         for k, d in enumerate(scene.clouds):
-            if not isinstance(d, CASTERS):
+            if registry.of(d).caster is None:
                 continue
             c, r = caster_sphere(d)
             index.append(k)
@@ -172,13 +140,11 @@ def caster_transmittance(
     chosen = range(len(scene.clouds)) if among is None else among
     for k in chosen:
         d = scene.clouds[k]
-        if isinstance(d, ParticleCloud):
-            light = lights[k] if lights is not None else None
-            t = ground_shadow(d, sun, points, scene.sprite_settings, light)
-        elif isinstance(d, (BillboardCloud, BillboardField)):
-            t = ground_caf(d, sun, points, scene.billboard_shading, threads)
-        else:
+        caster = registry.of(d).caster
+        if caster is None:
             continue
+        light = lights[k] if lights is not None else None
+        t = caster.transmittance(d, sun, points, scene, light, threads)
         # A transmittance: a particle light with allow_gain can exceed 1 (or overflow).
         t = np.clip(np.nan_to_num(np.asarray(t, np.float32), nan=1.0, posinf=1.0), 0.0, 1.0)
         out = t if out is None else out * t
@@ -189,7 +155,7 @@ def default_extent(scene: Any, height: float) -> tuple[float, float, float, floa
     """The rectangle of the plane ``y = height`` the boxes of the drawables can shade (their
     corners moved along the light onto the plane, padded by 2 %); None when nothing can."""
     s = np.asarray(scene.sun.direction, np.float64)
-    media = [d for d in scene.clouds if isinstance(d, SHADOW_CASTERS)]
+    media = [d for d in scene.clouds if shades(d)]
     if s[1] <= 1e-3 or not media:
         return None
     feet = np.array([footprint(box_corners(*d.layer_box()), s, (height, height)) for d in media])

@@ -17,7 +17,14 @@ import numpy as np
 
 from cumuli import _core, _progress
 from cumuli import _validate as check
-from cumuli.model.volume import AnimationFrame, VolumeDatabase, _box, _float_volumes
+from cumuli.light.memo import content_digest, remember
+from cumuli.model.volume import (
+    AnimationFrame,
+    VolumeCloud,
+    VolumeDatabase,
+    _box,
+    _float_volumes,
+)
 from cumuli.sky import Sun, as_sky, sky_args
 
 #: SH exponential methods of VolumeLighting.
@@ -367,3 +374,44 @@ def point_optical_depth(
         _depth_method(method),
     )
     return out[0] if single else out
+
+
+# --- the light pass of the kind (cumuli.kinds.volume) ------------------------------------
+def volume_light(
+    volume: VolumeCloud, scene: Any, given: Any = None, threads: int = 0
+) -> np.ndarray:
+    """The ``(D, H, W, 4)`` light of a `VolumeCloud` under the scene's sun and sky: its own
+    precomputed light (or ``given``) when made for them, else computed by `VolumeLighting`."""
+    if given is not None:
+        # A copy of a light shaded by particles and billboards: the volume's own underneath.
+        own = getattr(given, "shaded_from", None)
+        light = np.asarray(given if own is None else own, dtype=np.float32)
+        if light.shape != (*volume.shape, 4) or not np.isfinite(light).all():
+            raise ValueError(
+                f"the light of a VolumeCloud must be a finite {(*volume.shape, 4)} array"
+            )
+        return light
+    if volume.light is not None and (volume.light_sun, volume.light_sky) == (scene.sun, scene.sky):
+        return volume.light
+    key = (
+        "volume",
+        content_digest(volume.density),
+        volume.box,
+        volume.sigma_t,
+        volume.albedo,
+        tuple(sorted(volume.lighting.items())),
+        scene.sun,
+        scene.sky,
+    )
+
+    def make() -> np.ndarray:
+        database = VolumeDatabase(volume.density[None], *volume.box)
+        lighting = VolumeLighting(
+            database, scene.sun, scene.sky, sigma_t=volume.sigma_t, albedo=volume.albedo,
+            threads=threads, **volume.lighting,
+        )  # fmt: skip
+        light = lighting.light(0, threads=threads)
+        light.setflags(write=False)
+        return light
+
+    return remember(key, make)

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core, _progress
+from cumuli import _core, _progress, registry
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _thread_default, default_context
@@ -30,7 +30,6 @@ from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
 from cumuli.rendering.cpu import check_stats_scene, march_with_stats
-from cumuli.rendering.kinds import CPU_DRAWERS, GL_DRAWERS, GROUND_KINDS, GROUPED_KINDS
 from cumuli.rendering.painters import CPUPainter, GLPainter
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
@@ -50,10 +49,11 @@ BACKENDS = ("gl", "cpu")
 
 def _one_drawer(kinds: set[str]) -> bool:
     """Whether grouped ``kinds`` share one drawer on both backends (one pass draws them all)."""
+    found = [registry.get(k) for k in kinds]
     return (
-        kinds <= GROUPED_KINDS
-        and len({GL_DRAWERS.get(k) for k in kinds}) == 1
-        and len({CPU_DRAWERS.get(k) for k in kinds}) == 1
+        all(k is not None and k.groups for k in found)
+        and len({k.gl_drawer for k in found}) == 1  # type: ignore[union-attr]
+        and len({k.cpu_drawer for k in found}) == 1  # type: ignore[union-attr]
     )
 
 
@@ -84,7 +84,7 @@ def single_pass(scene: Scene) -> bool:
     if not kinds:
         return True
     one = len(kinds) == 1 or _one_drawer(set(kinds))
-    return one and (scene.ground is None or kinds[0] in GROUND_KINDS)
+    return one and (scene.ground is None or _kind(kinds[0]).draws_ground)
 
 
 def compose(
@@ -149,9 +149,17 @@ def _check_size(
     return int(width), int(height)
 
 
-def _check_kinds(scene: Scene, drawers: dict[str, Any], backend: str) -> None:
+def _kind(name: str) -> registry.Kind:
+    found = registry.get(name)
+    if found is None:
+        raise TypeError(f"no kind of drawable is registered as {name!r}")
+    return found
+
+
+def _check_kinds(scene: Scene, backend: str) -> None:
     for k, kind in enumerate(scene.kinds):
-        if kind not in drawers:
+        found = registry.get(kind)
+        if found is None or getattr(found, f"{backend.lower()}_drawer", None) is None:
             raise TypeError(f"scene.clouds[{k}]: the {backend} backend has no drawer for {kind!r}")
 
 
@@ -300,7 +308,7 @@ class Renderer:
     def drawer(self, kind: str) -> Any:
         """The GL drawer of ``kind`` (made on first use)."""
         if kind not in self._drawers:
-            self._drawers[kind] = GL_DRAWERS[kind](self.gl, self.tiles)
+            self._drawers[kind] = _kind(kind).gl_drawer(self.gl, self.tiles)
         return self._drawers[kind]
 
     def extra(self, name: str, make: Callable[[GLContext, Tiles], Any]) -> Any:
@@ -356,7 +364,7 @@ class Renderer:
             raise TypeError(f"camera must be a cumuli.Camera, got {type(camera).__name__}")
         width, height = _check_size(width, height, self.max_texture_size, "GL_MAX_TEXTURE_SIZE")
         cache = self._cache_arg(impostors)
-        _check_kinds(plain, GL_DRAWERS, "GL")
+        _check_kinds(plain, "GL")
         _check_layers(plain, width, height)
         for kind, indices in plan(plain):  # before the light pass, which could be long
             drawer = self.drawer(kind)
@@ -466,7 +474,7 @@ def render_cpu(
         raise TypeError(
             f"impostors must be a cumuli.ImpostorCache or None, got {type(impostors).__name__}"
         )
-    _check_kinds(plain, CPU_DRAWERS, "CPU")
+    _check_kinds(plain, "CPU")
     _check_layers(plain, width, height)
     if check.flag(return_stats, "return_stats"):
         check_stats_scene(plain, impostors)

@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, registry
 from cumuli.camera import Camera
 from cumuli.gl.sprites import camera_dict
 from cumuli.light.prepare import LitScene
@@ -57,7 +57,6 @@ from cumuli.rendering.impostor_units import (
     units,
 )
 from cumuli.rendering.impostors import ImpostorState, view_reason
-from cumuli.rendering.kinds import SPLIT_KEYS
 from cumuli.rendering.solids import composite_split, solids_inside
 
 __all__ = ["Impostor", "ImpostorCache", "drawable_sphere", "same_content"]
@@ -372,7 +371,7 @@ class ImpostorCache:
         state = ImpostorState.generate(tuple(centre), radius, camera, width, height, s)
         cam, (w, h), plane = self._view(state, camera, centre)
         # Keys as the impostor camera sorts the kind's sprites (same eye as the view).
-        key = SPLIT_KEYS[unit.kind]
+        key = registry.get(unit.kind).split_key  # type: ignore[union-attr]
         keyed = sorted(
             ((key(lit, scene.solids[j].centre, cam), j) for j in inside), reverse=True
         )  # fmt: skip  (farthest first)

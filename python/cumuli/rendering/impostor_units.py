@@ -9,7 +9,7 @@ by, its identity across frames (``key``: the drawable's index, or ``(index, part
 its content is unchanged up to a translation (wind moves clouds without invalidating their
 impostors) and whether its light is unchanged.
 
-Pure translations are recognised per kind (:data:`TRANSLATIONS`): a `ParticleCloud` or a
+Pure translations are recognised per kind (its registered `translation`): a `ParticleCloud` or a
 `BillboardCloud` compares its arrays relative to its bounding sphere; a part compares its
 signature and moves with its anchor; other kinds compare a digest of their scene-file dict (a
 translated 2018 cloud samples other noise: a change).
@@ -21,12 +21,12 @@ import hashlib
 import json
 import math
 import weakref
-from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
+from cumuli import registry
 from cumuli.light.prepare import LitScene
 from cumuli.model.billboards import ARRAY_FIELDS, BillboardCloud
 from cumuli.model.particles import ParticleCloud
@@ -99,30 +99,15 @@ def billboard_translation(old: BillboardCloud, new: BillboardCloud) -> np.ndarra
     return offset
 
 
-#: Pure-translation tests per drawable class: ``fn(old, new) -> offset | None``.
-TRANSLATIONS: dict[type, Callable[[Any, Any], np.ndarray | None]] = {
-    ParticleCloud: particle_translation,
-    BillboardCloud: billboard_translation,
-}
-
-
-#: The point a kind's drawer sorts whole drawables by when it is not the bounding-sphere centre:
-#: ``fn(drawable) -> (3,)`` (a billboard cloud: its boxes' centre ``c_C``, RENDER_CONTRACT
-#: "Billboards").
-ORDER_POINTS: dict[type, Callable[[Any], np.ndarray]] = {
-    BillboardCloud: lambda d: np.asarray(d.centre, np.float64),
-}
-
-
 def same_content(old: Any, new: Any) -> tuple[bool, np.ndarray]:
     """Whether ``new`` is ``old`` up to a translation, and that translation (the change of the
-    bounding-sphere centre): :data:`TRANSLATIONS` for the kinds that have one, else a digest of
-    the scene-file dict."""
+    bounding-sphere centre): the kind's registered ``translation`` where it has one, else a
+    digest of the scene-file dict."""
     if new is old:
         return True, _ZERO
     if type(new) is not type(old):
         return False, _ZERO
-    test = TRANSLATIONS.get(type(new))
+    test = registry.of(new).translation
     if test is not None:
         offset = test(old, new)
         return (False, _ZERO) if offset is None else (True, offset)
@@ -192,7 +177,7 @@ def units(lit: LitScene, k: int) -> list[Unit]:
     parts_of = getattr(drawable, "impostor_parts", None)
     if parts_of is None:
         centre, radius = drawable_sphere(drawable)
-        order = ORDER_POINTS.get(type(drawable))
+        order = registry.of(drawable).order_point
         point = centre if order is None else order(drawable)
         return [Unit(k, kind, k, None, centre, radius, point)]
     parts = parts_of()

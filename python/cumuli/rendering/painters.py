@@ -14,14 +14,20 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core
+from cumuli import _core, registry
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.light.prepare import LitScene
 from cumuli.rendering import particle_layers
 from cumuli.rendering.impostor_gl import ImpostorDisplayGL, quad_planes
-from cumuli.rendering.kinds import CLIPS_SOLIDS, CPU_DRAWERS, CPU_SPLITS, GL_DRAWERS
 from cumuli.rendering.solids import SolidsGL, draw_solids_cpu
+
+
+def _kind(name: str) -> registry.Kind:
+    found = registry.get(name)
+    if found is None:
+        raise TypeError(f"no kind of drawable is registered as {name!r}")
+    return found
 
 
 class CPUPainter:
@@ -36,23 +42,23 @@ class CPUPainter:
         self, lit: LitScene, kind: str, indices: Sequence[int], camera: Camera, width: int,
         height: int, with_sky: bool,
     ) -> np.ndarray:  # fmt: skip
-        return CPU_DRAWERS[kind](lit, indices, camera, width, height, with_sky, self.threads)
+        return _kind(kind).cpu_drawer(lit, indices, camera, width, height, with_sky, self.threads)
 
     def solids(self, lit: LitScene, camera: Camera, width: int, height: int) -> np.ndarray:
         scene = lit.scene
         return draw_solids_cpu(scene.solids, scene.sun, camera, width, height, self.threads)
 
     def can_split(self, kind: str) -> bool:
-        return kind in CPU_SPLITS
+        return _kind(kind).cpu_split is not None
 
     def clips_solids(self, kind: str) -> bool:
-        return kind in CLIPS_SOLIDS
+        return _kind(kind).clips_solids
 
     def split(
         self, lit: LitScene, k: int, camera: Camera, width: int, height: int, cuts: Sequence[float]
     ) -> np.ndarray:
         kind = lit.scene.clouds[k].kind
-        return CPU_SPLITS[kind](lit, k, camera, width, height, cuts, self.threads)
+        return _kind(kind).cpu_split(lit, k, camera, width, height, cuts, self.threads)
 
     def display(
         self, quads: Sequence[Any], camera: Camera, width: int, height: int, exact: bool = True
@@ -91,10 +97,10 @@ class GLPainter:
         return drawer.draw(lit.scene.solids, lit.scene.sun, camera, width, height)
 
     def can_split(self, kind: str) -> bool:
-        return hasattr(GL_DRAWERS[kind], "draw_split")
+        return hasattr(_kind(kind).gl_drawer, "draw_split")
 
     def clips_solids(self, kind: str) -> bool:
-        return kind in CLIPS_SOLIDS
+        return _kind(kind).clips_solids
 
     def split(
         self, lit: LitScene, k: int, camera: Camera, width: int, height: int, cuts: Sequence[float]
