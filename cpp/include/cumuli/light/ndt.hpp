@@ -35,9 +35,9 @@
 //    boundary on every voxel layer; L at each layer crossing comes from one backward sweep, and a
 //    voxel's L is the bilinear blend of the four lines around it on its layer. Not the per-voxel
 //    definition: the difference (max and mean |ΔL| against Ndt) is measured by
-//    benchmarks/bench_light.py and bounded in tests/test_light_shared.py. `samples` per voxel
-//    is then the count of samples its nearest line marched from the voxel's layer towards the
-//    sun, and LightStats::samples the number actually marched (each once).
+//    benchmarks/bench_light.py and bounded in tests/light/test_light_grid_shared.py. `samples`
+//    per voxel is then the count of samples its nearest line marched from the voxel's layer
+//    towards the sun, and LightStats::samples the number actually marched (each once).
 #pragma once
 
 #include <cstdint>
