@@ -13,7 +13,7 @@ import numpy as np
 
 from cumuli.ground import sky_irradiance
 from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, PhysicalLight
-from cumuli.rendering.cpu import MIN_TRANSMITTANCE
+from cumuli.rendering.params import MIN_TRANSMITTANCE
 
 #: 32-bit words of one PhysicalCloud in the std430 storage buffer (ten vec4 / ivec4).
 WORDS = 40
