@@ -15,6 +15,7 @@ from cumuli.rendering.params import (
     MIN_TRANSMITTANCE,
     march_params,
     march_uniforms,
+    physical_uniforms,
     sky_params,
     sky_uniforms,
     sun_params,
@@ -149,6 +150,9 @@ def test_march_params_of_the_physical_mode():
     assert p.phys.extinction_scale == f32(s.extinction_scale) and p.phys.albedo == f32(s.albedo)
     assert p.phys.min_transmittance == f32(MIN_TRANSMITTANCE)
     p.validate()
+    u = physical_uniforms(p.phys)  # the GL uniforms come from the same struct
+    assert u["u_phys_octaves"] == 3 and u["u_phys_dual"] is True and u["u_phys_seed"] == 9
+    assert u["u_phys_g"] == (p.phys.g1, p.phys.g2, p.phys.blend)
 
 
 def test_sun_sky_and_view_structs():

@@ -139,6 +139,22 @@ def march_uniforms(params: _core.MarchSettings, exact_noise: bool = False) -> di
     }
 
 
+def physical_uniforms(params: _core.PhysicalParams) -> dict[str, Any]:
+    """The physical shading uniforms (shaders/common/physical.glsl) of a ``_core.PhysicalParams``
+    (:func:`physical_params`): the same values the CPU twin takes."""
+    p = params
+    return {
+        "u_phys_extinction": p.extinction_scale,
+        "u_phys_albedo": p.albedo,
+        "u_phys_dual": p.dual_hg,
+        "u_phys_g": (p.g1, p.g2, p.blend),
+        "u_phys_octaves": p.octaves,
+        "u_phys_abc": (p.oct_a, p.oct_b, p.oct_c),
+        "u_phys_seed": p.jitter_seed,
+        "u_phys_min_t": p.min_transmittance,
+    }
+
+
 def sky_uniforms(sky: Sky, sun: Sun) -> dict[str, Any]:
     """The sun's and the sky's uniforms (shaders/common/sky.glsl and sun_disc.glsl)."""
     return {
