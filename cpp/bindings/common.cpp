@@ -1,5 +1,6 @@
 #include "common.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace cumuli::bind {
@@ -91,7 +92,30 @@ py::array_t<double> to_array_d(const std::vector<double>& v, py::ssize_t n) {
   return out;
 }
 
-SkyParams sky_of(const py::tuple& t) {
+glm::vec3 vec3_arg(const py::handle& value, const char* name) {
+  FloatArray a;
+  try {
+    a = FloatArray::ensure(value);
+  } catch (...) {
+    a = FloatArray();
+  }
+  if (!a || a.ndim() != 1 || a.shape(0) != 3)
+    throw py::value_error(std::string(name) + " must be a sequence of three numbers");
+  const float* d = a.data();
+  const glm::vec3 v(d[0], d[1], d[2]);
+  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
+    throw py::value_error(std::string(name) + " must be finite");
+  return v;
+}
+
+float finite(float v, const char* name) {
+  if (!std::isfinite(v)) throw py::value_error(std::string(name) + " must be finite");
+  return v;
+}
+
+SkyParams sky_of(const py::handle& h) {
+  if (py::isinstance<SkyParams>(h)) return h.cast<SkyParams>();
+  const py::tuple t = h.cast<py::tuple>();
   if (t.size() != 6)
     throw py::value_error(
         "sky must be (zenith, horizon, ground, exponent, disc radius, disc intensity)");
@@ -140,29 +164,6 @@ GroundParams ground_of(const py::object& obj) {
     throw py::value_error(e.what());
   }
   return g;
-}
-
-PhysicalParams physical_of(const py::dict& d) {
-  PhysicalParams p;
-  const char* w = "physical";
-  p.extinction_scale = get<float>(d, "extinction_scale", w);
-  p.albedo = get<float>(d, "albedo", w);
-  p.dual_hg = get<bool>(d, "dual_hg", w);
-  p.g1 = get<float>(d, "g1", w);
-  p.g2 = get<float>(d, "g2", w);
-  p.blend = get<float>(d, "blend", w);
-  p.octaves = get<int>(d, "octaves", w);
-  p.oct_a = get<float>(d, "a", w);
-  p.oct_b = get<float>(d, "b", w);
-  p.oct_c = get<float>(d, "c", w);
-  p.jitter_seed = get<int>(d, "jitter_seed", w);
-  p.min_transmittance = get<float>(d, "min_transmittance", w);
-  try {
-    p.validate();
-  } catch (const std::invalid_argument& e) {
-    throw py::value_error(e.what());
-  }
-  return p;
 }
 
 PhysicalGrids physical_grids_of(const py::object& obj) {

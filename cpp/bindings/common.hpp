@@ -6,8 +6,13 @@
 #include <pybind11/stl.h>
 
 #include <array>
+#include <cmath>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
+
+#include <glm/vec3.hpp>
 
 #include "cumuli/light/volume_light.hpp"
 #include "cumuli/model/cloud.hpp"
@@ -65,16 +70,76 @@ VolumeGrid grid_of(const FloatArray& vols, int lead, const V3& lo, const V3& hi,
 py::array_t<float> to_array(const std::vector<float>& v, const std::vector<py::ssize_t>& shape);
 py::array_t<double> to_array_d(const std::vector<double>& v, py::ssize_t n);
 
-// The sky as Python passes it: (zenith, horizon, ground, exponent, disc radius, disc intensity).
-SkyParams sky_of(const py::tuple& t);
+// The sky as Python passes it: a SkyParams, or the tuple (zenith, horizon, ground, exponent,
+// disc radius, disc intensity).
+SkyParams sky_of(const py::handle& h);
 
 // The ground as Python passes it: None, or a dict with height, albedo, sky_irradiance and
 // optionally shadow ((nz, nx) float32) with extent (x0, z0, x1, z1).
 GroundParams ground_of(const py::object& g);
-// The physical shading parameters (dict with extinction_scale, albedo, dual_hg, g1, g2, blend,
-// octaves, a, b, c, jitter_seed, min_transmittance).
-PhysicalParams physical_of(const py::dict& d);
 // A drawable's physical light: (frame, depth (nw, nv, nu), grid_lo, grid_hi, rgba (D, H, W, 4)).
 PhysicalGrids physical_grids_of(const py::object& t);
+
+// --- bound parameter structs: field helpers -----------------------------------------------------
+
+// A finite 3-vector from a sequence of three numbers (ValueError naming `name` otherwise).
+glm::vec3 vec3_arg(const py::handle& value, const char* name);
+// `v`, or a ValueError naming `name` when it is not finite.
+float finite(float v, const char* name);
+
+// A glm::vec3 / dvec3 field as a property: reads (x, y, z), takes three finite numbers.
+template <class C, class V>
+void vec3_property(py::class_<C>& cls, const char* name, V C::* field, const char* label) {
+  cls.def_property(
+      name,
+      [field](const C& c) {
+        const V& v = c.*field;
+        return py::make_tuple(v.x, v.y, v.z);
+      },
+      [field, label](C& c, const py::handle& value) {
+        if constexpr (std::is_same_v<V, glm::dvec3>) {
+          std::array<double, 3> a{};
+          try {
+            a = value.cast<std::array<double, 3>>();
+          } catch (const py::cast_error&) {
+            throw py::value_error(std::string(label) + " must be a sequence of three numbers");
+          }
+          for (const double x : a)
+            if (!std::isfinite(x)) throw py::value_error(std::string(label) + " must be finite");
+          c.*field = V(a[0], a[1], a[2]);
+        } else {
+          c.*field = vec3_arg(value, label);
+        }
+      });
+}
+
+// An enumeration's values with their Python names.
+template <class E>
+using Names = std::vector<std::pair<const char*, E>>;
+
+// The value named `s`, else a ValueError naming `label` and listing the names.
+template <class E>
+E enum_of(const std::string& s, const Names<E>& names, const char* label) {
+  for (const auto& [n, e] : names)
+    if (s == n) return e;
+  std::string all;
+  for (std::size_t i = 0; i < names.size(); ++i)
+    all += (i == 0 ? "'" : (i + 1 == names.size() ? " or '" : ", '")) +
+           std::string(names[i].first) + "'";
+  throw py::value_error(std::string(label) + " must be " + all + ", got '" + s + "'");
+}
+
+// An enumeration field as a property read and set by name.
+template <class C, class E>
+void enum_property(py::class_<C>& cls, const char* name, E C::* field, Names<E> names) {
+  cls.def_property(
+      name,
+      [field, names](const C& c) {
+        for (const auto& [n, e] : names)
+          if (c.*field == e) return std::string(n);
+        return std::string("?");
+      },
+      [field, names, name](C& c, const std::string& s) { c.*field = enum_of(s, names, name); });
+}
 
 }  // namespace cumuli::bind

@@ -21,17 +21,34 @@
 
 namespace cumuli::bind {
 
+const Names<Directional> kDirectional = {{"linear", Directional::Linear},
+                                         {"smoothstep", Directional::Smoothstep}};
+
+// This stage's parameter structs as classes (module.cpp binds them before the functions that
+// take them): fields as attributes, vectors as tuples, enumerations by name.
+void bind_light_params(py::module_& m) {
+  py::class_<ShadeParams> sh(m, "ShadeParams",
+                             "Billboard shading ([TM]): directional term (d_min, d_max, k_dir, "
+                             "linear / smoothstep), ambient, k_amb and height levels (f, h).");
+  sh.def(py::init<>())
+      .def_readwrite("d_min", &ShadeParams::d_min)
+      .def_readwrite("d_max", &ShadeParams::d_max)
+      .def_readwrite("k_dir", &ShadeParams::k_dir)
+      .def_readwrite("k_amb", &ShadeParams::k_amb)
+      .def_readwrite("height_levels", &ShadeParams::height_levels)
+      .def("validate", &ShadeParams::validate);
+  vec3_property(sh, "ambient", &ShadeParams::ambient, "ambient");
+  enum_property(sh, "directional", &ShadeParams::directional, kDirectional);
+}
+
 void bind_light(py::module_& m) {
   m.attr("LIGHT_MAX_RESOLUTION") = LightSettings::kMaxResolution;
   m.attr("LIGHT_MAX_STEPS_PER_RAY") = LightSettings::kMaxStepsPerRay;
   m.def(
       "light_grid",
-      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
-         const std::string& model, float kappa, float phi, const Noise* noise,
-         std::array<float, 3> sun_dir, std::array<int, 3> resolution, const std::string& method,
-         float step, float extinction, float solid_angle, int octaves, float gain, float lacunarity,
-         float frequency, float density_constant, int threads) {
-        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+      [](const CloudShape& cloud, const Noise* noise, std::array<float, 3> sun_dir,
+         std::array<int, 3> resolution, const std::string& method, float step, float extinction,
+         float solid_angle, const FbmParams& fbm, float density_constant, int threads) {
         LightSettings s;
         s.sun_dir = glm::vec3(sun_dir[0], sun_dir[1], sun_dir[2]);
         for (int a = 0; a < 3; ++a) s.resolution[a] = resolution[a];
@@ -50,7 +67,7 @@ void bind_light(py::module_& m) {
         s.threads = threads;
         DensitySource src;
         src.noise = noise;
-        src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+        src.fbm = fbm;
         src.constant = density_constant;
         // Validate everything before allocating the output.
         const Box box = [&] {
@@ -85,11 +102,9 @@ void bind_light(py::module_& m) {
                               py::make_tuple(box.hi.x, box.hi.y, box.hi.z), stats.samples,
                               stats.seconds);
       },
-      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
-      py::arg("kappa"), py::arg("phi"), py::arg("noise").none(true), py::arg("sun_dir"),
-      py::arg("resolution"), py::arg("method"), py::arg("step"), py::arg("extinction"),
-      py::arg("solid_angle"), py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"),
-      py::arg("frequency"), py::arg("density_constant"), py::arg("threads"),
+      py::arg("cloud"), py::arg("noise").none(true), py::arg("sun_dir"), py::arg("resolution"),
+      py::arg("method"), py::arg("step"), py::arg("extinction"), py::arg("solid_angle"),
+      py::arg("fbm"), py::arg("density_constant"), py::arg("threads"),
       "Light grid L(v) [z, y, x] (see cumuli.light_grid). Returns (grid, samples, lo, hi, "
       "total_samples, seconds).");
 }
@@ -207,7 +222,7 @@ void bind_volume_light(py::module_& m) {
 
   m.def(
       "sky_sh",
-      [](const py::tuple& sky, int order, int n_theta) {
+      [](const py::object& sky, int order, int n_theta) {
         return to_array(sky_sh(sky_of(sky), order, n_theta), {3, order * order});
       },
       py::arg("sky"), py::arg("order"), py::arg("n_theta"));
@@ -426,9 +441,7 @@ struct ShadeInputs {
 
 ShadeInputs shade_inputs(const FloatArray& caf, const FloatArray& boxes,
                          const FloatArray& light_dirs, const FloatArray& light_radiance,
-                         float d_min, float d_max, float k_dir, const std::string& directional,
-                         V3 ambient, float k_amb,
-                         const std::vector<std::array<float, 2>>& height_levels) {
+                         const ShadeParams& params) {
   ShadeInputs in;
   const std::vector<Box> b = boxes_of(boxes, "boxes");
   if (b.empty()) throw py::value_error("boxes must not be empty");
@@ -446,18 +459,7 @@ ShadeInputs shade_inputs(const FloatArray& caf, const FloatArray& boxes,
     if (!(len > 0.0f)) throw py::value_error("light directions must be non-zero");
     in.lights[l] = ShadeLight{dirs[l] / len, rad[l]};
   }
-  in.params.d_min = d_min;
-  in.params.d_max = d_max;
-  in.params.k_dir = k_dir;
-  if (directional == "linear")
-    in.params.directional = Directional::Linear;
-  else if (directional == "smoothstep")
-    in.params.directional = Directional::Smoothstep;
-  else
-    throw py::value_error("directional must be 'linear' or 'smoothstep'");
-  in.params.ambient = v3(ambient);
-  in.params.k_amb = k_amb;
-  for (const auto& h : height_levels) in.params.height_levels.emplace_back(h[0], h[1]);
+  in.params = params;
   in.params.validate();
   in.frame = shade_frame(b);
   return in;
@@ -564,10 +566,8 @@ void bind_caf(py::module_& m) {
       "billboard_shade",
       [](const FloatArray& points, const IntArray& index, const FloatArray& caf,
          const FloatArray& boxes, const FloatArray& light_dirs, const FloatArray& light_radiance,
-         float d_min, float d_max, float k_dir, const std::string& directional, V3 ambient,
-         float k_amb, const std::vector<std::array<float, 2>>& height_levels, int threads) {
-        const ShadeInputs in = shade_inputs(caf, boxes, light_dirs, light_radiance, d_min, d_max,
-                                            k_dir, directional, ambient, k_amb, height_levels);
+         const ShadeParams& shade, int threads) {
+        const ShadeInputs in = shade_inputs(caf, boxes, light_dirs, light_radiance, shade);
         const std::vector<glm::vec3> p = vec3s(points, "points");
         const std::vector<int> idx = columns_of(index, p.size(), in.q, "index");
         auto out = new_array({static_cast<py::ssize_t>(p.size()), 3});
@@ -581,9 +581,7 @@ void bind_caf(py::module_& m) {
         return out;
       },
       py::arg("points"), py::arg("index"), py::arg("caf"), py::arg("boxes"), py::arg("light_dirs"),
-      py::arg("light_radiance"), py::arg("d_min"), py::arg("d_max"), py::arg("k_dir"),
-      py::arg("directional"), py::arg("ambient"), py::arg("k_amb"), py::arg("height_levels"),
-      py::arg("threads") = 0,
+      py::arg("light_radiance"), py::arg("shade"), py::arg("threads") = 0,
       "Colours (N, 3) = k_amb·ambient + H·Σ_ℓ caf[ℓ, index]·D_ℓ·radiance_ℓ at points; the "
       "cloud frame (centre, radius, heights) comes from the boxes.");
 
@@ -591,11 +589,9 @@ void bind_caf(py::module_& m) {
       "billboard_vertex_colours",
       [](const FloatArray& centres, const FloatArray& sizes, const FloatArray& rotation,
          const IntArray& index, const FloatArray& caf, const FloatArray& boxes,
-         const FloatArray& light_dirs, const FloatArray& light_radiance, float d_min, float d_max,
-         float k_dir, const std::string& directional, V3 ambient, float k_amb,
-         const std::vector<std::array<float, 2>>& height_levels, V3 right, V3 up, int threads) {
-        const ShadeInputs in = shade_inputs(caf, boxes, light_dirs, light_radiance, d_min, d_max,
-                                            k_dir, directional, ambient, k_amb, height_levels);
+         const FloatArray& light_dirs, const FloatArray& light_radiance, const ShadeParams& shade,
+         V3 right, V3 up, int threads) {
+        const ShadeInputs in = shade_inputs(caf, boxes, light_dirs, light_radiance, shade);
         const std::vector<glm::vec3> c = vec3s(centres, "centres");
         const std::vector<glm::vec2> sz = sizes_of(sizes, rotation, c.size());
         const std::vector<int> idx = columns_of(index, c.size(), in.q, "index");
@@ -613,10 +609,8 @@ void bind_caf(py::module_& m) {
         return py::make_tuple(out, corners);
       },
       py::arg("centres"), py::arg("sizes"), py::arg("rotation"), py::arg("index"), py::arg("caf"),
-      py::arg("boxes"), py::arg("light_dirs"), py::arg("light_radiance"), py::arg("d_min"),
-      py::arg("d_max"), py::arg("k_dir"), py::arg("directional"), py::arg("ambient"),
-      py::arg("k_amb"), py::arg("height_levels"), py::arg("right"), py::arg("up"),
-      py::arg("threads") = 0,
+      py::arg("boxes"), py::arg("light_dirs"), py::arg("light_radiance"), py::arg("shade"),
+      py::arg("right"), py::arg("up"), py::arg("threads") = 0,
       "[TM]'s vertex shading: ((K, 4, 3) colours, (K, 4, 3) corners) of the camera-facing quads.");
 
   m.def(

@@ -32,8 +32,6 @@ namespace cumuli::bind {
 
 namespace {
 
-glm::vec3 to_vec3(const std::array<float, 3>& a) { return glm::vec3(a[0], a[1], a[2]); }
-
 py::array_t<float> points_array(const std::vector<glm::vec3>& pts) {
   auto out = new_array({static_cast<py::ssize_t>(pts.size()), 3});
   float* d = out.mutable_data();
@@ -48,13 +46,6 @@ py::array_t<float> scalar_array(const std::vector<float>& v) {
   return out;
 }
 
-RadiusModel parse_radius_model(const std::string& s) {
-  if (s == "eq15") return RadiusModel::Eq15;
-  if (s == "eq16") return RadiusModel::Eq16;
-  if (s == "uniform") return RadiusModel::Uniform;
-  throw py::value_error("radius_model must be 'eq15', 'eq16' or 'uniform', got '" + s + "'");
-}
-
 LSystemRules make_rules(const std::map<std::string, std::string>& rules) {
   LSystemRules r;
   for (const auto& [key, value] : rules) {
@@ -65,15 +56,12 @@ LSystemRules make_rules(const std::map<std::string, std::string>& rules) {
   return r;
 }
 
-glm::dvec3 to_dvec3(const std::array<double, 3>& a) { return glm::dvec3(a[0], a[1], a[2]); }
-
 // The density of a cloud: fBm from `noise`, or `constant` everywhere when it is >= 0 (ValueError
 // for bad fBm parameters or for neither).
-DensitySource density_source(const Noise* noise, float constant, int octaves, float gain,
-                             float lacunarity, float frequency) {
+DensitySource density_source(const Noise* noise, float constant, const FbmParams& fbm) {
   DensitySource src;
   src.noise = noise;
-  src.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+  src.fbm = fbm;
   try {
     src.fbm.validate();
   } catch (const std::invalid_argument& e) {
@@ -87,46 +75,91 @@ DensitySource density_source(const Noise* noise, float constant, int octaves, fl
 
 }  // namespace
 
+const Names<ClampMode> kClampModes = {{"saturate", ClampMode::Saturate},
+                                      {"resample", ClampMode::Resample}};
+const Names<RadiusModel> kRadiusModels = {
+    {"eq15", RadiusModel::Eq15}, {"eq16", RadiusModel::Eq16}, {"uniform", RadiusModel::Uniform}};
+const Names<Eq16Combine> kCombines = {{"sum", Eq16Combine::Sum}, {"product", Eq16Combine::Product}};
+
+// This stage's parameter structs as classes (module.cpp binds them before the functions that
+// take them): fields as attributes, vectors as tuples, enumerations by name.
+void bind_model_params(py::module_& m) {
+  py::class_<CloudShape>(m, "CloudShape",
+                         "A 2018 cloud as the core takes it: primitives (centres (N, 3), radii "
+                         "(N, 3), rotations (N, 3, 3)) and density model, κ, φ.")
+      .def(py::init(&cloud_from_arrays), py::arg("centres"), py::arg("radii"), py::arg("rotations"),
+           py::arg("model"), py::arg("kappa"), py::arg("phi"))
+      .def_property_readonly("n", [](const CloudShape& c) { return c.primitives.size(); })
+      .def_property_readonly("kappa", [](const CloudShape& c) { return c.density.kappa; })
+      .def_property_readonly("phi", [](const CloudShape& c) { return c.density.phi; });
+
+  py::class_<EvolutionParams> ev(m, "EvolutionParams",
+                                 "How a cumulus evolves over the frames of a volume database.");
+  ev.def(py::init<>())
+      .def_readwrite("frames", &EvolutionParams::frames)
+      .def_property(
+          "res", [](const EvolutionParams& p) { return py::make_tuple(p.res_x, p.res_y, p.res_z); },
+          [](EvolutionParams& p, std::array<int, 3> r) {
+            p.res_x = r[0];
+            p.res_y = r[1];
+            p.res_z = r[2];
+          })
+      .def_readwrite("growth", &EvolutionParams::growth)
+      .def_readwrite("jitter", &EvolutionParams::jitter)
+      .def_readwrite("density_scale", &EvolutionParams::density_scale)
+      .def_readwrite("padding", &EvolutionParams::padding)
+      .def_readwrite("seed", &EvolutionParams::seed);
+  vec3_property(ev, "drift", &EvolutionParams::drift, "drift");
+  vec3_property(ev, "wind", &EvolutionParams::wind, "wind");
+
+  py::class_<GaussianCumulusParams> gc(m, "GaussianCumulusParams",
+                                       "The Gaussian cumulus generator's parameters (§3.6.1).");
+  gc.def(py::init<>())
+      .def_readwrite("n", &GaussianCumulusParams::n)
+      .def_readwrite("epsilon", &GaussianCumulusParams::epsilon)
+      .def_readwrite("radius_scale", &GaussianCumulusParams::radius_scale)
+      .def_readwrite("radius_lo", &GaussianCumulusParams::radius_lo)
+      .def_readwrite("radius_hi", &GaussianCumulusParams::radius_hi)
+      .def_readwrite("hollow", &GaussianCumulusParams::hollow)
+      .def_readwrite("remove_contained", &GaussianCumulusParams::remove_contained)
+      .def_readwrite("seed", &GaussianCumulusParams::seed)
+      .def("validate", &GaussianCumulusParams::validate);
+  vec3_property(gc, "centre", &GaussianCumulusParams::centre, "centre");
+  vec3_property(gc, "mu", &GaussianCumulusParams::mu, "mu");
+  vec3_property(gc, "sigma", &GaussianCumulusParams::sigma, "sigma");
+  vec3_property(gc, "clamp_lo", &GaussianCumulusParams::clamp_lo, "clamp_lo");
+  vec3_property(gc, "clamp_hi", &GaussianCumulusParams::clamp_hi, "clamp_hi");
+  vec3_property(gc, "hollow_box", &GaussianCumulusParams::hollow_box, "hollow_box");
+  enum_property(gc, "clamp_mode", &GaussianCumulusParams::clamp_mode, kClampModes);
+  enum_property(gc, "radius_model", &GaussianCumulusParams::radius_model, kRadiusModels);
+  enum_property(gc, "eq16_combine", &GaussianCumulusParams::eq16_combine, kCombines);
+
+  py::class_<TurtleParams> tp(m, "TurtleParams",
+                              "The L-system turtle: angle, radius and step ranges, symbols, "
+                              "start frame, seed and sphere budget.");
+  tp.def(py::init<>())
+      .def_readwrite("angle_lo", &TurtleParams::angle_lo)
+      .def_readwrite("angle_hi", &TurtleParams::angle_hi)
+      .def_readwrite("radius_lo", &TurtleParams::radius_lo)
+      .def_readwrite("radius_hi", &TurtleParams::radius_hi)
+      .def_readwrite("step_lo", &TurtleParams::step_lo)
+      .def_readwrite("step_hi", &TurtleParams::step_hi)
+      .def_readwrite("draw_symbols", &TurtleParams::draw_symbols)
+      .def_readwrite("move_symbols", &TurtleParams::move_symbols)
+      .def_readwrite("seed", &TurtleParams::seed)
+      .def_readwrite("max_spheres", &TurtleParams::max_spheres)
+      .def("validate", &TurtleParams::validate);
+  vec3_property(tp, "start", &TurtleParams::start, "start");
+  vec3_property(tp, "heading", &TurtleParams::heading, "heading");
+  vec3_property(tp, "up", &TurtleParams::up, "up");
+}
+
 void bind_shapes(py::module_& m) {
   m.attr("LSYSTEM_MAX_LENGTH") = kMaxLSystemLength;
   m.def(
       "gaussian_cumulus",
-      [](std::array<float, 3> centre, int n, std::array<float, 3> mu, std::array<float, 3> sigma,
-         std::array<float, 3> clamp_lo, std::array<float, 3> clamp_hi,
-         const std::string& clamp_mode, const std::string& radius_model,
-         const std::string& eq16_combine, float epsilon, float radius_scale, float radius_lo,
-         float radius_hi, bool hollow, std::array<float, 3> hollow_box, bool remove_contained,
-         std::uint64_t seed) {
-        GaussianCumulusParams p;
-        p.centre = to_vec3(centre);
-        p.n = n;
-        p.mu = to_vec3(mu);
-        p.sigma = to_vec3(sigma);
-        p.clamp_lo = to_vec3(clamp_lo);
-        p.clamp_hi = to_vec3(clamp_hi);
-        if (clamp_mode == "saturate")
-          p.clamp_mode = ClampMode::Saturate;
-        else if (clamp_mode == "resample")
-          p.clamp_mode = ClampMode::Resample;
-        else
-          throw py::value_error("clamp_mode must be 'saturate' or 'resample', got '" + clamp_mode +
-                                "'");
-        p.radius_model = parse_radius_model(radius_model);
-        if (eq16_combine == "sum")
-          p.eq16_combine = Eq16Combine::Sum;
-        else if (eq16_combine == "product")
-          p.eq16_combine = Eq16Combine::Product;
-        else
-          throw py::value_error("eq16_combine must be 'sum' or 'product', got '" + eq16_combine +
-                                "'");
-        p.epsilon = epsilon;
-        p.radius_scale = radius_scale;
-        p.radius_lo = radius_lo;
-        p.radius_hi = radius_hi;
-        p.hollow = hollow;
-        p.hollow_box = to_vec3(hollow_box);
-        p.remove_contained = remove_contained;
-        p.seed = seed;
+      [](const GaussianCumulusParams& params) {
+        const GaussianCumulusParams& p = params;
         p.validate();  // std::invalid_argument → ValueError
         GaussianCumulusResult r;
         {
@@ -141,11 +174,9 @@ void bind_shapes(py::module_& m) {
         stats["kept"] = static_cast<int>(r.centres.size());
         return py::make_tuple(points_array(r.centres), scalar_array(r.radii), stats);
       },
-      py::arg("centre"), py::arg("n"), py::arg("mu"), py::arg("sigma"), py::arg("clamp_lo"),
-      py::arg("clamp_hi"), py::arg("clamp_mode"), py::arg("radius_model"), py::arg("eq16_combine"),
-      py::arg("epsilon"), py::arg("radius_scale"), py::arg("radius_lo"), py::arg("radius_hi"),
-      py::arg("hollow"), py::arg("hollow_box"), py::arg("remove_contained"), py::arg("seed"),
-      "Gaussian cumulus (§3.6.1): returns (centres (N,3), radii (N,), stats dict).");
+      py::arg("params"),
+      "Gaussian cumulus (params: a GaussianCumulusParams) (§3.6.1): returns (centres (N,3), radii "
+      "(N,), stats dict).");
 
   m.def(
       "remove_contained_spheres",
@@ -208,25 +239,8 @@ void bind_shapes(py::module_& m) {
 
   m.def(
       "lsystem_interpret",
-      [](const std::string& symbols, double angle_lo, double angle_hi, double radius_lo,
-         double radius_hi, double step_lo, double step_hi, const std::string& draw_symbols,
-         const std::string& move_symbols, std::array<double, 3> start,
-         std::array<double, 3> heading, std::array<double, 3> up, std::uint64_t seed,
-         std::uint64_t max_spheres) {
-        TurtleParams p;
-        p.angle_lo = angle_lo;
-        p.angle_hi = angle_hi;
-        p.radius_lo = radius_lo;
-        p.radius_hi = radius_hi;
-        p.step_lo = step_lo;
-        p.step_hi = step_hi;
-        p.draw_symbols = draw_symbols;
-        p.move_symbols = move_symbols;
-        p.start = to_dvec3(start);
-        p.heading = to_dvec3(heading);
-        p.up = to_dvec3(up);
-        p.seed = seed;
-        p.max_spheres = max_spheres;
+      [](const std::string& symbols, const TurtleParams& params) {
+        const TurtleParams& p = params;
         p.validate();
         TurtleResult r;
         {
@@ -245,22 +259,16 @@ void bind_shapes(py::module_& m) {
             py::make_tuple(r.final_heading.x, r.final_heading.y, r.final_heading.z);
         return py::make_tuple(points_array(r.centres), scalar_array(r.radii), stats);
       },
-      py::arg("symbols"), py::arg("angle_lo"), py::arg("angle_hi"), py::arg("radius_lo"),
-      py::arg("radius_hi"), py::arg("step_lo"), py::arg("step_hi"), py::arg("draw_symbols"),
-      py::arg("move_symbols"), py::arg("start"), py::arg("heading"), py::arg("up"), py::arg("seed"),
-      py::arg("max_spheres"),
-      "Walk an L-system string with the 3D turtle: returns (centres (N,3), radii (N,), stats).");
+      py::arg("symbols"), py::arg("params"),
+      "Walk an L-system string with the 3D turtle (params: a TurtleParams): returns (centres "
+      "(N,3), radii (N,), stats).");
 
   m.def(
       "cloud_density",
-      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
-         const std::string& model, float kappa, float phi, const FloatArray& points,
-         const Noise* noise, float constant, int octaves, float gain, float lacunarity,
-         float frequency, int threads) {
-        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+      [](const CloudShape& cloud, const FloatArray& points, const Noise* noise, float constant,
+         const FbmParams& fbm, int threads) {
         require_points(points, "points");
-        const DensitySource src =
-            density_source(noise, constant, octaves, gain, lacunarity, frequency);
+        const DensitySource src = density_source(noise, constant, fbm);
         const std::size_t n = static_cast<std::size_t>(points.shape(0));
         auto rho = new_array({static_cast<py::ssize_t>(n)});
         auto gamma = new_array({static_cast<py::ssize_t>(n)});
@@ -291,21 +299,16 @@ void bind_shapes(py::module_& m) {
         }
         return py::make_tuple(rho, gamma);
       },
-      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
-      py::arg("kappa"), py::arg("phi"), py::arg("points"), py::arg("noise"), py::arg("constant"),
-      py::arg("octaves") = 5, py::arg("gain") = 0.5f, py::arg("lacunarity") = 2.0f,
-      py::arg("frequency") = 1.0f, py::arg("threads") = 0,
+      py::arg("cloud"), py::arg("points"), py::arg("noise").none(true), py::arg("constant"),
+      py::arg("fbm") = FbmParams{}, py::arg("threads") = 0,
       "Density (rho, gamma) of a cloud at points (eq. 2 or eqs. 19-21).");
 
   m.def(
       "density_grid",
-      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
-         const std::string& model, float kappa, float phi, const Noise* noise, float constant,
-         int octaves, float gain, float lacunarity, float frequency, std::array<float, 3> lo,
-         std::array<float, 3> hi, std::array<int, 3> res, int supersample, int threads) {
-        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
-        const DensitySource src =
-            density_source(noise, constant, octaves, gain, lacunarity, frequency);
+      [](const CloudShape& cloud, const Noise* noise, float constant, const FbmParams& fbm,
+         std::array<float, 3> lo, std::array<float, 3> hi, std::array<int, 3> res, int supersample,
+         int threads) {
+        const DensitySource src = density_source(noise, constant, fbm);
         Box box{glm::vec3(lo[0], lo[1], lo[2]), glm::vec3(hi[0], hi[1], hi[2])};
         for (int a = 0; a < 3; ++a) {
           if (!(box.hi[a] > box.lo[a]) || !std::isfinite(box.lo[a]) || !std::isfinite(box.hi[a]))
@@ -323,9 +326,7 @@ void bind_shapes(py::module_& m) {
         }
         return to_array(out, {res[2], res[1], res[0]});
       },
-      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
-      py::arg("kappa"), py::arg("phi"), py::arg("noise").none(true), py::arg("constant"),
-      py::arg("octaves"), py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"),
+      py::arg("cloud"), py::arg("noise").none(true), py::arg("constant"), py::arg("fbm"),
       py::arg("lo"), py::arg("hi"), py::arg("res"), py::arg("supersample") = 1,
       py::arg("threads") = 0,
       "The density field (union attribution) on a lattice over a box: (D, H, W) float32, the "
@@ -380,60 +381,31 @@ void bind_shapes(py::module_& m) {
       "rotations (F,3,3), stats).");
 }
 
-namespace {
-
-EvolutionParams evolution(int frames, std::array<int, 3> res, float growth, V3 drift, float jitter,
-                          V3 wind, float density_scale, float padding, std::uint64_t seed) {
-  EvolutionParams p;
-  p.frames = frames;
-  p.res_x = res[0];
-  p.res_y = res[1];
-  p.res_z = res[2];
-  p.growth = growth;
-  p.drift = v3(drift);
-  p.jitter = jitter;
-  p.wind = v3(wind);
-  p.density_scale = density_scale;
-  p.padding = padding;
-  p.seed = seed;
-  return p;
-}
-
-}  // namespace
-
 void bind_volumes(py::module_& m) {
   m.def(
       "evolving_cloud_box",
-      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
-         const std::string& model, float kappa, float phi, int frames, std::array<int, 3> res,
-         float growth, V3 drift, float jitter, V3 wind, float density_scale, float padding,
-         std::uint64_t seed) {
-        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
-        const Box b = evolving_cloud_box(cloud, evolution(frames, res, growth, drift, jitter, wind,
-                                                          density_scale, padding, seed));
+      [](const CloudShape& cloud, const EvolutionParams& evolution) {
+        const Box b = evolving_cloud_box(cloud, evolution);
         return py::make_tuple(V3{b.lo.x, b.lo.y, b.lo.z}, V3{b.hi.x, b.hi.y, b.hi.z});
       },
+      py::arg("cloud"), py::arg("evolution"),
       "World box holding the evolving cloud at every frame (padded): ((x,y,z) lo, (x,y,z) hi).");
 
   m.def(
       "evolving_cloud_volumes",
-      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
-         const std::string& model, float kappa, float phi, const Noise* noise, float constant,
-         int octaves, float gain, float lacunarity, float frequency, int frames,
-         std::array<int, 3> res, float growth, V3 drift, float jitter, V3 wind, float density_scale,
-         float padding, std::uint64_t seed, V3 box_lo, V3 box_hi, int threads) {
-        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
-        const DensitySource src =
-            density_source(noise, constant, octaves, gain, lacunarity, frequency);
-        const EvolutionParams p =
-            evolution(frames, res, growth, drift, jitter, wind, density_scale, padding, seed);
+      [](const CloudShape& cloud, const Noise* noise, float constant, const FbmParams& fbm,
+         const EvolutionParams& evolution, V3 box_lo, V3 box_hi, int threads) {
+        const DensitySource src = density_source(noise, constant, fbm);
+        const EvolutionParams& p = evolution;
         std::vector<float> v;
         {
           py::gil_scoped_release release;
           v = evolving_cloud_volumes(cloud, src, p, Box{v3(box_lo), v3(box_hi)}, threads);
         }
-        return to_array(v, {frames, res[2], res[1], res[0]});
+        return to_array(v, {p.frames, p.res_z, p.res_y, p.res_x});
       },
+      py::arg("cloud"), py::arg("noise").none(true), py::arg("constant"), py::arg("fbm"),
+      py::arg("evolution"), py::arg("box_lo"), py::arg("box_hi"), py::arg("threads"),
       "Voxelise an evolving cloud: (frames, D, H, W) float32 densities.");
 }
 
@@ -606,12 +578,9 @@ void bind_particles(py::module_& m) {
   };
   m.def(
       "particle_fill",
-      [arrays](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
-               const std::string& model, float kappa, float phi, int n, float radius_min,
-               float radius_max, float tau, float albedo, const Noise* noise, int octaves,
-               float gain, float lacunarity, float frequency, float tau_floor, std::uint64_t seed,
-               int threads) {
-        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, kappa, phi);
+      [arrays](const CloudShape& cloud, int n, float radius_min, float radius_max, float tau,
+               float albedo, const Noise* noise, const FbmParams& fbm, float tau_floor,
+               std::uint64_t seed, int threads) {
         ParticleFillParams p;
         p.n = n;
         p.radius_min = radius_min;
@@ -619,7 +588,7 @@ void bind_particles(py::module_& m) {
         p.tau = tau;
         p.albedo = albedo;
         p.noise = noise;
-        p.fbm = FbmParams{octaves, gain, lacunarity, frequency};
+        p.fbm = fbm;
         p.tau_floor = tau_floor;
         p.seed = seed;
         p.validate();
@@ -630,10 +599,8 @@ void bind_particles(py::module_& m) {
         }
         return arrays(std::move(out));
       },
-      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
-      py::arg("kappa"), py::arg("phi"), py::arg("n"), py::arg("radius_min"), py::arg("radius_max"),
-      py::arg("tau"), py::arg("albedo"), py::arg("noise").none(true), py::arg("octaves"),
-      py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"), py::arg("tau_floor"),
+      py::arg("cloud"), py::arg("n"), py::arg("radius_min"), py::arg("radius_max"), py::arg("tau"),
+      py::arg("albedo"), py::arg("noise").none(true), py::arg("fbm"), py::arg("tau_floor"),
       py::arg("seed"), py::arg("threads"),
       "Fill a cloud's ellipsoid union with particles: (centres, radii, tau, albedo).");
 

@@ -38,6 +38,11 @@ bool python_interrupt(std::size_t done, std::size_t total) {
 }  // namespace
 
 namespace cumuli::bind {
+void bind_noise_params(py::module_& m);
+void bind_model_params(py::module_& m);
+void bind_light_params(py::module_& m);
+void bind_render_params(py::module_& m);
+void bind_sprite_params(py::module_& m);
 void bind_noise(py::module_& m);
 void bind_shapes(py::module_& m);
 void bind_deck(py::module_& m);
@@ -88,6 +93,12 @@ PYBIND11_MODULE(_core, m) {
       }
     }
   });
+  // The parameter structs first: the functions' signatures name these classes.
+  cumuli::bind::bind_noise_params(m);
+  cumuli::bind::bind_model_params(m);
+  cumuli::bind::bind_light_params(m);
+  cumuli::bind::bind_render_params(m);
+  cumuli::bind::bind_sprite_params(m);
   cumuli::bind::bind_noise(m);
   cumuli::bind::bind_shapes(m);
   cumuli::bind::bind_deck(m);

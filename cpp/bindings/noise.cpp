@@ -50,6 +50,24 @@ void set_by_name(const std::string& name, void (*reset)(), Parse parse, Set set)
 
 }  // namespace
 
+// This stage's parameter structs as classes (module.cpp binds them before the functions that
+// take them): fields as attributes, vectors as tuples, enumerations by name.
+void bind_noise_params(py::module_& m) {
+  py::class_<FbmParams>(m, "FbmParams",
+                        "fBm of eq. (1): octaves n, gain w, lacunarity s, "
+                        "frequency f (lattice texels per world unit).")
+      .def(py::init([](int octaves, float gain, float lacunarity, float frequency) {
+             return FbmParams{octaves, gain, lacunarity, frequency};
+           }),
+           py::arg("octaves") = 5, py::arg("gain") = 0.5f, py::arg("lacunarity") = 2.0f,
+           py::arg("frequency") = 1.0f)
+      .def_readwrite("octaves", &FbmParams::octaves)
+      .def_readwrite("gain", &FbmParams::gain)
+      .def_readwrite("lacunarity", &FbmParams::lacunarity)
+      .def_readwrite("frequency", &FbmParams::frequency)
+      .def("validate", &FbmParams::validate);
+}
+
 void bind_noise(py::module_& m) {
   // SIMD level of the bulk loops (cumuli/simd.hpp); the Python layer is cumuli.noise.simd_*.
   m.def(

@@ -28,27 +28,6 @@ namespace {
 constexpr py::ssize_t kMaxPixels = py::ssize_t{1} << 26;
 constexpr int kMaxEdge = 1 << 15;
 
-glm::vec3 vec3_arg(const py::handle& value, const char* name) {
-  FloatArray a;
-  try {
-    a = FloatArray::ensure(value);
-  } catch (...) {
-    a = FloatArray();
-  }
-  if (!a || a.ndim() != 1 || a.shape(0) != 3)
-    throw py::value_error(std::string(name) + " must be a sequence of three numbers");
-  const float* d = a.data();
-  const glm::vec3 v(d[0], d[1], d[2]);
-  if (!std::isfinite(v.x) || !std::isfinite(v.y) || !std::isfinite(v.z))
-    throw py::value_error(std::string(name) + " must be finite");
-  return v;
-}
-
-float finite(float v, const char* name) {
-  if (!std::isfinite(v)) throw py::value_error(std::string(name) + " must be finite");
-  return v;
-}
-
 py::object item(const py::dict& d, const char* key, std::size_t index) {
   if (!d.contains(key))
     throw py::value_error("clouds[" + std::to_string(index) + "] is missing '" + key + "'");
@@ -123,12 +102,6 @@ std::vector<SolidSphere> solid_spheres(const py::object& obj) {
 CameraParams camera_params(const py::handle& position, const py::handle& target,
                            const py::handle& up, float fov);
 
-MarchMode march_mode(const std::string& s) {
-  if (s == "paper") return MarchMode::Paper;
-  if (s == "union") return MarchMode::Union;
-  throw py::value_error("march must be 'paper' or 'union', got '" + s + "'");
-}
-
 CameraParams camera_params(const py::handle& position, const py::handle& target,
                            const py::handle& up, float fov) {
   CameraParams cam;
@@ -144,73 +117,175 @@ CameraParams camera_params(const py::handle& position, const py::handle& target,
   return cam;
 }
 
+// The sun as the renderers take it: finite, direction non-zero and normalised here.
+SunParams sun_of(const SunParams& sun) {
+  SunParams out = sun;
+  for (int k = 0; k < 3; ++k)
+    if (!std::isfinite(sun.direction[k]) || !std::isfinite(sun.radiance[k]))
+      throw py::value_error("sun direction and radiance must be finite");
+  if (!(glm::dot(sun.direction, sun.direction) > 0.0f))
+    throw py::value_error("sun direction must not be zero");
+  out.direction = glm::normalize(sun.direction);
+  return out;
+}
+
 }  // namespace
+
+const Names<MarchMode> kMarchModes = {{"paper", MarchMode::Paper}, {"union", MarchMode::Union}};
+const Names<PhaseKind> kPhases = {{"rayleigh", PhaseKind::Rayleigh},
+                                  {"isotropic", PhaseKind::Isotropic},
+                                  {"hg", PhaseKind::HenyeyGreenstein}};
+const Names<SpriteSort> kSorts = {{"distance", SpriteSort::Distance}, {"depth", SpriteSort::Depth}};
+const Names<SplatKernel> kKernels = {{"gaussian", SplatKernel::Gaussian},
+                                     {"hermite", SplatKernel::Hermite}};
+
+// This stage's parameter structs as classes (module.cpp binds them before the functions that
+// take them): fields as attributes, vectors as tuples, enumerations by name.
+void bind_render_params(py::module_& m) {
+  py::class_<SunParams> sun(m, "SunParams", "The sun: direction (towards it) and radiance.");
+  sun.def(py::init<>());
+  vec3_property(sun, "direction", &SunParams::direction, "sun direction");
+  vec3_property(sun, "radiance", &SunParams::radiance, "sun radiance");
+
+  py::class_<SkyParams> sky(m, "SkyParams",
+                            "The gradient sky and the sun disc (RENDER_CONTRACT \"Sky\").");
+  sky.def(py::init<>())
+      .def_readwrite("exponent", &SkyParams::exponent)
+      .def_readwrite("sun_disc_radius", &SkyParams::sun_disc_radius)
+      .def_readwrite("sun_disc_intensity", &SkyParams::sun_disc_intensity);
+  vec3_property(sky, "zenith", &SkyParams::zenith, "sky zenith");
+  vec3_property(sky, "horizon", &SkyParams::horizon, "sky horizon");
+  vec3_property(sky, "ground", &SkyParams::ground, "sky ground");
+
+  py::class_<CameraParams> cam(m, "CameraParams",
+                               "A look-at camera: position, target, up, vertical fov (degrees).");
+  cam.def(py::init<>())
+      .def_property(
+          "fov", [](const CameraParams& c) { return c.fov; },
+          [](CameraParams& c, float v) { c.fov = finite(v, "fov"); })
+      .def("validate", &CameraParams::validate);
+  vec3_property(cam, "position", &CameraParams::position, "camera position");
+  vec3_property(cam, "target", &CameraParams::target, "camera target");
+  vec3_property(cam, "up", &CameraParams::up, "camera up");
+
+  py::class_<Viewport>(m, "Viewport", "A camera and the image it takes (width × height).")
+      .def(py::init([](const CameraParams& camera, int width, int height) {
+             return Viewport{camera, width, height};
+           }),
+           py::arg("camera"), py::arg("width"), py::arg("height"))
+      .def_readwrite("camera", &Viewport::camera)
+      .def_readwrite("width", &Viewport::width)
+      .def_readwrite("height", &Viewport::height)
+      .def("validate", &Viewport::validate);
+
+  py::class_<PhysicalParams>(m, "PhysicalParams",
+                             "The physical lighting mode's shading (RENDER_CONTRACT "
+                             "\"Physical lighting\").")
+      .def(py::init<>())
+      .def_readwrite("extinction_scale", &PhysicalParams::extinction_scale)
+      .def_readwrite("albedo", &PhysicalParams::albedo)
+      .def_readwrite("dual_hg", &PhysicalParams::dual_hg)
+      .def_readwrite("g1", &PhysicalParams::g1)
+      .def_readwrite("g2", &PhysicalParams::g2)
+      .def_readwrite("blend", &PhysicalParams::blend)
+      .def_readwrite("octaves", &PhysicalParams::octaves)
+      .def_readwrite("oct_a", &PhysicalParams::oct_a)
+      .def_readwrite("oct_b", &PhysicalParams::oct_b)
+      .def_readwrite("oct_c", &PhysicalParams::oct_c)
+      .def_readwrite("jitter_seed", &PhysicalParams::jitter_seed)
+      .def_readwrite("min_transmittance", &PhysicalParams::min_transmittance)
+      .def("validate", &PhysicalParams::validate);
+
+  py::class_<MarchSettings> ms(m, "MarchSettings",
+                               "The 2018 marcher's settings (RENDER_CONTRACT), filled from "
+                               "RenderSettings by cumuli.rendering.params.march_params.");
+  ms.def(py::init<>())
+      .def_readwrite("absorption", &MarchSettings::absorption)
+      .def_readwrite("lod_a", &MarchSettings::lod_a)
+      .def_readwrite("lod_delta", &MarchSettings::lod_delta)
+      .def_readwrite("ref_step", &MarchSettings::ref_step)
+      .def_readwrite("step_min", &MarchSettings::step_min)
+      .def_readwrite("step_max", &MarchSettings::step_max)
+      .def_readwrite("fixed_step", &MarchSettings::fixed_step)
+      .def_readwrite("hg_g", &MarchSettings::hg_g)
+      .def_readwrite("max_steps", &MarchSettings::max_steps)
+      .def_readwrite("max_candidates", &MarchSettings::max_candidates)
+      .def_readwrite("sort_candidates", &MarchSettings::sort_candidates)
+      .def_readwrite("fbm", &MarchSettings::fbm)
+      .def_readwrite("density_constant", &MarchSettings::density_constant)
+      .def_readwrite("physical", &MarchSettings::physical)
+      .def_readwrite("phys", &MarchSettings::phys)
+      .def_readwrite("min_transmittance", &MarchSettings::min_transmittance)
+      .def_readwrite("skip_empty", &MarchSettings::skip_empty)
+      .def_readwrite("jitter", &MarchSettings::jitter)
+      .def("validate", &MarchSettings::validate);
+  enum_property(ms, "march", &MarchSettings::march, kMarchModes);
+
+  py::class_<VolumeCameraRays> vc(m, "VolumeCamera",
+                                  "The volume marcher's camera: position, unit basis and "
+                                  "tan(vertical fov / 2).");
+  vc.def(py::init<>()).def_readwrite("tan_half_fov", &VolumeCameraRays::tan_half_fov);
+  vec3_property(vc, "position", &VolumeCameraRays::position, "camera position");
+  vec3_property(vc, "forward", &VolumeCameraRays::forward, "camera forward");
+  vec3_property(vc, "right", &VolumeCameraRays::right, "camera right");
+  vec3_property(vc, "up", &VolumeCameraRays::up, "camera up");
+
+  py::class_<VolumeRenderParams>(m, "VolumeRenderParams",
+                                 "The volume marcher's image, sun, sky and medium.")
+      .def(py::init<>())
+      .def_readwrite("width", &VolumeRenderParams::width)
+      .def_readwrite("height", &VolumeRenderParams::height)
+      .def_readwrite("sun", &VolumeRenderParams::sun)
+      .def_readwrite("sky", &VolumeRenderParams::sky)
+      .def_readwrite("with_sky", &VolumeRenderParams::with_sky)
+      .def_readwrite("sigma_t", &VolumeRenderParams::sigma_t)
+      .def_readwrite("albedo", &VolumeRenderParams::albedo)
+      .def_readwrite("g", &VolumeRenderParams::g)
+      .def_readwrite("step", &VolumeRenderParams::step)
+      .def_readwrite("physical", &VolumeRenderParams::physical)
+      .def_readwrite("phys", &VolumeRenderParams::phys);
+}
+
+// This stage's parameter structs as classes (module.cpp binds them before the functions that
+// take them): fields as attributes, vectors as tuples, enumerations by name.
+void bind_sprite_params(py::module_& m) {
+  py::class_<ParticleSpriteSettings> ps(m, "ParticleSpriteSettings",
+                                        "The Harris particles' eye pass: solid angle γ, phase, "
+                                        "ambient, sort and culling.");
+  ps.def(py::init<>())
+      .def_readwrite("solid_angle", &ParticleSpriteSettings::solid_angle)
+      .def_readwrite("hg_g", &ParticleSpriteSettings::hg_g)
+      .def_readwrite("cull", &ParticleSpriteSettings::cull);
+  vec3_property(ps, "ambient", &ParticleSpriteSettings::ambient, "ambient");
+  enum_property(ps, "phase", &ParticleSpriteSettings::phase, kPhases);
+  enum_property(ps, "sort", &ParticleSpriteSettings::sort, kSorts);
+
+  py::class_<SpriteRasterSettings> rs(m, "SpriteRasterSettings",
+                                      "The sprite rasteriser's splat kernel and peak opacity.");
+  rs.def(py::init<>()).def_readwrite("peak", &SpriteRasterSettings::peak);
+  enum_property(rs, "kernel", &SpriteRasterSettings::kernel, kKernels);
+}
 
 void bind_march(py::module_& m) {
   m.def(
       "render_cpu",
-      [](const py::handle& camera_position, const py::handle& camera_target,
-         const py::handle& camera_up, float fov, int width, int height, const py::list& clouds,
-         const py::handle& sun_direction, const py::handle& sun_radiance,
-         const py::handle& sky_zenith, const py::handle& sky_horizon, const py::handle& sky_ground,
-         float sky_exponent, float sun_disc_radius, float sun_disc_intensity, float absorption,
-         float lod_a, float lod_delta, float ref_step, float step_min, float step_max,
-         float fixed_step, float hg_g, int max_steps, int max_candidates, const std::string& march,
-         int octaves, float gain, float lacunarity, float frequency, const Noise* noise,
-         int threads, float density_constant, bool sort_candidates, bool with_sky,
-         const py::object& solids, const py::object& physical, const py::object& ground,
-         float min_transmittance, bool skip_empty, bool jitter, int jitter_seed,
-         bool return_stats) -> py::object {
-        if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
-          throw py::value_error("width and height must be in [1, " + std::to_string(kMaxEdge) +
-                                "], got " + std::to_string(width) + "x" + std::to_string(height));
-        if (py::ssize_t{width} * height > kMaxPixels)
-          throw py::value_error("image has more than " + std::to_string(kMaxPixels) + " pixels");
-        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
-
-        CameraParams cam;
-        cam.position = vec3_arg(camera_position, "camera position");
-        cam.target = vec3_arg(camera_target, "camera target");
-        cam.up = vec3_arg(camera_up, "camera up");
-        cam.fov = finite(fov, "fov");
-
-        MarchSettings s;
-        s.absorption = absorption;
-        s.lod_a = lod_a;
-        s.lod_delta = lod_delta;
-        s.ref_step = ref_step;
-        s.step_min = step_min;
-        s.step_max = step_max;
-        s.fixed_step = fixed_step;
-        s.hg_g = hg_g;
-        s.max_steps = max_steps;
-        s.max_candidates = max_candidates;
-        s.march = march_mode(march);
-        s.sort_candidates = sort_candidates;
-        s.fbm = FbmParams{octaves, gain, lacunarity, frequency};
-        s.density_constant = density_constant;
-        s.min_transmittance = min_transmittance;
-        s.skip_empty = skip_empty;
-        s.jitter = jitter;
-        if (jitter_seed < 0 || jitter_seed > 1023)
-          throw py::value_error("jitter_seed must be in [0, 1023]");
-        s.phys.jitter_seed = jitter_seed;
-        if (!physical.is_none()) {
-          s.physical = true;
-          s.phys = physical_of(physical.cast<py::dict>());
+      [](const Viewport& view, const py::list& clouds, const SunParams& sun, const SkyParams& sky,
+         const MarchSettings& settings, const Noise* noise, int threads, bool with_sky,
+         const py::object& solids, const py::object& ground, bool return_stats) -> py::object {
+        try {
+          view.validate();
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
         }
+        const int width = view.width, height = view.height;
+        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
+        const MarchSettings& s = settings;
+        if (s.phys.jitter_seed < 0 || s.phys.jitter_seed > 1023)
+          throw py::value_error("jitter_seed must be in [0, 1023]");
 
         MarchScene scene;
-        const glm::vec3 sd = vec3_arg(sun_direction, "sun direction");
-        if (!(glm::dot(sd, sd) > 0.0f)) throw py::value_error("sun direction must not be zero");
-        scene.sun.direction = glm::normalize(sd);
-        scene.sun.radiance = vec3_arg(sun_radiance, "sun radiance");
-        scene.sky.zenith = vec3_arg(sky_zenith, "sky zenith");
-        scene.sky.horizon = vec3_arg(sky_horizon, "sky horizon");
-        scene.sky.ground = vec3_arg(sky_ground, "sky ground");
-        scene.sky.exponent = sky_exponent;
-        scene.sky.sun_disc_radius = sun_disc_radius;
-        scene.sky.sun_disc_intensity = sun_disc_intensity;
+        scene.sun = sun_of(sun);
+        scene.sky = sky;
         scene.noise = noise;
         scene.with_sky = with_sky;
         scene.solids = solid_spheres(solids);
@@ -221,7 +296,6 @@ void bind_march(py::module_& m) {
 
         try {
           s.validate();
-          cam.validate();
           scene.validate(s);
         } catch (const std::invalid_argument& e) {
           throw py::value_error(e.what());
@@ -231,7 +305,7 @@ void bind_march(py::module_& m) {
         float* dst = out.mutable_data();
         if (!return_stats) {
           py::gil_scoped_release release;
-          render_image(scene, s, cam, width, height, dst, threads);
+          render_image(scene, s, view.camera, width, height, dst, threads);
           return std::move(out);
         }
         py::array_t<std::uint32_t> map(
@@ -240,7 +314,7 @@ void bind_march(py::module_& m) {
         MarchStats stats;
         {
           py::gil_scoped_release release;
-          render_image(scene, s, cam, width, height, dst, threads, &stats, map_dst);
+          render_image(scene, s, view.camera, width, height, dst, threads, &stats, map_dst);
         }
         py::dict d;
         d["fbm_evaluations"] = stats.fbm_evaluations;
@@ -249,29 +323,17 @@ void bind_march(py::module_& m) {
         d["fbm_map"] = map;
         return py::make_tuple(out, d);
       },
-      py::arg("camera_position"), py::arg("camera_target"), py::arg("camera_up"), py::arg("fov"),
-      py::arg("width"), py::arg("height"), py::arg("clouds"), py::arg("sun_direction"),
-      py::arg("sun_radiance"), py::arg("sky_zenith"), py::arg("sky_horizon"), py::arg("sky_ground"),
-      py::arg("sky_exponent"), py::arg("sun_disc_radius"), py::arg("sun_disc_intensity"),
-      py::arg("absorption"), py::arg("lod_a"), py::arg("lod_delta"), py::arg("ref_step"),
-      py::arg("step_min"), py::arg("step_max"), py::arg("fixed_step"), py::arg("hg_g"),
-      py::arg("max_steps"), py::arg("max_candidates"), py::arg("march"), py::arg("octaves"),
-      py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"), py::arg("noise").none(true),
-      py::arg("threads") = 0, py::arg("density_constant") = -1.0f,
-      py::arg("sort_candidates") = true, py::arg("with_sky") = true, py::arg("solids") = py::none(),
-      py::arg("physical") = py::none(), py::arg("ground") = py::none(),
-      py::arg("min_transmittance") = 1e-6f, py::arg("skip_empty") = false,
-      py::arg("jitter") = false, py::arg("jitter_seed") = 0, py::arg("return_stats") = false,
-      "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image, row 0 at "
-      "the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light "
-      "([z, y, x]) and light_lo / light_hi. density_constant >= 0 replaces fBm (tests); "
-      "sort_candidates=False leaves candidates "
-      "unsorted (candidate_sort='none'); with_sky=False gives the premultiplied layer (colour, 1 − "
-      "T); "
-      "solids (n, 4) (centre, radius) stop every ray at the nearest solid. min_transmittance: the "
-      "paper mode's early exit; skip_empty: empty-space skipping (occupancy grids, the same "
-      "image); jitter: the paper mode's samples at xi*step (jitter_seed's pattern) instead of "
-      "step/2; return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}).");
+      py::arg("view"), py::arg("clouds"), py::arg("sun"), py::arg("sky"), py::arg("settings"),
+      py::arg("noise").none(true), py::arg("threads") = 0, py::arg("with_sky") = true,
+      py::arg("solids") = py::none(), py::arg("ground") = py::none(),
+      py::arg("return_stats") = false,
+      "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image of the "
+      "Viewport, row 0 at the top. Each cloud is a dict with centres, radii, rotations, model, "
+      "kappa, phi, light ([z, y, x]) and light_lo / light_hi (or physical). settings: a "
+      "MarchSettings (density_constant >= 0 replaces fBm, for tests; physical selects the "
+      "physical mode with its PhysicalParams). with_sky=False gives the premultiplied layer "
+      "(colour, 1 − T); solids (n, 4) (centre, radius) stop every ray at the nearest solid; "
+      "return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}).");
 
   m.def(
       "occupancy_grid",
@@ -302,32 +364,23 @@ void bind_march(py::module_& m) {
 void bind_volume_march(py::module_& m) {
   m.def(
       "render_volume_cpu",
-      [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi, V3 position, V3 forward,
-         V3 right, V3 up, float tan_half_fov, int width, int height, V3 sun_dir, V3 sun_radiance,
-         const py::tuple& sky, float sigma_t, float albedo, float g, float step, int threads,
-         bool with_sky, const py::object& solids, const py::object& physical,
-         const py::object& physical_light) {
+      [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi,
+         const VolumeCameraRays& camera, const VolumeRenderParams& params, int threads,
+         const py::object& solids, const py::object& physical_light) {
         const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
         const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
         if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
           throw py::value_error("light must have shape (D, H, W, 4) matching the volume");
-        VolumeCameraRays cam{v3(position), v3(forward), v3(right), v3(up), tan_half_fov};
-        VolumeRenderParams p;
-        p.width = width;
-        p.height = height;
-        p.sun.direction = v3(sun_dir);
-        p.sun.radiance = v3(sun_radiance);
-        p.sky = sky_of(sky);
-        p.sigma_t = sigma_t;
-        p.albedo = albedo;
-        p.g = g;
-        p.step = step;
-        p.with_sky = with_sky;
+        VolumeRenderParams p = params;
         p.solids = solid_spheres(solids);
         PhysicalGrids grids;
-        if (!physical.is_none()) {
-          p.physical = true;
-          p.phys = physical_of(physical.cast<py::dict>());
+        p.grids = nullptr;
+        if (p.physical) {
+          try {
+            p.phys.validate();
+          } catch (const std::invalid_argument& e) {
+            throw py::value_error(e.what());
+          }
           grids = physical_grids_of(physical_light);
           p.grids = &grids;
         }
@@ -335,18 +388,17 @@ void bind_volume_march(py::module_& m) {
         std::vector<float> img;
         {
           py::gil_scoped_release release;
-          img = render_volume_cpu(pd, pl, grid, cam, p, threads);
+          img = render_volume_cpu(pd, pl, grid, camera, p, threads);
         }
-        return to_array(img, {height, width, 4});
+        return to_array(img, {p.height, p.width, 4});
       },
-      py::arg("density"), py::arg("light"), py::arg("lo"), py::arg("hi"), py::arg("position"),
-      py::arg("forward"), py::arg("right"), py::arg("up"), py::arg("tan_half_fov"),
-      py::arg("width"), py::arg("height"), py::arg("sun_dir"), py::arg("sun_radiance"),
-      py::arg("sky"), py::arg("sigma_t"), py::arg("albedo"), py::arg("g"), py::arg("step"),
-      py::arg("threads"), py::arg("with_sky"), py::arg("solids") = py::none(),
-      py::arg("physical") = py::none(), py::arg("physical_light") = py::none(),
-      "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top; "
-      "solids (n, 4) stop every ray at the nearest solid.");
+      py::arg("density"), py::arg("light"), py::arg("lo"), py::arg("hi"), py::arg("camera"),
+      py::arg("params"), py::arg("threads"), py::arg("solids") = py::none(),
+      py::arg("physical_light") = py::none(),
+      "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top. "
+      "camera: a VolumeCamera; params: VolumeRenderParams (image, sun, sky, medium; physical "
+      "with its PhysicalParams and physical_light); solids (n, 4) stop every ray at the nearest "
+      "solid.");
 }
 
 void bind_composite(py::module_& m) {
@@ -354,7 +406,7 @@ void bind_composite(py::module_& m) {
       "composite_layers",
       [](const FloatArray& layers, const FloatArray& boxes, const py::handle& camera_position,
          const py::handle& camera_target, const py::handle& camera_up, float fov,
-         const py::tuple& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
+         const py::object& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
          int threads, const py::object& solid, const py::object& ground) {
         if (layers.ndim() != 4 || layers.shape(3) != 4)
           throw py::value_error("layers must have shape (L, H, W, 4)");
@@ -513,12 +565,6 @@ SpriteCamera sprite_camera(const py::dict& d) {
   return c;
 }
 
-SplatKernel kernel_of(const std::string& s) {
-  if (s == "gaussian") return SplatKernel::Gaussian;
-  if (s == "hermite") return SplatKernel::Hermite;
-  throw py::value_error("kernel must be 'gaussian' or 'hermite', got '" + s + "'");
-}
-
 using IntArray = py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>;
 
 std::vector<Sprite> sprites_of(const FloatArray& centres, const FloatArray& half_sizes,
@@ -670,8 +716,8 @@ void bind_sprites(py::module_& m) {
       "rasterise_sprites",
       [](const FloatArray& centres, const FloatArray& half_sizes, const FloatArray& rotation,
          const FloatArray& colours, const FloatArray& alpha, const IntArray& texture,
-         const py::dict& camera, const std::string& kernel, float peak, const py::object& atlas,
-         std::array<int, 2> grid, int threads, const py::object& shading, const py::object& depth) {
+         const py::dict& camera, const SpriteRasterSettings& settings, const py::object& atlas,
+         int threads, const py::object& shading, const py::object& depth) {
         const std::vector<Sprite> sprites =
             sprites_of(centres, half_sizes, rotation, colours, alpha, texture);
         // Fragment shading (billboards, spec §4.2): per sprite frame (N, 4), yrange (N, 2),
@@ -706,14 +752,16 @@ void bind_sprites(py::module_& m) {
             throw py::value_error("depth must have shape (H, W) like the image");
           depth_ptr = depth_array.data();
         }
-        SpriteRasterSettings st;
-        st.kernel = kernel_of(kernel);
-        st.peak = peak;
+        const SpriteRasterSettings& st = settings;
         FloatArray atlas_array;
         SpriteAtlas at;
         const SpriteAtlas* atlas_ptr = nullptr;
         if (!atlas.is_none()) {
-          atlas_array = atlas.cast<FloatArray>();
+          const py::tuple atlas_grid = atlas.cast<py::tuple>();
+          if (atlas_grid.size() != 2)
+            throw py::value_error("atlas must be None or (rgba (H, W, 4), (nx, ny))");
+          atlas_array = atlas_grid[0].cast<FloatArray>();
+          const auto grid = atlas_grid[1].cast<std::array<int, 2>>();
           if (atlas_array.ndim() != 3 || atlas_array.shape(2) != 4)
             throw py::value_error("atlas must have shape (H, W, 4)");
           at.rgba = atlas_array.data();
@@ -732,10 +780,11 @@ void bind_sprites(py::module_& m) {
         return out;
       },
       py::arg("centres"), py::arg("half_sizes"), py::arg("rotation"), py::arg("colours"),
-      py::arg("alpha"), py::arg("texture"), py::arg("camera"), py::arg("kernel"), py::arg("peak"),
-      py::arg("atlas").none(true), py::arg("grid"), py::arg("threads") = 0,
-      py::arg("shading") = py::none(), py::arg("depth") = py::none(),
+      py::arg("alpha"), py::arg("texture"), py::arg("camera"), py::arg("settings"),
+      py::arg("atlas").none(true), py::arg("threads") = 0, py::arg("shading") = py::none(),
+      py::arg("depth") = py::none(),
       "Rasterise view-plane-parallel sprites back to front into a premultiplied (H, W, 4) layer; "
+      "settings: a SpriteRasterSettings (kernel, peak); atlas: None or (rgba (H, W, 4), (nx, ny)); "
       "shading: per-pixel billboard shading; depth (H, W): a sprite covers only pixels where its "
       "view depth is smaller.");
 
@@ -769,8 +818,8 @@ void bind_sprites(py::module_& m) {
       "particle_sprites",
       [](const FloatArray& centres, const FloatArray& radii, const FloatArray& tau,
          const FloatArray& albedo, const FloatArray& light, const FloatArray& directions,
-         const FloatArray& radiances, const py::dict& camera, float solid_angle,
-         const std::string& phase, float hg_g, V3 ambient, const std::string& sort, bool cull) {
+         const FloatArray& radiances, const py::dict& camera,
+         const ParticleSpriteSettings& settings) {
         const ParticleView v = particle_view(centres, radii, tau, albedo);
         const auto n = static_cast<py::ssize_t>(v.n);
         if (directions.ndim() != 2 || directions.shape(1) != 3 || radiances.ndim() != 2 ||
@@ -788,25 +837,7 @@ void bind_sprites(py::module_& m) {
             throw py::value_error("light directions must be finite and non-zero");
           lights[static_cast<std::size_t>(l)] = {glm::normalize(dir), glm::vec3(r[0], r[1], r[2])};
         }
-        ParticleSpriteSettings s;
-        s.solid_angle = solid_angle;
-        if (phase == "rayleigh")
-          s.phase = PhaseKind::Rayleigh;
-        else if (phase == "isotropic")
-          s.phase = PhaseKind::Isotropic;
-        else if (phase == "hg")
-          s.phase = PhaseKind::HenyeyGreenstein;
-        else
-          throw py::value_error("phase must be 'rayleigh', 'isotropic' or 'hg'");
-        s.hg_g = hg_g;
-        s.ambient = v3(ambient);
-        if (sort == "distance")
-          s.sort = SpriteSort::Distance;
-        else if (sort == "depth")
-          s.sort = SpriteSort::Depth;
-        else
-          throw py::value_error("sort must be 'distance' or 'depth'");
-        s.cull = cull;
+        const ParticleSpriteSettings& s = settings;
         const SpriteCamera cam = sprite_camera(camera);
         ParticleSpriteList list;
         {
@@ -827,7 +858,10 @@ void bind_sprites(py::module_& m) {
         }
         return py::make_tuple(index, colour, alpha, key);
       },
-      "Eye pass sprites of a particle cloud: (index back to front, colours (M, 3), alpha (M,), "
+      py::arg("centres"), py::arg("radii"), py::arg("tau"), py::arg("albedo"), py::arg("light"),
+      py::arg("directions"), py::arg("radiances"), py::arg("camera"), py::arg("settings"),
+      "Eye pass sprites of a particle cloud (settings: a ParticleSpriteSettings): (index back to "
+      "front, colours (M, 3), alpha (M,), "
       "sort keys (M,)).");
 
   m.def(

@@ -39,20 +39,4 @@ float smoothstep(float e0, float e1, float x) {
   return t * t * (3.0f - 2.0f * t);
 }
 
-glm::vec3 sky_radiance(const SkyParams& sky, const SunParams& sun, glm::vec3 d) {
-  glm::vec3 base;
-  if (d.y >= 0.0f) {
-    base = sky.horizon + (sky.zenith - sky.horizon) * std::pow(d.y, sky.exponent);
-  } else {
-    base = sky.horizon + (sky.ground - sky.horizon) * std::min(1.0f, -8.0f * d.y);
-  }
-  if (sky.sun_disc_radius > 0.0f && sky.sun_disc_intensity != 0.0f) {
-    constexpr float kDegToRad = 0.017453292519943295f;
-    const float rad = sky.sun_disc_radius * kDegToRad;
-    const float w = smoothstep(std::cos(1.5f * rad), std::cos(rad), glm::dot(d, sun.direction));
-    base += w * sky.sun_disc_intensity * sun.radiance;
-  }
-  return base;
-}
-
 }  // namespace cumuli

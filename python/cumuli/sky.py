@@ -12,6 +12,7 @@ from typing import Any
 
 import numpy as np
 
+from cumuli import _core
 from cumuli import _validate as check
 
 
@@ -99,8 +100,7 @@ class Sky:
         up = hor + (zen - hor) * np.power(np.maximum(dy, 0), np.float32(self.exponent))
         down = hor + (gnd - hor) * np.minimum(np.float32(1), -8 * dy)
         base = np.where(dy >= 0, up, down)
-        rad = math.radians(self.sun_disc_radius)
-        e0, e1 = np.float32(math.cos(1.5 * rad)), np.float32(math.cos(rad))
+        e0, e1 = (np.float32(e) for e in sun_disc_edges(self.sun_disc_radius))
         c = d @ np.asarray(sun.direction, dtype=np.float32)
         t = np.clip((c - e0) / (e1 - e0), 0, 1)
         disc = (t * t * (3 - 2 * t))[..., None] * np.float32(self.sun_disc_intensity)
@@ -147,9 +147,19 @@ def as_sky(sky: Any) -> Sky:
     )
 
 
-def sky_args(sky: Sky) -> tuple:
-    """The core's sky tuple (zenith, horizon, ground, exponent, disc radius, disc intensity)."""
-    return (
-        sky.zenith, sky.horizon, sky.ground, float(sky.exponent), float(sky.sun_disc_radius),
-        float(sky.sun_disc_intensity),
-    )  # fmt: skip
+def sun_disc_edges(radius: float) -> tuple[float, float]:
+    """The sun disc's smoothstep edges ``(cos 1.5r, cos r)`` for its radius ``r`` in degrees:
+    the disc weighs ``smoothstep(cos 1.5r, cos r, d·sun)`` (RENDER_CONTRACT "Sky"; the GLSL
+    ``u_sun_disc`` and :meth:`Sky.colour`)."""
+    rad = math.radians(radius)
+    return (math.cos(1.5 * rad), math.cos(rad))
+
+
+def sky_args(sky: Sky) -> Any:
+    """The sky as the core takes it: a ``_core.SkyParams``."""
+    p = _core.SkyParams()
+    p.zenith, p.horizon, p.ground = sky.zenith, sky.horizon, sky.ground
+    p.exponent = float(sky.exponent)
+    p.sun_disc_radius = float(sky.sun_disc_radius)
+    p.sun_disc_intensity = float(sky.sun_disc_intensity)
+    return p

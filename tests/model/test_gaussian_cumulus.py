@@ -7,6 +7,7 @@ import pytest
 
 import cumuli
 from cumuli import _core
+from cumuli._structs import core_struct
 
 SIGMA = np.array([3.8, 1.7, 3.7], dtype=np.float64)
 HOLLOW = np.array([0.75, 1.0 / 3.0, 0.75]) * SIGMA
@@ -167,24 +168,14 @@ def test_all_removed_is_a_clear_error() -> None:
 def test_core_validates_on_its_own() -> None:
     with pytest.raises(ValueError, match="sigma"):
         _core.gaussian_cumulus(
-            [0, 0, 0],
-            5,
-            [0, 0, 0],
-            [1, -1, 1],
-            [-2, 0, -2],
-            [2, 2, 2],
-            "saturate",
-            "eq16",
-            "sum",
-            2.5,
-            1.0,
-            1.0,
-            1.0,
-            True,
-            [0.75, 0.33, 0.75],
-            True,
-            0,
-        )
+            core_struct(
+                _core.GaussianCumulusParams, centre=[0, 0, 0], n=5, mu=[0, 0, 0],
+                sigma=[1, -1, 1], clamp_lo=[-2, 0, -2], clamp_hi=[2, 2, 2],
+                clamp_mode="saturate", radius_model="eq16", eq16_combine="sum", epsilon=2.5,
+                radius_scale=1.0, radius_lo=1.0, radius_hi=1.0, hollow=True,
+                hollow_box=[0.75, 0.33, 0.75], remove_contained=True, seed=0,
+            )
+        )  # fmt: skip
 
 
 def test_epsilon_pair_picks_by_model() -> None:

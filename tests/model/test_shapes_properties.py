@@ -10,6 +10,7 @@ from hypothesis.extra import numpy as hnp
 
 import cumuli
 from cumuli import _core
+from cumuli._structs import core_struct
 
 SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 finite = st.floats(-1e4, 1e4, allow_nan=False, allow_infinity=False, width=32)
@@ -69,8 +70,13 @@ def test_gaussian_core_random_parameters(
     centre, n, mu, sigma, lo, hi, model, combine, mode, seed
 ) -> None:
     c, r, stats = _core.gaussian_cumulus(
-        list(centre), n, list(mu), list(sigma), [lo, lo, lo], [hi, hi, hi], mode, model,
-        combine, 2.5, 1.0, 0.5, 1.5, True, [0.75, 0.33, 0.75], True, seed,
+        core_struct(
+            _core.GaussianCumulusParams, centre=list(centre), n=n, mu=list(mu),
+            sigma=list(sigma), clamp_lo=[lo, lo, lo], clamp_hi=[hi, hi, hi], clamp_mode=mode,
+            radius_model=model, eq16_combine=combine, epsilon=2.5, radius_scale=1.0,
+            radius_lo=0.5, radius_hi=1.5, hollow=True, hollow_box=[0.75, 0.33, 0.75],
+            remove_contained=True, seed=seed,
+        )
     )  # fmt: skip
     assert np.isfinite(c).all() and np.isfinite(r).all() and (r > 0).all()
     assert stats["drawn"] == n
@@ -100,8 +106,13 @@ def test_lsystem_random_grammars(axiom, rules, iterations, angle_lo, spread, see
     assert len(s) == expected
     try:
         c, r, stats = _core.lsystem_interpret(
-            s, angle_lo, angle_lo + spread, 0.5, 1.0, 0.5, 1.5, "XYF", "f",
-            [0, 0, 0], [1, 0, 0], [0, 1, 0], seed, 1 << 20,
+            s,
+            core_struct(
+                _core.TurtleParams, angle_lo=angle_lo, angle_hi=angle_lo + spread,
+                radius_lo=0.5, radius_hi=1.0, step_lo=0.5, step_hi=1.5, draw_symbols="XYF",
+                move_symbols="f", start=[0, 0, 0], heading=[1, 0, 0], up=[0, 1, 0], seed=seed,
+                max_spheres=1 << 20,
+            ),
         )  # fmt: skip
     except ValueError as exc:  # only unbalanced brackets may be refused
         assert "unbalanced" in str(exc)

@@ -320,8 +320,12 @@ def test_non_orthonormal_rotations_are_refused(rotation: object) -> None:
         cu.Cloud(np.zeros((1, 3)), np.ones(1), rot)
     with pytest.raises(ValueError, match="orthonormal"):
         _core.light_grid(
-            np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32), rot, "spheroid", 0.5,
-            0.6, None, (0, 1, 0), (4, 4, 4), "ndt", 0.1, 0.3, 1e-4, 5, 0.5, 2.0, 1.0, 0.5, 1,
+            _core.CloudShape(
+                np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32), rot, "spheroid", 0.5,
+                0.6,
+            ),
+            None, (0, 1, 0), (4, 4, 4), "ndt", 0.1, 0.3, 1e-4, _core.FbmParams(5, 0.5, 2.0, 1.0),
+            0.5, 1,
         )  # fmt: skip
 
 

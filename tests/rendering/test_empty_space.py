@@ -180,7 +180,9 @@ def test_return_stats_bad_input():
     with pytest.raises(ValueError, match="2018 clouds"):
         cu.render_cpu(vol, cam, 8, 6, return_stats=True)
     with pytest.raises(ValueError, match="min_transmittance"):
-        _core.render_cpu(**{**_args(scene, cam), "min_transmittance": 1.5})
+        args = _args(scene, cam)
+        args["settings"].min_transmittance = 1.5
+        _core.render_cpu(**args)
 
 
 def _args(scene: cu.Scene, cam: cu.Camera) -> dict:

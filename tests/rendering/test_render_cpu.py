@@ -16,6 +16,7 @@ from test_physical import _jitter  # RENDER_CONTRACT "Camera rays": ξ of a pixe
 import cumuli as cu
 import cumuli.rendering.cpu
 from cumuli import _core
+from cumuli._structs import core_struct
 
 F = np.float32
 EYE3 = np.eye(3, dtype=np.float32)
@@ -85,6 +86,59 @@ def make_args(clouds, width=8, height=6, **over):
     }
     args.update(over)
     return args
+
+
+def core_render(**a):
+    """``_core.render_cpu`` from the flat arguments of `make_args`, packed into the core's
+    structs (the numpy reference below reads the flat ones)."""
+    a = dict(a)
+    cam = core_struct(
+        _core.CameraParams, position=a.pop("camera_position"), target=a.pop("camera_target"),
+        up=a.pop("camera_up"), fov=a.pop("fov"),
+    )  # fmt: skip
+    view = _core.Viewport(cam, a.pop("width"), a.pop("height"))
+    sun = core_struct(
+        _core.SunParams, direction=a.pop("sun_direction"), radiance=a.pop("sun_radiance")
+    )
+    sky = core_struct(
+        _core.SkyParams, zenith=a.pop("sky_zenith"), horizon=a.pop("sky_horizon"),
+        ground=a.pop("sky_ground"), exponent=a.pop("sky_exponent"),
+        sun_disc_radius=a.pop("sun_disc_radius"), sun_disc_intensity=a.pop("sun_disc_intensity"),
+    )  # fmt: skip
+    settings = _core.MarchSettings()
+    for name in MARCH_FIELDS:
+        if name in a:
+            setattr(settings, name, a.pop(name))
+    settings.fbm = _core.FbmParams(
+        a.pop("octaves"), a.pop("gain"), a.pop("lacunarity"), a.pop("frequency")
+    )
+    settings.phys.jitter_seed = a.pop("jitter_seed", 0)
+    return _core.render_cpu(view, a.pop("clouds"), sun, sky, settings, **a)
+
+
+MARCH_FIELDS = (
+    "absorption", "lod_a", "lod_delta", "ref_step", "step_min", "step_max", "fixed_step", "hg_g",
+    "max_steps", "max_candidates", "march", "sort_candidates", "density_constant",
+    "min_transmittance", "skip_empty", "jitter",
+)  # fmt: skip
+
+
+def flat_args(core: dict) -> dict:
+    """The flat arguments of `make_args` from the core's (structs) keyword arguments."""
+    view, sun, sky, st = core["view"], core["sun"], core["sky"], core["settings"]
+    out = {
+        "camera_position": view.camera.position, "camera_target": view.camera.target,
+        "camera_up": view.camera.up, "fov": view.camera.fov, "width": view.width,
+        "height": view.height, "sun_direction": sun.direction, "sun_radiance": sun.radiance,
+        "sky_zenith": sky.zenith, "sky_horizon": sky.horizon, "sky_ground": sky.ground,
+        "sky_exponent": sky.exponent, "sun_disc_radius": sky.sun_disc_radius,
+        "sun_disc_intensity": sky.sun_disc_intensity, "octaves": st.fbm.octaves,
+        "gain": st.fbm.gain, "lacunarity": st.fbm.lacunarity, "frequency": st.fbm.frequency,
+        "jitter_seed": st.phys.jitter_seed,
+    }  # fmt: skip
+    out.update({name: getattr(st, name) for name in MARCH_FIELDS})
+    out.update({k: v for k, v in core.items() if k not in ("view", "sun", "sky", "settings")})
+    return out
 
 
 def two_spheres(**kw):
@@ -379,7 +433,7 @@ def ref_render(args, lattice=None):
 @pytest.mark.parametrize("march", ["paper", "union"])
 def test_constant_density_matches_numpy_reference(march):
     args = make_args([two_spheres()], march=march)
-    img = _core.render_cpu(**args)
+    img = core_render(**args)
     ref = ref_render(args)
     assert img.shape == (6, 8, 4) and img.dtype == np.float32
     assert (img[..., 3] > 0.5).sum() >= 4, "the test scene must actually show the cloud"
@@ -390,12 +444,12 @@ def test_constant_density_matches_numpy_reference(march):
 def test_jittered_samples_match_numpy_reference(march):
     # settings.jitter: each pixel's samples at ξ·Δ into their step instead of Δ/2.
     args = make_args([two_spheres()], march=march, jitter=True, jitter_seed=7, width=12, height=9)
-    img = _core.render_cpu(**args)
+    img = core_render(**args)
     ref = ref_render(args)
     np.testing.assert_allclose(img, ref, atol=1e-5, rtol=0)
-    plain = _core.render_cpu(**{**args, "jitter": False})
+    plain = core_render(**{**args, "jitter": False})
     assert np.abs(img - plain).max() > 1e-3  # the offsets do move the samples
-    assert not np.array_equal(_core.render_cpu(**{**args, "jitter_seed": 8}), img)  # its seed
+    assert not np.array_equal(core_render(**{**args, "jitter_seed": 8}), img)  # its seed
 
 
 @pytest.mark.parametrize("march", ["paper", "union"])
@@ -408,7 +462,7 @@ def test_fbm_density_matches_numpy_reference(march):
         density_constant=-1.0,
         frequency=2.0,
     )
-    img = _core.render_cpu(**args)
+    img = core_render(**args)
     ref = ref_render(args, np.asarray(noise.lattice))
     assert (img[..., 3] > 0.05).sum() >= 4
     np.testing.assert_allclose(img, ref, atol=1e-5, rtol=0)
@@ -424,7 +478,7 @@ def test_metaball_and_two_clouds_match_numpy_reference():
     )
     far = cloud_dict([[2.0, 0.5, 4.0]], [1.5], seed=2)
     args = make_args([far, meta], absorption=2.0, density_constant=0.5)
-    img = _core.render_cpu(**args)
+    img = core_render(**args)
     ref = ref_render(args)
     assert (img[..., 3] > 0.5).sum() >= 2
     np.testing.assert_allclose(img, ref, atol=1e-5, rtol=0)
@@ -433,26 +487,26 @@ def test_metaball_and_two_clouds_match_numpy_reference():
 def test_thread_count_does_not_change_a_bit():
     noise = _core.Noise(5, 32)
     args = make_args([two_spheres()], width=40, height=30, noise=noise, density_constant=-1.0)
-    one = _core.render_cpu(**{**args, "threads": 1})
+    one = core_render(**{**args, "threads": 1})
     for t in (2, 3, 7):
-        assert np.array_equal(one, _core.render_cpu(**{**args, "threads": t}))
+        assert np.array_equal(one, core_render(**{**args, "threads": t}))
 
 
 def test_no_cloud_gives_the_sky_exactly():
     args = make_args([], width=8, height=6)
-    img = _core.render_cpu(**args)
+    img = core_render(**args)
     assert (img[..., 3] == 0).all()
     np.testing.assert_allclose(img, ref_render(args), atol=1e-6, rtol=0)
     # A cloud the camera looks away from changes nothing either.
     behind = make_args([cloud_dict([[0.0, 0.0, -20.0]], [1.0])])
-    assert np.array_equal(_core.render_cpu(**behind), img)
+    assert np.array_equal(core_render(**behind), img)
 
 
 def test_paper_equals_union_where_primitives_are_disjoint():
     disjoint = cloud_dict([[-1.2, 0.0, 0.0], [1.2, 0.0, 0.5]], [1.0, 0.9])
     args = make_args([disjoint], width=24, height=18)
-    paper = _core.render_cpu(**{**args, "march": "paper"})
-    union = _core.render_cpu(**{**args, "march": "union"})
+    paper = core_render(**{**args, "march": "paper"})
+    union = core_render(**{**args, "march": "union"})
     assert (paper[..., 3] > 0.5).sum() > 20
     assert np.array_equal(paper, union)
 
@@ -466,8 +520,8 @@ def test_paper_marches_overlaps_twice():
         absorption=0.1,
         density_constant=0.2,
     )
-    paper = _core.render_cpu(**{**args, "march": "paper"})
-    union = _core.render_cpu(**{**args, "march": "union"})
+    paper = core_render(**{**args, "march": "paper"})
+    union = core_render(**{**args, "march": "union"})
     covered = union[..., 3] > 0.05
     assert covered.sum() > 20
     # Never less opaque; rays through both spheres see about twice the optical depth (thin
@@ -494,7 +548,7 @@ def test_camera_inside_a_cloud_is_finite_and_covered():
         width=16,
         height=12,
     )
-    img = _core.render_cpu(**args)
+    img = core_render(**args)
     assert np.isfinite(img).all()
     assert (img[..., 3] > 0).all()  # every ray starts inside the sphere
     np.testing.assert_allclose(
@@ -507,8 +561,8 @@ def test_camera_inside_a_cloud_is_finite_and_covered():
 
 def test_max_steps_caps_the_march():
     args = make_args([two_spheres()], absorption=0.05, density_constant=0.2)
-    full = _core.render_cpu(**args)
-    capped = _core.render_cpu(**{**args, "max_steps": 3})
+    full = core_render(**args)
+    capped = core_render(**{**args, "max_steps": 3})
     covered = full[..., 3] > 0.05  # rays with more than three samples in the cloud
     assert covered.any()
     assert (capped[..., 3] <= full[..., 3]).all()
@@ -522,15 +576,15 @@ def test_max_candidates_keeps_the_nearest():
     args = make_args(
         [row], camera_position=(0.0, 0.0, -8.0), camera_target=(0.0, 0.0, 0.0), absorption=0.2
     )
-    one = _core.render_cpu(**{**args, "max_candidates": 1})
+    one = core_render(**{**args, "max_candidates": 1})
     np.testing.assert_allclose(one, ref_render({**args, "max_candidates": 1}), atol=1e-5, rtol=0)
-    all3 = _core.render_cpu(**args)
+    all3 = core_render(**args)
     assert all3[3, 4, 3] > one[3, 4, 3] > 0
 
 
 def test_early_exit_makes_dense_clouds_opaque():
     args = make_args([two_spheres()], absorption=50.0, density_constant=0.3)
-    img = _core.render_cpu(**args)
+    img = core_render(**args)
     assert img[..., 3].max() >= 1 - 1e-6
     np.testing.assert_allclose(img, ref_render(args), atol=1e-5, rtol=0)
 
@@ -567,7 +621,7 @@ def test_early_exit_makes_dense_clouds_opaque():
 )
 def test_bad_arguments_raise_clear_errors(change, match):
     with pytest.raises(ValueError, match=match):
-        _core.render_cpu(**make_args([two_spheres()], **change))
+        core_render(**make_args([two_spheres()], **change))
 
 
 @pytest.mark.parametrize(
@@ -587,16 +641,16 @@ def test_bad_arguments_raise_clear_errors(change, match):
 def test_bad_clouds_raise_clear_errors(change, match):
     cloud = {**two_spheres(), **change}
     with pytest.raises(ValueError, match=match):
-        _core.render_cpu(**make_args([cloud]))
+        core_render(**make_args([cloud]))
 
 
 def test_cloud_missing_a_field_or_not_a_dict():
     cloud = two_spheres()
     del cloud["light"]
     with pytest.raises(ValueError, match=r"clouds\[0\].*light"):
-        _core.render_cpu(**make_args([cloud]))
+        core_render(**make_args([cloud]))
     with pytest.raises(TypeError, match=r"clouds\[0\]"):
-        _core.render_cpu(**make_args([42]))
+        core_render(**make_args([42]))
 
 
 # --------------------------------------------------------------------------------------------
@@ -618,9 +672,9 @@ def test_render_cpu_on_scene_objects_follows_the_contract():
     scene = cu.prepare_light(scene, lights=[grid])  # the hand-made grid, used as it is
     camera = cu.Camera(position=(0.3, 0.4, -6.0), target=(0.2, 0.1, 0.0), fov=40)
     img = cu.render_cpu(scene, camera, 8, 6)
-    args = cumuli.rendering.cpu.render_cpu_args(scene, camera, 8, 6)
+    args = flat_args(cumuli.rendering.cpu.render_cpu_args(scene, camera, 8, 6))
     assert args["clouds"][0]["kappa"] == pytest.approx(0.7)  # settings.kappa overrides the cloud's
-    assert args["ref_step"] == settings.step_ref and args["march"] == "union"
+    assert args["ref_step"] == np.float32(settings.step_ref) and args["march"] == "union"
     assert (img[..., 3] > 0.05).sum() >= 4
     lattice = np.asarray(scene.scene.noise.lattice)
     np.testing.assert_allclose(img, ref_render(args, lattice), atol=1e-5)
@@ -684,13 +738,13 @@ def test_rotation_columns_are_the_ellipsoid_axes():
     rotated = {**aligned, "radii": np.array([[2.0, 1.0, 0.7]], np.float32)}
     rotated["rotations"] = np.array([[[0, 0, 1], [1, 0, 0], [0, 1, 0]]], np.float32)
     args = make_args([aligned], width=20, height=15, noise=noise, density_constant=-1.0)
-    a = _core.render_cpu(**args)
-    b = _core.render_cpu(**{**args, "clouds": [rotated]})
+    a = core_render(**args)
+    b = core_render(**{**args, "clouds": [rotated]})
     assert (a[..., 3] > 0.05).sum() > 10
     np.testing.assert_allclose(a, b, atol=1e-5, rtol=0)
     # Rows as axes would be another ellipsoid (radii (1, 0.7, 2)): visibly different.
     wrong = {**rotated, "rotations": np.transpose(rotated["rotations"], (0, 2, 1)).copy()}
-    c = _core.render_cpu(**{**args, "clouds": [wrong]})
+    c = core_render(**{**args, "clouds": [wrong]})
     assert np.abs(c - a)[..., 3].max() > 0.2
 
 
@@ -708,7 +762,7 @@ def test_axis_aligned_rays_with_zero_direction_components():
         camera_target=(0.0, 0.0, 0.0),
         sun_direction=(0.0, 1.0, 0.0),
     )
-    img = _core.render_cpu(**args)
+    img = core_render(**args)
     assert np.isfinite(img).all()
     assert img[3, 4, 3] > 0.5  # the centre ray goes through the middle of the sphere
     np.testing.assert_allclose(img[..., 3], img[:, ::-1, 3], atol=1e-6)

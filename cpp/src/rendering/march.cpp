@@ -72,6 +72,15 @@ void CameraParams::validate() const {
     throw std::invalid_argument("camera up must not be parallel to the view direction");
 }
 
+void Viewport::validate() const {
+  if (width < 1 || height < 1 || width > kMaxEdge || height > kMaxEdge)
+    throw std::invalid_argument("width and height must be in [1, " + std::to_string(kMaxEdge) +
+                                "], got " + std::to_string(width) + "x" + std::to_string(height));
+  if (static_cast<long long>(width) * height > kMaxPixels)
+    throw std::invalid_argument("image has more than " + std::to_string(kMaxPixels) + " pixels");
+  camera.validate();
+}
+
 CameraRays::CameraRays(const CameraParams& camera, int w, int h) : width(w), height(h) {
   origin = camera.position;
   forward = glm::normalize(camera.target - camera.position);

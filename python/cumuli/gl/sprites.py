@@ -24,6 +24,7 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli._structs import core_struct
 from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _resolve_context
 from cumuli.gl.sprite_shading import _SHADE_ATTRS, _SHADE_FORMAT, FragmentShading
@@ -242,10 +243,8 @@ def draw_sprites_cpu(
         sprites.alpha,
         sprites.texture,
         cam,
-        kernel,
-        peak,
-        arr,
-        grid,
+        core_struct(_core.SpriteRasterSettings, kernel=kernel, peak=peak),
+        None if arr is None else (arr, grid),
         check.threads(threads),
         None if shading is None else shading.core_dict(),
         depth,

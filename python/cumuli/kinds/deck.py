@@ -9,8 +9,8 @@ from __future__ import annotations
 from typing import Any
 
 from cumuli import registry
-from cumuli.kinds import volume as volume_kind
 from cumuli.light.medium import volume_core_args, volume_extinction
+from cumuli.light.memo import content_digest
 from cumuli.light.physical import physical_pass
 from cumuli.light.volume import volume_light
 from cumuli.model.deck import CloudDeck
@@ -19,7 +19,8 @@ from cumuli.rendering.deck import DeckGL, draw_deck_cpu
 
 def digest(deck: CloudDeck) -> tuple:
     """What a deck's light depends on: its baked lattice, box and extinction."""
-    return ("deck", *volume_kind.digest(deck.to_volume())[1:])
+    volume = deck.to_volume()
+    return ("deck", content_digest(volume.density), volume.box, volume.sigma_t)
 
 
 def light(deck: CloudDeck, scene: Any, given: Any = None, threads: int = 0) -> Any:

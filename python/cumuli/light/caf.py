@@ -27,6 +27,7 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli._structs import core_struct
 from cumuli.light.billboard_shading import (  # noqa: F401  (re-exported)
     CAF_AT,
     CURVES,
@@ -395,13 +396,16 @@ def _shade_args(
         cloud.boxes,
         np.asarray(dirs, dtype=np.float32),
         np.asarray(rads, dtype=np.float32),
-        shading.d_min,
-        shading.d_max,
-        shading.k_dir,
-        shading.directional,
-        shading.ambient_colour(sky),
-        shading.k_amb,
-        levels,
+        core_struct(
+            _core.ShadeParams,
+            d_min=shading.d_min,
+            d_max=shading.d_max,
+            k_dir=shading.k_dir,
+            directional=shading.directional,
+            ambient=shading.ambient_colour(sky),
+            k_amb=shading.k_amb,
+            height_levels=levels,
+        ),
     ]
     return args, light.at
 

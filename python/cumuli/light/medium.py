@@ -64,8 +64,8 @@ def _cloud_grid(
     if settings.kappa is not None and model == "spheroid":
         kappa = settings.kappa
     rho = _core.density_grid(
-        centres, radii, rotations, model, float(kappa), float(phi), noise._core, -1.0,
-        settings.octaves, settings.gain, settings.lacunarity, settings.frequency,
+        _core.CloudShape(centres, radii, rotations, model, float(kappa), float(phi)),
+        noise._core, -1.0, _core.FbmParams(**settings.fbm_params()),
         tuple(map(float, box[0])), tuple(map(float, box[1])), shape, supersample, threads,
     )  # fmt: skip
     rho *= np.float32(settings.extinction_scale)

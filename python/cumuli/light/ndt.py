@@ -238,7 +238,7 @@ def light_grid(
     constant = -1.0 if p.density_override is None else p.density_override
     with _progress.core("light grid", progress):
         out = _core.light_grid(
-            *target.core_args(),
+            _core.CloudShape(*target.core_args()),
             noise._core if noise is not None else None,
             sun_dir,
             p.resolution,
@@ -246,10 +246,7 @@ def light_grid(
             p.step,
             p.extinction,
             p.solid_angle,
-            p.octaves,
-            p.gain,
-            p.lacunarity,
-            p.frequency,
+            _core.FbmParams(p.octaves, p.gain, p.lacunarity, p.frequency),
             constant,
             nthreads,
         )

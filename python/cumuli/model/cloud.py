@@ -226,17 +226,16 @@ class Cloud:
                 raise TypeError(f"noise must be a cumuli.Noise, got {type(noise).__name__}")
         else:
             const = check.real(constant, "constant", 0.0)
-        return _core.cloud_density(
-            *self.core_args(),
-            pts,
-            core_noise,
-            const,
+        fbm = _core.FbmParams(
             check.integer(octaves, "octaves", 1, 16),
             check.real(gain, "gain", 0.0, lo_open=True),
             check.real(lacunarity, "lacunarity", 0.0, lo_open=True),
             check.real(frequency, "frequency", 0.0, lo_open=True),
-            check.threads(threads),
         )
+        return _core.cloud_density(
+            _core.CloudShape(*self.core_args()), pts, core_noise, const, fbm,
+            check.threads(threads),
+        )  # fmt: skip
 
     # --- transforms (new clouds) ----------------------------------------------------------
     def _derived(self, transform: dict[str, Any], **changes: Any) -> Cloud:

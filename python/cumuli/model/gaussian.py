@@ -16,6 +16,7 @@ from typing import Any
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli._structs import core_struct
 from cumuli._validate import MAX_COORD
 from cumuli.model.cloud import Cloud
 
@@ -156,25 +157,27 @@ def gaussian_cumulus(
         raise ValueError(f"hollow_box must be non-negative, got {tuple(args['hollow_box'])}")
     cl = args["clamps"]
     _check_gaussian_reach(args)
-    centres, radii, stats = _core.gaussian_cumulus(
-        args["centre"],
-        args["n"],
-        args["mu"],
-        args["sigma"],
-        [cl[0][0], cl[1][0], cl[2][0]],
-        [cl[0][1], cl[1][1], cl[2][1]],
-        args["clamp_mode"],
-        args["radius_model"],
-        args["eq16_combine"],
-        args["epsilon"],
-        args["radius_scale"],
-        args["radius_range"][0],
-        args["radius_range"][1],
-        args["hollow"],
-        args["hollow_box"],
-        args["remove_contained"],
-        args["seed"],
+    params = core_struct(
+        _core.GaussianCumulusParams,
+        centre=args["centre"],
+        n=args["n"],
+        mu=args["mu"],
+        sigma=args["sigma"],
+        clamp_lo=[cl[0][0], cl[1][0], cl[2][0]],
+        clamp_hi=[cl[0][1], cl[1][1], cl[2][1]],
+        clamp_mode=args["clamp_mode"],
+        radius_model=args["radius_model"],
+        eq16_combine=args["eq16_combine"],
+        epsilon=args["epsilon"],
+        radius_scale=args["radius_scale"],
+        radius_lo=args["radius_range"][0],
+        radius_hi=args["radius_range"][1],
+        hollow=args["hollow"],
+        hollow_box=args["hollow_box"],
+        remove_contained=args["remove_contained"],
+        seed=args["seed"],
     )
+    centres, radii, stats = _core.gaussian_cumulus(params)
     if centres.shape[0] == 0:
         raise ValueError(
             f"the filters removed all {stats['drawn']} spheres (n={args['n']}); "

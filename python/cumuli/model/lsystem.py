@@ -13,6 +13,7 @@ from typing import Any
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli._structs import core_struct
 from cumuli._validate import MAX_COORD
 from cumuli.model.cloud import MAX_PRIMITIVES, Cloud
 
@@ -184,22 +185,23 @@ def lsystem_cloud(
             f"radius * step over {moves} moves lets the turtle reach {reach:.3g} from the origin, "
             f"beyond the limit ±{MAX_COORD:g}: shrink radius or step"
         )
-    centres, radii, stats = _core.lsystem_interpret(
-        symbols,
-        a_lo,
-        a_hi,
-        args["radius"][0],
-        args["radius"][1],
-        args["step"][0],
-        args["step"][1],
-        draw_symbols,
-        move_symbols,
-        args["start"],
-        args["heading"],
-        args["up"],
-        args["seed"],
-        MAX_PRIMITIVES,
+    turtle = core_struct(
+        _core.TurtleParams,
+        angle_lo=a_lo,
+        angle_hi=a_hi,
+        radius_lo=args["radius"][0],
+        radius_hi=args["radius"][1],
+        step_lo=args["step"][0],
+        step_hi=args["step"][1],
+        draw_symbols=draw_symbols,
+        move_symbols=move_symbols,
+        start=args["start"],
+        heading=args["heading"],
+        up=args["up"],
+        seed=args["seed"],
+        max_spheres=MAX_PRIMITIVES,
     )
+    centres, radii, stats = _core.lsystem_interpret(symbols, turtle)
     if centres.shape[0] == 0:
         raise ValueError(
             f"the L-system placed no spheres: none of draw_symbols {draw_symbols!r} occurs in "

@@ -494,17 +494,14 @@ def particle_fill(
     lacunarity = check.real(lacunarity, "lacunarity", 0.0, lo_open=True)
     frequency = check.real(frequency, "frequency", 0.0, lo_open=True)
     c, r, t, a = _core.particle_fill(
-        *cloud.core_args(),
+        _core.CloudShape(*cloud.core_args()),
         n,
         rmin,
         rmax,
         tau,
         albedo,
         None if noise is None else noise._core,
-        octaves,
-        gain,
-        lacunarity,
-        frequency,
+        _core.FbmParams(octaves, gain, lacunarity, frequency),
         1e-3,
         seed,
         check.threads(threads),

@@ -17,6 +17,7 @@ import numpy as np
 
 from cumuli import _core, _progress
 from cumuli import _validate as check
+from cumuli._structs import core_struct
 from cumuli.io.jsonable import array_from_json, array_to_json, jsonable
 from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise, _fbm_params
@@ -237,9 +238,12 @@ def evolving_cloud_volumes(
     seed = check.integer(seed, "seed", 0, 2**64 - 1)
     fbm = _fbm_params(octaves, gain, lacunarity, frequency)
     res = [w, h, d]
-    evo = (n_frames, res, growth, drift3, jitter, wind3, density_scale, padding, seed)
+    evo = core_struct(
+        _core.EvolutionParams, frames=n_frames, res=res, growth=growth, drift=drift3,
+        jitter=jitter, wind=wind3, density_scale=density_scale, padding=padding, seed=seed,
+    )  # fmt: skip
     if box is None:
-        lo, hi = _core.evolving_cloud_box(*cloud.core_args(), *evo)
+        lo, hi = _core.evolving_cloud_box(_core.CloudShape(*cloud.core_args()), evo)
         lo, hi = _box(lo, hi)
     else:
         if not isinstance(box, Sequence) or len(box) != 2:
@@ -247,8 +251,9 @@ def evolving_cloud_volumes(
         lo, hi = _box(box[0], box[1])
     with _progress.core("cloud volumes", progress):  # a bar when it takes long
         vols = _core.evolving_cloud_volumes(
-            *cloud.core_args(), core_noise, const, *fbm, *evo, lo, hi, check.threads(threads)
-        )
+            _core.CloudShape(*cloud.core_args()), core_noise, const, _core.FbmParams(*fbm), evo,
+            lo, hi, check.threads(threads),
+        )  # fmt: skip
     return VolumeDatabase(vols, lo, hi)
 
 

@@ -20,18 +20,23 @@ from cumuli import _core
 from cumuli import _validate as check
 from cumuli.camera import Camera
 from cumuli.ground import ground_args
-from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, PhysicalLight
+from cumuli.light.physical import PhysicalLight
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.cloud import Cloud
 from cumuli.model.solid import solid_arrays
+from cumuli.rendering.params import (
+    MIN_TRANSMITTANCE,  # noqa: F401  (re-exported)
+    march_params,
+    sky_params,
+    sun_params,
+    viewport,
+)
 from cumuli.scene import Scene
 
 #: Largest image edge the CPU marcher accepts.
 MAX_EDGE = 1 << 14
 #: Largest image in pixels (the core's own limit, checked before any light grid is made).
 MAX_PIXELS = 1 << 26
-#: The physical mode stops a ray once its transmittance falls below this.
-MIN_TRANSMITTANCE = 1e-4
 #: Cells per axis of a cloud's occupancy grid (empty-space skipping; the shader's OCC_RES).
 OCCUPANCY_RESOLUTION = 16
 
@@ -96,24 +101,6 @@ def physical_core_tuple(light: PhysicalLight) -> tuple:
     return (light.frame, light.sun_depth, lo, hi, light.grid)
 
 
-def physical_core_args(settings: Any, octaves: int) -> dict[str, Any]:
-    """The physical shading parameters of the core (RENDER_CONTRACT "Physical lighting")."""
-    return {
-        "extinction_scale": float(settings.extinction_scale),
-        "albedo": float(settings.albedo),
-        "dual_hg": settings.phase == "dual_hg",
-        "g1": float(settings.hg_g),
-        "g2": float(settings.hg_g2),
-        "blend": float(settings.hg_blend),
-        "octaves": int(octaves),
-        "a": OCTAVE_A,
-        "b": OCTAVE_B,
-        "c": OCTAVE_C,
-        "jitter_seed": int(settings.jitter_seed),
-        "min_transmittance": MIN_TRANSMITTANCE,
-    }
-
-
 def cloud_core_dict(cloud: Cloud, grid: Any, kappa: float | None = None) -> dict[str, Any]:
     """The dict ``_core.render_cpu`` takes for one cloud and its light (a `LightGrid`, or a
     `PhysicalLight` in the physical mode).
@@ -158,7 +145,8 @@ def render_cpu_args(
     of a scene (its light prepared first when it is not a `LitScene`).
 
     Exposed for tests and tools that want to change one knob of the core call (for example
-    ``density_constant``, a constant density in place of fBm for analytic checks).
+    ``args["settings"].density_constant``, a constant density in place of fBm for analytic
+    checks).
     """
     lit = scene if isinstance(scene, LitScene) else prepare_light(scene, threads=threads)
     scene = lit.scene
@@ -168,51 +156,17 @@ def render_cpu_args(
     if indices is None:
         indices = range(len(scene.clouds))
     s = scene.settings
-    sky = scene.sky
-    sun = scene.sun
     return {
-        "camera_position": camera.position,
-        "camera_target": camera.target,
-        "camera_up": camera.up,
-        "fov": float(camera.fov),
-        "width": width,
-        "height": height,
+        "view": viewport(camera, width, height),
         "clouds": [cloud_core_dict(scene.clouds[k], lit.lights[k], s.kappa) for k in indices],
-        "sun_direction": sun.direction,
-        "sun_radiance": sun.radiance,
-        "sky_zenith": sky.zenith,
-        "sky_horizon": sky.horizon,
-        "sky_ground": sky.ground,
-        "sky_exponent": float(sky.exponent),
-        "sun_disc_radius": float(sky.sun_disc_radius),
-        "sun_disc_intensity": float(sky.sun_disc_intensity),
-        "absorption": float(s.absorption),
-        "lod_a": float(s.lod_a),
-        "lod_delta": float(s.lod_delta),
-        "ref_step": float(s.step_ref),
-        "step_min": float(s.step_min),
-        "step_max": float(s.step_max),
-        "fixed_step": float(s.fixed_step),
-        "hg_g": float(s.hg_g),
-        "max_steps": int(s.max_steps),
-        "max_candidates": int(s.max_candidates),
-        "march": s.march,
-        # The GL sorts all give the (t_in, primitive) order the core's insertion sort gives.
-        "sort_candidates": s.candidate_sort != "none",
-        "octaves": int(s.octaves),
-        "gain": float(s.gain),
-        "lacunarity": float(s.lacunarity),
-        "frequency": float(s.frequency),
+        "sun": sun_params(scene.sun),
+        "sky": sky_params(scene.sky),
+        "settings": march_params(s, _octaves(lit, indices) if s.physical else 1),
         "noise": scene.noise._core,
         "threads": threads,
         "with_sky": bool(with_sky),
         "solids": solid_arrays(scene.solids)[0] if scene.solids else None,
-        "physical": physical_core_args(s, _octaves(lit, indices)) if s.physical else None,
         "ground": ground_args(scene.ground, scene.sky, lit.shadow),
-        "min_transmittance": float(s.min_transmittance),
-        "skip_empty": bool(s.empty_space_skipping),
-        "jitter": bool(s.jitter),
-        "jitter_seed": int(s.jitter_seed),
     }
 
 

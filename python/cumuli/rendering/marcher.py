@@ -10,7 +10,6 @@ back with row 0 at the top. The maths is RENDER_CONTRACT.md; the C++ twin is
 
 from __future__ import annotations
 
-import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -23,10 +22,11 @@ from cumuli.light.ndt import LightGrid
 from cumuli.light.prepare import LitScene
 from cumuli.model.cloud import Cloud
 from cumuli.rendering.cpu import OCCUPANCY_RESOLUTION, occupancy_grid
+from cumuli.rendering.params import march_params, march_uniforms, sky_uniforms
 from cumuli.rendering.physical_gl import bind_ground, bind_physical
 from cumuli.rendering.solids import set_solid_uniforms
 from cumuli.scene import Scene
-from cumuli.settings import CANDIDATE_SORTS, MAX_CANDIDATES, MAX_CLOUDS
+from cumuli.settings import CANDIDATE_SORTS, MAX_CLOUDS
 
 #: Most primitives per cloud the GL marcher accepts, by density model. Every loop of the shader
 #: is bounded, but not by a constant: per pixel, candidate collection tests all N primitives of
@@ -263,7 +263,6 @@ class MarcherGL:
             occ_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             occ_tex.use(location=5)
             self._set("u_occupancy", 5)
-            self._set("u_skip_empty", bool(skip))
             self._set_uniforms(scene, len(clouds), camera, width, height, with_sky)
             return self.tiles.draw(self.vao, self._set, width, height)
         finally:
@@ -279,37 +278,15 @@ class MarcherGL:
         set_("u_light_atlas", 1)
         for name, value in camera.uniforms(width, height).items():
             set_(name, value)
-        set_("u_sun_dir", scene.sun.direction)
-        set_("u_sun_radiance", scene.sun.radiance)
-        sky = scene.sky
-        set_("u_sky_zenith", sky.zenith)
-        set_("u_sky_horizon", sky.horizon)
-        set_("u_sky_ground", sky.ground)
-        set_("u_sky_exponent", sky.exponent)
-        rad = math.radians(sky.sun_disc_radius)
-        set_("u_sun_disc", (math.cos(1.5 * rad), math.cos(rad)))
-        set_("u_sun_disc_intensity", sky.sun_disc_intensity)
+        # The same values the CPU twin takes (cumuli.rendering.params).
+        uniforms = {
+            **sky_uniforms(scene.sky, scene.sun),
+            **march_uniforms(march_params(s), s.exact_noise),
+        }
+        for name, value in uniforms.items():
+            set_(name, value)
         set_("u_with_sky", bool(with_sky))
         set_("u_cloud_count", count)
-        set_("u_absorption", s.absorption)
-        set_("u_step_ref", s.step_ref)
-        set_("u_lod_a", s.lod_a)
-        set_("u_lod_delta", s.lod_delta)
-        set_("u_step_min", s.step_min)
-        set_("u_step_max", s.step_max)
-        set_("u_fixed_step", s.fixed_step)
-        set_("u_g", s.hg_g)
-        set_("u_max_steps", s.max_steps)
-        set_("u_max_candidates", min(s.max_candidates, MAX_CANDIDATES))
-        set_("u_union", s.march == "union")
-        set_("u_exact", s.exact_noise)
-        set_("u_min_t", s.min_transmittance)
-        set_("u_jitter", s.jitter)
-        set_("u_jitter_seed", s.jitter_seed)
-        set_("u_octaves", s.octaves)
-        set_("u_gain", s.gain)
-        set_("u_lacunarity", s.lacunarity)
-        set_("u_frequency", s.frequency)
         # Opaque solids: each ray stops at the nearest (none: u_solid_count = 0).
         set_solid_uniforms(self.program, scene.solids)
 

@@ -26,6 +26,7 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli._structs import core_struct
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
 from cumuli.gl.sprites import (
@@ -93,8 +94,11 @@ def scene_sprites(
         cloud, light = scene.clouds[k], lit.lights[k]
         check_light(cloud, light, lights)
         index, colour, alpha, _ = _core.particle_sprites(
-            *cloud.core_args(), light.light, dirs, radiance, cam, s.solid_angle, s.phase, s.hg_g,
-            s.ambient, s.sort, True,
+            *cloud.core_args(), light.light, dirs, radiance, cam,
+            core_struct(
+                _core.ParticleSpriteSettings, solid_angle=s.solid_angle, phase=s.phase,
+                hg_g=s.hg_g, ambient=s.ambient, sort=s.sort, cull=True,
+            ),
         )  # fmt: skip
         centres.append(cloud.centres[index])
         radii.append(cloud.radii[index])

@@ -19,6 +19,7 @@ import numpy as np
 
 from cumuli import _core
 from cumuli import _validate as check
+from cumuli._structs import core_struct
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
 from cumuli.gl.sprites import SpriteLayerRenderer, Sprites, camera_dict, draw_sprites_cpu
@@ -85,12 +86,15 @@ def particle_sprites(
         light_directions(lights),
         radiance,
         cam,
-        settings.solid_angle,
-        settings.phase,
-        settings.hg_g,
-        amb,
-        settings.sort,
-        bool(cull),
+        core_struct(
+            _core.ParticleSpriteSettings,
+            solid_angle=settings.solid_angle,
+            phase=settings.phase,
+            hg_g=settings.hg_g,
+            ambient=amb,
+            sort=settings.sort,
+            cull=bool(cull),
+        ),
     )
     sprites = Sprites(
         centres=cloud.centres[index],

@@ -12,8 +12,8 @@ import moderngl
 import numpy as np
 
 from cumuli.ground import sky_irradiance
-from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, PhysicalLight
-from cumuli.rendering.cpu import MIN_TRANSMITTANCE
+from cumuli.light.physical import PhysicalLight
+from cumuli.rendering.params import physical_params, physical_uniforms
 
 #: 32-bit words of one PhysicalCloud in the std430 storage buffer (ten vec4 / ivec4).
 WORDS = 40
@@ -109,14 +109,10 @@ def set_physical_uniforms(
     """The physical shading uniforms (common/physical.glsl), atlases on units 2 and 3."""
     set_("u_depth_atlas", 2)
     set_("u_grid_atlas", 3)
-    set_("u_phys_extinction", float(settings.extinction_scale))
-    set_("u_phys_albedo", float(settings.albedo))
-    set_("u_phys_dual", settings.phase == "dual_hg")
-    set_("u_phys_g", (float(settings.hg_g), float(settings.hg_g2), float(settings.hg_blend)))
-    set_("u_phys_octaves", max((light.octaves for light in lights), default=1))
-    set_("u_phys_abc", (OCTAVE_A, OCTAVE_B, OCTAVE_C))
-    set_("u_phys_seed", int(settings.jitter_seed))
-    set_("u_phys_min_t", MIN_TRANSMITTANCE)
+    # The same values the CPU twin takes (cumuli.rendering.params).
+    octaves = max((light.octaves for light in lights), default=1)
+    for name, value in physical_uniforms(physical_params(settings, octaves)).items():
+        set_(name, value)
 
 
 def bind_ground(ctx: Any, set_: Callable[[str, Any], None], lit: Any, location: int) -> list:

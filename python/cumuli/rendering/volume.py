@@ -35,10 +35,11 @@ from cumuli.light.physical import PhysicalLight
 from cumuli.light.prepare import LitScene
 from cumuli.model.solid import Solid, as_solids, solid_arrays
 from cumuli.model.volume import _box, _float_volumes
-from cumuli.rendering.cpu import physical_core_args, physical_core_tuple
+from cumuli.rendering.cpu import physical_core_tuple
+from cumuli.rendering.params import physical_params, sky_params, sky_uniforms, sun_params
 from cumuli.rendering.physical_gl import bind_physical
 from cumuli.rendering.solids import set_solid_uniforms
-from cumuli.sky import Sun, as_sky, sky_args
+from cumuli.sky import Sun, as_sky
 
 #: Most steps a ray may take (the shader's loop bound).
 MAX_STEPS = 1 << 16
@@ -184,7 +185,6 @@ class VolumeRenderer:
         vol, lig, lo, hi, width, height, step = _inputs(volume, light, box, width, height, step)
         cam = camera if isinstance(camera, dict) else camera_rays(camera)
         sky = as_sky(sky)
-        rad = math.radians(sky.sun_disc_radius)
         ctx = self.context.ctx
         d, h, w = vol.shape
         limit = int(self.context.info.get("GL_MAX_3D_TEXTURE_SIZE", 2048))
@@ -226,14 +226,7 @@ class VolumeRenderer:
                 "u_cam_up": cam["up"],
                 "u_tan_half_fov": cam["tan_half_fov"],
                 "u_resolution": (float(width), float(height)),
-                "u_sun_dir": sun.direction,
-                "u_sun_radiance": sun.radiance,
-                "u_sky_zenith": sky.zenith,
-                "u_sky_horizon": sky.horizon,
-                "u_sky_ground": sky.ground,
-                "u_sky_exponent": float(sky.exponent),
-                "u_sun_disc": (math.cos(1.5 * rad), math.cos(rad)),
-                "u_sun_disc_intensity": float(sky.sun_disc_intensity),
+                **sky_uniforms(sky, sun),
                 "u_sigma_t": check.real(sigma_t, "sigma_t", 0.0),
                 "u_albedo": check.real(albedo, "albedo", 0.0, 1.0),
                 "u_g": check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True),
@@ -303,16 +296,24 @@ def render_volume_cpu(
     spheres = solid_arrays(solids)[0] if solids else None
     vol, lig, lo, hi, width, height, step = _inputs(volume, light, box, width, height, step)
     cam = camera if isinstance(camera, dict) else camera_rays(camera)
-    phys_args: tuple[Any, Any] = (None, None)
+    rays = _core.VolumeCamera()
+    rays.position, rays.forward, rays.right, rays.up = (
+        cam["position"], cam["forward"], cam["right"], cam["up"],
+    )  # fmt: skip
+    rays.tan_half_fov = cam["tan_half_fov"]
+    p = _core.VolumeRenderParams()
+    p.width, p.height, p.sun, p.sky = width, height, sun_params(sun), sky_params(as_sky(sky))
+    p.sigma_t = check.real(sigma_t, "sigma_t", 0.0)
+    p.albedo = check.real(albedo, "albedo", 0.0, 1.0)
+    p.g = check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True)
+    p.step, p.with_sky = step, bool(with_sky)
+    plight = None
     if physical is not None:
         settings, plight = physical
-        phys_args = (physical_core_args(settings, plight.octaves), physical_core_tuple(plight))
+        p.physical, p.phys = True, physical_params(settings, plight.octaves)
+        plight = physical_core_tuple(plight)
     return _core.render_volume_cpu(
-        vol, lig, lo, hi, cam["position"], cam["forward"], cam["right"], cam["up"],
-        cam["tan_half_fov"], width, height, sun.direction, sun.radiance, sky_args(as_sky(sky)),
-        check.real(sigma_t, "sigma_t", 0.0), check.real(albedo, "albedo", 0.0, 1.0),
-        check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True), step,
-        check.threads(threads), bool(with_sky), spheres, *phys_args,
+        vol, lig, lo, hi, rays, p, check.threads(threads), spheres, plight
     )  # fmt: skip
 
 

@@ -56,6 +56,19 @@ struct CameraParams {
   void validate() const;  // throws std::invalid_argument
 };
 
+// A camera and the image it takes: what the CPU renderers of whole images are given.
+struct Viewport {
+  CameraParams camera;
+  int width = 1, height = 1;
+
+  static constexpr int kMaxEdge = 1 << 15;
+  static constexpr long long kMaxPixels = 1LL << 26;
+
+  // Throws std::invalid_argument: edges outside [1, kMaxEdge], more than kMaxPixels pixels, or
+  // a bad camera.
+  void validate() const;
+};
+
 // The camera's frame, computed once per image.
 struct CameraRays {
   glm::vec3 origin, forward, right, up;
