@@ -14,12 +14,12 @@
 
 #include <glm/vec3.hpp>
 
-#include "cumuli/light/volume_light.hpp"
+#include "cumuli/light/volume.hpp"
 #include "cumuli/model/cloud.hpp"
 #include "cumuli/model/particles.hpp"
 #include "cumuli/rendering/ground.hpp"
 #include "cumuli/rendering/physical.hpp"
-#include "cumuli/rendering/volume_march.hpp"
+#include "cumuli/rendering/volume.hpp"
 
 namespace cumuli::bind {
 

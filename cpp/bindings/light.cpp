@@ -1,5 +1,5 @@
 // Bindings of the light stage (python/cumuli/light): the NDT light-grid precompute (light/ndt.hpp,
-// Algorithm 2, eqs. 3–7) and the endless animation's volume light (light/volume_light.hpp: sun
+// Algorithm 2, eqs. 3–7) and the endless animation's volume light (light/volume.hpp: sun
 // and sky optical depths, SH exponential, multiple scattering), and the billboard clouds'
 // absorption factors and vertex shading (light/caf.hpp). Long loops release the GIL.
 #include "cumuli/light/ndt.hpp"
@@ -14,9 +14,9 @@
 
 #include "common.hpp"
 #include "cumuli/light/caf.hpp"
-#include "cumuli/light/particle_light.hpp"
+#include "cumuli/light/particles.hpp"
 #include "cumuli/light/physical.hpp"
-#include "cumuli/light/volume_light.hpp"
+#include "cumuli/light/volume.hpp"
 #include "cumuli/parallel.hpp"
 
 namespace cumuli::bind {
@@ -701,7 +701,7 @@ std::vector<glm::vec3> unit_directions(const FloatArray& dirs) {
 
 }  // namespace
 
-// The multiple forward scattering light pass of Harris 2002 (light/particle_light.hpp).
+// The multiple forward scattering light pass of Harris 2002 (light/particles.hpp).
 void bind_particle_light(py::module_& m) {
   m.def(
       "particle_light",

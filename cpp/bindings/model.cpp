@@ -1,7 +1,7 @@
 // Bindings of the model stage (python/cumuli/model): the cloud-shape generators (Gaussian
 // cumulus, L-system, metaballs, mesh → ellipsoids), cloud density, the voxelised evolving
 // clouds of the endless-animation database (anim/endless.hpp), the seed-and-box billboard
-// clouds with their sprite atlas (model/seedbox.hpp, model/sprite_atlas.hpp) and the cloud
+// clouds with their sprite atlas (model/seedbox.hpp, model/atlas.hpp) and the cloud
 // decks (model/deck.hpp).
 #include <algorithm>
 #include <array>
@@ -17,14 +17,14 @@
 
 #include "common.hpp"
 #include "cumuli/anim/endless.hpp"
+#include "cumuli/model/atlas.hpp"
 #include "cumuli/model/cloud.hpp"
 #include "cumuli/model/deck.hpp"
 #include "cumuli/model/gaussian.hpp"
 #include "cumuli/model/lsystem.hpp"
-#include "cumuli/model/mesh_ellipsoids.hpp"
+#include "cumuli/model/mesh.hpp"
 #include "cumuli/model/particles.hpp"
 #include "cumuli/model/seedbox.hpp"
-#include "cumuli/model/sprite_atlas.hpp"
 #include "cumuli/noise.hpp"
 #include "cumuli/parallel.hpp"
 

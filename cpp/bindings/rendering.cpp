@@ -1,8 +1,8 @@
 // Bindings of the rendering stage (python/cumuli/rendering): the CPU twins — the 2018 paper's
-// reference marcher (march.hpp, `render_cpu`), the volume marcher (volume_march.hpp), the shared
-// sprite rasteriser (sprite_raster.hpp) — the compositor (composite.hpp) and the impostor maths
-// of Harris 2002 (impostor.hpp).
-#include "cumuli/rendering/march.hpp"
+// reference marcher (rendering/marcher.hpp, `render_cpu`), the volume marcher
+// (rendering/volume.hpp), the shared sprite rasteriser (rendering/sprites.hpp) — the compositor
+// (rendering/compositor.hpp) and the impostor maths of Harris 2002 (rendering/impostors.hpp).
+#include "cumuli/rendering/marcher.hpp"
 #include "cumuli/rendering/occupancy.hpp"
 
 #include <algorithm>
@@ -14,11 +14,11 @@
 
 #include "common.hpp"
 #include "cumuli/rendering/billboards.hpp"
-#include "cumuli/rendering/composite.hpp"
-#include "cumuli/rendering/impostor.hpp"
-#include "cumuli/rendering/solid.hpp"
-#include "cumuli/rendering/sprite_raster.hpp"
-#include "cumuli/rendering/volume_march.hpp"
+#include "cumuli/rendering/compositor.hpp"
+#include "cumuli/rendering/impostors.hpp"
+#include "cumuli/rendering/solids.hpp"
+#include "cumuli/rendering/sprites.hpp"
+#include "cumuli/rendering/volume.hpp"
 
 namespace cumuli::bind {
 

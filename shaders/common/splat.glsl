@@ -1,5 +1,5 @@
 // Splat kernel of Harris 2002 particles (spec harris.md §2.2), twin of cumuli::splat_kernel
-// (cpp/src/light/particle_light.cpp): K(d) = peak·k(d) for d < 1, 0 for d ≥ 1, with
+// (cpp/src/light/particles.cpp): K(d) = peak·k(d) for d < 1, 0 for d ≥ 1, with
 //   kind 0: windowed Gaussian σ = 1/3, k = (e^{−4.5d²} − e^{−4.5})/(1 − e^{−4.5})
 //   kind 1: SkyWorks' cubic Hermite, k = 1 − 3d² + 2d³.
 // Same float32 constants and operation order as the C++; `precise` keeps compilers from fusing.

@@ -1,5 +1,5 @@
 // Empty-space skipping (twin of cpp/src/rendering/occupancy.cpp and RayMarcher::skip_empty in
-// cpp/src/rendering/march.cpp; RENDER_CONTRACT "Empty-space skipping"): each cloud's occupancy
+// cpp/src/rendering/marcher.cpp; RENDER_CONTRACT "Empty-space skipping"): each cloud's occupancy
 // grid (OCC_RES³ cells over its candidate box, 1 where density may be > 0, 0 where it is
 // certainly 0) is a slab of u_occupancy, clouds stacked along z from CloudData.info.w.
 #include "march/scene_data.glsl"

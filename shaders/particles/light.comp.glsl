@@ -1,6 +1,6 @@
 #version 430
 // Multiple forward scattering light pass of Harris 2002 (§2.2.1, §2.3, Fig. 4; spec harris.md §4):
-// the GLSL compute twin of cumuli::particle_light_one (cpp/src/light/particle_light.cpp).
+// the GLSL compute twin of cumuli::particle_light_one (cpp/src/light/particles.cpp).
 //
 // One work group per light. The N_L² light buffer (1 everywhere, uploaded) lives in an SSBO; particles come
 // in processing order (nearest the light first) with their buffer position, footprint radius,

@@ -187,7 +187,7 @@ def test_bad_sources(tmp_path: Path) -> None:
 
 def _parallel_face_threshold() -> int:
     """Faces below which the core runs on one thread whatever ``threads`` says."""
-    src = (Path(__file__).resolve().parents[2] / "cpp/src/model/mesh_ellipsoids.cpp").read_text()
+    src = (Path(__file__).resolve().parents[2] / "cpp/src/model/mesh.cpp").read_text()
     per_thread = int(re.search(r"kFacesPerThread = (\d+);", src).group(1))
     assert re.search(r"face_count < 2 \* kFacesPerThread \? 1 : threads", src)
     return 2 * per_thread

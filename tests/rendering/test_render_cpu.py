@@ -1,7 +1,7 @@
 """The C++ reference marcher (backend="cpu") against a slow numpy twin of RENDER_CONTRACT.
 
 The numpy marcher below follows the contract operation by operation in float32 scalars (the same
-order of operations as cpp/src/rendering/march.cpp, so interval ends and step counts agree), on
+order of operations as cpp/src/rendering/marcher.cpp, so interval ends and step counts agree), on
 tiny images: agreement is then at the level of libm's last bits (exp, pow, sqrt), far below 1e-5.
 """
 

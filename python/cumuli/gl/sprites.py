@@ -8,7 +8,7 @@ w×h quads, straight-alpha atlas cells sampled bilinearly, per-vertex colours, a
 (``render/sprite_raster.hpp``). Both return the layer ``(H, W, 4)`` float32, row 0 on top:
 ``rgb = C`` (premultiplied radiance), ``alpha = A``, **without sky** — a compositor makes
 ``rgb = C + (1 − A)·sky``. Sprites are drawn in the given order (back to front) with
-(ONE, ONE_MINUS_SRC_ALPHA) blending; see ``cpp/include/cumuli/rendering/sprite_raster.hpp`` for the
+(ONE, ONE_MINUS_SRC_ALPHA) blending; see ``cpp/include/cumuli/rendering/sprites.hpp`` for the
 exact per-pixel formulas.
 """
 

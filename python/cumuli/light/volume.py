@@ -63,7 +63,7 @@ class VolumeLighting:
     sun and along each quadrature direction every sun-parallel line of a grid sheared along the
     direction is integrated once and each voxel reads the four lines around it; towards each
     sample point the volume is swept outwards from the point, each voxel continuing the depth of
-    the voxels one slice closer (see ``volume_light.hpp``). ``method="march"`` marches every
+    the voxels one slice closer (see ``light/volume.hpp``). ``method="march"`` marches every
     voxel's ray (the brute-force reference, tens of times slower). Against ``"march"``, the swept
     depths of the README's cumulus database differ by a few per cent on average (the benchmark
     states the figures) and the sky visibility error quoted above is unchanged.

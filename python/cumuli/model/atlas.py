@@ -1,7 +1,7 @@
 """Sprite atlases for billboard clouds (Torchelsen & Musse 2005 §3.2, Fig. 5; spec §3 "Textures").
 
 [TM] textures its billboards with Wang's 16-sprite sheet, which is not redistributable; cumuli
-draws a seeded sheet in C++ (``cpp/include/cumuli/model/sprite_atlas.hpp``) from its own fBm::
+draws a seeded sheet in C++ (``cpp/include/cumuli/model/atlas.hpp``) from its own fBm::
 
     α = clamp(k·(fbm(p) − t), 0, 1) · m(r),   m(r) = 1 − smoothstep(0.6, 1, r)
 

@@ -2,7 +2,7 @@
 
 A :class:`Solid` is an opaque sphere — the stand-in for [H]'s airplane flying through clouds —
 drawn analytically per pixel (ray–sphere, ``rendering/solids.py`` and its C++ twin
-``rendering/solid.hpp``), shaded Lambert by the sun plus an ambient term:
+``rendering/solids.hpp``), shaded Lambert by the sun plus an ambient term:
 ``rgb = colour ⊙ (ambient + max(0, n·s)·sun_radiance)``. Scenes hold them in ``Scene.solids``;
 the compositor lets a solid hide whatever lies behind it, the marchers stop their rays at it,
 particles are depth-tested against it (direct rendering) or split around it (impostors).

@@ -9,7 +9,7 @@
 //    integral from the lattice's sun-side face to the node (the lattice box encloses the
 //    drawable, so nothing upstream of it is missed).
 // 2. Sky light: the SH projection (Sloan et al. 2002; the endless animation's sh_eval and
-//    quadrature, volume_light.hpp) of the visibility V(x, ω) = exp(−∫σt) over the quadrature's
+//    quadrature, light/volume.hpp) of the visibility V(x, ω) = exp(−∫σt) over the quadrature's
 //    directions, dotted with the sky radiance's SH projection: E_sky(x) = Σ_m L_m V_m(x), the
 //    sky irradiance over the whole sphere that reaches x unscattered (clamped at 0).
 // 3. Multiple scattering: the diffusion approximation (Stam 1995, "Multiple scattering as a
@@ -29,7 +29,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "cumuli/light/volume_light.hpp"
+#include "cumuli/light/volume.hpp"
 #include "cumuli/model/cloud.hpp"
 #include "cumuli/primitives.hpp"
 

@@ -2,7 +2,7 @@
 // spec shared/specs/torchelsen.md §4.2 and §5): the sprite list one frame draws of a batch of
 // billboard clouds — each a variant (its geometry, in its local frame) placed by an instance
 // transform world = R_y(yaw)·local + offset — for both drawers (the GL sprite pipeline and its
-// CPU twin, rendering/sprite_raster.hpp), so that culling, fades, order and shading are computed
+// CPU twin, rendering/sprites.hpp), so that culling, fades, order and shading are computed
 // once, in C++, whatever the backend.
 //
 // Per instance i of variant V (a BillboardCloud is one instance with yaw 0, offset 0):
@@ -33,7 +33,7 @@
 #include <glm/vec4.hpp>
 
 #include "cumuli/light/caf.hpp"
-#include "cumuli/rendering/sprite_raster.hpp"
+#include "cumuli/rendering/sprites.hpp"
 
 namespace cumuli {
 

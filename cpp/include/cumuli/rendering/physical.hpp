@@ -18,7 +18,7 @@
 #include <glm/vec3.hpp>
 
 #include "cumuli/light/physical.hpp"
-#include "cumuli/light/volume_light.hpp"
+#include "cumuli/light/volume.hpp"
 
 namespace cumuli {
 

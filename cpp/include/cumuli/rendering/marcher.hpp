@@ -22,7 +22,7 @@
 #include "cumuli/rendering/ground.hpp"
 #include "cumuli/rendering/occupancy.hpp"
 #include "cumuli/rendering/physical.hpp"
-#include "cumuli/rendering/solid.hpp"
+#include "cumuli/rendering/solids.hpp"
 
 namespace cumuli {
 
@@ -129,11 +129,11 @@ struct MarchScene {
   SkyParams sky;
   const Noise* noise = nullptr;  // may be null only when settings.density_constant ≥ 0
   // false: no sky behind the clouds, output (colour, 1 − T), a premultiplied layer for the
-  // compositor (composite.hpp).
+  // compositor (rendering/compositor.hpp).
   bool with_sky = true;
-  // Opaque solids (solid.hpp, Harris 2002 §3.1.1): each ray is marched only up to the nearest
-  // solid it meets, t_s — intervals are clipped to t < t_s and a sample whose midpoint lies at or
-  // beyond t_s is not taken — so the layer holds exactly the cloud in front of the solid
+  // Opaque solids (rendering/solids.hpp, Harris 2002 §3.1.1): each ray is marched only up to the
+  // nearest solid it meets, t_s — intervals are clipped to t < t_s and a sample whose midpoint lies
+  // at or beyond t_s is not taken — so the layer holds exactly the cloud in front of the solid
   // (spec harris.md §7.5, "march each ray only up to the object's depth"). Empty: no clipping.
   std::vector<SolidSphere> solids;
   GroundParams ground;  // the background below the horizon when enabled

@@ -1,4 +1,4 @@
-#include "cumuli/rendering/march.hpp"
+#include "cumuli/rendering/marcher.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "cumuli/model/mesh_ellipsoids.hpp"
+#include "cumuli/model/mesh.hpp"
 
 #include <atomic>
 #include <cmath>

@@ -15,10 +15,10 @@
 
 #include <glm/vec3.hpp>
 
-#include "cumuli/light/volume_light.hpp"
+#include "cumuli/light/volume.hpp"
 #include "cumuli/phase.hpp"
 #include "cumuli/rendering/physical.hpp"
-#include "cumuli/rendering/solid.hpp"
+#include "cumuli/rendering/solids.hpp"
 
 namespace cumuli {
 
@@ -37,8 +37,9 @@ struct VolumeRenderParams {
   float albedo = 1.0f;
   float g = 0.2f;     // Henyey–Greenstein asymmetry
   float step = 0.1f;  // world units
-  // Opaque solids (solid.hpp): the ray is marched only up to the nearest one it meets (the box
-  // span [t0, t_out] becomes [t0, min(t_out, t_s)], still in equal steps). Empty: no clipping.
+  // Opaque solids (rendering/solids.hpp): the ray is marched only up to the nearest one it meets
+  // (the box span [t0, t_out] becomes [t0, min(t_out, t_s)], still in equal steps). Empty: no
+  // clipping.
   std::vector<SolidSphere> solids;
   // The physical lighting mode (RENDER_CONTRACT "Physical lighting"): σ = sigma_t·ρ, samples at
   // (k + ξ)·h, physical.hpp's shading with `grids` (the light argument is then not read).

@@ -1,4 +1,4 @@
-#include "cumuli/rendering/composite.hpp"
+#include "cumuli/rendering/compositor.hpp"
 
 #include <algorithm>
 #include <cstddef>
@@ -22,7 +22,8 @@ void composite_layers(const std::vector<Layer>& layers, const CameraParams& came
       for (int c = 0; c < width; ++c) {
         const glm::vec3 dir = rays.direction(static_cast<int>(r), c);
         const glm::vec3 inv_dir = 1.0f / dir;
-        // The marcher's rule (march.cpp): entered at max(t_in, 0), stable insertion sort.
+        // The marcher's rule (rendering/marcher.cpp): entered at max(t_in, 0), stable insertion
+        // sort.
         hits.clear();
         for (std::size_t k = 0; k < layers.size(); ++k) {
           Interval iv;
@@ -33,7 +34,7 @@ void composite_layers(const std::vector<Layer>& layers, const CameraParams& came
             std::swap(hits[m], hits[m - 1]);
         }
         const std::size_t px = r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c);
-        // A solid hit at t_s hides every layer entered at or after it (solid.hpp).
+        // A solid hit at t_s hides every layer entered at or after it (rendering/solids.hpp).
         const float* s = solid != nullptr ? solid + px * 4 : nullptr;
         const float t_solid = s != nullptr && s[3] < kNoSolid
                                   ? s[3] / ((dir.x * rays.forward.x + dir.y * rays.forward.y) +

@@ -1,4 +1,4 @@
-#include "cumuli/rendering/impostor.hpp"
+#include "cumuli/rendering/impostors.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "cumuli/light/volume_light.hpp"
+#include "cumuli/light/volume.hpp"
 
 #include <algorithm>
 #include <cmath>

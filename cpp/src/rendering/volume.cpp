@@ -1,4 +1,4 @@
-#include "cumuli/rendering/volume_march.hpp"
+#include "cumuli/rendering/volume.hpp"
 
 #include <algorithm>
 #include <cmath>

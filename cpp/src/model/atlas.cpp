@@ -1,4 +1,4 @@
-#include "cumuli/model/sprite_atlas.hpp"
+#include "cumuli/model/atlas.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -41,7 +41,7 @@
 #include <glm/vec3.hpp>
 
 #include "cumuli/light/caf.hpp"
-#include "cumuli/light/particle_light.hpp"
+#include "cumuli/light/particles.hpp"
 
 namespace cumuli {
 

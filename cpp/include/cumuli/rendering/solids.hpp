@@ -9,9 +9,9 @@
 // it at t = 0). Shading at p = o + t·d with n = (p − c)/r:
 //   rgb = colour ⊙ (ambient + max(0, n·s)·sun_radiance),   s towards the sun.
 // The solid image holds rgb and the view depth Z = t·(d·f) (f the camera's forward) in alpha,
-// +∞ where no solid is hit — what the compositor (composite.hpp) and the sprite depth test read.
-// Split composite ([H] §3.1.1): cloud layers L_0 (farthest) … L_m (nearest) and solid images
-// S_0 … S_{m−1} (S_j lies between L_j and L_{j+1}) are combined back to front:
+// +∞ where no solid is hit — what the compositor (rendering/compositor.hpp) and the sprite depth
+// test read. Split composite ([H] §3.1.1): cloud layers L_0 (farthest) … L_m (nearest) and solid
+// images S_0 … S_{m−1} (S_j lies between L_j and L_{j+1}) are combined back to front:
 //   dst = L_0; for j: where S_j is hit nearer than every solid drawn so far, dst = (S_j.rgb, 1);
 //   dst = L_{j+1} + (1 − L_{j+1}.a)·dst          (depth test on for solids, off for layers).
 #pragma once
@@ -45,6 +45,7 @@ float nearest_solid(const std::vector<SolidSphere>& solids, glm::vec3 origin, gl
                     int* which = nullptr);
 glm::vec3 shade_solid(const SolidSphere& solid, glm::vec3 point, const SunParams& sun);
 
-// draw_solids and composite_split (what the compositor does with solids) are in composite.hpp.
+// draw_solids and composite_split (what the compositor does with solids) are in
+// rendering/compositor.hpp.
 
 }  // namespace cumuli

@@ -1,4 +1,4 @@
-#include "cumuli/rendering/solid.hpp"
+#include "cumuli/rendering/solids.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,7 @@
 #include <glm/geometric.hpp>
 
 #include "cumuli/parallel.hpp"
-#include "cumuli/rendering/composite.hpp"
+#include "cumuli/rendering/compositor.hpp"
 
 namespace cumuli {
 

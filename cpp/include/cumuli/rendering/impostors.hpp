@@ -34,7 +34,7 @@
 
 #include <glm/vec3.hpp>
 
-#include "cumuli/rendering/march.hpp"
+#include "cumuli/rendering/marcher.hpp"
 
 namespace cumuli {
 

@@ -1,4 +1,4 @@
-#include "cumuli/rendering/sprite_raster.hpp"
+#include "cumuli/rendering/sprites.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "cumuli/light/particle_light.hpp"
+#include "cumuli/light/particles.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -10,8 +10,8 @@
 #include "cumuli/phase.hpp"
 #include "cumuli/primitives.hpp"
 #include "cumuli/rendering/ground.hpp"
-#include "cumuli/rendering/march.hpp"
-#include "cumuli/rendering/solid.hpp"
+#include "cumuli/rendering/marcher.hpp"
+#include "cumuli/rendering/solids.hpp"
 
 namespace cumuli {
 
@@ -33,13 +33,14 @@ void composite_layers(const std::vector<Layer>& layers, const CameraParams& came
                       const GroundParams& ground, float* out, int threads,
                       const float* solid = nullptr);
 
-// The solid image (height·width·4 floats, row 0 on top): rgb shaded (solid.hpp), alpha the view
-// depth Z = t·(d·f) of the nearest solid, +∞ where the ray meets none.
+// The solid image (height·width·4 floats, row 0 on top): rgb shaded (rendering/solids.hpp), alpha
+// the view depth Z = t·(d·f) of the nearest solid, +∞ where the ray meets none.
 void draw_solids(const std::vector<SolidSphere>& solids, const CameraParams& camera, int width,
                  int height, const SunParams& sun, float* out, int threads);
 
-// The split composite of solid.hpp: `layers` m + 1 premultiplied images, farthest first, `solids`
-// m solid images (solids[j] between layers[j] and layers[j + 1]); out a premultiplied layer.
+// The split composite of rendering/solids.hpp: `layers` m + 1 premultiplied images, farthest first,
+// `solids` m solid images (solids[j] between layers[j] and layers[j + 1]); out a premultiplied
+// layer.
 void composite_split(const std::vector<const float*>& layers,
                      const std::vector<const float*>& solids, int width, int height, float* out,
                      int threads);
