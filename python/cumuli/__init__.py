@@ -66,9 +66,9 @@ from cumuli.model.volume import (
 )
 from cumuli.noise import Noise
 from cumuli.rendering.compositor import Renderer, render, render_cpu, render_volume
-from cumuli.rendering.cpu import MarchStats, occupancy_grid
 from cumuli.rendering.impostor_cache import ImpostorCache
 from cumuli.rendering.impostors import ImpostorSettings
+from cumuli.rendering.marcher_cpu import MarchStats, occupancy_grid
 from cumuli.rendering.volume import VolumeRenderer
 from cumuli.scene import Scene, load_scene
 from cumuli.settings import RenderSettings

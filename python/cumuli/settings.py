@@ -12,12 +12,12 @@ from cumuli import _validate as check
 from cumuli.light.grid import MAX_RESOLUTION
 from cumuli.light.ndt import DEFAULT_SOLID_ANGLE, LightParams
 
-#: Upper bounds of the settings that size shader loops and arrays (shaders/march/march.frag.glsl).
+#: Upper bounds of the settings that size shader loops and arrays (shaders/marcher/march.frag.glsl).
 MAX_CANDIDATES = 128
 MAX_STEPS = 1 << 16
 MAX_CLOUDS = 64
 MARCH_MODES = ("paper", "union")
-#: Candidate sorts of the GL marcher (compile-time variants of shaders/march/march.frag.glsl).
+#: Candidate sorts of the GL marcher (compile-time variants of shaders/marcher/march.frag.glsl).
 CANDIDATE_SORTS = ("insertion", "quicksort", "oddeven", "none")
 #: Light-grid methods the renderer may use (`cumuli.light_grid`).
 LIGHT_METHODS = ("ndt", "naive", "shared")

@@ -1,7 +1,7 @@
 #version 430
 // Fragment side of the shared sprite pipeline (see sprites.vert.glsl; CPU twin
 // cumuli::rasterise_sprites). Per pixel (j, i) of the whole image (tile origin added, rows flipped
-// to row 0 on top like march/march.frag.glsl): sprite coordinates
+// to row 0 on top like marcher/march.frag.glsl): sprite coordinates
 //   dx = (j + ½) − j_c, dy = (i + ½) − i_c, s = (dx·cos ψ − dy·sin ψ)/hx, t = (−dx·sin ψ − dy·cos ψ)/hy,
 // discarded outside |s|, |t| ≤ 1; colour interpolated barycentrically over (v0, v1, v2) (s ≥ t) or
 // (v0, v2, v3) unless the four are equal;

@@ -1,7 +1,7 @@
 """Candidate sorts of the marcher (settings.candidate_sort, the paper's §4.1 experiment).
 
 Insertion sort, iterative quicksort and Batcher's odd-even mergesort are compile-time variants of
-shaders/march/march.frag.glsl that must order candidates identically (by t_in, ties by primitive
+shaders/marcher/march.frag.glsl that must order candidates identically (by t_in, ties by primitive
 index), so their images are bit-identical; "none" leaves them unsorted, changes the image where
 intervals overlap, and the CPU marcher reproduces it.
 """

@@ -186,7 +186,7 @@ def test_return_stats_bad_input():
 
 
 def _args(scene: cu.Scene, cam: cu.Camera) -> dict:
-    from cumuli.rendering.cpu import render_cpu_args
+    from cumuli.rendering.marcher_cpu import render_cpu_args
 
     return render_cpu_args(scene, cam, 8, 6)
 

@@ -12,7 +12,7 @@ import pytest
 import cumuli as cu
 from cumuli import _core
 from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, physical_light
-from cumuli.rendering.cpu import MIN_TRANSMITTANCE
+from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
 
 F = np.float32
 SUN = cu.Sun(direction=(0.8, 0.45, -0.3), colour=(1.0, 0.9, 0.8), intensity=5.0)

@@ -14,7 +14,7 @@ import pytest
 from test_physical import _jitter  # RENDER_CONTRACT "Camera rays": ξ of a pixel
 
 import cumuli as cu
-import cumuli.rendering.cpu
+import cumuli.rendering.marcher_cpu
 from cumuli import _core
 from cumuli._structs import core_struct
 
@@ -672,7 +672,7 @@ def test_render_cpu_on_scene_objects_follows_the_contract():
     scene = cu.prepare_light(scene, lights=[grid])  # the hand-made grid, used as it is
     camera = cu.Camera(position=(0.3, 0.4, -6.0), target=(0.2, 0.1, 0.0), fov=40)
     img = cu.render_cpu(scene, camera, 8, 6)
-    args = flat_args(cumuli.rendering.cpu.render_cpu_args(scene, camera, 8, 6))
+    args = flat_args(cumuli.rendering.marcher_cpu.render_cpu_args(scene, camera, 8, 6))
     assert args["clouds"][0]["kappa"] == pytest.approx(0.7)  # settings.kappa overrides the cloud's
     assert args["ref_step"] == np.float32(settings.step_ref) and args["march"] == "union"
     assert (img[..., 3] > 0.05).sum() >= 4

@@ -11,8 +11,8 @@ from cumuli.light.medium import cloud_core_args, cloud_extinction
 from cumuli.light.ndt import cloud_light
 from cumuli.light.physical import physical_pass
 from cumuli.model.cloud import Cloud
-from cumuli.rendering.cpu import draw_clouds_cpu
 from cumuli.rendering.marcher import MarcherGL
+from cumuli.rendering.marcher_cpu import draw_clouds_cpu
 
 
 def digest(cloud: Cloud) -> tuple:
@@ -33,7 +33,7 @@ KIND = registry.register(
             "light.grid",
             "light.ndt",
             "rendering.marcher",
-            "rendering.cpu",
+            "rendering.marcher_cpu",
             "kinds.cloud",
         ),  # fmt: skip
         light=cloud_light,

@@ -29,7 +29,7 @@ from cumuli.gl.context import GLContext, _thread_default, default_context
 from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
-from cumuli.rendering.cpu import check_stats_scene, march_with_stats
+from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
 from cumuli.rendering.painters import CPUPainter, GLPainter
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene

@@ -1,11 +1,11 @@
 """The 2018 paper's GLSL ray marcher (Jiménez de Parga & Gómez Palomo 2018, Algorithms 1 and 3).
 
-:class:`MarcherGL` compiles ``shaders/march/march.frag.glsl`` (one variant per candidate sort,
+:class:`MarcherGL` compiles ``shaders/marcher/march.frag.glsl`` (one variant per candidate sort,
 on first use) on a :class:`cumuli.gl.GLContext` and draws a group of 2018 clouds of a lit scene:
 primitives and clouds as storage buffers, light grids packed into one 3D atlas, the noise lattice
 as a REPEAT/LINEAR 3D texture, a full-screen triangle per tile into an RGBA32F framebuffer read
 back with row 0 at the top. The maths is RENDER_CONTRACT.md; the C++ twin is
-``cumuli.rendering.cpu`` (``_core.render_cpu``).
+``cumuli.rendering.marcher_cpu`` (``_core.render_cpu``).
 """
 
 from __future__ import annotations
@@ -21,7 +21,7 @@ from cumuli.gl import GLContext
 from cumuli.light.ndt import LightGrid
 from cumuli.light.prepare import LitScene
 from cumuli.model.cloud import Cloud
-from cumuli.rendering.cpu import OCCUPANCY_RESOLUTION, occupancy_grid
+from cumuli.rendering.marcher_cpu import OCCUPANCY_RESOLUTION, occupancy_grid
 from cumuli.rendering.params import march_params, march_uniforms, sky_uniforms
 from cumuli.rendering.physical_gl import bind_ground, bind_physical
 from cumuli.rendering.solids import set_solid_uniforms
@@ -60,7 +60,7 @@ def pack_clouds(
 ) -> tuple[bytes, bytes, np.ndarray]:
     """Storage-buffer bytes for primitives and clouds and the light atlas ``[z, y, x]``.
 
-    Layout: see shaders/march/scene_data.glsl. Light grids are stacked along z; each cloud
+    Layout: see shaders/marcher/scene_data.glsl. Light grids are stacked along z; each cloud
     records its first slice. Boxes, the LOD centre and r̄² come from the cloud in the core's
     float32 order (`Cloud.layer_box`, `Cloud.centre`, `Cloud.mean_r2`).
     """
@@ -108,7 +108,7 @@ def pack_clouds(
 def occupancy_atlas(clouds: Sequence[Cloud], skip: bool) -> np.ndarray:
     """The clouds' occupancy grids (`occupancy_grid`) stacked along z, uint8 ``[z, y, x]``
     (255 where occupied)
-    (shaders/march/occupancy.glsl); one occupied texel when ``skip`` is off."""
+    (shaders/marcher/occupancy.glsl); one occupied texel when ``skip`` is off."""
     if not skip or not clouds:
         return np.full((1, 1, 1), 255, np.uint8)
     # R8 is normalised: 255 reads as 1.0 (occupied), 0 as 0.0 (empty).
@@ -148,7 +148,7 @@ class MarcherGL:
             if physical:
                 defines["PHYSICAL"] = 1
             program = self.gl.program(
-                "common/fullscreen.vert.glsl", "march/march.frag.glsl", defines=defines
+                "common/fullscreen.vert.glsl", "marcher/march.frag.glsl", defines=defines
             )
             try:
                 vao = self.gl.ctx.vertex_array(program, [])

@@ -4,7 +4,7 @@ The C++ core takes them as bound structs of ``cumuli._core`` (``MarchSettings`` 
 ``FbmParams`` and ``PhysicalParams``, ``SunParams``, ``SkyParams``, ``CameraParams`` in a
 ``Viewport``); :func:`march_params` fills the march's struct from a
 :class:`cumuli.RenderSettings` once, and :func:`march_uniforms` gives the GLSL marcher's uniforms
-from the same struct, so the CPU twin (``cumuli.rendering.cpu``) and the GL marcher
+from the same struct, so the CPU twin (``cumuli.rendering.marcher_cpu``) and the GL marcher
 (``cumuli.rendering.marcher``) cannot drift apart. :func:`sky_uniforms` is the sky's and sun's
 uniforms for every GL program that draws the sky (shaders/common/sky.glsl).
 """
@@ -111,7 +111,7 @@ def march_params(settings: RenderSettings, physical_octaves: int = 1) -> _core.M
 
 
 def march_uniforms(params: _core.MarchSettings, exact_noise: bool = False) -> dict[str, Any]:
-    """The GLSL marcher's uniforms (shaders/march/march.frag.glsl) of a ``_core.MarchSettings``
+    """The GLSL marcher's uniforms (shaders/marcher/march.frag.glsl) of a ``_core.MarchSettings``
     (:func:`march_params`): the same values the CPU twin takes. ``exact_noise``: texelFetch
     lookups instead of the hardware filter (GL only)."""
     p = params

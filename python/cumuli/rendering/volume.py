@@ -35,7 +35,7 @@ from cumuli.light.physical import PhysicalLight
 from cumuli.light.prepare import LitScene
 from cumuli.model.solid import Solid, as_solids, solid_arrays
 from cumuli.model.volume import _box, _float_volumes
-from cumuli.rendering.cpu import physical_core_tuple
+from cumuli.rendering.marcher_cpu import physical_core_tuple
 from cumuli.rendering.params import physical_params, sky_params, sky_uniforms, sun_params
 from cumuli.rendering.physical_gl import bind_physical
 from cumuli.rendering.solids import set_solid_uniforms

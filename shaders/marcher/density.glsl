@@ -2,7 +2,7 @@
 // metaball model of eqs. (19–21). Returns vec2(ρ, γ); ρ = 0 outside the cloud.
 #include "common/noise.glsl"
 #include "common/intersect.glsl"
-#include "march/scene_data.glsl"
+#include "marcher/scene_data.glsl"
 
 uniform bool u_exact;  // exact float trilinear lookups (parity) instead of the hardware filter
 

@@ -5,9 +5,9 @@
 // sorted candidate primitives, "paper" or "union" marching with the LOD step, eq. (2) gating,
 // light-grid lighting with HG scattering, early exit, sky blend.
 
-#include "march/density.glsl"
-#include "march/lighting.glsl"
-#include "march/occupancy.glsl"
+#include "marcher/density.glsl"
+#include "marcher/lighting.glsl"
+#include "marcher/occupancy.glsl"
 #include "common/sky.glsl"
 #include "common/solid.glsl"
 #include "common/ground.glsl"

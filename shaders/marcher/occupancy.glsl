@@ -2,7 +2,7 @@
 // cpp/src/rendering/marcher.cpp; RENDER_CONTRACT "Empty-space skipping"): each cloud's occupancy
 // grid (OCC_RES³ cells over its candidate box, 1 where density may be > 0, 0 where it is
 // certainly 0) is a slab of u_occupancy, clouds stacked along z from CloudData.info.w.
-#include "march/scene_data.glsl"
+#include "marcher/scene_data.glsl"
 
 #define OCC_RES 16
 

@@ -1,6 +1,6 @@
 // Algorithm 3 (lighting and shading): the light grid lookup and one sample's contribution.
 #include "common/phase.glsl"
-#include "march/scene_data.glsl"
+#include "marcher/scene_data.glsl"
 #include "common/trilinear.glsl"
 
 // Trilinear lookup of a cloud's light grid at world p: GL texel-centre convention over the grid's
