@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -201,7 +201,7 @@ def torchelsen_sequence(
     at CV = 0, 1/3, 2/3, 1 (``panels`` frames evenly over the schedule), as a 2-column grid of
     ``width/2 × height/2`` frames (one row when ``panels`` is 2). Returns ``(H, W, 4)`` linear
     RGBA, opaque."""
-    from cumuli import _validate as check
+    from cumuli._util import validate as check
     from cumuli.anim.weather_presets import table1
     from cumuli.rendering.compositor import render
 

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.sky import Sky, Sun
 
 

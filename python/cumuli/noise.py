@@ -15,7 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 #: Largest lattice edge accepted: 512³ float32 is 512 MiB, and the core keeps a second,
 #: padded (size + 1)³ copy for its lookups, so about 1 GiB in all.

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import registry
-from cumuli._atomic import atomic_target
+from cumuli._util.atomic import atomic_target
 from cumuli.camera import Camera
 from cumuli.ground import Ground
 from cumuli.light.billboard_shading import BillboardShading

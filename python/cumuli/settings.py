@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.light.grid import MAX_RESOLUTION
 from cumuli.light.ndt import DEFAULT_SOLID_ANGLE, LightParams
 

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 
 @dataclass(frozen=True)

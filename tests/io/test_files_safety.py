@@ -25,7 +25,7 @@ import pytest
 
 import cumuli as cu
 import cumuli.io.images as cio
-from cumuli import _atomic
+from cumuli._util import atomic as _atomic
 
 ROOT = Path(__file__).resolve().parents[2]
 

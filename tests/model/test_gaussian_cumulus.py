@@ -7,7 +7,7 @@ import pytest
 
 import cumuli
 from cumuli import _core
-from cumuli._structs import core_struct
+from cumuli._util.structs import core_struct
 
 SIGMA = np.array([3.8, 1.7, 3.7], dtype=np.float64)
 HOLLOW = np.array([0.75, 1.0 / 3.0, 0.75]) * SIGMA

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli._validate import MAX_COORD, direction, points3, vec3
+from cumuli._util.validate import MAX_COORD, direction, points3, vec3
 from cumuli.io import meshes
 
 HUGE = 3e38  # finite in float32 (max 3.4e38)

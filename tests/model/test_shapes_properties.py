@@ -10,7 +10,7 @@ from hypothesis.extra import numpy as hnp
 
 import cumuli
 from cumuli import _core
-from cumuli._structs import core_struct
+from cumuli._util.structs import core_struct
 
 SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 finite = st.floats(-1e4, 1e4, allow_nan=False, allow_infinity=False, width=32)

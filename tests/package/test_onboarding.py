@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli import _progress
+from cumuli._util import progress as _progress
 
 ROOT = Path(__file__).resolve().parents[2]
 

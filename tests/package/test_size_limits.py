@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.anim import endless
 from cumuli.light import prepare
 from cumuli.model import volume as mvolume

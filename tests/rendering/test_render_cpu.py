@@ -16,7 +16,7 @@ from test_physical import _jitter  # RENDER_CONTRACT "Camera rays": ξ of a pixe
 import cumuli as cu
 import cumuli.rendering.marcher_cpu
 from cumuli import _core
-from cumuli._structs import core_struct
+from cumuli._util.structs import core_struct
 
 F = np.float32
 EYE3 = np.eye(3, dtype=np.float32)

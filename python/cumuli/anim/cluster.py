@@ -143,7 +143,7 @@ def sweep(
     :func:`cumuli.write_image` saves them), or with ``out_dir`` the paths of the files written
     there (``pattern`` numbered by sweep index).
     """
-    from cumuli import _validate as check
+    from cumuli._util import validate as check
     from cumuli.io.images import ALPHA_MODES
 
     if not callable(scene_fn):

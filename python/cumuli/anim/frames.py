@@ -10,8 +10,8 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
 from cumuli import registry
+from cumuli._util import validate as check
 from cumuli.anim.weather import Weather
 from cumuli.camera import Camera
 from cumuli.scene import Scene

@@ -40,7 +40,7 @@ from typing import TYPE_CHECKING, Any
 import moderngl
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 if TYPE_CHECKING:
     from cumuli.noise import Noise

@@ -11,7 +11,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 #: Per-instance layout of the fragment-shading buffer: cloud frame 4f, y range 2f, CAF row i.
 _SHADE_FORMAT = "4f 2f 1i/i"

@@ -23,8 +23,8 @@ import moderngl
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
-from cumuli._structs import core_struct
+from cumuli._util import validate as check
+from cumuli._util.structs import core_struct
 from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _resolve_context
 from cumuli.gl.sprite_shading import _SHADE_ATTRS, _SHADE_FORMAT, FragmentShading

@@ -17,7 +17,7 @@ elsewhere, and for an exact EXR round trip).
 **Safety.** Writes are atomic and verified: the file is written to a temporary in the destination
 folder, read back and compared with what was meant (a full disk that the PNG writer does not
 report is caught there), flushed, and only then renamed over the destination (see
-:mod:`cumuli._atomic`). **Memory** stays bounded: conversion goes in slabs of rows, so a write
+:mod:`cumuli._util.atomic`). **Memory** stays bounded: conversion goes in slabs of rows, so a write
 needs little beyond its input and a read little beyond its float32 output; images larger than
 :data:`MAX_PIXELS` are refused before anything is decoded or encoded. Errors: unsupported
 extension → ``ValueError``; bad array → ``TypeError`` / ``ValueError``; a missing folder, a
@@ -35,7 +35,7 @@ from typing import Any
 import numpy as np
 import OpenImageIO as oiio
 
-from cumuli._atomic import atomic_target, resolve_target
+from cumuli._util.atomic import atomic_target, resolve_target
 
 #: Extensions write_image and read_image handle, and what they store.
 FORMATS = {".exr": "float32 linear RGBA (OpenEXR, ZIP)", ".png": "8-bit sRGB RGBA"}

@@ -20,7 +20,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 #: Extensions `load_mesh` accepts.
 MESH_FORMATS = (".obj", ".ply", ".stl", ".off", ".glb", ".gltf")

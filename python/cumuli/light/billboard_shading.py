@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 OVERLAPS = ("sum", "union")
 CURVES = ("linear", "exp")

@@ -26,8 +26,8 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
-from cumuli._structs import core_struct
+from cumuli._util import validate as check
+from cumuli._util.structs import core_struct
 from cumuli.light.billboard_shading import (  # noqa: F401  (re-exported)
     CAF_AT,
     CURVES,

@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
-from cumuli._atomic import atomic_target
+from cumuli._util import validate as check
+from cumuli._util.atomic import atomic_target
 from cumuli.io.npz import check_path, check_readable, read_npz
 from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise, _fbm_params

@@ -18,7 +18,7 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from cumuli import _core, registry
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.model.cloud import Cloud
 from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise

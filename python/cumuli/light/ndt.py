@@ -30,8 +30,9 @@ from typing import Any, Literal, overload
 
 import numpy as np
 
-from cumuli import _core, _progress
-from cumuli import _validate as check
+from cumuli import _core
+from cumuli._util import progress as _progress
+from cumuli._util import validate as check
 from cumuli.light.grid import (
     DEFAULT_EXTINCTION,
     DEFAULT_SOLID_ANGLE,

@@ -28,7 +28,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.caf import ground_caf
 from cumuli.light.sprite_settings import (  # noqa: F401 (public names)

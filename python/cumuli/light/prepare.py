@@ -33,8 +33,9 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _progress, registry
-from cumuli import _validate as check
+from cumuli import registry
+from cumuli._util import progress as _progress
+from cumuli._util import validate as check
 from cumuli.light.between import onto_media, own_light_of, through_media
 from cumuli.light.digests import shadow_digest as _shadow_digest
 from cumuli.light.memo import lock as _memo_lock

@@ -23,8 +23,8 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
 from cumuli import registry
+from cumuli._util import validate as check
 from cumuli.light.footprint import box_corners, footprint
 from cumuli.light.physical import optical_depth
 

@@ -10,7 +10,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 PHASES = ("rayleigh", "isotropic", "hg")
 KERNELS = ("gaussian", "hermite")

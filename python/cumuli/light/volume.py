@@ -15,8 +15,9 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core, _progress
-from cumuli import _validate as check
+from cumuli import _core
+from cumuli._util import progress as _progress
+from cumuli._util import validate as check
 from cumuli.light.memo import content_digest, remember
 from cumuli.model.volume import (
     AnimationFrame,

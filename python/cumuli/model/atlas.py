@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 STYLES = ("sunny", "rainy", "wispy")
 #: Most sprites a generated atlas holds, and the sprite edge range in texels.

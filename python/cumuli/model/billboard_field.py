@@ -19,7 +19,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.model.billboards import ARRAY_FIELDS, BillboardCloud, rotate_y
 from cumuli.model.parts import DrawableParts
 

@@ -29,8 +29,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from cumuli import _validate as check
-from cumuli._atomic import atomic_target
+from cumuli._util import validate as check
+from cumuli._util.atomic import atomic_target
 from cumuli.io.jsonable import jsonable
 from cumuli.io.npz import check_path, check_readable, json_default, read_npz
 

@@ -47,7 +47,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.io.jsonable import array_from_json, array_to_json
 from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise, _fbm_params, check_fbm_reach

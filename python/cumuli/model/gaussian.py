@@ -15,9 +15,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from cumuli import _core
-from cumuli import _validate as check
-from cumuli._structs import core_struct
-from cumuli._validate import MAX_COORD
+from cumuli._util import validate as check
+from cumuli._util.structs import core_struct
+from cumuli._util.validate import MAX_COORD
 from cumuli.model.cloud import Cloud
 
 #: Most primitives the Gaussian generator draws (its containment filter is O(n²)).

@@ -12,9 +12,9 @@ from collections.abc import Sequence
 from typing import Any
 
 from cumuli import _core
-from cumuli import _validate as check
-from cumuli._structs import core_struct
-from cumuli._validate import MAX_COORD
+from cumuli._util import validate as check
+from cumuli._util.structs import core_struct
+from cumuli._util.validate import MAX_COORD
 from cumuli.model.cloud import MAX_PRIMITIVES, Cloud
 
 #: The paper's grammar (eq. 18): from axiom "X", 2ⁿ spheres after n iterations.

@@ -15,8 +15,8 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
-from cumuli._validate import MAX_COORD
+from cumuli._util import validate as check
+from cumuli._util.validate import MAX_COORD
 from cumuli.model.cloud import MAX_PRIMITIVES, Cloud
 
 

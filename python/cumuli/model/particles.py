@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
-from cumuli._atomic import atomic_target
+from cumuli._util import validate as check
+from cumuli._util.atomic import atomic_target
 from cumuli.io.jsonable import array_from_json, array_to_json
 from cumuli.io.npz import json_default
 from cumuli.model.cloud import Cloud

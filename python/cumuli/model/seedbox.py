@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.model.atlas import SpriteAtlas, sprite_atlas
 
 #: Per-cloud limits (spec §10), checked against the worst case before generating.

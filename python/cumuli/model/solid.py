@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 #: Most solids one scene holds (the size of the shaders' uniform arrays).
 MAX_SOLIDS = 16

@@ -15,9 +15,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from cumuli import _core, _progress
-from cumuli import _validate as check
-from cumuli._structs import core_struct
+from cumuli import _core
+from cumuli._util import progress as _progress
+from cumuli._util import validate as check
+from cumuli._util.structs import core_struct
 from cumuli.io.jsonable import array_from_json, array_to_json, jsonable
 from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise, _fbm_params

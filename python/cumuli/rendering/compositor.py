@@ -22,8 +22,9 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _core, _progress, registry
-from cumuli import _validate as check
+from cumuli import _core, registry
+from cumuli._util import progress as _progress
+from cumuli._util import validate as check
 from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _thread_default, default_context
 from cumuli.ground import ground_args

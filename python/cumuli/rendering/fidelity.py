@@ -29,7 +29,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.camera import Camera
 from cumuli.light.particles import particle_light
 from cumuli.light.sprite_settings import SpriteSettings

@@ -19,7 +19,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.camera import Camera
 
 RESOLUTION_RULES = ("paper", "skyworks")

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core, registry
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.camera import Camera
 from cumuli.light.prepare import LitScene
 from cumuli.rendering import particle_layers

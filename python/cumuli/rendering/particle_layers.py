@@ -25,8 +25,8 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
-from cumuli._structs import core_struct
+from cumuli._util import validate as check
+from cumuli._util.structs import core_struct
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
 from cumuli.gl.sprites import (

@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
 from cumuli.model.solid import MAX_SOLIDS, Solid, solid_arrays

@@ -28,7 +28,7 @@ import moderngl
 import numpy as np
 
 from cumuli import _core
-from cumuli import _validate as check
+from cumuli._util import validate as check
 from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _resolve_context
 from cumuli.light.physical import PhysicalLight

@@ -18,7 +18,7 @@ from typing import Any
 
 from tqdm.auto import tqdm
 
-from cumuli import _validate as check
+from cumuli._util import validate as check
 
 #: Seconds a step runs before its bar is shown.
 DELAY = 2.0
