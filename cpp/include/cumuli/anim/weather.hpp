@@ -1,5 +1,5 @@
 // Animated skies with climatic variation, wind and layers (Torchelsen & Musse 2005, §4, Fig. 8,
-// Table 1; spec shared/specs/torchelsen.md §6–8).
+// Table 1).
 //
 // A layer holds sky states sorted by their climatic value cv (0 sunny … 1 stormy), each with NC
 // clouds drawn from NBM basis models × NM variants. One schedule CV(t) (piecewise linear, clamped)

@@ -1,6 +1,6 @@
-// Billboard-cloud lighting (Torchelsen & Musse 2005, §3.2, Figs. 6–7, 9; spec
-// shared/specs/torchelsen.md §4): the light-absorption factor "CAF" by ray casting through the
-// cloud's boxes, and the per-vertex colour ambient + CAF · directional term.
+// Billboard-cloud lighting (Torchelsen & Musse 2005, §3.2, Figs. 6–7, 9): the light-absorption
+// factor "CAF" by ray casting through the cloud's boxes, and the per-vertex colour ambient + CAF ·
+// directional term.
 //
 // CAF (§4.1). From a sample point x (a box centre, or a billboard centre) a ray x + t·s, t ≥ 0,
 // runs towards the (directional) sun s. With [t_in, t_out] the slab-test span of box b′:

@@ -29,7 +29,7 @@
 //  - Naive (the paper's baseline): every candidate interval is marched in full, in sorted order,
 //    each sample attributed to its own candidate; overlaps are marched (and attenuate) twice.
 // For pairwise disjoint primitives both give bit-identical fields.
-//  - Shared (issue 14): the samples of voxels on one sun-parallel line are shared. Each line of a
+//  - Shared: the samples of voxels on one sun-parallel line are shared. Each line of a
 //    grid sheared along the sun (one line per voxel column of a layer) is marched once, as NDT
 //    marches a ray (union intervals, attribution, gating), on a step Δ' ≈ Δ that puts a segment
 //    boundary on every voxel layer; L at each layer crossing comes from one backward sweep, and a

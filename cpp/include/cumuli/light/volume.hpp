@@ -52,7 +52,7 @@ float optical_depth_ray(const float* vol, const VolumeGrid& g, glm::vec3 p, glm:
 // How the bulk optical depths below are computed.
 //  - March: one ray per voxel (per direction, per point), optical_depth_ray / _segment: the
 //    brute-force reference.
-//  - Sweep (issue 14): each voxel reuses what its neighbours' rays already integrated.
+//  - Sweep: each voxel reuses what its neighbours' rays already integrated.
 //    Along a direction ω (the sun, each SH direction): let a be the axis the ray crosses fastest
 //    in voxels; the lines (l_b + s_b·u, u, l_c + s_c·u) of a grid sheared along ω (u the layer
 //    coordinate along a, s the shift per layer, one line per voxel column of a layer) are each
