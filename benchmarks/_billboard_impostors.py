@@ -1,5 +1,5 @@
 """Impostor parts of ``bench_billboards.py`` (Torchelsen & Musse 2005 skies through Harris 2002's
-dynamic impostors, one per cloud and per field instance; spec torchelsen.md §9, §13.5).
+dynamic impostors, one per cloud and per field instance).
 
 - **Render time against clouds, with and without impostors**: fields of N clouds (10 cumulus
   variants, constant density), an orbit around the field and a fly-through across it (through

@@ -1,4 +1,4 @@
-"""Frame-time parts of ``bench_particles.py`` (spec harris.md §12.6 (b)–(d)): Harris 2002's
+"""Frame-time parts of ``bench_particles.py``: Harris 2002's
 impostor claims measured as ratios in one run.
 
 (b) **Fig. 8 sweep**: fields of N clouds × 200 particles, a circular path around the field and a

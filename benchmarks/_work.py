@@ -1,7 +1,7 @@
-"""Work per pixel of the 2018 marcher (issue 14 item 4), shared by ``bench_render_cpu.py`` and
+"""Work per pixel of the 2018 marcher, shared by ``bench_render_cpu.py`` and
 ``bench_render.py``.
 
-Three settings per scene: ``off`` (the march before issue 14: no empty-space skipping, early
+Three settings per scene: ``off`` (the march without empty-space skipping, early
 exit at T < 1e-6), ``skip`` (the default: empty-space skipping, the same image bit for bit) and
 ``fast`` (skipping and the early exit at ``T < FAST_MIN_TRANSMITTANCE``). The CPU marcher
 counts the fBm evaluations (``render_cpu(..., return_stats=True)``); the issue's targets are

@@ -6,7 +6,7 @@ Measured (median / best / worst wall time of repeats, plus process CPU time):
   resolution, on 1 thread and on all cores (ratio), and against a numpy reference at one size
   (ratio: C++ speed-up).
 * ``optical_depth``: per database volume, the sun optical depth and the SH optical depth, by
-  sweeping (``method="sweep"``, issue 14: each sun-parallel line of a sheared grid integrated
+  sweeping (``method="sweep"``: each sun-parallel line of a sheared grid integrated
   once) and by brute-force marching (one march per voxel and direction, today's method), against
   resolution: times, march/sweep ratios and the swept depths' mean difference from the marched.
 * ``precompute``: the README's example, ``VolumeLighting`` on 24 volumes of 32³ with the default

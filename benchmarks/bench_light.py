@@ -7,7 +7,7 @@ hollow and containment filters keep ~31) and a ~300-face mesh cloud (the procedu
 
 Per (cloud, resolution, method): median / min / max wall time of the repeats (the C++ march as
 timed inside the core, and the whole Python call), samples marched per voxel, and the ratios
-naive/NDT and NDT/shared of time and samples. ``method="shared"`` (issue 14) marches each
+naive/NDT and NDT/shared of time and samples. ``method="shared"`` marches each
 sun-parallel line of a sheared grid once and resamples into the grid: its difference from the
 per-voxel NDT grid (max and mean |ΔL|) is written beside it. Single-thread CPU time of NDT at
 the smallest grids is recorded too: it is robust to other load on a shared machine (the load
@@ -150,7 +150,7 @@ def main(argv: list[str] | None = None) -> int:
             row["ndt_over_shared_time"] = ndt["march_s"]["median"] / shared["march_s"]["median"]
             row["ndt_over_shared_samples"] = ndt["samples_total"] / shared["samples_total"]
             diff = np.abs(g_shared - g_ndt)
-            # The shared grid against the per-voxel definition (issue 14: stated, not hidden).
+            # The shared grid against the per-voxel definition (stated, not hidden).
             row["shared_minus_ndt"] = {
                 "max_abs": float(diff.max()),
                 "mean_abs": float(diff.mean()),
@@ -274,7 +274,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
             axes[1].plot(res, [r["samples_per_voxel"] for r in rows], style,
                          label=f"{name} {method}")  # fmt: skip
     axes[0].plot([20, 64], [TARGET_20_MS, TARGET_64_MS], "k*", markersize=10,
-                 label="issue 14 targets (cumulus)")  # fmt: skip
+                 label="targets (cumulus)")  # fmt: skip
     axes[0].set(xlabel="grid resolution R (R³ voxels)", ylabel="median time (ms)",
                 yscale="log", title="light grid time, all cores")  # fmt: skip
     axes[1].set(xlabel="grid resolution R", ylabel="samples marched per voxel",

@@ -15,7 +15,7 @@ the reference point: a hashed value noise, single-threaded (its CPU time equals 
 the JSON records the ratio), timed interleaved with the C++ kernels so that both see the same
 machine.
 
-SIMD (issue 14, item 1): the C++ fBm is also timed on 1 thread with every kernel this CPU runs
+SIMD: the C++ fBm is also timed on 1 thread with every kernel this CPU runs
 (``cpp_1_thread_scalar``, and ``cpp_1_thread_<level>_<fetch>`` for each wide level, avx2 and
 avx512, and each lattice fetch, gather / loads / cells; interleaved, selected with
 ``cumuli.noise.set_simd_level`` and ``set_simd_fetch``, each timed call after an untimed one so

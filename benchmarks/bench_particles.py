@@ -1,4 +1,4 @@
-"""Harris 2002 particles (spec harris.md §12.6). Part (a), the light pass: time against particle
+"""Harris 2002 particles. Part (a), the light pass: time against particle
 count and light-buffer size for the C++ reference on 1 and 2 threads, the GLSL compute twin and
 the faithful 2002 read-back path (blended quads + one glReadPixels per particle), in one run.
 Parts (b)–(d), frame times with and without impostors (``_harris_frames.py``: the Fig. 8 sweep,

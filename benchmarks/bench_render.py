@@ -7,7 +7,7 @@ is rendered at 320×240 and 640×480 on llvmpipe, at 640×480, 800×600 and 1920
 the paper mode (``lighting_ratio``: the issue's limit of 1.5× the paper mode's frame time, as
 ``{limit, comparison, reached, met}``; GL and CPU, interleaved repeats of the same run; light
 steps excluded), and the GL frame time without and with empty-space skipping and the early
-exit (``work_per_pixel``, issue 14 item 4, ``_work.py``). GL time per frame is the sum of the
+exit (``work_per_pixel``, ``_work.py``). GL time per frame is the sum of the
 tiles' GL_TIME_ELAPSED queries (the draw only: no upload, no read-back); wall time of the whole
 ``render`` call is recorded too. Ratios (union/paper, GL/CPU) come from the same run; on
 llvmpipe, whose timer queries miss the deferred rasteriser threads, they use wall time.

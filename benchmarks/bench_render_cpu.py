@@ -7,7 +7,7 @@ cumulus, metaball cumulus, L-system castellanus, mesh → ellipsoids), with the 
 same run (GL timer queries of the draws, and wall time) for the CPU/GL ratios, and the physical
 lighting mode against the paper mode on every scene (``lighting``: the issue's limit of 1.5×, as
 ``{limit, comparison, reached, met}``, CPU on every core and GL wall time, interleaved repeats),
-and the work per pixel (``work_per_pixel``, issue 14 item 4, ``_work.py``: fBm evaluations per
+and the work per pixel (``work_per_pixel``, ``_work.py``: fBm evaluations per
 pixel without and with empty-space skipping and the early exit, their ratio against the target
 of 2, the image difference against 2e-3, CPU and GL frame-time ratios).
 Light grids are computed once, outside the timings. Writes ``render_cpu.json`` and

@@ -239,7 +239,7 @@ def target_rows(targets: dict[str, dict[str, Any]], extra=None) -> list[list[Any
     today's method (``baseline``) and the ratio to it."""
     rows = []
     for name, t in targets.items():
-        if "comparison" not in t:  # an archive from before issue 14: {target, value, met}
+        if "comparison" not in t:  # an older archive: {target, value, met}
             value = t.get("value")
             rows.append([name, t.get("target", "?"), "—" if value is None else f"{value:.3g}",
                          verdict(t.get("met")), "—"] + (extra(t) if extra else []))  # fmt: skip
@@ -317,7 +317,7 @@ def other_lines(data: dict[str, dict[str, Any]]) -> list[str]:
         first = next(iter(render["methods"].values()))
         lines += table(["size"] + [f"{k} wall ms" for k in sorted(first)], rows)
         lighting = render.get("lighting")
-        if lighting:  # issue 11: the physical mode costs at most 1.5× the paper mode
+        if lighting:  # target: the physical mode costs at most 1.5× the paper mode
             lines += ["Physical lighting against the paper mode, frame-time ratio (limit 1.5):", ""]
             rows = [[size] + [f"{e[k]['reached']:.2f} ({verdict(e[k]['met'])})"
                               for k in ("gl_physical_over_paper", "cpu_physical_over_paper")]

@@ -942,7 +942,7 @@ void bind_impostors(py::module_& m) {
       py::arg("images"), py::arg("planes"), py::arg("clamp"), py::arg("camera_position"),
       py::arg("camera_target"), py::arg("camera_up"), py::arg("fov"), py::arg("width"),
       py::arg("height"), py::arg("threads") = 0,
-      "Impostors drawn back to front (spec harris.md §7.2, exact bilinear): images (h, w, 4) "
+      "Impostors drawn back to front (exact bilinear): images (h, w, 4) "
       "premultiplied, planes (n, 14) = centre, forward, right, up, half_w, half_h; clamp (n,) "
       "bool. An (H, W, 4) premultiplied layer, row 0 on top.");
 

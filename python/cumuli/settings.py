@@ -113,12 +113,12 @@ class RenderSettings:
         Skip the samples that lie in empty cells of each cloud's coarse occupancy grid
         (``cumuli.occupancy_grid``, 16³ cells over the cloud's box) without evaluating the
         density, in both marchers and both lighting modes. The grid is conservative, so the
-        image is the same bit for bit (RENDER_CONTRACT "Empty-space skipping"); ``False`` is the
-        march before issue 14.
+        image is the same bit for bit (RENDER_CONTRACT "Empty-space skipping"); ``False`` marches
+        every cell.
     min_transmittance:
         The paper mode's early exit: a ray stops once its transmittance falls below it, the
         light still to come estimated by the last sample's source (the medium taken as opaque
-        beyond). ``1e-6`` (the default) is the paper mode's exit before issue 14; larger values
+        beyond). ``1e-6`` (the default) is the paper mode's exit; larger values
         (``0.2``: ÷ 2 fBm evaluations at a mean |Δ| ≤ 1.3e-3 on the benchmark scenes) trade a
         bounded error (at most ``min_transmittance`` times the radiance behind) for fewer fBm
         evaluations (``benchmarks/bench_render_cpu.py`` measures both). The physical mode keeps

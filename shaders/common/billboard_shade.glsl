@@ -1,4 +1,4 @@
-// Billboard shading of Torchelsen & Musse 2005 (§3.2; spec torchelsen.md §4.2) at one point:
+// Billboard shading of Torchelsen & Musse 2005 (§3.2) at one point:
 // the GLSL twin of cumuli::shade_point (cpp/src/light/caf.cpp), used per pixel by the sprite
 // pipeline's fragment-shading mode. Same float32 operations in the same order (`precise` keeps
 // the compiler from fusing or reordering them):

@@ -1,4 +1,4 @@
-// Opaque solid spheres (Harris 2002 §3.1.1; spec harris.md §7.5): the GLSL twin of
+// Opaque solid spheres (Harris 2002 §3.1.1): the GLSL twin of
 // cpp/include/cumuli/rendering/solids.hpp. Ray o + t·d (d unit): oc = o − c, b = oc·d,
 // k = oc·oc − r², disc = b² − k; a miss when disc < 0 or −b + √disc < 0; else t = max(−b − √disc, 0).
 // The marchers stop at the nearest solid (nearest_solid); shaders/solids/solid.frag.glsl draws them.

@@ -1,4 +1,4 @@
-// Splat kernel of Harris 2002 particles (spec harris.md §2.2), twin of cumuli::splat_kernel
+// Splat kernel of Harris 2002 particles, twin of cumuli::splat_kernel
 // (cpp/src/light/particles.cpp): K(d) = peak·k(d) for d < 1, 0 for d ≥ 1, with
 //   kind 0: windowed Gaussian σ = 1/3, k = (e^{−4.5d²} − e^{−4.5})/(1 − e^{−4.5})
 //   kind 1: SkyWorks' cubic Hermite, k = 1 − 3d² + 2d³.

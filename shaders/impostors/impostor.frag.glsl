@@ -1,5 +1,5 @@
 #version 430
-// Impostor display (Harris 2002 §3, spec harris.md §7.2); the GL twin of cumuli::display_impostors
+// Impostor display (Harris 2002 §3); the GL twin of cumuli::display_impostors
 // (cpp/src/rendering/impostors.cpp). Per pixel (j, i) of the whole image, the RENDER_CONTRACT ray
 // o + t·d meets the impostor plane (centre c, normal f, unit axes r, u, half sizes hw, hh) at
 // t = ((c − o)·f)/(d·f) (nothing unless d·f > 0 and t > 0); rel = t·d − (c − o),

@@ -1,5 +1,5 @@
 #version 430
-// Dynamically generated impostors (Harris 2002 §3; spec harris.md §7.2): one impostor per draw,
+// Dynamically generated impostors (Harris 2002 §3): one impostor per draw,
 // two triangles covering its conservative pixel rectangle (cumuli::impostor_rect, computed on the
 // CPU); the fragment shader decides coverage exactly by intersecting the pixel's ray with the
 // impostor's plane.

@@ -1,5 +1,5 @@
 #version 430
-// Multiple forward scattering light pass of Harris 2002 (§2.2.1, §2.3, Fig. 4; spec harris.md §4):
+// Multiple forward scattering light pass of Harris 2002 (§2.2.1, §2.3, Fig. 4):
 // the GLSL compute twin of cumuli::particle_light_one (cpp/src/light/particles.cpp).
 //
 // One work group per light. The N_L² light buffer (1 everywhere, uploaded) lives in an SSBO; particles come

@@ -1,5 +1,5 @@
 #version 430
-// The solid image (spec harris.md §7.5, §12.4): per pixel the nearest opaque sphere, shaded
+// The solid image: per pixel the nearest opaque sphere, shaded
 // Lambert by the sun plus ambient, rgb = colour ⊙ (ambient + max(0, n·s)·sun_radiance); alpha the
 // view depth Z = t·(d·f), +∞ where no solid is hit. GLSL twin of cumuli::draw_solids
 // (cpp/src/rendering/solids.cpp); the camera ray is RENDER_CONTRACT's, tiles as the marcher's.

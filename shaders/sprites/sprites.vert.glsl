@@ -1,6 +1,6 @@
 #version 430
-// View-plane-parallel sprites (Harris 2002 particle splats, spec harris.md §5; Torchelsen & Musse
-// 2005 billboards, spec torchelsen.md §3–5): the GL twin of cumuli::project_sprite and
+// View-plane-parallel sprites (Harris 2002 particle splats; Torchelsen & Musse
+// 2005 billboards): the GL twin of cumuli::project_sprite and
 // cumuli::rasterise_sprites (cpp/src/render/sprite_raster.cpp).
 //
 // One instance per sprite, six vertices (two triangles) built here in screen space from the

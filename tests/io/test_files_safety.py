@@ -1,4 +1,4 @@
-"""No lost files (issue 15, items 2, 4, 5 and 8): verified writes on a full disk, temporaries that
+"""No lost files: verified writes on a full disk, temporaries that
 no glob of the real extension finds and that fit NAME_MAX, cleanup on SIGTERM, the file mode and
 symlinks kept by the atomic replace, bounded memory in read_image / write_image, the alpha of
 saved images.

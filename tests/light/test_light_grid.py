@@ -1,4 +1,4 @@
-"""Light pass (issue 4): the NDT / naive light grid against a slow numpy reference of eqs. (3)–(7),
+"""Light pass: the NDT / naive light grid against a slow numpy reference of eqs. (3)–(7),
 analytic Beer–Lambert cases, method and thread invariants, and bad input."""
 
 from __future__ import annotations

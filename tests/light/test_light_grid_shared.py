@@ -1,4 +1,4 @@
-"""Light grids that share their samples (issue 14, item 2): ``light_grid(method="shared")``.
+"""Light grids that share their samples: ``light_grid(method="shared")``.
 
 Each sun-parallel line of a grid sheared along the sun is marched once (NDT's union march, step
 Δ' = λ/round(λ/Δ) with λ the distance between voxel layers along the line) and read back at every

@@ -1,4 +1,4 @@
-"""Harris 2002 light pass (spec harris.md §3–4, tests §10.1): C++ reference against a numpy slow
+"""Harris 2002 light pass: C++ reference against a numpy slow
 reference, the analytic column / offset / continuum results, monotonicity, invariances, the
 energy check, GLSL compute and 2002 read-back parity, threads, convergence in N_L, skylight."""
 

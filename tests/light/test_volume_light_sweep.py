@@ -1,4 +1,4 @@
-"""Volume light precompute by sweeping (issue 14, item 3) against brute-force marching.
+"""Volume light precompute by sweeping against brute-force marching.
 
 ``method="sweep"`` integrates each sun-parallel line of a sheared grid once (sun and every SH
 quadrature direction) and sweeps outwards from each multiple-scattering point; ``"march"`` marches

@@ -1,4 +1,4 @@
-"""SIMD fBm (issue 14, item 1): every dispatch path gives the scalar path's bits.
+"""SIMD fBm: every dispatch path gives the scalar path's bits.
 
 The AVX2 and AVX-512 kernels perform the scalar kernel's float32 operations in the same order
 (no FMA), so they must agree bit for bit on random points, on lattice boundaries, on negative

@@ -1,4 +1,4 @@
-"""Harris 2002 particle clouds (spec harris.md §2, §12.5): data, generators, volumes, files."""
+"""Harris 2002 particle clouds: data, generators, volumes, files."""
 
 from __future__ import annotations
 

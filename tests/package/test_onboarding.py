@@ -1,4 +1,4 @@
-"""The first hour (issue 15): `cumuli --version`, progress bars on long steps (with an opt-out),
+"""The first hour: `cumuli --version`, progress bars on long steps (with an opt-out),
 `make bench` writing to benchmarks/out/ unless asked to archive, the notebooks' numbering."""
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Checks before expensive work (issue 15, item 6) and float32 overflow refused for both backends
+"""Checks before expensive work and float32 overflow refused for both backends
 (item 7): every size limit is enforced before anything large is allocated or computed, and
 values that would overflow float32 in the renderers are refused when the object is made.
 """

@@ -1,5 +1,5 @@
 """Impostors of billboard clouds and of every billboard-field instance (Harris 2002 §3 applied to
-Torchelsen & Musse 2005; spec harris.md §7, torchelsen.md §5, §13.4): display at the generation
+Torchelsen & Musse 2005): display at the generation
 viewpoint against direct rendering, exact GL/CPU parity, one impostor per field instance kept
 by its id, the update criteria, wind (a pure translation) keeping the impostors, relighting and
 content changes invalidating them, the parts protocol, and a filmed weather through impostors."""

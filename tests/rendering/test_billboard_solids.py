@@ -1,5 +1,5 @@
 """Billboard clouds around opaque solids (Harris 2002 §3.1.1, Fig. 7, applied to Torchelsen &
-Musse 2005's billboards; spec harris.md §7.5, torchelsen.md §13.4): direct rendering depth-tests
+Musse 2005's billboards): direct rendering depth-tests
 every billboard against the solids (hard cuts, Fig. 7 left), `draw_split` / its CPU twin cut a
 cloud's sorted billboards into m + 1 layers at the solids' sort keys, and impostors split a
 billboard cloud — or only the field instance a solid is in — around it (Fig. 7 right)."""

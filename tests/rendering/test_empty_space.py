@@ -1,4 +1,4 @@
-"""Less work per pixel in the 2018 marcher (issue 14 item 4; RENDER_CONTRACT "Empty-space
+"""Less work per pixel in the 2018 marcher (RENDER_CONTRACT "Empty-space
 skipping"): conservative occupancy grids, bit-exact skipping in both marchers and both lighting
 modes, the early exit `min_transmittance`, and the fBm counts of the CPU twin."""
 

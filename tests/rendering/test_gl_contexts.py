@@ -1,5 +1,5 @@
-"""GL after fork, GL from several threads, several contexts in one thread, context reuse (issue 15,
-items 1, 3 and 9) and the first render's GPU time.
+"""GL after fork, GL from several threads, several contexts in one thread, context reuse and the
+first render's GPU time.
 
 Mesa keeps its EGL display (and llvmpipe's rasteriser threads) per process: a child forked from a
 process that made a GL context cannot draw (it waits forever for threads that were not copied),
@@ -83,7 +83,7 @@ def test_gl_in_a_forked_worker_raises_a_clear_error_instead_of_hanging(
             cwd=tmp_path,
         )  # fmt: skip
     except subprocess.TimeoutExpired:
-        pytest.fail(f"a {kind} of forked GL workers hung (issue 15, item 1)")
+        pytest.fail(f"a {kind} of forked GL workers hung")
     assert done.returncode == 0, done.stderr[-3000:]
     line = [x for x in done.stdout.splitlines() if x.startswith("RESULT ")][-1]
     out = json.loads(line.removeprefix("RESULT "))

@@ -1,7 +1,7 @@
-"""Dynamic impostors for every kind of cloud (Harris 2002 §3–§4; spec harris.md §7, tests §10.3.1,
-§10.3.4, §10.3.7, §10.3.8): display against direct rendering, exact GL/CPU parity, popping
-against the tolerance, screen impostors, invalidation, culling, the texture pool, statistics,
-marched clouds and volumes through impostors, and `render_frames(impostors=True)`."""
+"""Dynamic impostors for every kind of cloud (Harris 2002 §3–§4): display against direct rendering,
+exact GL/CPU parity, popping against the tolerance, screen impostors, invalidation, culling, the
+texture pool, statistics, marched clouds and volumes through impostors, and
+`render_frames(impostors=True)`."""
 
 from __future__ import annotations
 

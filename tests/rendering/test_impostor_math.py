@@ -1,4 +1,4 @@
-"""Impostor mathematics of Harris 2002 §3 (spec harris.md §7.1, §7.3, §7.4; tests §10.3.2–3)."""
+"""Impostor mathematics of Harris 2002 §3."""
 
 from __future__ import annotations
 

@@ -1,9 +1,9 @@
-"""One scene holding every kind of drawable (RENDER_CONTRACT "Compositor"; spec harris.md §12.4,
-torchelsen.md §13.4): a 2018 cumulus (marched), a density volume, a Harris particle cloud, a
-Torchelsen billboard cloud and a billboard field, drawn by GL and by the C++ twins, with and
-without impostors — parity, the per-pixel order of the layers against a numpy reference of the
-compositing rule, the nearer cloud hiding the farther whatever their kinds, solids splitting the
-kinds that can split, and scene files holding every kind."""
+"""One scene holding every kind of drawable (RENDER_CONTRACT "Compositor"): a 2018 cumulus
+(marched), a density volume, a Harris particle cloud, a Torchelsen billboard cloud and a billboard
+field, drawn by GL and by the C++ twins, with and without impostors — parity, the per-pixel order of
+the layers against a numpy reference of the compositing rule, the nearer cloud hiding the farther
+whatever their kinds, solids splitting the kinds that can split, and scene files holding every
+kind."""
 
 from __future__ import annotations
 

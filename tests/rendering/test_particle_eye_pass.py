@@ -1,5 +1,5 @@
-"""Harris 2002 eye pass and the shared sprite pipeline (spec harris.md §5, tests §10.2; the
-billboard mode of spec torchelsen.md §3–5): analytic single/overlapping particles, phase ratios,
+"""Harris 2002 eye pass and the shared sprite pipeline (the
+billboard mode of Torchelsen & Musse 2005): analytic single/overlapping particles, phase ratios,
 the Fig. 9/10 statistic, GL vs CPU parity, culling and tiling."""
 
 from __future__ import annotations

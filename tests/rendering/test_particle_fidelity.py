@@ -1,4 +1,4 @@
-"""Harris 2002: linearity in the lights (spec harris.md §10.2.6, skylight additivity), the shadow
+"""Harris 2002: linearity in the lights (skylight additivity), the shadow
 map by-product and ground shadows (§10.3.9), and the fidelity of the approximations against the
 Gaussian-blob volume they stand for (§10.4, reported by `cumuli.rendering.fidelity`)."""
 

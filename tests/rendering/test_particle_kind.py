@@ -1,4 +1,4 @@
-"""Harris 2002 particle clouds as a drawable kind (spec harris.md §12.2–12.5): through every stage
+"""Harris 2002 particle clouds as a drawable kind: through every stage
 (model, light step, GL drawer and its CPU twin), one pass for a scene of particle clouds, mixed
 scenes through the compositor (parity, per-pixel order), scene files, public names, bad input."""
 

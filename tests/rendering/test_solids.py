@@ -1,4 +1,4 @@
-"""Opaque solids inside clouds (Harris 2002 §3.1.1, Fig. 7; spec harris.md §7.5, §12.4, §10.3.5–6):
+"""Opaque solids inside clouds (Harris 2002 §3.1.1, Fig. 7):
 the analytic solid image (GL and C++), solids hiding what lies behind them in the compositor, the
 marchers stopping at a solid, particles depth-tested against it (direct rendering), and impostor
 splitting (layer associativity, the object between the layers)."""

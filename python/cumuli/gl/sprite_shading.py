@@ -1,5 +1,5 @@
-"""Per-pixel billboard shading for the shared sprite pipeline (Torchelsen & Musse 2005 §3.2;
-spec torchelsen.md §4.2, ``shading="fragment"``): :class:`FragmentShading` carries what
+"""Per-pixel billboard shading for the shared sprite pipeline (Torchelsen & Musse 2005 §3.2
+``shading="fragment"``): :class:`FragmentShading` carries what
 :func:`cumuli.gl.sprites.draw_sprites_cpu` (C++ ``shade_point`` in ``rasterise_sprites``) and
 :class:`cumuli.gl.sprites.SpriteLayerRenderer` (``shaders/common/billboard_shade.glsl``) evaluate at
 each pixel in place of the interpolated vertex colours."""

@@ -1,7 +1,7 @@
 """The shared sprite pipeline: view-plane-parallel sprites into a premultiplied layer.
 
-Serves Harris 2002 particle splats (spec harris.md §5: analytic kernel, one colour per sprite,
-alpha ``1 − e^{−τ}``) and Torchelsen & Musse 2005 billboards (spec torchelsen.md §3–5: rotated
+Serves Harris 2002 particle splats (analytic kernel, one colour per sprite,
+alpha ``1 − e^{−τ}``) and Torchelsen & Musse 2005 billboards (rotated
 w×h quads, straight-alpha atlas cells sampled bilinearly, per-vertex colours, alpha multiplier).
 :class:`Sprites` holds a batch; :class:`SpriteLayerRenderer` draws it with GL
 (``shaders/sprites/sprites.{vert,frag}.glsl``), :func:`draw_sprites_cpu` with the C++ twin

@@ -1,4 +1,4 @@
-"""GL twins of the particle light pass (spec harris.md §4): compute shader and 2002 read-back.
+"""GL twins of the particle light pass: compute shader and 2002 read-back.
 
 ``method="gl"`` runs ``shaders/particles/light.comp.glsl`` (one work group per light; the buffer
 in an SSBO). ``method="readback"`` is [H]'s own algorithm: each particle drawn as a blended quad

@@ -1,4 +1,4 @@
-"""Seed-and-box billboard clouds (Torchelsen & Musse 2005 §3; spec shared/specs/torchelsen.md §2–3).
+"""Seed-and-box billboard clouds (Torchelsen & Musse 2005 §3).
 
 A `SeedBox` (the paper's "seed"; ``seed=`` stays the RNG seed everywhere in cumuli) grows child
 boxes over ``levels`` reproduction levels by eq. (1), ``B = S + l·ρ·λ·R̂``: ``R̂`` uniform on the

@@ -1,4 +1,4 @@
-"""Particle clouds of Harris 2002 (§2; spec harris.md §2): data, generators, files.
+"""Particle clouds of Harris 2002 (§2): data, generators, files.
 
 A :class:`ParticleCloud` is ``N`` particles — centres ``(N, 3)``, splat radii ``r_k`` (the
 screen-aligned quad has side ``2·r_k``), optical depths ``τ_k`` (default 8.0, [H] §2.3) and

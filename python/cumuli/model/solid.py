@@ -1,4 +1,4 @@
-"""Opaque solids inside clouds (Harris 2002 §3.1.1, Fig. 7; spec harris.md §7.5, §12.4).
+"""Opaque solids inside clouds (Harris 2002 §3.1.1, Fig. 7).
 
 A :class:`Solid` is an opaque sphere — the stand-in for [H]'s airplane flying through clouds —
 drawn analytically per pixel (ray–sphere, ``rendering/solids.py`` and its C++ twin

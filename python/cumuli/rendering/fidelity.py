@@ -1,5 +1,4 @@
-"""How far Harris 2002's approximations are from the volume they stand for (spec harris.md §10.4,
-[beyond the paper]).
+"""How far Harris 2002's approximations are from the volume they stand for ([beyond the paper]).
 
 A particle is the Gaussian blob ``σ(x) = β_k·exp(−|x − p_k|²/(2 s_k²))``, ``s_k = r_k/3``,
 ``β_k = τ_k/(s_k√(2π))`` (:meth:`cumuli.ParticleCloud.to_volume`). Two measurements:

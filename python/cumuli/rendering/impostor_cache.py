@@ -1,5 +1,4 @@
-"""Dynamically generated impostors for every kind of cloud (Harris 2002 §3, §3.1, §3.1.1, §4;
-spec harris.md §7, §12.4).
+"""Dynamically generated impostors for every kind of cloud (Harris 2002 §3, §3.1, §3.1.1, §4).
 
 An :class:`ImpostorCache` lives across frames. Each frame, for every drawable of the scene:
 

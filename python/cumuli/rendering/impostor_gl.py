@@ -1,4 +1,4 @@
-"""GL display of impostors (Harris 2002 §3; spec harris.md §7.2): textures from a pool, one quad
+"""GL display of impostors (Harris 2002 §3): textures from a pool, one quad
 per impostor drawn back to front (``shaders/impostors/impostor.{vert,frag}.glsl``).
 
 Each impostor's image is uploaded once when it is (re)generated into an RGBA32F texture taken

@@ -1,6 +1,5 @@
 """What an :class:`~cumuli.rendering.impostor_cache.ImpostorCache` keeps one impostor for, and
-when two frames' versions of it draw the same image (Harris 2002 §3; spec harris.md §7.3 items
-4–5, torchelsen.md §5, §13.4).
+when two frames' versions of it draw the same image (Harris 2002 §3).
 
 A **unit** is a whole drawable, or one part of a drawable that has parts (the optional
 ``impostor_parts()`` / ``part(i)`` protocol of :mod:`cumuli.model.parts`: a `BillboardField`'s

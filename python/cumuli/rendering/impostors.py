@@ -1,4 +1,4 @@
-"""Impostor mathematics of Harris 2002 §3 and §3.1 (spec harris.md §7.1, §7.3, §7.4).
+"""Impostor mathematics of Harris 2002 §3 and §3.1.
 
 Pure functions over the C++ core (``render/impostor.hpp``, double precision): the tight impostor
 camera of a cloud's bounding sphere (:func:`impostor_view`), the translation error α_trans,

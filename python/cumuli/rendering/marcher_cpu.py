@@ -43,7 +43,7 @@ OCCUPANCY_RESOLUTION = 16
 
 @dataclass(frozen=True)
 class MarchStats:
-    """The work of one CPU render of 2018 clouds (issue 14 item 4): counted by the C++ marcher
+    """The work of one CPU render of 2018 clouds: counted by the C++ marcher
     per pixel, so the numbers do not depend on the thread count, and counting never changes the
     image.
 

@@ -1,5 +1,4 @@
-"""Particle clouds as a drawable kind: the drawers the compositor calls (Harris 2002 §2.3, §4;
-spec harris.md §5, §7.5, §12.4).
+"""Particle clouds as a drawable kind: the drawers the compositor calls (Harris 2002 §2.3, §4).
 
 :class:`ParticleCloudsGL` (GL, the shared sprite pipeline) and :func:`draw_particle_clouds_cpu`
 (its C++ twin) draw several particle clouds of a :class:`cumuli.LitScene` **in one pass**, as

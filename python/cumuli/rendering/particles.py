@@ -1,4 +1,4 @@
-"""Eye pass of Harris 2002 particle clouds (§2.2.2, §2.3, eq. (5); spec harris.md §5).
+"""Eye pass of Harris 2002 particle clouds (§2.2.2, §2.3, eq. (5)).
 
 :func:`particle_sprites` turns a lit :class:`~cumuli.model.particles.ParticleCloud` into a
 :class:`~cumuli.gl.sprites.Sprites` batch for a camera, in the C++ core: colour per

@@ -1,4 +1,4 @@
-"""Opaque solids drawn per pixel (Harris 2002 §3.1.1; spec harris.md §7.5, §12.4).
+"""Opaque solids drawn per pixel (Harris 2002 §3.1.1).
 
 The solid image of a scene's :class:`cumuli.Solid` spheres — ``(H, W, 4)`` float32, row 0 on
 top, rgb shaded Lambert by the sun plus ambient, alpha the **view depth** of the nearest solid

@@ -1,5 +1,5 @@
 // Multiple forward scattering light pass of particle clouds (Harris 2002 §2.2.1, §2.3, Fig. 4;
-// equations (1)–(4) as restored in spec harris.md §3; algorithm spec §4).
+// equations (1)–(4) with the factors the talk leaves out restored, RENDER_CONTRACT "Sprites").
 //
 // Per cloud and directional light (s towards the light, light travels along l = −s):
 //   1. light frame f = −s, r = normalize(f × up), u = r × f (up = +y, or +x when |f·y| > 1 − 1e−6),

@@ -1,5 +1,4 @@
-// Procedural sprite atlas for billboard clouds (Torchelsen & Musse 2005, §3.2, Fig. 5; spec
-// shared/specs/torchelsen.md §3 "Textures").
+// Procedural sprite atlas for billboard clouds (Torchelsen & Musse 2005, §3.2, Fig. 5).
 //
 // [TM] uses Wang's hand-painted 16-sprite sheet, which is not redistributable; cumuli draws a
 // seeded sheet instead. Sprite i sits in cell (i mod nx, i div nx) of an nx × ny grid of

@@ -1,4 +1,4 @@
-// Particle clouds (Harris 2002, "Real-Time Cloud Rendering for Games", §2; spec harris.md §2).
+// Particle clouds (Harris 2002, "Real-Time Cloud Rendering for Games", §2).
 //
 // A particle is a roughly spherical blob: centre p_k, splat radius r_k (the screen-aligned quad
 // has side 2·r_k), optical depth τ_k of the whole particle and albedo a_k. As a density it is the

@@ -1,5 +1,4 @@
-// Seed-and-box billboard clouds (Torchelsen & Musse 2005, §3.1–3.2, eq. (1); spec
-// shared/specs/torchelsen.md §2–3).
+// Seed-and-box billboard clouds (Torchelsen & Musse 2005, §3.1–3.2, eq. (1)).
 //
 // A seed box S with reproduction directions D_i (full cone apertures θ_i) grows child boxes over
 // L levels: B = S + l·ρ·λ·R̂ (eq. (1) with ‖R‖ = ρ ∈ (0, 1] and the reach λ converting to world

@@ -1,5 +1,5 @@
-// Billboard clouds as sprites (Torchelsen & Musse 2005 §3.2 and §5, "vertex-shader" billboards;
-// spec shared/specs/torchelsen.md §4.2 and §5): the sprite list one frame draws of a batch of
+// Billboard clouds as sprites (Torchelsen & Musse 2005 §3.2 and §5, "vertex-shader" billboards):
+// the sprite list one frame draws of a batch of
 // billboard clouds — each a variant (its geometry, in its local frame) placed by an instance
 // transform world = R_y(yaw)·local + offset — for both drawers (the GL sprite pipeline and its
 // CPU twin, rendering/sprites.hpp), so that culling, fades, order and shading are computed

@@ -1,5 +1,5 @@
 // Impostor mathematics of Harris 2002 §3 (dynamically generated impostors, after Schaufler 1995)
-// and §3.1 (viewpoint inside a cloud); spec harris.md §7.1, §7.3, §7.4. Pure functions in double
+// and §3.1 (viewpoint inside a cloud). Pure functions in double
 // precision (one evaluation per cloud and frame); the GL impostor cache builds on them.
 //
 // For a bounding sphere (c, R) seen from e₀ with d₀ = |c − e₀| > R:

@@ -103,7 +103,7 @@ struct MarchSettings {
   bool physical = false;
   PhysicalParams phys;
   // The paper mode's early exit: the ray stops once T < min_transmittance (the physical mode's
-  // is phys.min_transmittance). 1e-6 is the method before issue 14.
+  // is phys.min_transmittance). 1e-6 is the paper's exit.
   float min_transmittance = 1e-6f;
   // Empty-space skipping (occupancy.hpp): samples in cells of a cloud's occupancy grid that
   // cannot hold density are passed over without evaluating the density. They still count as
@@ -134,14 +134,14 @@ struct MarchScene {
   // Opaque solids (rendering/solids.hpp, Harris 2002 §3.1.1): each ray is marched only up to the
   // nearest solid it meets, t_s — intervals are clipped to t < t_s and a sample whose midpoint lies
   // at or beyond t_s is not taken — so the layer holds exactly the cloud in front of the solid
-  // (spec harris.md §7.5, "march each ray only up to the object's depth"). Empty: no clipping.
+  // ("march each ray only up to the object's depth"). Empty: no clipping.
   std::vector<SolidSphere> solids;
   GroundParams ground;  // the background below the horizon when enabled
 
   void validate(const MarchSettings& settings) const;
 };
 
-// Work statistics of one render (issue 14 item 4): counted per pixel, so the totals do not
+// Work statistics of one render: counted per pixel, so the totals do not
 // depend on the thread count. Counting never changes the image.
 struct MarchStats {
   std::uint64_t fbm_evaluations = 0;  // fBm evaluations of the density (eq. 1)

@@ -1,5 +1,5 @@
 // Coarse occupancy grids for empty-space skipping in the 2018 marcher (Jiménez de Parga &
-// Gómez Palomo 2018, Algorithms 1 and 3; issue 14 item 4, RENDER_CONTRACT "Empty-space
+// Gómez Palomo 2018, Algorithms 1 and 3; RENDER_CONTRACT "Empty-space
 // skipping").
 //
 // A cloud's candidate box (candidate_bounds) is cut into kOccupancyRes³ cells. A cell is marked

@@ -1,8 +1,8 @@
-// Opaque solids inside clouds: Harris 2002 §3.1.1 ("impostor splitting", Fig. 7), spec harris.md
-// §7.5 and §12.4. A Solid is an analytic opaque sphere — the "airplane" stand-in — drawn per pixel
-// by ray–sphere intersection, shaded Lambert by the sun plus an ambient term, depth-tested among
-// the solids. The GLSL twins are shaders/common/solid.glsl (intersection, used by the marchers to
-// stop at a solid) and shaders/solids/solid.frag.glsl (the solid image).
+// Opaque solids inside clouds: Harris 2002 §3.1.1 ("impostor splitting", Fig. 7). A Solid is an
+// analytic opaque sphere — the "airplane" stand-in — drawn per pixel by ray–sphere intersection,
+// shaded Lambert by the sun plus an ambient term, depth-tested among the solids. The GLSL twins are
+// shaders/common/solid.glsl (intersection, used by the marchers to stop at a solid) and
+// shaders/solids/solid.frag.glsl (the solid image).
 //
 // Ray o + t·d (d unit): oc = o − c, b = oc·d, k = oc·oc − r², disc = b² − k; a miss when disc < 0
 // or when the far root −b + √disc < 0; else t = max(−b − √disc, 0) (an eye inside the sphere sees

@@ -1,6 +1,6 @@
 // CPU rasteriser of view-plane-parallel sprites: the CPU twin of
 // shaders/sprites/sprites.{vert,frag}.glsl, shared by Harris 2002 particle splats (§2.3, eq. (5)
-// and (6); spec harris.md §5) and Torchelsen & Musse 2005 billboards (spec torchelsen.md §3–5).
+// and (6)) and Torchelsen & Musse 2005 billboards.
 //
 // A sprite is a w×h rectangle centred at a world point, parallel to the image plane, rotated by
 // `rotation` about the view axis. Its projection (RENDER_CONTRACT camera: f, r, u, th = tan(fov/2),
