@@ -6,6 +6,7 @@ physical mode), its medium casts the shadows, and the volume marcher draws it.""
 
 from __future__ import annotations
 
+import weakref
 from typing import Any
 
 from cumuli import registry
@@ -16,11 +17,18 @@ from cumuli.light.volume import volume_light
 from cumuli.model.deck import CloudDeck
 from cumuli.rendering.deck import DeckGL, draw_deck_cpu
 
+#: Each deck's digest, hashed once (the light step asks for it once per other drawable).
+_digests: weakref.WeakKeyDictionary[CloudDeck, tuple] = weakref.WeakKeyDictionary()
+
 
 def digest(deck: CloudDeck) -> tuple:
     """What a deck's light depends on: its baked lattice, box and extinction."""
-    volume = deck.to_volume()
-    return ("deck", content_digest(volume.density), volume.box, volume.sigma_t)
+    known = _digests.get(deck)
+    if known is None:
+        volume = deck.to_volume()
+        known = ("deck", content_digest(volume.density), volume.box, volume.sigma_t)
+        _digests[deck] = known
+    return known
 
 
 def light(deck: CloudDeck, scene: Any, given: Any = None, threads: int = 0) -> Any:

@@ -362,13 +362,15 @@ class CloudDeck:
 
     def to_volume(self, threads: int = 0) -> VolumeCloud:
         """The baked deck: a :class:`VolumeCloud` of :meth:`density_lattice` over the slab with
-        this deck's ``sigma_t``."""
-        return VolumeCloud(
-            density=self.density_lattice(threads),
-            box=self.box,
-            sigma_t=self.sigma_t,
-            params={"deck": self.cloud_type, "time": self.time},
-        )
+        this deck's ``sigma_t`` (made once per deck: every stage reads the deck through it)."""
+        if "volume" not in self._cache:
+            self._cache["volume"] = VolumeCloud(
+                density=self.density_lattice(threads),
+                box=self.box,
+                sigma_t=self.sigma_t,
+                params={"deck": self.cloud_type, "time": self.time},
+            )
+        return self._cache["volume"]
 
     def at(self, time: float) -> CloudDeck:
         """This deck at another ``time`` (the wind has moved its map and fBm); it shares the
