@@ -22,6 +22,7 @@ from cumuli.anim.frames import fly_towards, orbit, render_frames
 from cumuli.anim.weather import CloudLayer, Schedule, SkyState, Weather, load_weather
 from cumuli.camera import Camera
 from cumuli.ground import Ground
+from cumuli.interchange.mitsuba import to_mitsuba
 from cumuli.interchange.volumes import read_volume, write_volume
 from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
@@ -114,6 +115,7 @@ __all__ = [
     "density_volume",
     "read_volume",
     "write_volume",
+    "to_mitsuba",
     "ellipsoids_from_mesh",
     "ExtinctionField",
     "fly_towards",
