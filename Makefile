@@ -52,8 +52,8 @@ install: $(PY)
 blender: $(BLENDER_VENV)/.bpy-installed
 $(BLENDER_VENV)/.bpy-installed:
 	python3 -m venv $(BLENDER_VENV)
-	$(BLENDER_VENV)/bin/python -m pip install -q "bpy>=4.2,<5"
-	touch $@
+	@if $(BLENDER_VENV)/bin/python -m pip install -q "bpy>=4.2,<5"; then touch $@; \
+	else rm -rf $(BLENDER_VENV); echo "bpy (Python 3.11 only) is not installable here: the Blender tests will skip"; fi
 
 demo: setup
 	$(VENV)/bin/cumuli demo -o out.png

@@ -73,6 +73,11 @@ def test_every_kind_with_a_density_can_be_written(tmp_path: Path) -> None:
     parts = cu.particle_cumulus(seed=2)
     p = cu.read_volume(cu.write_volume(tmp_path / "p.vol", parts, resolution=12))
     assert np.array_equal(p.density, parts.to_volume(12)[0])
+    deck = cu.CloudDeck(base=20.0, top=30.0, extent=(-60.0, -60.0, 60.0, 60.0), coverage=0.6,
+                        sigma_t=0.8, map_size=32, resolution=(32, 6, 32), seed=2)  # fmt: skip
+    dv = cu.read_volume(cu.write_volume(tmp_path / "d.zarr", deck))
+    assert np.array_equal(dv.density, cu.density_volume(deck, resolution=None).values)
+    assert dv.params["kind"] == "deck" and dv.params["extinction_scale"] == 0.8
     bill = cu.seed_box_cloud(cu.seedbox_presets.cumulus(), 4)
     b = cu.read_volume(cu.write_volume(tmp_path / "b.nc", bill, resolution=16))
     assert b.density.max() > 0 and b.params["kind"] == "billboards"
