@@ -22,6 +22,9 @@ from cumuli.anim.frames import fly_towards, orbit, render_frames
 from cumuli.anim.weather import CloudLayer, Schedule, SkyState, Weather, load_weather
 from cumuli.camera import Camera
 from cumuli.ground import Ground
+from cumuli.interchange.blender import to_blender
+from cumuli.interchange.mitsuba import to_mitsuba
+from cumuli.interchange.volumes import read_volume, write_volume
 from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light.billboard_shading import BillboardShading
@@ -111,6 +114,10 @@ __all__ = [
     "Cloud",
     "CloudDeck",
     "density_volume",
+    "read_volume",
+    "write_volume",
+    "to_mitsuba",
+    "to_blender",
     "ellipsoids_from_mesh",
     "ExtinctionField",
     "fly_towards",
