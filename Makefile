@@ -23,7 +23,7 @@ STAMP := $(VENV)/.cumuli-installed
 
 .PHONY: setup system venv install blender demo test test-fast bench bench-quick lint inplace clean
 
-setup: system install blender
+setup: system install
 
 # Debian packages: a compiler and Python headers for the C++ core, GLM, EGL + Mesa (llvmpipe) for
 # headless GL. `env` passes DEBIAN_FRONTEND through sudo, which would otherwise drop it.
@@ -58,7 +58,7 @@ $(BLENDER_VENV)/.bpy-installed:
 demo: setup
 	$(VENV)/bin/cumuli demo -o out.png
 
-test: setup
+test: setup blender
 	$(PY) -m pytest -q tests --nbmake notebooks
 
 test-fast: install
