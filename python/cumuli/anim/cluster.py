@@ -183,9 +183,18 @@ def _paths(out_dir: str | os.PathLike[str] | None, pattern: str, count: int) -> 
         raise ValueError(f"pattern {pattern!r} must take one frame number: {exc}") from None
     if len(set(names)) != len(names) or any(os.sep in n for n in names):
         raise ValueError(f"pattern {pattern!r} must give a distinct file name per frame")
+    from cumuli.io.images import FORMATS
+
+    if count and Path(names[0]).suffix.lower() not in FORMATS:  # before any task runs
+        raise ValueError(
+            f"pattern {pattern!r} gives {names[0]!r}, whose extension is not one of "
+            f"{sorted(FORMATS)}"
+        )
     folder = Path(out_dir)
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OSError(f"cannot create out_dir {str(folder)!r}: {exc.strerror or exc}") from exc
+    if not os.access(folder, os.W_OK):
+        raise OSError(f"out_dir {str(folder)!r} is not writable")
     return [str(folder / n) for n in names]

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
+from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli._util.atomic import atomic_target
 from cumuli.io.npz import (
@@ -40,6 +41,7 @@ from cumuli.io.npz import (
     meta_of,
     read_npz,
 )
+from cumuli.model.atlas import recipes_cost
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BasisModel, BillboardCloud, cloud_variants
 
@@ -186,6 +188,10 @@ class CloudLayer:
         return cls(**kw)
 
 
+#: Most keyframes of one `Schedule` (each evaluation walks them).
+MAX_KEYFRAMES = 100_000
+
+
 @dataclass(frozen=True, init=False)
 class Schedule:
     """``CV(t)``: piecewise linear through ``keys`` ``((t, cv), ...)`` (t strictly increasing, cv
@@ -196,8 +202,17 @@ class Schedule:
     def __init__(self, keys: float | Sequence[tuple[float, float]]) -> None:
         if isinstance(keys, (int, float, np.floating)) and not isinstance(keys, bool):
             keys = [(0.0, float(keys))]
-        if not isinstance(keys, (tuple, list)) or not 1 <= len(keys) <= 100_000:
-            raise TypeError("cv must be a number or a sequence of (t, cv) keyframes")
+        if isinstance(keys, np.ndarray) and keys.ndim == 2:
+            keys = keys.tolist()
+        if not isinstance(keys, (tuple, list)):
+            raise TypeError(
+                f"cv must be a number or a sequence of (t, cv) keyframes, got {type(keys).__name__}"
+            )
+        if not 1 <= len(keys) <= MAX_KEYFRAMES:
+            raise ValueError(
+                f"cv has {len(keys)} keyframes; a schedule holds 1 to {MAX_KEYFRAMES} "
+                "(MAX_KEYFRAMES)"
+            )
         out = []
         for k in keys:
             if not isinstance(k, (tuple, list)) or len(k) != 2:
@@ -491,6 +506,7 @@ def _save(weather: Weather, path: Any) -> Path:
 
 
 def _load(path: Any, threads: int = 0) -> Weather:
+    threads = check.threads(threads)  # an argument's error is not the file's
     p = check_path(path, (".npz",))
     check_readable(p, "weather")
     limits = {"meta": 1 << 26}
@@ -499,6 +515,16 @@ def _load(path: Any, threads: int = 0) -> Weather:
             limits[f"layer{i}_{key}"] = _LIMIT
     arrays = read_npz(p, limits, ("meta",))
     meta = meta_of(arrays, p, FILE_FORMAT)
+    # The atlases its layers' recipes rebuild, before any is made: at most what a scene file of
+    # its size may cost.
+    recipes = recipes_cost(meta.get("config"))
+    size = p.stat().st_size
+    budget.check_memory(
+        f"weather file {p.name!r} of {budget.amount(size)} ({len(recipes)} atlas recipe(s))",
+        sum(cost for _, _, cost in recipes),
+        budget.get_limits().scene_bytes(size),
+        "cumuli.set_limits(scene_expansion=..., scene_allowance=...) or CUMULI_SCENE_ALLOWANCE",
+    )
     try:
         if meta.get("version") != FILE_VERSION:
             raise FileFormatError(

@@ -223,6 +223,13 @@ def particle_light_many(
     if not isinstance(return_buffers, (bool, np.bool_)):
         raise TypeError("return_buffers must be a bool")
     threads = check.threads(threads)
+    if context is not None:  # checked on every path, as the GL one would
+        from cumuli.gl.context import GLContext
+
+        if not isinstance(context, GLContext):
+            raise TypeError(
+                f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
+            )
     dirs = light_directions(lights)
     if method == "cpu":
         results = _core.particle_light(
