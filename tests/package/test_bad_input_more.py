@@ -273,6 +273,14 @@ def test_wrong_objects_are_named_as_what_they_should_be() -> None:
     with pytest.raises(TypeError, match="context must be a cumuli.gl.GLContext"):
         cu.particle_light(cloud, cu.Sun(), context="abc")  # the CPU path checks it too
     assert cu.particle_light(cloud, cu.Sun(), context=None) is not None
+    from cumuli.light.particles import phase_values
+
+    with pytest.raises(TypeError, match="context must be"):  # the siblings with a CPU path
+        phase_values("hg", [0.1], context="abc")
+    vol, camera = np.ones((2, 2, 2), np.float32), cu.Camera((0.5, 0.5, -3), (0.5, 0.5, 0.5))
+    with pytest.raises(TypeError, match="context must be"):
+        cu.render_volume(vol, np.ones((2, 2, 2, 4)), BOX, camera, 4, 4, backend="cpu",
+                         context="abc")  # fmt: skip
 
 
 @pytest.mark.parametrize(

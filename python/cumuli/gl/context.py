@@ -360,6 +360,15 @@ def close_default_context() -> None:
 atexit.register(close_default_context)
 
 
+def check_context(context: Any) -> None:
+    """Refuse a ``context`` argument that is neither a :class:`GLContext` nor None — on every
+    backend, so that a CPU call does not accept what the GL one would refuse."""
+    if context is not None and not isinstance(context, GLContext):
+        raise TypeError(
+            f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
+        )
+
+
 def _resolve_context(context: GLContext | None) -> GLContext:
     """``context`` (default: the process-wide one), made current: GL calls go to the current
     context, and the last one created may be another (see `GLContext.make_current`)."""

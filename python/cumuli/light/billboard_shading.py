@@ -89,8 +89,8 @@ class BillboardShading:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        set_(self, "d_min", check.real(self.d_min, "d_min", 0.0))
-        set_(self, "d_max", check.real(self.d_max, "d_max", 0.0))
+        set_(self, "d_min", check.real(self.d_min, "d_min", 0.0, check.MAX_COORD))
+        set_(self, "d_max", check.real(self.d_max, "d_max", 0.0, check.MAX_COORD))
         if self.d_min > self.d_max:
             raise ValueError(f"d_min must be <= d_max, got {self.d_min} > {self.d_max}")
         set_(self, "k_dir", check.real(self.k_dir, "k_dir", 0.0, 100.0, lo_open=True))
