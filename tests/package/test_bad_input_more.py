@@ -303,6 +303,9 @@ def test_sweep_refuses_the_extension_before_any_task(tmp_path: Path, monkeypatch
     scene_fn = lambda seed: cu.Scene([cu.gaussian_cumulus(n=4, seed=seed)])  # noqa: E731
     with pytest.raises(ValueError, match="extension"):
         cu.sweep(scene_fn, [{"seed": 1}, {"seed": 2}], out_dir=tmp_path / "o", pattern="{}.jpg")
+    assert cluster.MAX_SWEEP == cu.frames.MAX_FRAMES
+    with pytest.raises(ValueError, match="MAX_SWEEP"):
+        cu.sweep(scene_fn, [{"seed": 1}] * 100_001)
     with pytest.raises(ValueError, match="extension"):  # the same message as render_frames
         cu.render_frames(scene_fn(1), [cu.Camera((0, 0, -9), (0, 0, 0))], tmp_path / "f", 8, 8,
                          pattern="{}.jpg")  # fmt: skip

@@ -60,6 +60,7 @@ FIXED = (
     ("voxels of a deck", "cumuli.model.deck.MAX_LATTICE_VOXELS"),
     ("keyframes of a `Schedule`", "cumuli.anim.weather.MAX_KEYFRAMES"),
     ("frames per `render_frames` call", "cumuli.anim.frames.MAX_FRAMES"),
+    ("renders per `sweep` call", "cumuli.anim.cluster.MAX_SWEEP"),
     ("digits of an integer in a file (longer ones are refused by their field)",
      "cumuli.io.jsonable.MAX_INT_DIGITS"),
     ("scene file bytes", "cumuli.scene.MAX_SCENE_BYTES"),

@@ -30,6 +30,8 @@ from cumuli.camera import Camera
 from cumuli.scene import Scene
 
 BACKENDS = ("gl", "cpu")
+#: Most renders of one `sweep` (as `render_frames`' MAX_FRAMES: its tasks are held in memory).
+MAX_SWEEP = 100_000
 
 
 def render_task(
@@ -150,6 +152,8 @@ def sweep(
         raise TypeError(f"scene_fn must be callable, got {type(scene_fn).__name__}")
     if isinstance(params, (str, bytes, dict)) or not isinstance(params, Sequence):
         raise TypeError("params must be a sequence of dicts (keyword arguments of scene_fn)")
+    if len(params) > MAX_SWEEP:  # as render_frames: a list of tasks is held in memory
+        raise ValueError(f"params has {len(params)} entries, more than MAX_SWEEP={MAX_SWEEP}")
     for k, p in enumerate(params):
         if not isinstance(p, dict):
             raise TypeError(f"params[{k}] must be a dict, got {type(p).__name__}")
