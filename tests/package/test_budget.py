@@ -267,13 +267,43 @@ def test_a_deck_and_a_noise_are_held_to_the_budget() -> None:
     assert cu.CloudDeck(resolution=(64, 16, 64)).resolution == (64, 16, 64)
 
 
-def test_a_weather_file_is_held_to_the_scene_rule(tmp_path: Path) -> None:
+def test_a_weather_file_is_held_to_the_scene_rule(tmp_path: Path, monkeypatch) -> None:
+    from cumuli.anim import weather
+
     path = tmp_path / "w.npz"
-    cu.weather_presets.three_layers(seed=1).save(path)
+    made = cu.weather_presets.three_layers(seed=1)
+    made.save(path)
     with cu.limits(scene_expansion=1, scene_allowance=1024):
-        with pytest.raises(ValueError, match="w.npz.*atlas recipe"):
+        with pytest.raises(cu.BudgetError, match="w.npz.*atlas recipe"):
             cu.load_weather(path)
+    atlases = 2 * atlas_module.atlas_bytes(16, 64)  # the preset's two recipes
+    variants = weather.variants_cost(made.layers)
+    assert variants > 0
+
+    def never(*args, **kwargs):
+        raise AssertionError("a variant was generated")
+
+    monkeypatch.setattr(weather, "cloud_variants", never)
+    with cu.limits(scene_expansion=1, scene_allowance=atlases + variants - 1):
+        with pytest.raises(cu.BudgetError, match="w.npz.*variants") as err:
+            cu.load_weather(path)
+    assert "invalid" not in str(err.value)  # a refusal, not a corrupt file
+    with cu.limits(memory=variants - 1, scene_allowance=1 << 30):  # and as a call
+        with pytest.raises(cu.BudgetError, match="weather of"):
+            cu.Weather(made.area, made.layers, seed=1)
+    monkeypatch.undo()
     assert cu.load_weather(path) is not None
+
+
+def test_a_billboard_file_is_held_to_the_scene_rule(tmp_path: Path) -> None:
+    cloud = cu.seed_box_cloud(presets.cirrus(), seed=1)
+    for suffix in (".npz", ".json"):
+        path = tmp_path / f"b{suffix}"
+        cloud.save(path)
+        with cu.limits(scene_expansion=1, scene_allowance=1024):
+            with pytest.raises(cu.BudgetError, match=f"b{suffix}.*atlas recipe"):
+                cu.load_billboards(path)
+        assert cu.load_billboards(path).n_billboards == cloud.n_billboards
 
 
 def test_amounts_read_as_people_write_them() -> None:

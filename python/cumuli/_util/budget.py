@@ -44,6 +44,11 @@ _UNITS = {"": 1, "K": 1 << 10, "M": 1 << 20, "G": 1 << 30, "T": 1 << 40}
 MAX_LIMIT = 1 << 62
 
 
+class BudgetError(ValueError):
+    """An input refused because its estimated memory or work is over the budget (a ValueError:
+    the message names the input, its cost, the budget and the setting that raises it)."""
+
+
 @dataclass(frozen=True)
 class Limits:
     """The budget. ``memory``: bytes one input may allocate; ``work``: samples one input may
@@ -156,7 +161,7 @@ def check_memory(what: str, cost: float, budget: int | None = None, setting: str
     limit = get_limits().memory if budget is None else budget
     if cost > limit:
         how = setting or f"cumuli.set_limits(memory=...) or the {ENV_MEMORY} environment variable"
-        raise ValueError(
+        raise BudgetError(
             f"{what} would need about {amount(cost)} of memory, more than the budget of "
             f"{amount(limit)}; raise it with {how}"
         )
@@ -166,7 +171,7 @@ def check_work(what: str, samples: float) -> None:
     """Refuse ``what`` when its estimated work in samples is over the work budget."""
     limit = get_limits().work
     if samples > limit:
-        raise ValueError(
+        raise BudgetError(
             f"{what} would evaluate about {samples:.3g} samples, more than the budget of "
             f"{limit:.3g}; raise it with cumuli.set_limits(work=...) or the {ENV_WORK} "
             "environment variable"

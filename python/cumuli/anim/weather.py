@@ -49,6 +49,23 @@ BOUNDARIES = ("respawn", "wrap")
 MAX_INSTANCES: int = int(_core.WEATHER_MAX_INSTANCES)
 #: Most variants a whole weather may generate (NBM·NM summed over states and layers).
 MAX_VARIANTS = 4096
+#: Bytes a variant holds per box (its corners, level, seed and direction) and per billboard
+#: (centre, size, texture, box and rotation).
+BYTES_PER_VARIANT_BOX = 36
+BYTES_PER_VARIANT_BILLBOARD = 32
+
+
+def variants_cost(layers: Sequence[Any]) -> int:
+    """Bytes the variants of ``layers`` may hold: every state's NBM·NM clouds at their basis
+    model's worst case (`BasisModel.worst_case`), known before any is generated."""
+    total = 0
+    for layer in layers:
+        for state in layer.states:
+            for model in state.models:
+                boxes, billboards = model.worst_case
+                per = boxes * BYTES_PER_VARIANT_BOX + billboards * BYTES_PER_VARIANT_BILLBOARD
+                total += state.variants * per
+    return total
 
 
 @dataclass(frozen=True)
@@ -293,6 +310,7 @@ class Weather:
         total = sum(len(s.models) * s.variants for layer in layers for s in layer.states)
         if total > MAX_VARIANTS:
             raise ValueError(f"layers ask for {total} variants, more than {MAX_VARIANTS}")
+        budget.check_memory(f"a weather of {total} variants", variants_cost(layers))
         self.area = ((box[0], box[1]), (box[2], box[3]))
         self.layers: tuple[CloudLayer, ...] = tuple(layers)
         self.schedule = schedule
@@ -534,6 +552,13 @@ def _load(path: Any, threads: int = 0) -> Weather:
         if not isinstance(cfg, dict):
             raise ValueError("config must be an object")
         layers = [CloudLayer.from_dict(d) for d in cfg["layers"]]
+        # Its variants too, at the scene rule's budget, before any is generated.
+        budget.check_memory(
+            f"weather file {p.name!r} of {budget.amount(size)} (its layers' variants)",
+            variants_cost(layers) + sum(cost for _, _, cost in recipes),
+            budget.get_limits().scene_bytes(size),
+            "cumuli.set_limits(scene_expansion=..., scene_allowance=...) or CUMULI_SCENE_ALLOWANCE",
+        )
         weather = Weather(
             area=tuple(tuple(v) for v in cfg["area"]),
             layers=layers,
@@ -564,7 +589,7 @@ def _load(path: Any, threads: int = 0) -> Weather:
             state.append(d)
         weather._sim.set_state(float(meta["t"]), state)
         return weather
-    except FileFormatError:
+    except (FileFormatError, budget.BudgetError):
         raise
     except (ValueError, TypeError, KeyError, IndexError, RuntimeError, json.JSONDecodeError) as exc:
         raise FileFormatError(f"{p.name}: invalid weather data: {exc}") from None

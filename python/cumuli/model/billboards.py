@@ -28,6 +28,7 @@ from typing import Any, ClassVar
 import numpy as np
 
 from cumuli import _core
+from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli._util.atomic import atomic_target
 from cumuli.io.jsonable import loads as json_loads
@@ -555,6 +556,17 @@ def _save(cloud: BillboardCloud, path: Any) -> Path:
     return p
 
 
+def _check_file_cost(p: Path, data: Any) -> None:
+    """A file's atlas recipe costs at most what a scene file of its size may (the scene rule)."""
+    size = p.stat().st_size
+    budget.check_memory(
+        f"billboard file {p.name!r} of {budget.amount(size)} (its atlas recipe)",
+        sum(cost for _, _, cost in dict_cost(data)),
+        budget.get_limits().scene_bytes(size),
+        "cumuli.set_limits(scene_expansion=..., scene_allowance=...) or CUMULI_SCENE_ALLOWANCE",
+    )
+
+
 def _load(path: Any) -> BillboardCloud:
     p = check_path(path, (".npz", ".json"))
     check_readable(p, "billboard cloud")
@@ -564,6 +576,7 @@ def _load(path: Any) -> BillboardCloud:
             meta = meta_of(arrays, p, FILE_FORMAT)
             if meta.get("version") != FILE_VERSION:
                 raise FileFormatError(f"{p.name}: unsupported version {meta.get('version')!r}")
+            _check_file_cost(p, meta)
             data = dict(meta)
             data.update(arrays)
             image = data.pop("atlas_image", None)
@@ -574,8 +587,9 @@ def _load(path: Any) -> BillboardCloud:
             raise FileFormatError(f"{p.name}: not readable JSON ({exc})") from None
         if not isinstance(doc, dict) or doc.get("format") != FILE_FORMAT:
             raise FileFormatError(f"{p.name}: not a {FILE_FORMAT} file (format tag missing)")
+        _check_file_cost(p, doc)
         return _cloud_from_dict(doc)
-    except FileFormatError:
+    except (FileFormatError, budget.BudgetError):
         raise
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise FileFormatError(f"{p.name}: invalid billboard cloud data: {exc}") from None
