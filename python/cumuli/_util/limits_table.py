@@ -98,7 +98,20 @@ previous = cu.set_limits(scene_allowance="1G")   # from now on
 cu.set_limits(previous)                          # back
 ```
 
-From the shell: `CUMULI_MEMORY_BUDGET=16G cumuli render big_scene.json -o big.png`.
+From the shell: `CUMULI_MEMORY_BUDGET=16G cumuli render big_scene.json -o big.png`. A refusal
+is a `cumuli.BudgetError`, a `ValueError`.
+
+| input | estimated before it is made |
+|---|---|
+| `sprite_atlas(n, size)`, an atlas recipe in any file | its image: grid cells × size² × 16 bytes |
+| `BillboardField(...)`, a field in a scene file | instances × their variant's billboards |
+| `CloudDeck(resolution=...)` | its baked volume and light |
+| `Noise(size=...)` | its lattice |
+| `density_volume`, the physical light's extinction | voxels (≤ `MAX_VOXELS`), memory, samples |
+| `settings.physical_resolution` (the physical light step) | per drawable with a medium, all kept |
+| `Weather(...)`, `load_weather` | its variants at their basis models' worst case, its recipes |
+| `load_scene`, `Scene.from_dict`, `cumuli render` | all of the above, the noise, light grids |
+| `load_billboards` | its atlas recipe |
 """
 
 
