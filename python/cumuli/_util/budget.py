@@ -16,6 +16,7 @@ of bytes or samples), so that the command line and worker processes can be given
 from __future__ import annotations
 
 import contextlib
+import contextvars
 import dataclasses
 import os
 import re
@@ -97,11 +98,18 @@ def _from_environment() -> Limits:
 
 _lock = threading.Lock()
 _current: Limits | None = None
+#: A budget in force for the current thread or task only (`within`), over the process's.
+_local: contextvars.ContextVar[Limits | None] = contextvars.ContextVar(
+    "cumuli_limits", default=None
+)
 
 
 def get_limits() -> Limits:
     """The budget in force (the environment's on first use, else the defaults)."""
     global _current
+    local = _local.get()
+    if local is not None:
+        return local
     with _lock:
         if _current is None:
             _current = _from_environment()
@@ -145,6 +153,19 @@ def limits(**changes: Any) -> Iterator[Limits]:
         yield get_limits()
     finally:
         set_limits(previous)
+
+
+@contextlib.contextmanager
+def within(limits: Limits) -> Iterator[Limits]:
+    """``limits`` for the current thread (or asyncio task) only, the process's untouched: a
+    cluster worker runs each task under the budget of the process that submitted it."""
+    if not isinstance(limits, Limits):
+        raise TypeError(f"limits must be a cumuli.Limits, got {type(limits).__name__}")
+    token = _local.set(limits)
+    try:
+        yield limits
+    finally:
+        _local.reset(token)
 
 
 def amount(n: float) -> str:

@@ -26,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from cumuli._util.budget import Limits, get_limits, within
 from cumuli.camera import Camera
 from cumuli.scene import Scene
 
@@ -100,6 +101,12 @@ def _check_client(client: Any, backend: str) -> None:
             )
 
 
+def _within(limits: Limits, fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)`` under ``limits`` (a worker runs a task with its submitter's budget)."""
+    with within(limits):
+        return fn(*args)
+
+
 def run(
     tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]],
     client: Any = None,
@@ -113,8 +120,10 @@ def run(
         return [
             fn(*args) for fn, args in tqdm(tasks, desc=desc, unit="frame", disable=not progress)
         ]
-    # pure=False: every frame is a distinct task even when its arguments repeat.
-    futures = [client.submit(fn, *args, pure=False) for fn, args in tasks]
+    # pure=False: every frame is a distinct task even when its arguments repeat. Each task runs
+    # under the budget of the process that submits it (a worker's own may be the default).
+    limits = get_limits()
+    futures = [client.submit(_within, limits, fn, *args, pure=False) for fn, args in tasks]
     if progress:
         from distributed import progress as dask_progress
 
