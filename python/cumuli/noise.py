@@ -207,6 +207,7 @@ class Noise:
             d, h, w = (check.integer(v, "shape", 1, MAX_GRID_EDGE) for v in shape)
         if d * h * w > check.MAX_POINTS:
             raise ValueError(f"shape {(d, h, w)} has more than {check.MAX_POINTS} voxels")
+        budget.check_memory(f"fbm_grid of shape {(d, h, w)}", 4 * d * h * w)  # float32 out
         lo = np.array(check.vec3(box_min, "box_min"), dtype=np.float64)
         hi = np.array(check.vec3(box_max, "box_max"), dtype=np.float64)
         if not (hi > lo).all():

@@ -264,6 +264,8 @@ def test_a_deck_and_a_noise_are_held_to_the_budget() -> None:
             cu.CloudDeck(resolution=(64, 16, 64))
         with pytest.raises(ValueError, match="Noise\\(size=128\\)"):
             cu.Noise(seed=1, size=128)
+        with pytest.raises(cu.BudgetError, match="fbm_grid of shape"):
+            cu.Noise(seed=1, size=16).fbm_grid(128, (0, 0, 0), (1, 1, 1))
     assert cu.CloudDeck(resolution=(64, 16, 64)).resolution == (64, 16, 64)
 
 

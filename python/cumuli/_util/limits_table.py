@@ -106,7 +106,7 @@ is a `cumuli.BudgetError`, a `ValueError`.
 | `sprite_atlas(n, size)`, an atlas recipe in any file | its image: grid cells × size² × 16 bytes |
 | `BillboardField(...)`, a field in a scene file | instances × their variant's billboards |
 | `CloudDeck(resolution=...)` | its baked volume and light |
-| `Noise(size=...)` | its lattice |
+| `Noise(size=...)`, `Noise.fbm_grid` | its lattice, the grid |
 | `density_volume`, the physical light's extinction | voxels (≤ `MAX_VOXELS`), memory, samples |
 | `settings.physical_resolution` (the physical light step) | per drawable with a medium, all kept |
 | `Weather(...)`, `load_weather` | its variants at their basis models' worst case, its recipes |
