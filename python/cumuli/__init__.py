@@ -8,6 +8,7 @@ GLSL shaders run in a headless moderngl context render them. See the README for 
 from __future__ import annotations
 
 from cumuli import registry
+from cumuli._util.budget import BudgetError, Limits, get_limits, limits, set_limits
 from cumuli._version import __version__
 from cumuli.anim import frames, weather_presets
 from cumuli.anim.cluster import sweep
@@ -82,6 +83,11 @@ from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of 
 # isort: on
 
 __all__ = [
+    "BudgetError",
+    "Limits",
+    "get_limits",
+    "limits",
+    "set_limits",
     "BasisModel",
     "BillboardCloud",
     "BillboardField",
