@@ -24,6 +24,7 @@ from cumuli.camera import Camera
 from cumuli.ground import Ground
 from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
+from cumuli.jupyter import Image, show
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.caf import absorption_factors
 from cumuli.light.grid import LightGrid, LightParams, load_light_grid
@@ -78,6 +79,15 @@ from cumuli.sky import Sky, Sun
 from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of drawable)
 # isort: on
 
+
+def __getattr__(name: str) -> object:
+    # The Viewer needs the widget packages (anywidget): imported on first use only.
+    if name == "Viewer":
+        from cumuli.jupyter.viewer import Viewer
+
+        return Viewer
+    raise AttributeError(f"module 'cumuli' has no attribute {name!r}")
+
 __all__ = [
     "BasisModel",
     "BillboardCloud",
@@ -108,6 +118,9 @@ __all__ = [
     "similarity_matrix",
     "transition_matrix",
     "Camera",
+    "Image",
+    "show",
+    "Viewer",
     "Cloud",
     "CloudDeck",
     "density_volume",
