@@ -88,6 +88,7 @@ def __getattr__(name: str) -> object:
         return Viewer
     raise AttributeError(f"module 'cumuli' has no attribute {name!r}")
 
+
 __all__ = [
     "BasisModel",
     "BillboardCloud",

@@ -125,7 +125,8 @@ def as_image(
         raise TypeError("size and render arguments apply to a Scene or LitScene, not an image")
     elif not isinstance(obj, np.ndarray):
         raise TypeError(
-            f"show takes an image array, a cumuli.Image, Scene or LitScene, got {type(obj).__name__}"
+            "show takes an image array, a cumuli.Image, Scene or LitScene, "
+            f"got {type(obj).__name__}"
         )
     return Image(obj, exposure=exposure, tonemap=tonemap, title=title)
 
@@ -165,11 +166,9 @@ def show(
         scene_kw = {"size": size, **render_kwargs}
         images = [
             as_image(o, title=t, **look, **(scene_kw if isinstance(o, (Scene, LitScene)) else {}))
-            for o, t in zip(obj, titles)
+            for o, t in zip(obj, titles, strict=True)
         ]
         _display(Gallery(images))
         return
-    img = as_image(
-        obj, exposure=exposure, tonemap=tonemap, size=size, title=title, **render_kwargs
-    )
+    img = as_image(obj, exposure=exposure, tonemap=tonemap, size=size, title=title, **render_kwargs)
     _display(img)
