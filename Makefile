@@ -11,9 +11,10 @@
 VENV ?= .venv
 PY := $(VENV)/bin/python
 # python3-venv: Debian's python3 has no venv/ensurepip without it; python3-dev: Python.h for the
-# extension build; libgl1: glcontext's EGL backend dlopens libGL.so.1 (libegl1 does not pull it).
+# extension build; libgl1: glcontext's EGL backend dlopens libGL.so.1 (libegl1 does not pull it);
+# chromium + chromium-driver: the headless browser the notebook viewer's test drives.
 SYSTEM_PACKAGES := g++ make python3 python3-venv python3-dev libglm-dev \
-  libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2
+  libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2 chromium chromium-driver
 STAMP := $(VENV)/.cumuli-installed
 
 .PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace clean
