@@ -25,9 +25,11 @@ from cumuli.scene import Scene
 from cumuli.settings import LIGHTING_MODES
 from cumuli.sky import Sun
 
-#: What a preview frame gives up for speed: a longer march step, fewer fBm octaves, a
-#: stronger level of detail (RenderSettings fields). The light step is the full frame's.
-PREVIEW_SETTINGS = {"step_ref": 0.5, "octaves": 3, "lod_a": 0.5}
+#: What a preview frame gives up for speed (RenderSettings fields): a longer LOD step (A of
+#: Δ = A·exp(−δ·d)), 3 fBm octaves, each cloud's candidate intervals marched once ("union"),
+#: the paper mode's early exit at T < 0.2. The light step is the full frame's. On the default
+#: scene at 240 × 135 the image moves by ~0.013 (mean |Δ| of linear RGB) for 2–5× the speed.
+PREVIEW_SETTINGS = {"lod_a": 1.0, "octaves": 3, "march": "union", "min_transmittance": 0.2}
 #: The weather is filmed forward in steps of at most this many seconds.
 WEATHER_STEP = 1.0
 

@@ -79,6 +79,28 @@ def pack_physical(
     return words.tobytes(), depth, grid
 
 
+#: The last packing (its lights, the limit, the bytes): a viewer or a camera path draws the
+#: same light frame after frame, and packing and copying the atlases cost more than the draw.
+#: PhysicalLight is frozen; the cache holds its lights, so their ids cannot be reused.
+_last_pack: list[Any] = [None]
+
+
+def _packed(lights: Sequence[PhysicalLight], limit: int) -> tuple[Any, ...]:
+    """`pack_physical` as bytes and shapes, reused while the same light objects come back."""
+    last = _last_pack[0]
+    if (
+        last is not None
+        and last[1] == limit
+        and len(last[0]) == len(lights)
+        and all(a is b for a, b in zip(last[0], lights, strict=True))
+    ):
+        return last[2]
+    words, depth, grid = pack_physical(lights, limit)
+    out = (words, depth.shape, depth.tobytes(), grid.shape, grid.tobytes())
+    _last_pack[0] = (tuple(lights), limit, out)
+    return out
+
+
 def bind_physical(
     ctx: Any,
     set_: Callable[[str, Any], None],
@@ -89,12 +111,12 @@ def bind_physical(
     """Upload the drawables' physical light (the PhysicalCloud buffer on storage binding 2, the
     sun-depth and light atlases on texture units 2 and 3, filtered linearly, clamped) and set
     the physical uniforms; returns the GL objects made (the caller releases them)."""
-    words, depth, grid = pack_physical(lights, limit)
+    words, dshape, depth, gshape, grid = _packed(lights, limit)
     made: list[Any] = [ctx.buffer(words)]
     made[0].bind_to_storage_buffer(2)
-    for location, data, comps in ((2, depth, 1), (3, grid, 4)):
-        d, h, w = data.shape[:3]
-        tex = ctx.texture3d((w, h, d), comps, data.tobytes(), dtype="f4")
+    for location, shape, data, comps in ((2, dshape, depth, 1), (3, gshape, grid, 4)):
+        d, h, w = shape[:3]
+        tex = ctx.texture3d((w, h, d), comps, data, dtype="f4")
         made.append(tex)
         tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
         tex.repeat_x = tex.repeat_y = tex.repeat_z = False
