@@ -17,7 +17,7 @@ SYSTEM_PACKAGES := g++ make python3 python3-venv python3-dev libglm-dev \
   libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2 chromium chromium-driver
 STAMP := $(VENV)/.cumuli-installed
 
-.PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace clean
+.PHONY: setup system venv install demo test test-notebooks-full test-fast bench bench-quick lint inplace clean
 
 setup: system install
 
@@ -47,8 +47,13 @@ install: $(PY)
 demo: setup
 	$(VENV)/bin/cumuli demo -o out.png
 
+# CUMULI_QUICK=1: the notebooks at small sizes (notebooks/conftest.py sets it too); opened by a
+# person they run at full size. `make test-notebooks-full` runs each at full size (slow).
 test: setup
-	$(PY) -m pytest -q tests --nbmake notebooks
+	CUMULI_QUICK=1 $(PY) -m pytest -q tests --nbmake notebooks
+
+test-notebooks-full: install
+	CUMULI_QUICK=0 $(PY) -m pytest -q --nbmake --nbmake-timeout=3600 notebooks
 
 test-fast: install
 	$(PY) -m pytest -q tests -x

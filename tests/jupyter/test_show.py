@@ -105,3 +105,15 @@ def test_show_refuses_bad_input(monkeypatch: pytest.MonkeyPatch) -> None:
     with pytest.raises(ValueError, match="title"):
         cu.show([np.zeros((2, 2, 3), np.float32)], title=["a", "b"])
     assert shown == []
+
+
+def test_an_image_keeps_its_settings_unless_told(monkeypatch: pytest.MonkeyPatch) -> None:
+    shown = _capture(monkeypatch)
+    img = np.random.default_rng(3).random((4, 5, 3)).astype(np.float32) * 2
+    kept = cu.Image(img, exposure=0.5, tonemap="aces", title="mine")
+    cu.show([img, kept], title=["plain", None])  # type: ignore[list-item]
+    plain, mine = shown[-1].images
+    assert (plain.exposure, plain.tonemap, plain.title) == (1.0, "none", "plain")
+    assert (mine.exposure, mine.tonemap, mine.title) == (0.5, "aces", "mine")
+    cu.show(kept, tonemap="reinhard")
+    assert (shown[-1].exposure, shown[-1].tonemap, shown[-1].title) == (0.5, "reinhard", "mine")

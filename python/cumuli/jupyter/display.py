@@ -104,18 +104,22 @@ def _size(size: Any) -> tuple[int, int]:
 def as_image(
     obj: Any,
     *,
-    exposure: float = 1.0,
-    tonemap: str = "none",
+    exposure: float | None = None,
+    tonemap: str | None = None,
     size: Any = None,
-    title: str = "",
+    title: str | None = None,
     **render_kwargs: Any,
 ) -> Image:
-    """An `Image` of ``obj``: an image array (or `Image`) as it is, a `Scene` or `LitScene`
-    rendered at ``size`` (``(width, height)``, default 640×360) with ``render_kwargs``
-    (``camera``, ``backend``, …: :func:`cumuli.render`'s)."""
-    if tonemap not in TONEMAPS:
+    """An `Image` of ``obj``: an image array as it is, a `Scene` or `LitScene` rendered at
+    ``size`` (``(width, height)``, default 640×360) with ``render_kwargs`` (``camera``,
+    ``backend``, …: :func:`cumuli.render`'s). An `Image` keeps its own exposure, tone map and
+    title where these are not given; anything else gets 1, ``"none"`` and no title."""
+    if tonemap is not None and tonemap not in TONEMAPS:
         raise ValueError(f"tonemap must be one of {TONEMAPS}, got {tonemap!r}")
     if isinstance(obj, Image):
+        exposure = obj.exposure if exposure is None else exposure
+        tonemap = obj.tonemap if tonemap is None else tonemap
+        title = obj.title if title is None else title
         obj = obj.pixels
     if isinstance(obj, (Scene, LitScene)):
         w, h = _size(size)
@@ -128,7 +132,12 @@ def as_image(
             "show takes an image array, a cumuli.Image, Scene or LitScene, "
             f"got {type(obj).__name__}"
         )
-    return Image(obj, exposure=exposure, tonemap=tonemap, title=title)
+    return Image(
+        obj,
+        exposure=1.0 if exposure is None else exposure,
+        tonemap="none" if tonemap is None else tonemap,
+        title="" if title is None else title,
+    )
 
 
 def _display(obj: Any) -> None:
@@ -142,10 +151,10 @@ def _display(obj: Any) -> None:
 def show(
     obj: Any,
     *,
-    exposure: float = 1.0,
-    tonemap: str = "none",
+    exposure: float | None = None,
+    tonemap: str | None = None,
     size: Any = None,
-    title: str | Sequence[str] = "",
+    title: str | Sequence[str] | None = None,
     **render_kwargs: Any,
 ) -> None:
     """Show an image, or render a scene and show it, inline in a notebook.
@@ -154,7 +163,8 @@ def show(
     `cumuli.Image`, a `Scene` or a `LitScene`, or a list of them (shown side by side, ``title``
     then one caption each). ``exposure`` and ``tonemap`` are the display
     settings of :func:`cumuli.to_srgb8`; ``size`` ``(width, height)`` and ``render_kwargs``
-    (``camera=``, ``backend=``, …) apply to scenes. Returns nothing, like ``plt.show``, so
+    (``camera=``, ``backend=``, …) apply to scenes. A `cumuli.Image` keeps its own settings and
+    title where these are not given (default exposure 1, tone map ``"none"``). Returns nothing, like ``plt.show``, so
     that a cell ending with it shows the image once; :class:`cumuli.Image` is the object to
     keep (it shows itself when it is a cell's value).
     """
