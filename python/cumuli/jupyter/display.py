@@ -164,9 +164,9 @@ def show(
     then one caption each). ``exposure`` and ``tonemap`` are the display
     settings of :func:`cumuli.to_srgb8`; ``size`` ``(width, height)`` and ``render_kwargs``
     (``camera=``, ``backend=``, …) apply to scenes. A `cumuli.Image` keeps its own settings and
-    title where these are not given (default exposure 1, tone map ``"none"``). Returns nothing, like ``plt.show``, so
-    that a cell ending with it shows the image once; :class:`cumuli.Image` is the object to
-    keep (it shows itself when it is a cell's value).
+    title where these are not given (default exposure 1, tone map ``"none"``). Returns nothing,
+    like ``plt.show``, so that a cell ending with it shows the image once; :class:`cumuli.Image`
+    is the object to keep (it shows itself when it is a cell's value).
     """
     if isinstance(obj, (list, tuple)):
         titles = title if isinstance(title, (list, tuple)) else [title] * len(obj)
