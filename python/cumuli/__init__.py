@@ -81,7 +81,8 @@ from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of 
 
 
 def __getattr__(name: str) -> object:
-    # The Viewer needs the widget packages (anywidget): imported on first use only.
+    # The Viewer needs the widget packages (anywidget): imported on first use only, and kept
+    # out of __all__ so that `from cumuli import *` works without them.
     if name == "Viewer":
         from cumuli.jupyter.viewer import Viewer
 
@@ -121,7 +122,6 @@ __all__ = [
     "Camera",
     "Image",
     "show",
-    "Viewer",
     "Cloud",
     "CloudDeck",
     "density_volume",
