@@ -93,8 +93,14 @@ def test_the_viewer_notebook_shows_every_kind(tmp_path: Path) -> None:
     pytest.importorskip("anywidget", reason="the viewer needs anywidget (cumuli[jupyter])")
     probe = (
         "import gc\n"
-        "shown = {k for v in gc.get_objects() if isinstance(v, cu.Viewer)\n"
-        "         for k in v.session.scene().kinds}\n"
+        "def viewers():\n"
+        "    for o in gc.get_objects():\n"
+        "        try:\n"
+        "            if isinstance(o, cu.Viewer):\n"
+        "                yield o\n"
+        "        except ReferenceError:  # a dead weak proxy\n"
+        "            pass\n"
+        "shown = {k for v in viewers() for k in v.session.scene().kinds}\n"
         "print('KINDS', sorted(shown))"
     )
     printed = "".join(_run(ROOT / "notebooks" / "11_viewer.ipynb", tmp_path, True, probe))
