@@ -5,6 +5,7 @@ shadow map (``shaders/common/ground.glsl``). RENDER_CONTRACT, "Physical lighting
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -101,6 +102,23 @@ def _packed(lights: Sequence[PhysicalLight], limit: int) -> tuple[Any, ...]:
     return out
 
 
+#: Per GL context, the buffer and atlases of the last packing, kept for the next draw of the same
+#: light (a viewer's or a camera path's frames): uploading them cost as much as the draw.
+_uploaded: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _upload(ctx: Any, packed: tuple[Any, ...]) -> list[Any]:
+    words, dshape, depth, gshape, grid = packed
+    made: list[Any] = [ctx.buffer(words)]
+    for shape, data, comps in ((dshape, depth, 1), (gshape, grid, 4)):
+        d, h, w = shape[:3]
+        tex = ctx.texture3d((w, h, d), comps, data, dtype="f4")
+        tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+        made.append(tex)
+    return made
+
+
 def bind_physical(
     ctx: Any,
     set_: Callable[[str, Any], None],
@@ -108,21 +126,26 @@ def bind_physical(
     lights: Sequence[PhysicalLight],
     limit: int,
 ) -> list:
-    """Upload the drawables' physical light (the PhysicalCloud buffer on storage binding 2, the
+    """Bind the drawables' physical light (the PhysicalCloud buffer on storage binding 2, the
     sun-depth and light atlases on texture units 2 and 3, filtered linearly, clamped) and set
-    the physical uniforms; returns the GL objects made (the caller releases them)."""
-    words, dshape, depth, gshape, grid = _packed(lights, limit)
-    made: list[Any] = [ctx.buffer(words)]
-    made[0].bind_to_storage_buffer(2)
-    for location, shape, data, comps in ((2, dshape, depth, 1), (3, gshape, grid, 4)):
-        d, h, w = shape[:3]
-        tex = ctx.texture3d((w, h, d), comps, data, dtype="f4")
-        made.append(tex)
-        tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-        tex.repeat_x = tex.repeat_y = tex.repeat_z = False
-        tex.use(location=location)
+    the physical uniforms. The GL objects are the context's, kept while the same light comes
+    back and released when another replaces it; returns the objects the caller must release
+    (none)."""
+    packed = _packed(lights, limit)
+    held = _uploaded.get(ctx)
+    if held is None or held[0] is not packed:
+        if held is not None:
+            for obj in held[1]:
+                obj.release()
+            del _uploaded[ctx]
+        _uploaded[ctx] = (packed, _upload(ctx, packed))
+        held = _uploaded[ctx]
+    buf, depth_tex, grid_tex = held[1]
+    buf.bind_to_storage_buffer(2)
+    depth_tex.use(location=2)
+    grid_tex.use(location=3)
     set_physical_uniforms(set_, settings, lights)
-    return made
+    return []
 
 
 def set_physical_uniforms(
