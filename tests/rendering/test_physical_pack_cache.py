@@ -1,5 +1,5 @@
-"""The GL physical atlases are packed and uploaded once per light frame: a frame drawn again with the same
-light reuses the packing, and a new light is never drawn with the old one's."""
+"""The GL physical atlases are packed and uploaded once per light frame: a frame drawn again with
+the same light reuses them, and a new light is never drawn with the old one's."""
 
 from __future__ import annotations
 
