@@ -94,7 +94,7 @@ def main(argv: list[str] | None = None) -> int:
     repeats = 3 if args.quick else 7
     common.log(f"GL renderer: {machine['gl_renderer']}; {machine['cores']} cores")
 
-    base = cumulus_scene(seed=1)
+    base = cumulus_scene(seed=1, settings=cu.RenderSettings(lighting="paper"))
     camera = base.default_camera()
     cu.prepare_light(base)  # memoised: light grids are not part of the render pass timings
     results: dict[str, dict[str, dict]] = {}

@@ -41,7 +41,7 @@ def scene(drawable: object, shading: str = "vertex", **impostor: object) -> cu.S
     return cu.Scene(
         [drawable], sun=SUN, billboard_shading=cu.BillboardShading(shading=shading),
         impostor_settings=cu.ImpostorSettings(**impostor),
-    )  # fmt: skip
+    settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
 
 
 @pytest.mark.parametrize("shading", ["vertex", "fragment"])
@@ -92,7 +92,8 @@ def test_exact_display_gl_and_cpu_agree(shading: str, exact_impostors_agree: Cal
     ≤ 1e−4 max, at the generation viewpoint and from a moved eye reusing the impostors."""
     sh = cu.BillboardShading(shading=shading, exact_textures=True)
     sc = cu.Scene([cloud().translated((-30, 0, 20)), field()], sun=SUN, billboard_shading=sh,
-                  impostor_settings=cu.ImpostorSettings(exact=True, tolerance=1.0))  # fmt: skip
+                  impostor_settings=cu.ImpostorSettings(exact=True, tolerance=1.0),
+                  settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
     moved = cu.Camera((10.4, 8.2, -59.6), (0.0, 2.0, 10.0), fov=40)
     with cu.Renderer() as r:
         gl, gl_cache, cpu_cache = exact_impostors_agree(r, sc, [CAMERA, moved], W, H)
