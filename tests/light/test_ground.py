@@ -212,7 +212,9 @@ def test_a_particle_cloud_shadow_in_the_picture(gl_context) -> None:
 
 @pytest.mark.parametrize("lighting", ["paper", "physical"])
 def test_ground_radiance_lit_and_shadowed(lighting: str) -> None:
-    s = scene(cu.RenderSettings(lighting=lighting, physical_resolution=16, shadow_resolution=96))
+    s = scene(
+        cu.RenderSettings(lighting=lighting, physical_resolution=16, shadow_resolution=96, haze=0.0)
+    )
     lit = cu.prepare_light(s)
     assert lit.shadow is not None and lit.shadow.values.shape == (96, 96)
     img = cu.render_cpu(lit, CAMERA, 64, 48)

@@ -130,3 +130,30 @@ def test_gl_and_cpu_agree_with_the_mie_phase(gl_context) -> None:
     diff = np.abs(gl - cpu)
     assert diff.mean(axis=(0, 1)).max() <= 1e-3
     assert (diff.max(-1) > 5e-2).mean() <= 0.01
+
+
+def test_the_haze_draws_an_aureole_around_the_hidden_sun() -> None:
+    scene, cam = backlit_scene()
+    clear = scene.replace(settings=scene.settings.replace(haze=0.0))
+    img = cu.render_cpu(scene, cam, 80, 60)
+    base = cu.render_cpu(clear, cam, 80, 60)
+    glow = (img - base)[..., :3].sum(-1)
+    dirs = cam.ray_directions(80, 60)
+    angle = np.degrees(np.arccos(np.clip(dirs @ np.asarray(scene.sun.direction), -1, 1)))
+    sky = img[..., 3] < 0.01
+    near, far = sky & (angle < 12), sky & (angle > 25)
+    assert near.sum() > 5 and far.sum() > 50
+    # Bright near the sun (behind the cloud's edge), falling off with the angle; none on the
+    # cloud's opaque body; the phase's own falloff exactly.
+    assert glow[near].mean() > 5 * glow[far].mean() > 0
+    assert np.abs(glow[img[..., 3] > 0.999]).max() < 1e-3
+    s = scene.settings
+    expected = (
+        settings_phase(s, float(np.cos(np.radians(angle[far][0]))))
+        * s.haze
+        * sum(scene.sun.radiance)
+    )
+    assert glow[far][0] == pytest.approx(expected, rel=1e-3)
+    # The paper mode has no air.
+    paper = scene.replace(settings=cu.RenderSettings(lighting="paper"))
+    assert cu.rendering.air.aureole(paper, cam, 8, 6) is None
