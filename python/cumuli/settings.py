@@ -96,6 +96,11 @@ class RenderSettings:
         clouds' phase function): the aureole, the sun's forward-scattered glow around its disc,
         also around a sun hidden behind a cloud (``cumuli.rendering.air``). ``0`` turns it off;
         the paper mode has none.
+    resolve:
+        The physical mode's resolve pass: a 3×3 tent filter over the finished image
+        (``cumuli.rendering.resolve``) that averages out the camera rays' jitter pattern and
+        smooths cloud outlines (softening detail by about a pixel; not supersampling).
+        ``False`` gives the raw jittered image. The paper mode has none.
     physical_resolution:
         Longest edge of the physical mode's light grids (optical depth towards the sun, sky
         visibility, multiple scattering); the other edges follow the cloud's box.
@@ -167,6 +172,7 @@ class RenderSettings:
     hg_blend: float = 0.2
     droplet_diameter: float = 20.0
     haze: float = 0.05
+    resolve: bool = True
     physical_resolution: int = 48
     multiple_scattering: bool = True
     sky_light: bool = True
@@ -251,6 +257,7 @@ class RenderSettings:
         diameter = check.real(self.droplet_diameter, "settings.droplet_diameter", lo, hi)
         s(self, "droplet_diameter", diameter)
         s(self, "haze", check.real(self.haze, "settings.haze", 0.0, 10.0))
+        s(self, "resolve", check.flag(self.resolve, "settings.resolve"))
         res = check.integer(self.physical_resolution, "settings.physical_resolution", 4, 256)
         s(self, "physical_resolution", res)
         for name in ("multiple_scattering", "sky_light"):

@@ -213,7 +213,9 @@ def test_a_particle_cloud_shadow_in_the_picture(gl_context) -> None:
 @pytest.mark.parametrize("lighting", ["paper", "physical"])
 def test_ground_radiance_lit_and_shadowed(lighting: str) -> None:
     s = scene(
-        cu.RenderSettings(lighting=lighting, physical_resolution=16, shadow_resolution=96, haze=0.0)
+        cu.RenderSettings(
+            lighting=lighting, physical_resolution=16, shadow_resolution=96, haze=0.0, resolve=False
+        )
     )
     lit = cu.prepare_light(s)
     assert lit.shadow is not None and lit.shadow.values.shape == (96, 96)

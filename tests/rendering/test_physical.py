@@ -16,7 +16,9 @@ from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
 
 F = np.float32
 SUN = cu.Sun(direction=(0.8, 0.45, -0.3), colour=(1.0, 0.9, 0.8), intensity=5.0)
-PHYS = cu.RenderSettings(lighting="physical", physical_resolution=16, exact_noise=True, haze=0.0)
+PHYS = cu.RenderSettings(
+    lighting="physical", physical_resolution=16, exact_noise=True, haze=0.0, resolve=False
+)
 
 
 def small_cloud() -> cu.Cloud:

@@ -33,6 +33,7 @@ from cumuli.model.volume import VolumeCloud
 from cumuli.rendering.air import add_air
 from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
 from cumuli.rendering.painters import CPUPainter, GLPainter
+from cumuli.rendering.resolve import resolve
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
 from cumuli.settings import RenderSettings
@@ -106,7 +107,7 @@ def compose(
     if impostors is None and single_pass(scene):
         kind, indices = calls[0]
         image = painter.layer(lit, kind, indices, camera, width, height, True)
-        return add_air(image, scene, camera)
+        return add_air(resolve(image, scene), scene, camera)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
     else:
@@ -124,7 +125,7 @@ def compose(
         solid,
         ground_args(scene.ground, scene.sky, lit.shadow),
     )  # fmt: skip
-    return add_air(image, scene, camera)
+    return add_air(resolve(image, scene), scene, camera)
 
 
 def _lit(scene: Any) -> tuple[LitScene | None, Scene]:
