@@ -96,6 +96,11 @@ class RenderSettings:
         clouds' phase function): the aureole, the sun's forward-scattered glow around its disc,
         also around a sun hidden behind a cloud (``cumuli.rendering.air``). ``0`` turns it off;
         the paper mode has none.
+    air_extinction:
+        Extinction of the air per world unit in the physical mode: the ground seen at distance
+        ``t`` fades into the sky's horizon radiance by ``1 − exp(−air_extinction·t)``, so that
+        the ground meets the sky without a hard line (``0.003``: half faded at 230 units).
+        ``0`` turns it off; the paper mode has none. Clouds do not fade yet.
     resolve:
         The physical mode's resolve pass: a 3×3 tent filter over the finished image
         (``cumuli.rendering.resolve``) that averages out the camera rays' jitter pattern and
@@ -172,6 +177,7 @@ class RenderSettings:
     hg_blend: float = 0.2
     droplet_diameter: float = 20.0
     haze: float = 0.05
+    air_extinction: float = 0.003
     resolve: bool = True
     physical_resolution: int = 48
     multiple_scattering: bool = True
@@ -257,6 +263,8 @@ class RenderSettings:
         diameter = check.real(self.droplet_diameter, "settings.droplet_diameter", lo, hi)
         s(self, "droplet_diameter", diameter)
         s(self, "haze", check.real(self.haze, "settings.haze", 0.0, 10.0))
+        ext = check.real(self.air_extinction, "settings.air_extinction", 0.0, 10.0)
+        s(self, "air_extinction", ext)
         s(self, "resolve", check.flag(self.resolve, "settings.resolve"))
         res = check.integer(self.physical_resolution, "settings.physical_resolution", 4, 256)
         s(self, "physical_resolution", res)

@@ -1,6 +1,7 @@
 """The physical mode's air between the camera and the background (RENDER_CONTRACT "Physical
 lighting", "Air"): the aureole, the sun's light scattered forward by the haze's droplets with
-the settings' phase function, added where the background shows.
+the settings' phase function, added where the background shows, and the ground's fade into the
+horizon's sky with its distance (aerial perspective of the ground).
 
 Applied by the compositor to the finished image of either backend (numpy, the same for GL and
 CPU): ``rgb += (1 − α) · E_sun · haze · p(c)``, ``α`` the clouds' coverage, ``p`` the
@@ -35,13 +36,37 @@ def aureole(scene: Any, camera: Any, width: int, height: int) -> np.ndarray | No
     return (p[..., None] * (s.haze * radiance)).astype(np.float32)
 
 
+def ground_haze(scene: Any, camera: Any, width: int, height: int) -> np.ndarray | None:
+    """``(H, W)`` float32: how much of the ground each pixel sees is hidden by the air,
+    ``1 − exp(−air_extinction · t)``, ``t`` the distance to the ground plane along the ray (0
+    where the ray misses it); None without a ground, in the paper mode or with
+    ``air_extinction = 0``."""
+    s = scene.settings
+    if scene.ground is None or not s.physical or s.air_extinction == 0.0:
+        return None
+    dirs = camera.ray_directions(width, height).astype(np.float64)
+    dy = dirs[..., 1]
+    above = float(camera.position[1]) - float(scene.ground.height)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where((dy < 0) & (above > 0), above / -dy, np.inf)
+    hidden = np.where(np.isfinite(t), 1.0 - np.exp(-s.air_extinction * t), 0.0)
+    return hidden.astype(np.float32)
+
+
 def add_air(image: np.ndarray, scene: Any, camera: Any) -> np.ndarray:
-    """``image`` with the air of :func:`aureole` added where its background shows (a new array
-    when anything is added)."""
+    """``image`` with the air added where its background shows: the ground fades into the
+    horizon's sky radiance with its distance (:func:`ground_haze`), then the aureole
+    (:func:`aureole`). A new array when anything changes."""
     h, w = image.shape[:2]
     glow = aureole(scene, camera, w, h)
-    if glow is None:
+    fade = ground_haze(scene, camera, w, h)
+    if glow is None and fade is None:
         return image
     out = image.copy()
-    out[..., :3] += (1.0 - np.clip(image[..., 3:4], 0.0, 1.0)) * glow
+    clear = 1.0 - np.clip(image[..., 3:4], 0.0, 1.0)
+    if fade is not None:
+        horizon = np.asarray(scene.sky.horizon, np.float32)
+        out[..., :3] += clear * fade[..., None] * (horizon - out[..., :3])
+    if glow is not None:
+        out[..., :3] += clear * glow
     return out
