@@ -214,7 +214,12 @@ def test_a_particle_cloud_shadow_in_the_picture(gl_context) -> None:
 def test_ground_radiance_lit_and_shadowed(lighting: str) -> None:
     s = scene(
         cu.RenderSettings(
-            lighting=lighting, physical_resolution=16, shadow_resolution=96, haze=0.0, resolve=False
+            lighting=lighting,
+            physical_resolution=16,
+            shadow_resolution=96,
+            haze=0.0,
+            resolve=False,
+            air_extinction=0.0,
         )
     )
     lit = cu.prepare_light(s)

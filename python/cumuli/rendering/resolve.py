@@ -28,8 +28,9 @@ def tent_filter(image: np.ndarray) -> np.ndarray:
 
 def resolve(image: np.ndarray, scene: object) -> np.ndarray:
     """``image`` resolved when ``scene``'s settings ask for it (the physical mode with
-    ``resolve``), else ``image`` itself."""
+    ``resolve``), else ``image`` itself. A scene with solids is not resolved: a solid is opaque
+    (alpha exactly 1 where it is hit) and its outline is exact; the tent would bleed both."""
     s = scene.settings  # type: ignore[attr-defined]
-    if not (s.physical and s.resolve):
+    if not (s.physical and s.resolve) or scene.solids:  # type: ignore[attr-defined]
         return image
     return tent_filter(image)
