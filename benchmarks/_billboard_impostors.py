@@ -114,7 +114,9 @@ def sweep(renderer: Any, field_of: Callable[[int], Any], sun: Any, size: tuple[i
         counts, frames = [10, 100, 1000, 10_000], 20
     points = []
     for n in counts:
-        lit = cu.prepare_light(cu.Scene([field_of(n)], sun=sun))
+        lit = cu.prepare_light(
+            cu.Scene([field_of(n)], sun=sun, settings=cu.RenderSettings(lighting="paper"))
+        )
         for path, cams in sweep_paths(n, frames).items():
             row = {"clouds": n, "path": path, **run_path(renderer, lit, cams, size)}
             points.append(row)
@@ -183,7 +185,8 @@ def table1_day(renderer: Any, size: tuple[int, int], frames: int, impostors: boo
 
     weather = table1(seed=0)
     base = cu.Scene(sun=cu.Sun(direction=(0.3, 0.6, 0.6), colour=(1.0, 0.97, 0.92),
-                               intensity=1.4))  # fmt: skip
+                               intensity=1.4),
+                    settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
     cam = cu.Camera(position=(0.0, 2.0, -420.0), target=(0.0, 198.0, 0.0), fov=65.0)
     end = weather.schedule.keys[-1][0]
     dt = end / (frames - 1) if dt is None else dt

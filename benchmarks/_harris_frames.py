@@ -53,7 +53,12 @@ def field(n: int, seed: int = 0) -> tuple[cu.Scene, float]:
         )
         for k in range(n)
     ]
-    scene = cu.Scene(clouds, sun=SUN, sprite_settings=cu.SpriteSettings(ambient=(0.15, 0.15, 0.18)))
+    scene = cu.Scene(
+        clouds,
+        sun=SUN,
+        sprite_settings=cu.SpriteSettings(ambient=(0.15, 0.15, 0.18)),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     return scene, side
 
 
@@ -164,7 +169,12 @@ def big_clouds(quick: bool) -> cu.Scene:
         shapes[k % len(shapes)].translated((70.0 * k, rng.uniform(-8, 8), rng.uniform(-25, 25)))
         for k in range(count)
     ]
-    return cu.Scene(clouds, sun=SUN, sprite_settings=cu.SpriteSettings(ambient=(0.15,) * 3))
+    return cu.Scene(
+        clouds,
+        sun=SUN,
+        sprite_settings=cu.SpriteSettings(ambient=(0.15,) * 3),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
 
 
 def fly_through_big(renderer: Any, quick: bool, software: bool) -> dict[str, Any]:
@@ -210,7 +220,12 @@ def popping(renderer: Any, quick: bool, software: bool) -> dict[str, Any]:
     size = (48, 36) if quick else ((160, 120) if software else (640, 480))
     frames = 6 if quick else 40
     shape = variants(600, (2.0, 3.5), count=1)[0]
-    scene = cu.Scene([shape], sun=SUN, sprite_settings=cu.SpriteSettings(ambient=(0.15,) * 3))
+    scene = cu.Scene(
+        [shape],
+        sun=SUN,
+        sprite_settings=cu.SpriteSettings(ambient=(0.15,) * 3),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     cams = cu.orbit((0.0, 0.0, 0.0), 80.0, frames, height=10.0, degrees=0.25 * (frames - 1))
     w, h = size
     direct = [renderer.render(scene, c, w, h) for c in cams]

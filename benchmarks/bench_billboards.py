@@ -240,7 +240,9 @@ def render_vs_clouds(renderer: Any, ns: list[int], size: tuple[int, int], repeat
     out: dict[str, Any] = {}
     for n in ns:
         field = cloud_field(n)
-        lit = cu.prepare_light(cu.Scene([field], sun=RENDER_SUN))
+        lit = cu.prepare_light(
+            cu.Scene([field], sun=RENDER_SUN, settings=cu.RenderSettings(lighting="paper"))
+        )
         cam = field_camera(n)
         row = time_backends(renderer, lit, [cam], size, repeats, cpu=n <= cpu_max)
         row["clouds"] = n
@@ -261,7 +263,9 @@ def render_vs_billboards(renderer: Any, ks: list[int], size: tuple[int, int],
     out: dict[str, Any] = {}
     for k in ks:
         field = cloud_field(100, per_box=k)
-        lit = cu.prepare_light(cu.Scene([field], sun=RENDER_SUN))
+        lit = cu.prepare_light(
+            cu.Scene([field], sun=RENDER_SUN, settings=cu.RenderSettings(lighting="paper"))
+        )
         cam = field_camera(100)
         row = time_backends(renderer, lit, [cam], size, repeats)
         row["billboards_per_box"] = k
@@ -317,7 +321,7 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
         "cirrus": 60, "nimbus": 30, "rain": 20, "table1": 61}  # fmt: skip
     out: dict[str, Any] = {}
     cirrus = seed_box_cloud(presets.cirrus(), 2).translated((0.0, 150.0, 0.0))
-    scene = cu.Scene([cirrus], sun=RENDER_SUN)
+    scene = cu.Scene([cirrus], sun=RENDER_SUN, settings=cu.RenderSettings(lighting="paper"))
     cams = orbit((0.0, 150.0, 0.0), 80.0, frames["cirrus"], height=-35.0, fov=65.0)
     t = imp.path_with_impostors(renderer, scene, cams, size)
     out["cirrus"] = with_runs({"seed_boxes": len(presets.cirrus().seeds),
@@ -331,13 +335,15 @@ def paper_scenes(renderer: Any, size: tuple[int, int], quick: bool) -> dict[str,
         cams = fly_towards((0.0, altitude - 25.0, -half - 30.0), (0.0, altitude - 10.0, half),
                            frames[name], fov=60.0)  # fmt: skip
         step = float(np.linalg.norm(np.subtract(cams[1].position, cams[0].position)))
-        t = imp.path_with_impostors(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky), cams,
-                                    size)  # fmt: skip
+        paper = cu.RenderSettings(lighting="paper")
+        t = imp.path_with_impostors(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky,
+                                                       settings=paper), cams, size)  # fmt: skip
         out[name] = with_runs({"models": 10, "instances": n, "units_per_frame": step,
                                **fps_stats(t["gl"], PAPER_HZ[name])}, t)  # fmt: skip
         slow = imp.steps_path(cams[0].position, cams[-1].target, frames[name], imp.SPEED)
-        t = imp.path_with_impostors(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky), slow,
-                                    size)  # fmt: skip
+        paper = cu.RenderSettings(lighting="paper")
+        t = imp.path_with_impostors(renderer, cu.Scene([field], sun=RENDER_SUN, sky=sky,
+                                                       settings=paper), slow, size)  # fmt: skip
         out[name]["slow"] = with_runs({"units_per_frame": imp.SPEED,
                                        **fps_stats(t["gl"], PAPER_HZ[name])}, t)  # fmt: skip
         row = out[name]["slow"]

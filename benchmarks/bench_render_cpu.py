@@ -33,12 +33,20 @@ def scenes() -> dict[str, cu.Scene]:
     """The paper's four cloud kinds, each alone in the default scene settings."""
     rabbit = cu.mesh_cloud(cu.meshes.bunny_like(1), scale=1.2)
     return {
-        "gaussian_cumulus": cu.Scene(clouds=[cu.gaussian_cumulus(seed=1)]),
-        "metaball_cumulus": cu.Scene(clouds=[cu.metaball_cumulus(seed=2)]),
-        "lsystem_cloud": cu.Scene(clouds=[cu.lsystem_cloud(iterations=7, seed=2)]),
+        "gaussian_cumulus": cu.Scene(
+            clouds=[cu.gaussian_cumulus(seed=1)], settings=cu.RenderSettings(lighting="paper")
+        ),
+        "metaball_cumulus": cu.Scene(
+            clouds=[cu.metaball_cumulus(seed=2)], settings=cu.RenderSettings(lighting="paper")
+        ),
+        "lsystem_cloud": cu.Scene(
+            clouds=[cu.lsystem_cloud(iterations=7, seed=2)],
+            settings=cu.RenderSettings(lighting="paper"),
+        ),
         # The paper marches its mesh clouds with a fixed step smaller than the ellipsoids.
         "mesh_cloud": cu.Scene(
-            clouds=[rabbit], settings=cu.RenderSettings(fixed_step=0.03, absorption=3.0)
+            clouds=[rabbit],
+            settings=cu.RenderSettings(fixed_step=0.03, absorption=3.0, lighting="paper"),
         ),
     }
 

@@ -18,6 +18,7 @@
 #include "cumuli/light/physical.hpp"
 #include "cumuli/light/volume.hpp"
 #include "cumuli/parallel.hpp"
+#include "cumuli/phase.hpp"
 
 namespace cumuli::bind {
 
@@ -846,6 +847,29 @@ void bind_particle_light(py::module_& m) {
       },
       "The splat kernel K(d) (0 for d >= 1) at distances d in units of the splat radius.");
 
+  m.def(
+      "approx_mie_params",
+      [](float d) {
+        const ApproxMie m = approx_mie_params(d);
+        return py::make_tuple(m.g_hg, m.g_d, m.alpha, m.w_d);
+      },
+      py::arg("diameter"),
+      "(g_HG, g_D, alpha, w_D) of the approximate Mie phase for droplets of `diameter` µm.");
+  m.def(
+      "approx_mie_phase",
+      [](float d, const FloatArray& c, float scale) {
+        const ApproxMie m = approx_mie_params(d);
+        FloatArray out(c.size());
+        for (py::ssize_t i = 0; i < c.size(); ++i)
+          out.mutable_data()[i] = approx_mie(m, c.data()[i], scale);
+        return out;
+      },
+      py::arg("diameter"), py::arg("cos_theta"), py::arg("scale") = 1.0f,
+      "The approximate Mie phase (normalised by 1/4π) at cosines, lobes' g scaled by `scale`.");
+  m.def(
+      "approx_mie_mean_cosine",
+      [](float d) { return approx_mie_mean_cosine(approx_mie_params(d)); }, py::arg("diameter"),
+      "The approximate Mie phase's mean cosine.");
   m.def(
       "phase_4pi",
       [](const std::string& phase, float g, const FloatArray& c) {

@@ -188,6 +188,19 @@ void bind_render_params(py::module_& m) {
       .def_readwrite("g1", &PhysicalParams::g1)
       .def_readwrite("g2", &PhysicalParams::g2)
       .def_readwrite("blend", &PhysicalParams::blend)
+      .def_readwrite("mie", &PhysicalParams::mie)
+      .def_property(
+          "droplet_diameter", [](const PhysicalParams& p) { return p.droplet_diameter; },
+          [](PhysicalParams& p, float d) {
+            p.mie_params = approx_mie_params(d);
+            p.droplet_diameter = d;
+          })
+      .def_property_readonly("mie_params",
+                             [](const PhysicalParams& p) {
+                               const ApproxMie& m = p.mie_params;
+                               return py::make_tuple(m.g_hg, m.g_d, m.alpha, m.w_d);
+                             })
+      .def("phase", &PhysicalParams::phase, py::arg("cos_theta"), py::arg("scale") = 1.0f)
       .def_readwrite("octaves", &PhysicalParams::octaves)
       .def_readwrite("oct_a", &PhysicalParams::oct_a)
       .def_readwrite("oct_b", &PhysicalParams::oct_b)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <glm/geometric.hpp>
 
@@ -32,6 +33,35 @@ float phase_4pi(PhaseKind kind, float g, float cos_theta) {
       return (1.0f - g * g) / (denom * std::sqrt(denom));
     }
   }
+}
+
+ApproxMie approx_mie_params(float d) {
+  if (!(d >= kMieDiameterMin && d <= kMieDiameterMax))
+    throw std::invalid_argument("droplet diameter must be in [5, 50] µm");
+  ApproxMie m{};
+  m.g_hg = std::exp(-0.0990567f / (d - 1.67154f));
+  m.g_d = std::exp(-2.20679f / (d + 3.91029f) - 0.428934f);
+  m.alpha = std::exp(3.62489f - 8.29288f / (d + 5.52825f));
+  m.w_d = std::exp(-0.599085f / (d - 0.641583f) - 0.665888f);
+  return m;
+}
+
+float draine(float g, float alpha, float cos_theta) {
+  const float shape =
+      (1.0f + alpha * cos_theta * cos_theta) / (1.0f + alpha * (1.0f + 2.0f * g * g) / 3.0f);
+  return henyey_greenstein(g, cos_theta) * shape;
+}
+
+float approx_mie(const ApproxMie& m, float cos_theta, float scale) {
+  return (1.0f - m.w_d) * henyey_greenstein(m.g_hg * scale, cos_theta) +
+         m.w_d * draine(m.g_d * scale, m.alpha, cos_theta);
+}
+
+float approx_mie_mean_cosine(const ApproxMie& m) {
+  const float g2 = m.g_d * m.g_d;
+  const float gd = m.g_d * (1.0f + m.alpha * (3.0f + 2.0f * g2) / 5.0f) /
+                   (1.0f + m.alpha * (1.0f + 2.0f * g2) / 3.0f);
+  return (1.0f - m.w_d) * m.g_hg + m.w_d * gd;
 }
 
 float smoothstep(float e0, float e1, float x) {

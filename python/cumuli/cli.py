@@ -119,7 +119,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         from cumuli.io.images import write_image
 
         img = _demo_noise(args.width, args.height, args.seed)
-        path = write_image(args.output, img)
+        path = write_image(args.output, img, exposure=1.0, tonemap="none")
         print(f"wrote {path} ({args.width}×{args.height})")
         return 0
     if args.torchelsen:
@@ -157,7 +157,7 @@ def _size(text: str) -> tuple[int, int]:
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
-    from cumuli.io.images import write_image
+    from cumuli.io.images import display_for, write_image
     from cumuli.rendering.compositor import render
     from cumuli.scene import load_scene
 
@@ -166,7 +166,7 @@ def _cmd_render(args: argparse.Namespace) -> int:
     output = Path(args.output)
     _check_output(output)
     img = render(scene, scene.default_camera(), w, h, backend=args.backend)
-    exposure, tonemap = _display(args, 1.0, "none")
+    exposure, tonemap = _display(args, *display_for(scene.settings.lighting))
     alpha = "keep" if args.alpha else "opaque"
     path = write_image(output, img, alpha, exposure=exposure, tonemap=tonemap)
     print(f"wrote {path} ({w}×{h}, {args.backend})")
@@ -285,7 +285,7 @@ def build_parser() -> argparse.ArgumentParser:
         help="instead render a stratocumulus deck over a plain (a CloudDeck, physically lit)",
     )
     _display_args(
-        demo, "0.7; 1 with --harris, --torchelsen", "aces; none with --harris, --torchelsen"
+        demo, "0.8; 1 with --harris, --torchelsen", "aces; none with --harris, --torchelsen"
     )
     demo.set_defaults(run=_cmd_demo)
 
@@ -301,7 +301,7 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="keep the clouds' coverage (1 - T) as alpha instead of writing an opaque image",
     )
-    _display_args(rend, "1", "none")
+    _display_args(rend, "0.8, or 1 for a paper-mode scene", "aces, or none for a paper-mode scene")
     rend.set_defaults(run=_cmd_render)
     return parser
 

@@ -12,6 +12,7 @@ import numpy as np
 
 from cumuli.camera import Camera
 from cumuli.ground import Ground
+from cumuli.io.images import DISPLAY_EXPOSURE, DISPLAY_TONEMAP
 from cumuli.model.deck import CloudDeck
 from cumuli.model.gaussian import gaussian_cumulus
 from cumuli.noise import Noise
@@ -19,19 +20,27 @@ from cumuli.scene import Scene
 from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
 
+#: The sun's irradiance of the demo's daylight scenes in the physical mode: about ten times the
+#: sky's radiance, as outdoors (the paper mode's light grid takes 1).
+PHYSICAL_SUN_INTENSITY = 6.0
+
 
 def cumulus_scene(seed: int = 1, settings: RenderSettings | None = None) -> Scene:
     """One Gaussian cumulus (the paper's defaults, 35 spheres) under a daylight sky (Fig. 9).
 
-    The camera stands 60 units away on −z, slightly below the cloud's middle.
+    The camera stands 60 units away on −z, slightly below the cloud's middle. The sun's
+    intensity is :data:`PHYSICAL_SUN_INTENSITY` in the physical mode (the default), 1 in the
+    paper mode.
     """
+    settings = settings or RenderSettings()
+    intensity = 1.0 if settings.lighting == "paper" else PHYSICAL_SUN_INTENSITY
     cloud = gaussian_cumulus(centre=(0.0, 0.0, 0.0), seed=seed)
     return Scene(
         clouds=[cloud],
-        sun=Sun(direction=(0.45, 0.75, 0.5), colour=(1.0, 0.97, 0.92), intensity=1.0),
+        sun=Sun(direction=(0.45, 0.75, 0.5), colour=(1.0, 0.97, 0.92), intensity=intensity),
         sky=Sky(),
         noise=Noise(seed=7),
-        settings=settings or RenderSettings(),
+        settings=settings,
         camera=Camera(position=(0.0, 3.0, -60.0), target=(0.0, 4.0, 0.0), fov=45.0),
     )
 
@@ -77,13 +86,14 @@ def harris_scene(n_particles: int = 2500, clouds: int = 4, seed: int = 3) -> Sce
         lights=(Sun(direction=(-0.75, 0.45, -0.2), colour=(1.0, 0.42, 0.62), intensity=1.0),),
         sky=Sky.sunset(),
         sprite_settings=SpriteSettings(ambient=(0.05, 0.04, 0.07)),
+        settings=RenderSettings(lighting="paper"),
         camera=Camera(position=(0.0, 0.0, -40.0), target=(2.0, 14.0, 40.0), fov=60.0),
     )
 
 
-#: Display settings of the demo (``cumuli demo``): exposure and tone mapping of the 8-bit image.
-DEMO_EXPOSURE = 0.7
-DEMO_TONEMAP = "aces"
+#: Display settings of the demo (``cumuli demo``): the display defaults of the 8-bit image.
+DEMO_EXPOSURE = DISPLAY_EXPOSURE
+DEMO_TONEMAP = DISPLAY_TONEMAP
 
 
 def sunset_scene(settings: RenderSettings | None = None) -> Scene:
@@ -93,7 +103,7 @@ def sunset_scene(settings: RenderSettings | None = None) -> Scene:
     A low orange sun (17° up, from the right and slightly behind the camera, irradiance 9)
     lights their sides; the sunset sky lights the rest, so undersides and the far sides stay
     soft and blue-grey rather than black. Display with :data:`DEMO_EXPOSURE` and the ACES tone
-    curve (``cu.write_image(path, img, exposure=0.7, tonemap="aces")``).
+    curve (``cu.write_image(path, img)``: exposure 0.8, ACES, the defaults).
     """
     base = default_scene()
     return base.replace(
@@ -151,18 +161,20 @@ def benchmark_scenes(names: tuple[str, ...] = BENCHMARK_SCENES) -> dict[str, Sce
 
     def make(name: str) -> tuple[object, RenderSettings]:
         if name == "cumulus":
-            return gaussian_cumulus(centre=(0.0, 0.0, 0.0), seed=1), RenderSettings()
+            return gaussian_cumulus(centre=(0.0, 0.0, 0.0), seed=1), RenderSettings(
+                lighting="paper"
+            )
         if name == "mesh":
             vertices, faces = bunny_like(subdivisions=2)
             cloud = mesh_cloud((vertices * 6.0, faces), scale=1.2, target_faces=370)
-            return cloud, RenderSettings(fixed_step=0.1)
+            return cloud, RenderSettings(fixed_step=0.1, lighting="paper")
         if name == "metaball":
-            return metaball_cumulus(seed=3), RenderSettings()
+            return metaball_cumulus(seed=3), RenderSettings(lighting="paper")
         cloud = lsystem_cloud(
             "X", {"X": "X+Y", "Y": "X&Y"}, iterations=7, angle=(20.0, 40.0),
             heading=(0, 1, 0), up=(0, 0, -1), seed=2,
         )  # fmt: skip
-        return cloud, RenderSettings()
+        return cloud, RenderSettings(lighting="paper")
 
     scenes = {}
     for name in names:

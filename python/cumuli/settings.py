@@ -24,8 +24,11 @@ CANDIDATE_SORTS = ("insertion", "quicksort", "oddeven", "none")
 LIGHT_METHODS = ("ndt", "naive", "shared")
 #: Lighting models: the 2018 paper's render pass, or the physically based mode (RENDER_CONTRACT).
 LIGHTING_MODES = ("paper", "physical")
-#: Phase functions of the physical mode: one Henyey–Greenstein lobe or a blend of two.
-PHASE_FUNCTIONS = ("hg", "dual_hg")
+#: Phase functions of the physical mode: the approximate Mie phase of water droplets (the
+#: default), one Henyey–Greenstein lobe or a blend of two.
+PHASE_FUNCTIONS = ("mie", "hg", "dual_hg")
+#: Droplet diameters (µm) the approximate Mie phase's fits cover.
+DROPLET_DIAMETER_RANGE = (5.0, 50.0)
 #: The physical mode's sun lattice: ACROSS × physical_resolution nodes across the light, ALONG ×
 #: as many along.
 ACROSS = 2
@@ -87,18 +90,37 @@ class RenderSettings:
         How that grid is computed (:func:`cumuli.light_grid`): ``"ndt"`` (Algorithm 2) or
         ``"naive"``, its march step and the extinction ``A`` of eq. (3) per world unit.
     lighting:
-        ``"paper"`` (the 2018 render pass above, the default) or ``"physical"``: the volume
-        rendering equation in physical units with the approximations RENDER_CONTRACT states
-        (single scattering, multiple scattering, sky light). The fields below are the physical
-        mode's; the paper mode ignores them (except ``shadow_resolution`` with a ground).
+        ``"physical"`` (the default): the volume rendering equation in physical units with the
+        approximations RENDER_CONTRACT states (single scattering, multiple scattering, sky
+        light); ``"paper"``: the 2018 render pass above, unchanged bit for bit. The fields
+        below are the physical mode's; the paper mode ignores them (except
+        ``shadow_resolution`` with a ground).
     extinction_scale:
         σt = extinction_scale · ρ per world unit (ρ the cloud density as in the paper mode; the
         default 12 = absorption / step_ref gives the paper mode's opacity).
     albedo:
         Single-scattering albedo ϖ = σs / σt, in [0, 1].
-    phase, hg_g2, hg_blend:
-        ``"hg"``: Henyey–Greenstein with ``hg_g``; ``"dual_hg"``:
+    phase, hg_g2, hg_blend, droplet_diameter:
+        ``"mie"`` (the default): the approximate Mie phase of water droplets of
+        ``droplet_diameter`` µm (Jendersie & d'Eon 2023: a Henyey–Greenstein and Draine blend
+        fitted over the diameter, 5–50 µm; strong forward peak, the silver lining of back-lit
+        clouds); ``"hg"``: Henyey–Greenstein with ``hg_g``; ``"dual_hg"``:
         ``(1 − hg_blend)·HG(hg_g) + hg_blend·HG(hg_g2)``.
+    haze:
+        Optical depth of the air's haze along a view ray in the physical mode (droplets with the
+        clouds' phase function): the aureole, the sun's forward-scattered glow around its disc,
+        also around a sun hidden behind a cloud (``cumuli.rendering.air``). ``0`` turns it off;
+        the paper mode has none.
+    air_extinction:
+        Extinction of the air per world unit in the physical mode: the ground seen at distance
+        ``t`` fades into the sky's horizon radiance by ``1 − exp(−air_extinction·t)``, so that
+        the ground meets the sky without a hard line (``0.003``: half faded at 230 units).
+        ``0`` turns it off; the paper mode has none. Clouds do not fade yet.
+    resolve:
+        The physical mode's resolve pass: a 3×3 tent filter over the finished image
+        (``cumuli.rendering.resolve``) that averages out the camera rays' jitter pattern and
+        smooths cloud outlines (softening detail by about a pixel; not supersampling).
+        ``False`` gives the raw jittered image. The paper mode has none.
     physical_resolution:
         Longest edge of the physical mode's light grids (optical depth towards the sun, sky
         visibility, multiple scattering); the other edges follow the cloud's box.
@@ -162,12 +184,16 @@ class RenderSettings:
     light_method: str = "ndt"
     light_step: float = 0.1
     light_extinction: float = 1.0
-    lighting: str = "paper"
+    lighting: str = "physical"
     extinction_scale: float = 12.0
     albedo: float = 0.99
-    phase: str = "hg"
+    phase: str = "mie"
     hg_g2: float = -0.3
     hg_blend: float = 0.2
+    droplet_diameter: float = 20.0
+    haze: float = 0.05
+    air_extinction: float = 0.003
+    resolve: bool = True
     physical_resolution: int = 48
     multiple_scattering: bool = True
     sky_light: bool = True
@@ -248,6 +274,13 @@ class RenderSettings:
         g2 = check.real(self.hg_g2, "settings.hg_g2", -1.0, 1.0, lo_open=True, hi_open=True)
         s(self, "hg_g2", g2)
         s(self, "hg_blend", check.real(self.hg_blend, "settings.hg_blend", 0.0, 1.0))
+        lo, hi = DROPLET_DIAMETER_RANGE
+        diameter = check.real(self.droplet_diameter, "settings.droplet_diameter", lo, hi)
+        s(self, "droplet_diameter", diameter)
+        s(self, "haze", check.real(self.haze, "settings.haze", 0.0, 10.0))
+        ext = check.real(self.air_extinction, "settings.air_extinction", 0.0, 10.0)
+        s(self, "air_extinction", ext)
+        s(self, "resolve", check.flag(self.resolve, "settings.resolve"))
         res = check.integer(self.physical_resolution, "settings.physical_resolution", 4, 256)
         s(self, "physical_resolution", res)
         for name in ("multiple_scattering", "sky_light"):
@@ -339,7 +372,12 @@ class RenderSettings:
 
     @property
     def mean_cosine(self) -> float:
-        """The phase function's mean cosine ḡ (``hg_g``, or the blend of the two lobes)."""
+        """The phase function's mean cosine ḡ (``hg_g``, the blend of the two lobes, or the
+        approximate Mie phase's)."""
+        if self.phase == "mie":
+            from cumuli import _core
+
+            return float(_core.approx_mie_mean_cosine(self.droplet_diameter))
         if self.phase == "dual_hg":
             return (1.0 - self.hg_blend) * self.hg_g + self.hg_blend * self.hg_g2
         return self.hg_g

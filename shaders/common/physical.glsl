@@ -12,12 +12,15 @@ uniform float u_phys_extinction;  // σt = u_phys_extinction · ρ
 uniform float u_phys_albedo;      // ϖ
 uniform bool u_phys_dual;         // two HG lobes
 uniform vec3 u_phys_g;            // g1, g2, weight of the second lobe
+uniform bool u_phys_mie;          // the approximate Mie phase instead
+uniform vec4 u_phys_mie_p;        // its g_HG, g_D, α, w_D
 uniform int u_phys_octaves;       // scattering orders drawn
 uniform vec3 u_phys_abc;          // octave constants a, b, c
 uniform int u_phys_seed;          // jitter seed
 uniform float u_phys_min_t;       // the ray stops below this transmittance
 
 float phys_phase(float c, float scale) {
+    if (u_phys_mie) return approx_mie_phase(u_phys_mie_p, c, scale);
     float p1 = hg_phase(u_phys_g.x * scale, c);
     if (!u_phys_dual) return p1;
     return (1.0 - u_phys_g.z) * p1 + u_phys_g.z * hg_phase(u_phys_g.y * scale, c);

@@ -23,7 +23,7 @@ def small_scene(seed: int = 1, sun_y: float = 0.8) -> cu.Scene:
         [cloud],
         sun=cu.Sun(direction=(0.3, sun_y, 0.2)),
         noise=cu.Noise(seed=7, size=16),
-        settings=cu.RenderSettings(light_resolution=6),
+        settings=cu.RenderSettings(light_resolution=6, lighting="paper"),
     )
 
 

@@ -15,7 +15,7 @@ from cumuli.demo import cumulus_scene
 
 
 def small_scene() -> cu.Scene:
-    return cumulus_scene(seed=1)
+    return cumulus_scene(seed=1, settings=cu.RenderSettings(lighting="paper"))
 
 
 # --- camera paths (no GL) -----------------------------------------------------------------------
@@ -136,7 +136,9 @@ def test_cli_demo_writes_png_and_exr(tmp_path: Path, capsys: pytest.CaptureFixtu
     from cumuli.demo import DEMO_EXPOSURE, DEMO_TONEMAP
 
     np.testing.assert_allclose(
-        cu.to_srgb8(exr, DEMO_EXPOSURE, DEMO_TONEMAP), cu.to_srgb8(png), atol=1
+        cu.to_srgb8(exr, DEMO_EXPOSURE, DEMO_TONEMAP),
+        cu.to_srgb8(png, exposure=1.0, tonemap="none"),
+        atol=1,
     )
     assert "demo.exr" in capsys.readouterr().out
 
@@ -174,7 +176,11 @@ def test_cli_render_errors(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -
 
 
 def _scene() -> cu.Scene:
-    return cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], noise=cu.Noise(seed=2, size=16))
+    return cu.Scene(
+        [cu.gaussian_cumulus(n=6, seed=1)],
+        noise=cu.Noise(seed=2, size=16),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
 
 
 # --- arguments that are not iterable ----------------------------------------------------------

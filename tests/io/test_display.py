@@ -26,16 +26,30 @@ def test_tone_curves() -> None:
 
 def test_to_srgb8_applies_exposure_then_the_curve() -> None:
     img = np.random.default_rng(0).random((5, 7, 4)).astype(np.float32) * 3
-    np.testing.assert_array_equal(cu.to_srgb8(img), cu.to_srgb8(img, 1.0, "none"))
+    np.testing.assert_array_equal(
+        cu.to_srgb8(img, exposure=1.0, tonemap="none"), cu.to_srgb8(img, 1.0, "none")
+    )
     out = cu.to_srgb8(img, 0.5, "aces")
     want = np.floor(linear_to_srgb(tone_map(img[..., :3] * 0.5, "aces")) * 255 + 0.5)
     np.testing.assert_array_equal(out[..., :3], want)
-    np.testing.assert_array_equal(out[..., 3], cu.to_srgb8(img)[..., 3])  # alpha untouched
-    assert (cu.to_srgb8(img, 2.0)[..., :3] >= cu.to_srgb8(img)[..., :3]).all()
+    np.testing.assert_array_equal(
+        out[..., 3], cu.to_srgb8(img, exposure=1.0, tonemap="none")[..., 3]
+    )  # alpha untouched
+    assert (
+        cu.to_srgb8(img, 2.0, tonemap="none")[..., :3]
+        >= cu.to_srgb8(img, exposure=1.0, tonemap="none")[..., :3]
+    ).all()
     # Highlights: clipped without a curve, distinguishable with one.
     hot = np.array([[[4.0] * 3, [8.0] * 3]], np.float32)
-    assert cu.to_srgb8(hot)[0, 0, 0] == cu.to_srgb8(hot)[0, 1, 0] == 255
-    assert cu.to_srgb8(hot, tonemap="aces")[0, 0, 0] < cu.to_srgb8(hot, tonemap="aces")[0, 1, 0]
+    assert (
+        cu.to_srgb8(hot, exposure=1.0, tonemap="none")[0, 0, 0]
+        == cu.to_srgb8(hot, exposure=1.0, tonemap="none")[0, 1, 0]
+        == 255
+    )
+    assert (
+        cu.to_srgb8(hot, tonemap="aces", exposure=1.0)[0, 0, 0]
+        < cu.to_srgb8(hot, tonemap="aces", exposure=1.0)[0, 1, 0]
+    )
 
 
 @pytest.mark.parametrize(
@@ -58,7 +72,8 @@ def test_write_image_uses_them_for_png_only(tmp_path: Path) -> None:
     img[..., 3] = 1
     cu.write_image(tmp_path / "a.png", img, exposure=0.7, tonemap="aces")
     np.testing.assert_array_equal(
-        cu.to_srgb8(cu.read_image(tmp_path / "a.png")), cu.to_srgb8(img, 0.7, "aces")
+        cu.to_srgb8(cu.read_image(tmp_path / "a.png"), exposure=1.0, tonemap="none"),
+        cu.to_srgb8(img, 0.7, "aces"),
     )
     cu.write_image(tmp_path / "a.exr", img, exposure=0.7, tonemap="aces")
     np.testing.assert_array_equal(cu.read_image(tmp_path / "a.exr"), img)  # linear, as given
@@ -68,7 +83,8 @@ def test_cli_render_takes_exposure_and_tonemap(tmp_path: Path) -> None:
     from cumuli.cli import main
 
     scene = cu.Scene([cu.gaussian_cumulus(n=6, seed=2)], noise=cu.Noise(seed=1, size=32),
-                     sun=cu.Sun(intensity=4.0))  # fmt: skip
+                     sun=cu.Sun(intensity=4.0),
+                     settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
     path = scene.save(tmp_path / "s.json")
     args = ["render", str(path), "--size", "24x18", "--backend", "cpu"]
     assert main([*args, "-o", str(tmp_path / "lin.exr")]) == 0
@@ -77,7 +93,8 @@ def test_cli_render_takes_exposure_and_tonemap(tmp_path: Path) -> None:
     )
     lin = cu.read_image(tmp_path / "lin.exr")
     np.testing.assert_array_equal(
-        cu.to_srgb8(cu.read_image(tmp_path / "t.png")), cu.to_srgb8(lin, 0.5, "aces")
+        cu.to_srgb8(cu.read_image(tmp_path / "t.png"), exposure=1.0, tonemap="none"),
+        cu.to_srgb8(lin, 0.5, "aces"),
     )
     with pytest.raises(SystemExit) as exc:  # argparse refuses it
         main([*args, "-o", str(tmp_path / "b.png"), "--exposure", "-2"])

@@ -56,19 +56,21 @@ def _big_cloud(n: int) -> cu.Cloud:
 def _savers() -> dict[str, Callable[[Path], object]]:
     """Savers of files larger than the 1 MiB disk (their data made on first use)."""
     return {
-        "a.png": lambda p: cu.write_image(p, _big_image()),
-        "a.exr": lambda p: cu.write_image(p, _big_image()),
+        "a.png": lambda p: cu.write_image(p, _big_image(), exposure=1.0, tonemap="none"),
+        "a.exr": lambda p: cu.write_image(p, _big_image(), exposure=1.0, tonemap="none"),
         "c.npz": lambda p: _big_cloud(120_000).save(p),
         "c.json": lambda p: _big_cloud(12_000).save(p),
-        "s.json": lambda p: cu.Scene([_big_cloud(12_000)]).save(p),
+        "s.json": lambda p: cu.Scene(
+            [_big_cloud(12_000)], settings=cu.RenderSettings(lighting="paper")
+        ).save(p),
     }
 
 
 def _small(name: str, path: Path) -> None:
     if name.endswith((".png", ".exr")):
-        cu.write_image(path, _noisy(8, 8, seed=2))
+        cu.write_image(path, _noisy(8, 8, seed=2), exposure=1.0, tonemap="none")
     elif name.startswith("s"):
-        cu.Scene([_cloud()]).save(path)
+        cu.Scene([_cloud()], settings=cu.RenderSettings(lighting="paper")).save(path)
     else:
         _cloud().save(path)
 
@@ -108,7 +110,7 @@ def test_a_short_write_the_writer_did_not_report_is_caught(
     # What OpenImageIO's PNG writer did on a full disk: report success for a truncated file.
     target = tmp_path / f"a{ext}"
     old_img = _noisy(16, 16, seed=1)
-    cu.write_image(target, old_img)
+    cu.write_image(target, old_img, exposure=1.0, tonemap="none")
     old = target.read_bytes()
     real = cio._write_with_oiio
 
@@ -120,7 +122,7 @@ def test_a_short_write_the_writer_did_not_report_is_caught(
 
     monkeypatch.setattr(cio, "_write_with_oiio", short)
     with pytest.raises(OSError, match="read back"):
-        cu.write_image(target, _noisy(32, 32, seed=3))
+        cu.write_image(target, _noisy(32, 32, seed=3), exposure=1.0, tonemap="none")
     assert target.read_bytes() == old
     assert [p.name for p in tmp_path.iterdir()] == [target.name]
 
@@ -275,9 +277,11 @@ def test_the_replace_writes_through_a_symlink(tmp_path: Path, name: str) -> None
     link.symlink_to(real)
     before = real.read_bytes()
     if name.endswith(".exr"):
-        cu.write_image(link, _noisy(5, 7, seed=9))
+        cu.write_image(link, _noisy(5, 7, seed=9), exposure=1.0, tonemap="none")
     elif name.startswith("s"):
-        cu.Scene([_cloud().translated((1, 2, 3))]).save(link)
+        cu.Scene(
+            [_cloud().translated((1, 2, 3))], settings=cu.RenderSettings(lighting="paper")
+        ).save(link)
     else:
         _cloud().translated((1, 2, 3)).save(link)
     assert link.is_symlink() and link.resolve() == real
@@ -324,7 +328,7 @@ def test_an_image_beyond_the_pixel_limit_is_refused_before_decoding(tmp_path: Pa
 def test_read_image_peaks_near_its_output(tmp_path: Path) -> None:
     img = np.zeros((2048, 2048, 4), np.float32)
     img[::7, ::5] = 0.5
-    path = cu.write_image(tmp_path / "big.png", img, alpha="keep")
+    path = cu.write_image(tmp_path / "big.png", img, alpha="keep", exposure=1.0, tonemap="none")
     out_bytes = img.nbytes
     del img
     tracemalloc.start()
@@ -343,7 +347,7 @@ def test_write_image_allocates_little_beyond_its_input(tmp_path: Path, ext: str)
     img[..., 3] = 0.5
     tracemalloc.start()
     try:
-        cu.write_image(tmp_path / f"w{ext}", img)
+        cu.write_image(tmp_path / f"w{ext}", img, exposure=1.0, tonemap="none")
         peak = tracemalloc.get_traced_memory()[1]
     finally:
         tracemalloc.stop()
@@ -353,24 +357,32 @@ def test_write_image_allocates_little_beyond_its_input(tmp_path: Path, ext: str)
 
 # --- what a saved render looks like (the first hour) --------------------------------------------
 def test_a_saved_render_is_opaque_unless_alpha_is_kept(tmp_path: Path) -> None:
-    scene = cu.Scene([_cloud()], noise=cu.Noise(seed=2, size=16))
+    scene = cu.Scene(
+        [_cloud()], noise=cu.Noise(seed=2, size=16), settings=cu.RenderSettings(lighting="paper")
+    )
     img = cu.render(scene, scene.default_camera(), 24, 16, backend="cpu")
     assert img[..., 3].min() < 0.01  # sky pixels: the render's alpha is the clouds' coverage
     for ext in (".png", ".exr"):
-        seen = cu.read_image(cu.write_image(tmp_path / f"seen{ext}", img))
+        seen = cu.read_image(
+            cu.write_image(tmp_path / f"seen{ext}", img, exposure=1.0, tonemap="none")
+        )
         np.testing.assert_array_equal(seen[..., 3], 1.0)
-        kept = cu.read_image(cu.write_image(tmp_path / f"kept{ext}", img, alpha="keep"))
+        kept = cu.read_image(
+            cu.write_image(tmp_path / f"kept{ext}", img, alpha="keep", exposure=1.0, tonemap="none")
+        )
         np.testing.assert_allclose(kept[..., 3], img[..., 3], atol=0.5 / 255)
     np.testing.assert_array_equal(cu.read_image(tmp_path / "kept.exr"), img)
     np.testing.assert_array_equal(cu.read_image(tmp_path / "seen.exr")[..., :3], img[..., :3])
     with pytest.raises(ValueError, match="alpha must be one of"):
-        cu.write_image(tmp_path / "x.png", img, alpha="transparent")
+        cu.write_image(tmp_path / "x.png", img, alpha="transparent", exposure=1.0, tonemap="none")
     with pytest.raises(ValueError, match="alpha"):
-        cu.write_image(tmp_path / "x.png", img, alpha=True)
+        cu.write_image(tmp_path / "x.png", img, alpha=True, exposure=1.0, tonemap="none")
 
 
 def test_render_frames_saves_opaque_images_unless_alpha_is_kept(tmp_path: Path) -> None:
-    scene = cu.Scene([_cloud()], noise=cu.Noise(seed=2, size=16))
+    scene = cu.Scene(
+        [_cloud()], noise=cu.Noise(seed=2, size=16), settings=cu.RenderSettings(lighting="paper")
+    )
     cams = cu.orbit((0, 2, 0), 40, 2)
     paths = cu.render_frames(scene, cams, tmp_path / "f", 16, 12, backend="cpu", progress=False)
     assert all((cu.read_image(p)[..., 3] == 1).all() for p in paths)

@@ -25,7 +25,7 @@ def scene(settings: cu.RenderSettings | None = None, clouds=None) -> cu.Scene:
     return cu.Scene(
         clouds, sun=SUN, noise=cu.Noise(seed=5, size=32), ground=GROUND,
         settings=settings or cu.RenderSettings(exact_noise=True, physical_resolution=16,
-                                               shadow_resolution=64),
+                                               shadow_resolution=64, lighting="paper"),
     )  # fmt: skip
 
 
@@ -40,7 +40,7 @@ def test_ground_values_and_scene_files(tmp_path: Path) -> None:
         with pytest.raises(error, match="ground"):
             cu.Ground(**bad)
     with pytest.raises(TypeError, match="scene.ground"):
-        cu.Scene([], ground=3.0)
+        cu.Scene([], ground=3.0, settings=cu.RenderSettings(lighting="paper"))
     s = scene()
     back = cu.load_scene(s.save(tmp_path / "s.json"))
     assert back.ground == GROUND
@@ -212,7 +212,16 @@ def test_a_particle_cloud_shadow_in_the_picture(gl_context) -> None:
 
 @pytest.mark.parametrize("lighting", ["paper", "physical"])
 def test_ground_radiance_lit_and_shadowed(lighting: str) -> None:
-    s = scene(cu.RenderSettings(lighting=lighting, physical_resolution=16, shadow_resolution=96))
+    s = scene(
+        cu.RenderSettings(
+            lighting=lighting,
+            physical_resolution=16,
+            shadow_resolution=96,
+            haze=0.0,
+            resolve=False,
+            air_extinction=0.0,
+        )
+    )
     lit = cu.prepare_light(s)
     assert lit.shadow is not None and lit.shadow.values.shape == (96, 96)
     img = cu.render_cpu(lit, CAMERA, 64, 48)
@@ -253,9 +262,11 @@ def test_ground_gl_matches_cpu_in_one_pass_and_in_layers(gl_context, lighting: s
 
 def test_a_volume_alone_over_a_ground_is_composited() -> None:
     """A drawer that draws no ground (the volume marcher) goes through the compositor."""
-    field = cu.density_volume(scene().clouds[0], cu.Noise(seed=5, size=32), cu.RenderSettings(), 24)
+    field = cu.density_volume(
+        scene().clouds[0], cu.Noise(seed=5, size=32), cu.RenderSettings(lighting="paper"), 24
+    )
     volume = cu.VolumeCloud(density=field.values / 12.0, box=field.box, sigma_t=12.0)
-    s = scene(cu.RenderSettings(shadow_resolution=32), [volume])
+    s = scene(cu.RenderSettings(shadow_resolution=32, lighting="paper"), [volume])
     img = cu.render_cpu(s, CAMERA, 32, 24)
     sky_only = cu.render_cpu(s.replace(ground=None), CAMERA, 32, 24)
     assert np.abs(img[-1, :, :3] - sky_only[-1, :, :3]).max() > 0.01  # the ground shows

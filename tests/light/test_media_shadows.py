@@ -90,7 +90,7 @@ def test_the_shadowed_cloud_is_darker_in_both_backends(gl_context) -> None:
 
 
 #: A fine light step for the march from the boxes (the brute force steps 0.02), exact fBm.
-FINE = cu.RenderSettings(light_step=0.05, exact_noise=True, shadow_resolution=64)
+FINE = cu.RenderSettings(light_step=0.05, exact_noise=True, shadow_resolution=64, lighting="paper")
 
 
 def seed_box(offset: tuple[float, float, float] = (14.0, 0.0, -6.0)) -> cu.BillboardCloud:

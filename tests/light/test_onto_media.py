@@ -22,7 +22,7 @@ from cumuli.light.shadow import Casters, caster_transmittance
 TOWARDS_SUN = np.asarray(SUN.direction, np.float64) / np.linalg.norm(SUN.direction)
 SETTINGS = {"exact_noise": True, "physical_resolution": 16}
 #: Particle clouds and billboards shading one another (off by default).
-ON = cu.RenderSettings(sprite_shadows=True)
+ON = cu.RenderSettings(sprite_shadows=True, lighting="paper")
 
 
 def cumulus() -> cu.Cloud:
@@ -208,7 +208,9 @@ def test_particle_clouds_and_billboards_shade_one_another() -> None:
     place = 40 * TOWARDS_SUN + 14 * across  # half over the low cloud, seen from the sun
     high = cu.particle_cumulus(tuple(place.tolist()), 300, seed=3, radius=(2.0, 3.0))
     extra = cu.Sun(direction=(-0.6, 0.5, -0.2), intensity=0.5)  # clear of the high cloud
-    off = cu.Scene([low, high], sun=SUN, lights=(extra,))
+    off = cu.Scene(
+        [low, high], sun=SUN, lights=(extra,), settings=cu.RenderSettings(lighting="paper")
+    )
     assert all(light.unshadowed is None for light in cu.prepare_light(off).lights)  # default
     s = off.replace(settings=ON)
     a, b = cu.prepare_light(s).lights
@@ -278,11 +280,21 @@ def test_extra_lights_are_shaded_by_the_other_sprites_too() -> None:
     lent = cu.ground_shadow(high, extra, low.centres, s.sprite_settings, b)
     np.testing.assert_allclose(lent, want, rtol=1e-5, atol=1e-5)  # float32 passes
     # Without sprite_shadows neither column is shaded; billboards shade light ℓ too.
-    assert cu.prepare_light(s.replace(settings=cu.RenderSettings())).lights[0].unshadowed is None
+    assert (
+        cu.prepare_light(s.replace(settings=cu.RenderSettings(lighting="paper")))
+        .lights[0]
+        .unshadowed
+        is None
+    )
     boxes = seed_boxes_at(30 * towards)
     p_light = cu.prepare_light(cu.Scene([low, boxes], sun=SUN, lights=(extra,), settings=ON))
     p_light = p_light.lights[0]
-    want = cu.ground_shadow(boxes, extra, low.centres, cu.Scene([boxes]).billboard_shading)
+    want = cu.ground_shadow(
+        boxes,
+        extra,
+        low.centres,
+        cu.Scene([boxes], settings=cu.RenderSettings(lighting="paper")).billboard_shading,
+    )
     lit = p_light.unshadowed.light[:, 1] > 1e-4
     np.testing.assert_allclose(
         p_light.light[lit, 1] / p_light.unshadowed.light[lit, 1], want[lit], rtol=1e-5, atol=1e-6
@@ -298,7 +310,7 @@ def test_only_casters_up_sun_are_evaluated_and_nothing_is_lost() -> None:
                             radius=(0.5, 1.0))
         for k in range(14)
     ] + [seed_boxes_at(rng.uniform((-40, 10, -40), (40, 30, 40))) for _ in range(2)]  # fmt: skip
-    s = cu.Scene(clouds, sun=SUN)
+    s = cu.Scene(clouds, sun=SUN, settings=cu.RenderSettings(lighting="paper"))
     casters = Casters.of(s)
     assert list(casters.index) == list(range(16))
     kept = 0

@@ -20,7 +20,7 @@ from cumuli.light.prepare import clear_memo
 
 SUN = cu.Sun(direction=(0.3, 0.8, 0.2))
 # Small grids keep each light pass to a few milliseconds.
-SETTINGS = cu.RenderSettings(light_resolution=6)
+SETTINGS = cu.RenderSettings(light_resolution=6, lighting="paper")
 
 
 def scene_for(cloud: cu.Cloud, **settings: Any) -> cu.Scene:

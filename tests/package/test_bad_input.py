@@ -144,7 +144,9 @@ def test_deeply_nested_json_is_a_value_error(tmp_path: Path) -> None:
 def test_oversized_scene_file_is_refused_before_reading(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    path = cu.Scene([small_cloud()], noise=cu.Noise(0, 4)).save(tmp_path / "s.json")
+    path = cu.Scene(
+        [small_cloud()], noise=cu.Noise(0, 4), settings=cu.RenderSettings(lighting="paper")
+    ).save(tmp_path / "s.json")
     monkeypatch.setattr("cumuli.scene.MAX_SCENE_BYTES", 100)
     with pytest.raises(ValueError, match="more than 100"):
         cu.load_scene(path)
@@ -178,9 +180,13 @@ def test_read_image_refuses_declared_sizes_beyond_the_limit(tmp_path: Path) -> N
 
 # --- Atomic writes share one helper: same permissions, nothing left on failure ----------------
 def test_scene_cloud_and_image_files_get_the_same_permissions(tmp_path: Path) -> None:
-    scene_path = cu.Scene([small_cloud()], noise=cu.Noise(0, 4)).save(tmp_path / "s.json")
+    scene_path = cu.Scene(
+        [small_cloud()], noise=cu.Noise(0, 4), settings=cu.RenderSettings(lighting="paper")
+    ).save(tmp_path / "s.json")
     cloud_path = small_cloud().save(tmp_path / "c.npz")
-    image_path = cu.write_image(tmp_path / "i.png", np.zeros((2, 3, 4), np.float32))
+    image_path = cu.write_image(
+        tmp_path / "i.png", np.zeros((2, 3, 4), np.float32), exposure=1.0, tonemap="none"
+    )
     umask = os.umask(0)
     os.umask(umask)
     want = 0o666 & ~umask
@@ -192,7 +198,9 @@ def test_failed_saves_leave_no_temporary(tmp_path: Path) -> None:
     (tmp_path / "taken.json").mkdir()
     (tmp_path / "taken.npz").mkdir()
     with pytest.raises(OSError):
-        cu.Scene([small_cloud()], noise=cu.Noise(0, 4)).save(tmp_path / "taken.json")
+        cu.Scene(
+            [small_cloud()], noise=cu.Noise(0, 4), settings=cu.RenderSettings(lighting="paper")
+        ).save(tmp_path / "taken.json")
     with pytest.raises(OSError):
         small_cloud().save(tmp_path / "taken.npz")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["taken.json", "taken.npz"]
@@ -200,7 +208,11 @@ def test_failed_saves_leave_no_temporary(tmp_path: Path) -> None:
 
 # --- Light grids set by hand ------------------------------------------------------------------
 def _cpu_scene(cloud: cu.Cloud) -> cu.Scene:
-    return cu.Scene([cloud], noise=cu.Noise(0, 4), settings=cu.RenderSettings(light_resolution=4))
+    return cu.Scene(
+        [cloud],
+        noise=cu.Noise(0, 4),
+        settings=cu.RenderSettings(light_resolution=4, lighting="paper"),
+    )
 
 
 @pytest.mark.parametrize("dtype", [object, complex])
@@ -268,7 +280,10 @@ def test_renderer_refuses_primitives_beyond_the_storage_block_limit() -> None:
     # primitives) was bound anyway and the primitives past the limit silently read as nothing.
     c = small_cloud()
     grid = cu.LightGrid(np.ones((2, 2, 2), np.float32), ((-2.0, -2.0, -2.0), (3.0, 2.0, 2.0)))
-    scene = cu.prepare_light(cu.Scene([c], noise=cu.Noise(0, 4)), lights=[grid])
+    scene = cu.prepare_light(
+        cu.Scene([c], noise=cu.Noise(0, 4), settings=cu.RenderSettings(lighting="paper")),
+        lights=[grid],
+    )
     cam = cu.Camera((0, 0, -10), (0, 0, 0))
     with cu.Renderer() as r:
         marcher = r.drawer("cloud")
@@ -340,7 +355,9 @@ def test_proper_rotations_and_reflections_are_accepted() -> None:
 def test_render_frames_pattern_must_be_a_str(tmp_path: Path) -> None:
     from cumuli.anim import frames
 
-    scene = cu.Scene([small_cloud()], noise=cu.Noise(0, 4))
+    scene = cu.Scene(
+        [small_cloud()], noise=cu.Noise(0, 4), settings=cu.RenderSettings(lighting="paper")
+    )
     cams = frames.orbit((0, 0, 0), 10.0, 2)
     with pytest.raises(TypeError, match="pattern must be a str"):  # was AttributeError
         frames.render_frames(scene, cams, tmp_path / "out", 4, 3, backend="cpu", pattern=5)

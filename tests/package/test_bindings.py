@@ -117,7 +117,7 @@ SETTINGS = cu.RenderSettings(
     step_max=0.9, fixed_step=0.0, hg_g=0.45, max_steps=1234, max_candidates=17, march="union",
     candidate_sort="none", octaves=4, gain=0.6, lacunarity=2.5, frequency=0.7, jitter=True,
     jitter_seed=9, empty_space_skipping=False, min_transmittance=0.01,
-)  # fmt: skip
+lighting="paper")  # fmt: skip
 
 
 def test_march_params_carry_the_render_settings():

@@ -59,7 +59,10 @@ def test_long_python_loops_show_a_bar_unless_told_not_to(
     anim = cu.EndlessAnimation(db, crossfade_frames=1)
     anim.frames(3)
     assert "frames" in capsys.readouterr().err
-    scene = cu.Scene([cu.gaussian_cumulus(n=6, seed=s) for s in (1, 2)])
+    scene = cu.Scene(
+        [cu.gaussian_cumulus(n=6, seed=s) for s in (1, 2)],
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     cu.prepare_light(scene)
     assert "light" in capsys.readouterr().err
     with pytest.raises(TypeError, match="progress"):
@@ -71,7 +74,7 @@ def test_long_cpp_calls_show_a_bar_moved_by_their_loops(
 ) -> None:
     from cumuli.demo import default_scene
 
-    scene = default_scene()
+    scene = default_scene(settings=cu.RenderSettings(lighting="paper"))
     lit = cu.prepare_light(scene, progress=False)
     capsys.readouterr()
     cu.render_cpu(lit, scene.default_camera(), 320, 240, threads=1)
@@ -86,7 +89,11 @@ def test_long_cpp_calls_show_a_bar_moved_by_their_loops(
 
 @pytest.mark.gl
 def test_gl_tiles_show_a_bar(bars_at_once: None, capsys: pytest.CaptureFixture[str]) -> None:
-    scene = cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], noise=cu.Noise(seed=2, size=16))
+    scene = cu.Scene(
+        [cu.gaussian_cumulus(n=6, seed=1)],
+        noise=cu.Noise(seed=2, size=16),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     lit = cu.prepare_light(scene, progress=False)
     with cu.Renderer(tile=16) as r:
         r.render(lit, scene.default_camera(), 48, 32)

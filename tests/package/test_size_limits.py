@@ -111,7 +111,7 @@ def test_the_light_atlas_limit_is_checked_before_the_light_pass(
     monkeypatch: pytest.MonkeyPatch,
 ) -> None:
     cloud = cu.gaussian_cumulus(n=4, seed=1)
-    settings = cu.RenderSettings(light_resolution=256)
+    settings = cu.RenderSettings(light_resolution=256, lighting="paper")
     scene = cu.Scene([cloud.translated((30 * k, 0, 0)) for k in range(9)], settings=settings)
 
     def never(*args: object) -> None:
@@ -141,8 +141,8 @@ def test_the_light_atlas_limit_is_checked_before_the_light_pass(
         (lambda: cu.Sky(sun_disc_intensity=1e39), "sky.sun_disc_intensity"),
         (lambda: cu.Camera((1e39, 0, 0), (0, 0, 0)), "camera.position"),
         (lambda: cu.Camera((0, 0, 0), (0, 0, 1e16)), "camera.target"),
-        (lambda: cu.RenderSettings(absorption=1e39), "settings.absorption"),
-        (lambda: cu.RenderSettings(step_max=1e39), "settings.step_max"),
+        (lambda: cu.RenderSettings(absorption=1e39, lighting="paper"), "settings.absorption"),
+        (lambda: cu.RenderSettings(step_max=1e39, lighting="paper"), "settings.step_max"),
         (lambda: cu.VolumeCloud(np.ones((2, 2, 2)), BOX, sigma_t=1e39), "sigma_t"),
         (lambda: cu.VolumeCloud(np.ones((2, 2, 2)), ((0, 0, 0), (1e39, 1, 1))), "box_max"),
         (lambda: cu.VolumeCloud(np.full((2, 2, 2), 1e39), BOX), "density"),
@@ -161,7 +161,8 @@ def test_the_largest_accepted_values_render_finite_images(backend: str) -> None:
     sun = cu.Sun(colour=(1, 1, 1), intensity=big)
     sky = cu.Sky(zenith=(big, big, big), horizon=(big, 0, 0), sun_disc_intensity=big)
     scene = cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], sun=sun, sky=sky,
-                     noise=cu.Noise(seed=2, size=16))  # fmt: skip
+                     noise=cu.Noise(seed=2, size=16),
+                     settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
     img = cu.render(scene, scene.default_camera(), 24, 16, backend=backend)
     assert np.isfinite(img).all() and img[..., :3].max() > 1e9
     far = cu.Camera((check.MAX_COORD, 0, 0), (0, 0, 0))
@@ -172,7 +173,11 @@ def test_the_largest_accepted_values_render_finite_images(backend: str) -> None:
 
 
 def test_a_scene_file_with_an_overflowing_intensity_is_refused_by_the_cli(tmp_path: Path) -> None:
-    scene = cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], noise=cu.Noise(seed=2, size=16))
+    scene = cu.Scene(
+        [cu.gaussian_cumulus(n=6, seed=1)],
+        noise=cu.Noise(seed=2, size=16),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     data = scene.to_dict()
     data["sun"]["intensity"] = 1e300
     path = tmp_path / "s.json"

@@ -66,7 +66,7 @@ def reference_scene() -> tuple[cu.Scene, cu.Camera]:
         sun=sun,
         sky=cu.Sky(),
         noise=cu.Noise(seed=7),
-        settings=cu.RenderSettings(lighting="physical"),
+        settings=cu.RenderSettings(lighting="physical", phase="hg", haze=0.0, resolve=False),
     )
     camera = cu.Camera(position=(0.0, 2.0, -45.0), target=(0.0, 1.0, 0.0), fov=38.0)
     return scene, camera

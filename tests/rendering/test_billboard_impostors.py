@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
+from cumuli.io.images import srgb_to_linear
 from cumuli.model.parts import DrawableParts
 from cumuli.rendering.impostors import (
     impostor_resolution,
@@ -41,7 +42,7 @@ def scene(drawable: object, shading: str = "vertex", **impostor: object) -> cu.S
     return cu.Scene(
         [drawable], sun=SUN, billboard_shading=cu.BillboardShading(shading=shading),
         impostor_settings=cu.ImpostorSettings(**impostor),
-    )  # fmt: skip
+    settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
 
 
 @pytest.mark.parametrize("shading", ["vertex", "fragment"])
@@ -92,7 +93,8 @@ def test_exact_display_gl_and_cpu_agree(shading: str, exact_impostors_agree: Cal
     ≤ 1e−4 max, at the generation viewpoint and from a moved eye reusing the impostors."""
     sh = cu.BillboardShading(shading=shading, exact_textures=True)
     sc = cu.Scene([cloud().translated((-30, 0, 20)), field()], sun=SUN, billboard_shading=sh,
-                  impostor_settings=cu.ImpostorSettings(exact=True, tolerance=1.0))  # fmt: skip
+                  impostor_settings=cu.ImpostorSettings(exact=True, tolerance=1.0),
+                  settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
     moved = cu.Camera((10.4, 8.2, -59.6), (0.0, 2.0, 10.0), fov=40)
     with cu.Renderer() as r:
         gl, gl_cache, cpu_cache = exact_impostors_agree(r, sc, [CAMERA, moved], W, H)
@@ -289,7 +291,8 @@ def test_render_frames_of_a_weather_with_impostors(tmp_path: Path, backend: str)
         if k:
             w.step(0.5)
         direct = cu.render(w.scene_at(), cam, 48, 36, backend=backend)
-    shown = cu.read_image(paths[-1])  # sRGB8: quantised
-    assert np.abs(shown[..., :3] - direct[..., :3]).mean() <= 2e-2
+    shown = cu.read_image(paths[-1])  # sRGB8 through the display defaults: quantised
+    expected = srgb_to_linear(cu.to_srgb8(direct)[..., :3] / 255.0)
+    assert np.abs(shown[..., :3] - expected).mean() <= 2e-2
     assert cu.render_frames(make(), cam, tmp_path / "b", 16, 12, frames=2, dt=0.5,
                             backend=backend, progress=False, impostors=True)  # fmt: skip

@@ -76,7 +76,9 @@ def test_one_billboard_is_the_analytic_rectangle_and_colour(backend: str) -> Non
     eye = cu.Camera((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), fov=60.0)
     cloud = one_billboard((0.0, 0.0, 10.0), size=(4.0, 2.0), box_half=(1.0, 2.0, 1.0))
     sh = replace(EXACT, d_min=0.7, d_max=0.7, max_distance=8.0)
-    scene = cu.Scene([cloud], sun=SUN, billboard_shading=sh)
+    scene = cu.Scene(
+        [cloud], sun=SUN, billboard_shading=sh, settings=cu.RenderSettings(lighting="paper")
+    )
     img = cu.render(scene, eye, 65, 65, backend=backend).astype(np.float64)
     light = absorption_factors(cloud, SUN, max_distance=8.0)
     caf = float(light.caf[0])
@@ -101,7 +103,9 @@ def test_alpha_is_one_minus_the_product_over_covering_billboards(backend: str) -
     eye = cu.Camera((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), fov=60.0)
     clouds = [one_billboard((0.1 * k, 0.0, 10.0 + 2 * k), opacity=o)
               for k, o in enumerate((0.8, 0.5, 1.0))]  # fmt: skip
-    scene = cu.Scene(clouds, sun=SUN, billboard_shading=EXACT)
+    scene = cu.Scene(
+        clouds, sun=SUN, billboard_shading=EXACT, settings=cu.RenderSettings(lighting="paper")
+    )
     img = cu.render(scene, eye, 33, 33, backend=backend)
     expect = 1 - (1 - 0.5 * 0.8) * (1 - 0.5 * 0.5) * (1 - 0.5 * 1.0)
     assert img[16, 16, 3] == pytest.approx(expect, rel=1e-6)
@@ -114,7 +118,9 @@ def test_order_back_to_front_whatever_the_scene_order() -> None:
     near = one_billboard((0.0, 0.0, 8.0), atlas=flat_atlas(0.9, 0.7))
     far = one_billboard((0.3, 0.0, 12.0), size=(3.0, 2.0), atlas=flat_atlas(0.2, 0.7))
     sh = replace(EXACT, ambient=(0.2, 0.2, 0.25))  # not the sky's: the black sky below keeps it
-    a = cu.Scene([near, far], sun=SUN, billboard_shading=sh)
+    a = cu.Scene(
+        [near, far], sun=SUN, billboard_shading=sh, settings=cu.RenderSettings(lighting="paper")
+    )
     b = a.replace(clouds=[far, near])
     img_a, img_b = cu.render(a, eye, 33, 33, "cpu"), cu.render(b, eye, 33, 33, "cpu")
     np.testing.assert_array_equal(img_a, img_b)
@@ -135,7 +141,12 @@ def test_order_back_to_front_whatever_the_scene_order() -> None:
 
 def test_global_sort_interleaves_interpenetrating_clouds(cumulus: BillboardCloud) -> None:
     other = cumulus.translated((3.0, 0.5, 2.0))
-    scene = cu.Scene([cumulus, other], sun=SUN, billboard_shading=EXACT)
+    scene = cu.Scene(
+        [cumulus, other],
+        sun=SUN,
+        billboard_shading=EXACT,
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     per_cloud = render(scene, "cpu")
     glob = render(scene.replace(billboard_shading=replace(EXACT, global_sort=True)), "cpu")
     assert np.abs(per_cloud - glob).max() > 1e-3
@@ -152,7 +163,7 @@ def busy_scene(cumulus: BillboardCloud, field: BillboardField, **shading) -> cu.
     return cu.Scene(
         [cumulus, field], sun=SUN, lights=(cu.Sun((-0.3, 0.2, -0.9), (1.0, 0.6, 0.4), 0.4),),
         billboard_shading=sh,
-    )  # fmt: skip
+    settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
 
 
 @pytest.mark.gl
@@ -171,7 +182,7 @@ def test_gl_fast_mode_is_close_to_the_cpu(cumulus) -> None:
     # texels. Mipmaps blur minified sprites, which the exact CPU sampling does not: smaller
     # sprites differ more (RENDER_CONTRACT "Billboards" gives the measured means).
     cam = cu.Camera(position=(0.0, 11.0, -25.0), target=(0.0, 10.0, 0.0), fov=40)
-    scene = cu.Scene([cumulus], sun=SUN)
+    scene = cu.Scene([cumulus], sun=SUN, settings=cu.RenderSettings(lighting="paper"))
     assert not scene.billboard_shading.exact_textures
     gl, cpu = render(scene, "gl", cam, 320, 240), render(scene, "cpu", cam, 320, 240)
     assert (cpu[..., 3] > 0.05).mean() > 0.1
@@ -183,7 +194,9 @@ def test_gl_fast_mode_is_close_to_the_cpu(cumulus) -> None:
 def test_culling_and_far_away_billboards_change_nothing(cumulus, backend: str) -> None:
     behind = cumulus.translated((0.0, 0.0, -90.0))  # behind the camera
     aside = cumulus.translated((400.0, 0.0, 0.0))  # outside the view
-    base = cu.Scene([cumulus], sun=SUN, billboard_shading=EXACT)
+    base = cu.Scene(
+        [cumulus], sun=SUN, billboard_shading=EXACT, settings=cu.RenderSettings(lighting="paper")
+    )
     ref = render(base, backend)
     np.testing.assert_array_equal(render(base.replace(clouds=[cumulus, behind, aside]), backend),
                                   ref)  # fmt: skip
@@ -209,7 +222,9 @@ def test_vertex_colours_are_the_phase_one_shading(cumulus, field) -> None:
     mine = frame.cloud == 0
     np.testing.assert_array_equal(frame.sprites.colours[mine], ref[frame.billboard[mine]])
     # A field instance: instance_vertex_colours of the sun alone (one-light scene).
-    one = cu.Scene([field], sun=SUN, billboard_shading=EXACT)
+    one = cu.Scene(
+        [field], sun=SUN, billboard_shading=EXACT, settings=cu.RenderSettings(lighting="paper")
+    )
     frame = billboard_frame(cu.prepare_light(one), [0], CAMERA, W, H)
     fl = field_absorption_factors(field, SUN)
     for i in range(field.n):
@@ -224,7 +239,9 @@ def test_vertex_colours_are_the_phase_one_shading(cumulus, field) -> None:
 def test_fragment_shading_matches_the_corners_and_lights_the_tops(cumulus) -> None:
     # At the quad corners fragment shading equals the vertex colours; across the cloud tops
     # facing the sun are brighter than bases (directional term and CAF).
-    vert = cu.Scene([cumulus], sun=SUN, billboard_shading=EXACT)
+    vert = cu.Scene(
+        [cumulus], sun=SUN, billboard_shading=EXACT, settings=cu.RenderSettings(lighting="paper")
+    )
     frag = vert.replace(billboard_shading=replace(EXACT, shading="fragment"))
     a, b = render(vert, "cpu", w=160, h=120), render(frag, "cpu", w=160, h=120)
     cloud = (a[..., 3] > 0.5) & (b[..., 3] > 0.5)
@@ -236,7 +253,9 @@ def test_fragment_shading_matches_the_corners_and_lights_the_tops(cumulus) -> No
 
 
 def test_fades_and_instance_alpha(field) -> None:
-    scene = cu.Scene([field], sun=SUN, billboard_shading=EXACT)
+    scene = cu.Scene(
+        [field], sun=SUN, billboard_shading=EXACT, settings=cu.RenderSettings(lighting="paper")
+    )
     frame = billboard_frame(cu.prepare_light(scene), [0], CAMERA, W, H)
     opacity = np.array([v.opacity for v in field.variants])[field.variant]
     np.testing.assert_allclose(frame.sprites.alpha, (opacity * field.alpha)[frame.cloud], rtol=1e-6)
@@ -279,7 +298,7 @@ def test_light_pass_memo_tolerance_and_given_light(cumulus) -> None:
     from cumuli.light.billboards import BillboardLighting, clear_memo
 
     clear_memo()
-    scene = cu.Scene([cumulus], sun=SUN)
+    scene = cu.Scene([cumulus], sun=SUN, settings=cu.RenderSettings(lighting="paper"))
     first = cu.prepare_light(scene).lights[0]
     assert isinstance(first, BillboardLighting) and first.records[0].sun == SUN.direction
     assert cu.prepare_light(scene).lights[0].records is first.records  # memoised
@@ -340,21 +359,27 @@ def test_bad_input(cumulus) -> None:
         BillboardShading(global_sort="yes")
     with pytest.raises(ValueError, match="near"):
         BillboardShading(near=0.0)
-    scene = cu.Scene([cumulus], sun=SUN)
+    scene = cu.Scene([cumulus], sun=SUN, settings=cu.RenderSettings(lighting="paper"))
     lit = cu.prepare_light(scene)
     with pytest.raises(ValueError, match="exclude"):
         billboard_frame(lit, [0], CAMERA, W, H, exclude=np.array([True, False]))
     with pytest.raises(ValueError, match="exclude"):
         billboard_frame(lit, [0], CAMERA, W, H, exclude=[1, 0])
     with pytest.raises(TypeError, match="BillboardShading"):
-        cu.Scene([cumulus], billboard_shading={"d_min": 0.1})
+        cu.Scene(
+            [cumulus],
+            billboard_shading={"d_min": 0.1},
+            settings=cu.RenderSettings(lighting="paper"),
+        )
 
 
 @pytest.mark.gl
 def test_another_context_made_meanwhile_does_not_break_cached_textures(cumulus) -> None:
     # moderngl sends calls to the current context, the last one created: the shared renderer's
     # cached atlas texture must still be its own after another renderer came and went.
-    scene = cu.Scene([cumulus], sun=SUN, billboard_shading=EXACT)
+    scene = cu.Scene(
+        [cumulus], sun=SUN, billboard_shading=EXACT, settings=cu.RenderSettings(lighting="paper")
+    )
     cpu = render(scene, "cpu")
     np.testing.assert_allclose(render(scene, "gl"), cpu, atol=1e-4)
     with cu.Renderer() as other:
@@ -372,8 +397,16 @@ def test_drifting_field_keeps_its_light_unless_clouds_shadow_each_other(field) -
                            variant=field.variant, yaw=field.yaw)  # fmt: skip
     for between in (False, True):
         sh = BillboardShading(shadow_between_clouds=between, max_distance=30.0)
-        a = cu.prepare_light(cu.Scene([field], sun=SUN, billboard_shading=sh)).lights[0]
-        b = cu.prepare_light(cu.Scene([moved], sun=SUN, billboard_shading=sh)).lights[0]
+        a = cu.prepare_light(
+            cu.Scene(
+                [field], sun=SUN, billboard_shading=sh, settings=cu.RenderSettings(lighting="paper")
+            )
+        ).lights[0]
+        b = cu.prepare_light(
+            cu.Scene(
+                [moved], sun=SUN, billboard_shading=sh, settings=cu.RenderSettings(lighting="paper")
+            )
+        ).lights[0]
         assert (a.records is b.records) == (not between)
         ref = field_absorption_factors(moved, SUN, max_distance=30.0,
                                        shadow_between_clouds=between)  # fmt: skip
@@ -385,7 +418,12 @@ def test_clouds_with_different_atlases_share_one_pass(cumulus, backend: str) -> 
     # A user atlas of 8×8 cells beside the generated 64×64 one: one combined texture (the flat
     # cell resampled stays flat), each cloud drawn as it is alone where they do not overlap.
     flat = one_billboard((0.0, 14.0, -20.0), size=(3.0, 3.0), atlas=flat_atlas(0.9, 0.6))
-    both = cu.Scene([cumulus, flat], sun=SUN, billboard_shading=EXACT)
+    both = cu.Scene(
+        [cumulus, flat],
+        sun=SUN,
+        billboard_shading=EXACT,
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     assert plan(both) == [("billboards", [0, 1])]
     img = render(both, backend, w=96, h=72)
     alone = render(both.replace(clouds=[flat]), backend, w=96, h=72)
@@ -447,4 +485,4 @@ def test_too_many_billboards_are_refused_before_drawing(cumulus, monkeypatch, ba
 
     monkeypatch.setattr(bb, "MAX_SPRITES", cumulus.n_billboards - 1)
     with pytest.raises(ValueError, match="billboards"):
-        render(cu.Scene([cumulus], sun=SUN), backend)
+        render(cu.Scene([cumulus], sun=SUN, settings=cu.RenderSettings(lighting="paper")), backend)

@@ -20,7 +20,7 @@ SUN = cu.Sun(direction=(0.4, 0.8, 0.3), intensity=2.0)
 SKY = cu.Sky()
 BLACK = cu.Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0)
 CAMERA = cu.Camera(position=(0.0, 3.0, -70.0), target=(0.0, 3.0, 0.0), fov=35)
-SETTINGS = cu.RenderSettings(exact_noise=True, absorption=3.0)
+SETTINGS = cu.RenderSettings(exact_noise=True, absorption=3.0, lighting="paper")
 SHADING = cu.BillboardShading(exact_textures=True, ambient=(0.3, 0.35, 0.45))
 BACKENDS = ["cpu", pytest.param("gl", marks=pytest.mark.gl)]
 
@@ -106,7 +106,13 @@ def sky_weather() -> cu.Weather:
 
 
 def test_scene_at_holds_the_fields_and_the_base(sky_weather, nimbus) -> None:
-    base = cu.Scene([nimbus], sun=SUN, billboard_shading=SHADING, camera=CAMERA)
+    base = cu.Scene(
+        [nimbus],
+        sun=SUN,
+        billboard_shading=SHADING,
+        camera=CAMERA,
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     scene = sky_weather.scene_at(base)
     assert scene.kinds == ("billboards", "billboard_field")
     assert scene.clouds[0] is nimbus and scene.clouds[1].n == 6
@@ -142,9 +148,24 @@ def test_render_frames_films_a_weather(tmp_path: Path, sky_weather) -> None:
     with pytest.raises(ValueError, match="locally"):
         cu.render_frames(sky_weather, [cam], tmp_path, 8, 8, dt=1.0, client=object())
     with pytest.raises(ValueError, match="Weather only"):
-        cu.render_frames(cu.Scene(), [cam], tmp_path, 8, 8, dt=1.0, frames=2)
+        cu.render_frames(
+            cu.Scene(settings=cu.RenderSettings(lighting="paper")),
+            [cam],
+            tmp_path,
+            8,
+            8,
+            dt=1.0,
+            frames=2,
+        )
     with pytest.raises(ValueError, match="dt"):
-        cu.render_frames(cu.Scene(), [cam], tmp_path, 8, 8, dt=float("nan"))
+        cu.render_frames(
+            cu.Scene(settings=cu.RenderSettings(lighting="paper")),
+            [cam],
+            tmp_path,
+            8,
+            8,
+            dt=float("nan"),
+        )
     assert sky_weather.t == pytest.approx(8.0)  # refused calls did not step it
 
 
@@ -165,13 +186,20 @@ def test_public_names() -> None:
                  "BillboardShading", "SkyState", "CloudLayer", "Schedule", "Weather",
                  "load_weather", "weather_presets", "load_billboards"):  # fmt: skip
         assert name in cu.__all__ and getattr(cu, name) is not None
-    assert cu.Scene().billboard_shading == cu.BillboardShading()
+    assert (
+        cu.Scene(settings=cu.RenderSettings(lighting="paper")).billboard_shading
+        == cu.BillboardShading()
+    )
 
 
 def test_cli_renders_a_billboard_scene_file(tmp_path: Path, nimbus) -> None:
-    path = cu.Scene([nimbus], sun=SUN, billboard_shading=SHADING, camera=CAMERA).save(
-        tmp_path / "sky.json"
-    )
+    path = cu.Scene(
+        [nimbus],
+        sun=SUN,
+        billboard_shading=SHADING,
+        camera=CAMERA,
+        settings=cu.RenderSettings(lighting="paper"),
+    ).save(tmp_path / "sky.json")
     out = tmp_path / "sky.exr"
     assert main(["render", str(path), "-o", str(out), "--backend", "cpu", "--size", "32x24"]) == 0
     expect = cu.render(cu.load_scene(path), CAMERA, 32, 24, backend="cpu")

@@ -86,7 +86,15 @@ def test_split_layers_composite_back_to_the_unsplit_layer(backend: str, shading:
     with cu.Renderer() if backend == "gl" else _none() as r:
         p = painter_for(backend, r)
         for d in (CLOUD, field):
-            lit = cu.prepare_light(cu.Scene([d], sun=SUN, sky=BLACK, billboard_shading=sh))
+            lit = cu.prepare_light(
+                cu.Scene(
+                    [d],
+                    sun=SUN,
+                    sky=BLACK,
+                    billboard_shading=sh,
+                    settings=cu.RenderSettings(lighting="paper"),
+                )
+            )
             keys = sorted(sort_key(lit, (0.0, 4.0, z), CAMERA) for z in (-6.0, 0.0, 5.0))
             whole = p.layer(lit, d.kind, [0], CAMERA, W, H, False)
             parts = p.split(lit, 0, CAMERA, W, H, keys)

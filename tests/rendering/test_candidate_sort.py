@@ -82,7 +82,7 @@ def test_cpu_sorted_modes_identical_and_none_differs() -> None:
 
 def test_candidate_sort_validated_and_saved(tmp_path) -> None:
     with pytest.raises(ValueError, match="candidate_sort"):
-        cu.RenderSettings(candidate_sort="bogo")
+        cu.RenderSettings(candidate_sort="bogo", lighting="paper")
     scene = overlapping_scene(candidate_sort="oddeven")
     path = scene.save(tmp_path / "scene.json")
     assert cu.load_scene(path).settings.candidate_sort == "oddeven"

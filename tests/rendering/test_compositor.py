@@ -21,7 +21,7 @@ SUN = cu.Sun(direction=(0.4, 0.8, 0.3), intensity=2.0)
 SKY = cu.Sky()
 BLACK = cu.Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0)
 CAMERA = cu.Camera(position=(0.0, 3.0, -70.0), target=(0.0, 3.0, 0.0), fov=35)
-SETTINGS = cu.RenderSettings(exact_noise=True, absorption=3.0)
+SETTINGS = cu.RenderSettings(exact_noise=True, absorption=3.0, lighting="paper")
 
 
 @pytest.fixture(scope="module")
@@ -121,7 +121,7 @@ def test_a_scene_of_one_kind_takes_the_single_pass(frame: cu.VolumeCloud) -> Non
     with cu.Renderer() as r:
         direct = r.drawer("cloud").draw(lit, [0, 1], CAMERA, W, H, True)
         np.testing.assert_array_equal(r.render(lit, CAMERA, W, H), direct)
-    single = cu.Scene([frame], sun=SUN, sky=SKY)
+    single = cu.Scene([frame], sun=SUN, sky=SKY, settings=cu.RenderSettings(lighting="paper"))
     img = cu.render(single, CAMERA, W, H, backend="cpu")
     ref = cu.render_volume(
         frame.density, frame.light, frame.box, CAMERA, W, H, SUN, SKY, backend="cpu",
@@ -132,7 +132,12 @@ def test_a_scene_of_one_kind_takes_the_single_pass(frame: cu.VolumeCloud) -> Non
 
 def test_volume_light_is_computed_for_another_sun(frame: cu.VolumeCloud) -> None:
     # The frame's light was made for SUN; under another sun the light step recomputes it.
-    scene = cu.Scene([frame], sun=cu.Sun(direction=(-0.5, 0.6, -0.2)), sky=SKY)
+    scene = cu.Scene(
+        [frame],
+        sun=cu.Sun(direction=(-0.5, 0.6, -0.2)),
+        sky=SKY,
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     light = cu.prepare_light(scene).lights[0]
     assert light.shape == (*frame.shape, 4)
     assert not np.array_equal(light, frame.light)
@@ -155,7 +160,11 @@ def test_scene_with_both_kinds_round_trips(tmp_path: Path, frame: cu.VolumeCloud
 
 
 def test_version_1_scene_files_still_load(tmp_path: Path) -> None:
-    scene = cu.Scene([cu.gaussian_cumulus(seed=1)], noise=cu.Noise(seed=7, size=16))
+    scene = cu.Scene(
+        [cu.gaussian_cumulus(seed=1)],
+        noise=cu.Noise(seed=7, size=16),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     doc = scene.to_dict()
     doc["version"] = 1
     del doc["lights"]
@@ -183,6 +192,6 @@ def test_bad_scene_contents_are_refused(tmp_path: Path, frame: cu.VolumeCloud) -
         with pytest.raises(ValueError, match=match):
             cu.load_scene(tmp_path / "bad.json")
     with pytest.raises(TypeError, match="drawable"):
-        cu.Scene(["not a cloud"])
+        cu.Scene(["not a cloud"], settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(TypeError, match="lights"):
-        cu.Scene(lights=["sun"])
+        cu.Scene(lights=["sun"], settings=cu.RenderSettings(lighting="paper"))

@@ -141,15 +141,15 @@ def test_skipping_keeps_the_step_budget_solids_and_physical_mode():
 
 
 def test_settings_validation_and_scene_round_trip(tmp_path):
-    s = cu.RenderSettings()
+    s = cu.RenderSettings(lighting="paper")
     assert s.empty_space_skipping is True and s.min_transmittance == 1e-6
     with pytest.raises(TypeError, match="empty_space_skipping"):
-        cu.RenderSettings(empty_space_skipping=1)
+        cu.RenderSettings(empty_space_skipping=1, lighting="paper")
     for bad in (-0.1, 1.0, float("nan")):
         with pytest.raises(ValueError, match="min_transmittance"):
-            cu.RenderSettings(min_transmittance=bad)
+            cu.RenderSettings(min_transmittance=bad, lighting="paper")
     with pytest.raises(TypeError, match="min_transmittance"):
-        cu.RenderSettings(min_transmittance="0.1")
+        cu.RenderSettings(min_transmittance="0.1", lighting="paper")
     scene = _with(SCENES["gaussian_cumulus"], **FAST)
     path = tmp_path / "scene.json"
     scene.save(path)
@@ -175,7 +175,8 @@ def test_return_stats_bad_input():
         clouds=[
             scene.clouds[0],
             cu.VolumeCloud(np.ones((4, 4, 4), np.float32), ((0, 0, 0), (1, 1, 1))),
-        ]
+        ],
+        settings=cu.RenderSettings(lighting="paper"),
     )
     with pytest.raises(ValueError, match="2018 clouds"):
         cu.render_cpu(vol, cam, 8, 6, return_stats=True)

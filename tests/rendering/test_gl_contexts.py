@@ -30,7 +30,11 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def _scene() -> cu.Scene:
-    return cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], noise=cu.Noise(seed=2, size=16))
+    return cu.Scene(
+        [cu.gaussian_cumulus(n=6, seed=1)],
+        noise=cu.Noise(seed=2, size=16),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
 
 
 # --- fork (item 1) ------------------------------------------------------------------------------

@@ -52,12 +52,18 @@ def _scenes() -> dict[str, cu.Scene]:
     # One ellipsoid per face of a 560-triangle rabbit (rotated ellipsoids), with a fixed step
     # smaller than the ellipsoids as the paper uses for its mesh tests.
     rabbit = cu.mesh_cloud(cu.meshes.bunny_like(1), scale=1.2)
-    mesh_settings = cu.RenderSettings(fixed_step=0.03, absorption=3.0, frequency=1.0)
+    mesh_settings = cu.RenderSettings(
+        fixed_step=0.03, absorption=3.0, frequency=1.0, lighting="paper"
+    )
     scenes = {
         "mesh_cloud": cu.Scene(clouds=[rabbit], settings=mesh_settings),
-        "gaussian_cumulus": cu.Scene(clouds=[cumulus]),
-        "metaball_cumulus": cu.Scene(clouds=[metaball]),
-        "lsystem_cloud": cu.Scene(clouds=[castle]),
+        "gaussian_cumulus": cu.Scene(
+            clouds=[cumulus], settings=cu.RenderSettings(lighting="paper")
+        ),
+        "metaball_cumulus": cu.Scene(
+            clouds=[metaball], settings=cu.RenderSettings(lighting="paper")
+        ),
+        "lsystem_cloud": cu.Scene(clouds=[castle], settings=cu.RenderSettings(lighting="paper")),
     }
     return scenes
 
@@ -101,7 +107,7 @@ def test_gl_matches_cpu_with_two_clouds_close_up(renderer):
     a = cu.gaussian_cumulus(seed=3, centre=(0.0, 0.0, 0.0))
     b = cu.metaball_cumulus(seed=4, centre=(4.0, 1.0, 6.0))
     settings = cu.RenderSettings(
-        exact_noise=True, lod_a=0.3, lod_delta=0.02, march="union", frequency=0.6
+        exact_noise=True, lod_a=0.3, lod_delta=0.02, march="union", frequency=0.6, lighting="paper"
     )
     scene = cu.Scene(clouds=[a, b], settings=settings, sun=cu.Sun(direction=(-0.4, 0.6, 0.5)))
     camera = cu.Camera(position=(-2.0, 3.0, -18.0), target=(2.0, 2.0, 3.0), fov=60)
@@ -113,7 +119,7 @@ def test_gl_matches_cpu_with_two_clouds_close_up(renderer):
 
 def test_gl_matches_cpu_with_the_camera_inside_a_cloud(renderer):
     cloud = cu.gaussian_cumulus(seed=5)
-    settings = cu.RenderSettings(exact_noise=True, absorption=0.4)
+    settings = cu.RenderSettings(exact_noise=True, absorption=0.4, lighting="paper")
     scene = cu.Scene(clouds=[cloud], settings=settings)
     centre = cloud.centre
     camera = cu.Camera(position=tuple(centre), target=tuple(centre + np.array([0.0, 0.2, 5.0])))

@@ -27,7 +27,7 @@ def scene(**impostor: object) -> cu.Scene:
     return cu.Scene(
         [puff()], sun=SUN, sprite_settings=cu.SpriteSettings(ambient=(0.1, 0.1, 0.1)),
         impostor_settings=cu.ImpostorSettings(**impostor),
-    )  # fmt: skip
+    settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
 
 
 def test_display_at_the_generation_viewpoint_is_a_resampling() -> None:
@@ -131,7 +131,12 @@ def test_changes_invalidate_and_translation_keeps_the_impostor() -> None:
 
 def field() -> cu.Scene:
     clouds = [puff(seed=k, centre=(40.0 * (k % 3) - 40, 0, 30.0 * (k // 3))) for k in range(6)]
-    return cu.Scene(clouds, sun=SUN, impostor_settings=cu.ImpostorSettings(release_after=3))
+    return cu.Scene(
+        clouds,
+        sun=SUN,
+        impostor_settings=cu.ImpostorSettings(release_after=3),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
 
 
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
@@ -204,7 +209,7 @@ def test_impostors_for_marched_clouds_and_volumes(backend: str) -> None:
     sc = cu.Scene(
         [cu.gaussian_cumulus(centre=(-4.0, 0.0, 0.0), seed=1), volume, puff(seed=8,
          centre=(8, 2, 20))], sun=SUN, noise=cu.Noise(seed=7, size=32),
-        settings=cu.RenderSettings(exact_noise=True, absorption=3.0),
+        settings=cu.RenderSettings(exact_noise=True, absorption=3.0, lighting="paper"),
     )  # fmt: skip
     cache = cu.ImpostorCache()
     for cam in (CAMERA, cu.Camera((10.3, 8.1, -70.0), (0.0, 2.0, 0.0), fov=35)):

@@ -74,6 +74,8 @@ def test_physical_mode_matches_mitsuba(reference, backend: str) -> None:
 def test_the_paper_mode_is_far_off(reference) -> None:
     """What the physical mode fixes (the issue's measurement): the same scene in paper mode."""
     scene, camera = ref.reference_scene()
-    img = cu.render_cpu(scene.replace(settings=cu.RenderSettings()), camera, ref.WIDTH, ref.HEIGHT)
+    img = cu.render_cpu(
+        scene.replace(settings=cu.RenderSettings(lighting="paper")), camera, ref.WIDTH, ref.HEIGHT
+    )
     e = errors(img, reference["ms"], reference["T"])
     assert e["median"] > 0.3 and e["dT"] < 0.01

@@ -44,7 +44,7 @@ def drawables() -> list[object]:
 def mixed(drawables: list[object], sky: cu.Sky | None = None, **kw: object) -> cu.Scene:
     return cu.Scene(
         drawables, sun=SUN, sky=sky or cu.Sky(), noise=cu.Noise(seed=7, size=32),
-        settings=cu.RenderSettings(exact_noise=True, absorption=3.0),
+        settings=cu.RenderSettings(exact_noise=True, absorption=3.0, lighting="paper"),
         billboard_shading=cu.BillboardShading(exact_textures=True), **kw,
     )  # fmt: skip
 

@@ -29,7 +29,7 @@ def with_lights(sun_i: float, light_i: tuple[float, ...], sky: cu.Sky, ambient: 
     return cu.Scene(
         [puff()], sun=cu.Sun(SUN.direction, SUN.colour, sun_i), sky=sky, lights=lights,
         sprite_settings=cu.SpriteSettings(ambient=(ambient,) * 3),
-    )  # fmt: skip
+    settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
 
 
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
@@ -56,7 +56,9 @@ def test_skylight_lights_add_up_like_the_sky() -> None:
     # The automatic skylight: n lights from the sky's colours, one column each in the light pass.
     sky = cu.Sky.sunset()
     lights = cu.skylight_lights(sky, SUN, n=4)
-    scene = cu.Scene([puff()], sun=SUN, sky=sky, lights=lights)
+    scene = cu.Scene(
+        [puff()], sun=SUN, sky=sky, lights=lights, settings=cu.RenderSettings(lighting="paper")
+    )
     lit = cu.prepare_light(scene)
     assert lit.lights[0].light.shape == (300, 5)
     lit_sky = cu.render(scene, CAMERA, W, H, backend="cpu")

@@ -17,7 +17,7 @@ W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, 0.3), intensity=2.0)
 BLACK = cu.Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0)
 CAMERA = cu.Camera(position=(0.0, 3.0, -70.0), target=(0.0, 3.0, 0.0), fov=35)
-SETTINGS = cu.RenderSettings(exact_noise=True, absorption=3.0)
+SETTINGS = cu.RenderSettings(exact_noise=True, absorption=3.0, lighting="paper")
 
 
 def puff(centre: tuple[float, float, float], seed: int, n: int = 250) -> cu.ParticleCloud:
@@ -26,7 +26,13 @@ def puff(centre: tuple[float, float, float], seed: int, n: int = 250) -> cu.Part
 
 def trio(sky: cu.Sky = BLACK) -> cu.Scene:
     clouds = [puff((-8, 0, 0), 1), puff((6, 2, 25), 2), puff((14, -1, -10), 3)]
-    return cu.Scene(clouds, sun=SUN, sky=sky, sprite_settings=cu.SpriteSettings(ambient=(0.1,) * 3))
+    return cu.Scene(
+        clouds,
+        sun=SUN,
+        sky=sky,
+        sprite_settings=cu.SpriteSettings(ambient=(0.1,) * 3),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
 
 
 def test_particle_cloud_is_wired_through_every_stage() -> None:
@@ -50,7 +56,7 @@ def test_the_light_step_lights_particles_for_the_sun_and_extra_lights() -> None:
     clear_memo()
     extra = (cu.Sun((-0.5, 0.6, 0.2), (1.0, 0.5, 0.6), 0.7),)
     pc = puff((0, 0, 0), 4)
-    scene = cu.Scene([pc], sun=SUN, lights=extra)
+    scene = cu.Scene([pc], sun=SUN, lights=extra, settings=cu.RenderSettings(lighting="paper"))
     lit = cu.prepare_light(scene)
     light = lit.lights[0]
     assert isinstance(light, cu.ParticleLight) and light.light.shape == (pc.n, 2)
@@ -73,7 +79,14 @@ def test_the_light_step_lights_particles_for_the_sun_and_extra_lights() -> None:
     assert cu.prepare_light(scene, lights=[stale]).lights[0].n_lights == 2
     # Several clouds share one C++ call and give the same values one by one.
     # (Their own light: in the scene the other cloud's shadow then darkens the sun's column.)
-    two = cu.prepare_light(cu.Scene([pc, puff((20, 0, 0), 5)], sun=SUN, lights=extra))
+    two = cu.prepare_light(
+        cu.Scene(
+            [pc, puff((20, 0, 0), 5)],
+            sun=SUN,
+            lights=extra,
+            settings=cu.RenderSettings(lighting="paper"),
+        )
+    )
     np.testing.assert_array_equal((two.lights[0].unshadowed or two.lights[0]).light, ref.light)
     assert not pc.params.get("light")  # nothing stored on the cloud
 
@@ -99,7 +112,9 @@ def test_clouds_are_splatted_back_to_front(backend: str) -> None:
     # side the camera looks from (clouds sorted by the distance to their sphere centres).
     # Each cloud alone is drawn with the light it has in the scene (they shade each other).
     near, far = puff((0, 0, -10), 6), puff((4, 1, 12), 7)
-    scene = cu.prepare_light(cu.Scene([far, near], sun=SUN, sky=BLACK))
+    scene = cu.prepare_light(
+        cu.Scene([far, near], sun=SUN, sky=BLACK, settings=cu.RenderSettings(lighting="paper"))
+    )
 
     def alone(k: int, camera: cu.Camera) -> np.ndarray:
         layer = cu.LitScene(scene.scene.replace(clouds=[scene.scene.clouds[k]]), (scene.lights[k],))
@@ -199,13 +214,16 @@ def test_public_names() -> None:
 
 def test_bad_input_names_the_field(tmp_path: Path) -> None:
     with pytest.raises(TypeError, match="scene.solids"):
-        cu.Scene(solids=[1])
+        cu.Scene(solids=[1], settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(ValueError, match="at most 16"):
-        cu.Scene(solids=[cu.Solid((k, 0, 0)) for k in range(17)])
+        cu.Scene(
+            solids=[cu.Solid((k, 0, 0)) for k in range(17)],
+            settings=cu.RenderSettings(lighting="paper"),
+        )
     with pytest.raises(TypeError, match="sprite_settings"):
-        cu.Scene(sprite_settings={"phase": "hg"})
+        cu.Scene(sprite_settings={"phase": "hg"}, settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(TypeError, match="impostor_settings"):
-        cu.Scene(impostor_settings=None)
+        cu.Scene(impostor_settings=None, settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(ValueError, match="radius"):
         cu.Solid((0, 0, 0), -1.0)
     with pytest.raises(ValueError, match="colour"):

@@ -11,12 +11,14 @@ import pytest
 
 import cumuli as cu
 from cumuli import _core
-from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, physical_light
+from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, phase, physical_light
 from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
 
 F = np.float32
 SUN = cu.Sun(direction=(0.8, 0.45, -0.3), colour=(1.0, 0.9, 0.8), intensity=5.0)
-PHYS = cu.RenderSettings(lighting="physical", physical_resolution=16, exact_noise=True)
+PHYS = cu.RenderSettings(
+    lighting="physical", physical_resolution=16, exact_noise=True, haze=0.0, resolve=False
+)
 
 
 def small_cloud() -> cu.Cloud:
@@ -62,12 +64,14 @@ def test_settings_mean_cosine_and_round_trip() -> None:
     s = cu.RenderSettings(lighting="physical", phase="dual_hg", hg_g=0.8, hg_g2=-0.4, hg_blend=0.25)
     assert s.physical and s.mean_cosine == pytest.approx(0.75 * 0.8 - 0.25 * 0.4)
     assert cu.RenderSettings(**s.to_dict()) == s
-    assert not cu.RenderSettings().physical  # the paper mode stays the default
+    assert cu.RenderSettings().physical  # the physical mode is the default
+    assert cu.RenderSettings().phase == "mie"  # with the approximate Mie phase
+    assert not cu.RenderSettings(lighting="paper").physical
 
 
 def test_density_volume_is_the_extinction_field_at_texel_centres() -> None:
     cloud, noise = small_cloud(), cu.Noise(seed=5, size=32)
-    s = cu.RenderSettings(extinction_scale=7.0)
+    s = cu.RenderSettings(extinction_scale=7.0, lighting="paper")
     field = cu.density_volume(cloud, noise, s, (12, 9, 10))
     assert field.values.shape == (10, 9, 12) and field.values.dtype == np.float32
     lo, hi = (np.asarray(b, np.float64) for b in field.box)
@@ -127,7 +131,7 @@ def test_light_step_dispatches_on_lighting_and_memoises() -> None:
     assert isinstance(light, cu.PhysicalLight) and light.octaves == 4
     assert light.grid.shape[-1] == 4 and not light.grid.flags.writeable
     assert cu.prepare_light(scene).lights[0] is light  # memoised by content
-    paper = cu.prepare_light(scene.replace(settings=cu.RenderSettings()))
+    paper = cu.prepare_light(scene.replace(settings=cu.RenderSettings(lighting="paper")))
     assert isinstance(paper.lights[0], cu.LightGrid)
     # Switches: no sky light → no sky channels; no multiple scattering → single scattering only.
     nosky = physical_light(scene.clouds[0], scene.replace(settings=PHYS.replace(sky_light=False)))
@@ -270,7 +274,7 @@ def numpy_physical(lit: cu.LitScene, cam: cu.Camera, w: int, h: int) -> np.ndarr
                 cands.sort()
                 c_ = d @ sun
                 terms = [
-                    (OCTAVE_A**n * _hg(s.hg_g * OCTAVE_B**n, c_), OCTAVE_C**n)
+                    (OCTAVE_A**n * phase(s, float(c_), OCTAVE_B**n), OCTAVE_C**n)
                     for n in range(light.octaves)
                 ]
                 xi = float(_jitter(i, j, s.jitter_seed))
@@ -333,7 +337,9 @@ def test_physical_alpha_is_the_paper_modes_opacity() -> None:
     scene = small_scene(settings=PHYS.replace(march="union"))
     cam = camera_for(scene)
     phys = cu.render_cpu(scene, cam, 48, 36)
-    paper = cu.render_cpu(scene.replace(settings=cu.RenderSettings(march="union")), cam, 48, 36)
+    paper = cu.render_cpu(
+        scene.replace(settings=cu.RenderSettings(march="union", lighting="paper")), cam, 48, 36
+    )
     assert np.abs(phys[..., 3] - paper[..., 3]).mean() < 0.01
 
 
@@ -417,7 +423,9 @@ def test_an_empty_physical_scene_is_its_background(backend: str) -> None:
     empty = cu.Scene([], sun=SUN, settings=PHYS)
     cam = cu.Camera(position=(0, 2, -10), target=(0, 0, 0), fov=50)
     img = cu.render(empty, cam, 16, 12, backend=backend)
-    ref = cu.render(empty.replace(settings=cu.RenderSettings()), cam, 16, 12, backend="cpu")
+    ref = cu.render(
+        empty.replace(settings=cu.RenderSettings(lighting="paper")), cam, 16, 12, backend="cpu"
+    )
     np.testing.assert_allclose(img, ref, atol=1e-6)
     assert (img[..., 3] == 0).all()
 
@@ -427,7 +435,7 @@ def test_render_volume_bad_input() -> None:
     cam = cu.Camera(position=(0, 0, -10), target=(0, 0, 0), fov=40)
     box = ((-1, -1, -1), (1, 1, 1))
     with pytest.raises(ValueError, match="light is required"):
-        cu.render_volume(dens, None, box, cam, 8, 6)
+        cu.render_volume(dens, None, box, cam, 8, 6, settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(TypeError, match="settings"):
         cu.render_volume(dens, None, box, cam, 8, 6, settings="physical")
     img = cu.render_volume(dens, None, box, cam, 8, 6, settings=PHYS)

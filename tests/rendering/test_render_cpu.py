@@ -667,7 +667,9 @@ def test_render_cpu_on_scene_objects_follows_the_contract():
     import cumuli as cu
 
     cloud, grid = scene_cloud([[0.0, 0.0, 0.0], [1.1, 0.3, 0.2]], [1.0, 0.8], kappa=0.3)
-    settings = cu.RenderSettings(kappa=0.7, frequency=1.5, march="union", lod_a=0.1)
+    settings = cu.RenderSettings(
+        kappa=0.7, frequency=1.5, march="union", lod_a=0.1, lighting="paper"
+    )
     scene = cu.Scene(clouds=[cloud], noise=cu.Noise(seed=4, size=16), settings=settings)
     scene = cu.prepare_light(scene, lights=[grid])  # the hand-made grid, used as it is
     camera = cu.Camera(position=(0.3, 0.4, -6.0), target=(0.2, 0.1, 0.0), fov=40)
@@ -683,7 +685,12 @@ def test_render_cpu_on_scene_objects_follows_the_contract():
 def test_render_cpu_sky_agrees_with_the_scene_sky_reference():
     import cumuli as cu
 
-    scene = cu.Scene(clouds=[], sky=cu.Sky.sunset(), sun=cu.Sun(direction=(0.2, 0.05, 1.0)))
+    scene = cu.Scene(
+        clouds=[],
+        sky=cu.Sky.sunset(),
+        sun=cu.Sun(direction=(0.2, 0.05, 1.0)),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     camera = cu.Camera(position=(0.0, 1.0, 0.0), target=(0.2, 1.05, 5.0), fov=60)
     img = cu.render_cpu(scene, camera, 32, 24)
     dirs = camera.ray_directions(32, 24)
@@ -696,7 +703,10 @@ def test_render_cpu_sky_agrees_with_the_scene_sky_reference():
 def test_render_cpu_bad_arguments():
     import cumuli as cu
 
-    scene = cu.Scene(clouds=[scene_cloud([[0.0, 0.0, 0.0]], [1.0])[0]])
+    scene = cu.Scene(
+        clouds=[scene_cloud([[0.0, 0.0, 0.0]], [1.0])[0]],
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     camera = cu.Camera(position=(0.0, 0.0, -5.0), target=(0.0, 0.0, 0.0))
     with pytest.raises(ValueError, match="width"):
         cu.render_cpu(scene, camera, 0, 4)
@@ -713,7 +723,7 @@ def test_render_cpu_computes_missing_light_grids_and_dispatches():
     scene = cu.Scene(
         clouds=[cloud],
         noise=cu.Noise(seed=2, size=16),
-        settings=cu.RenderSettings(light_resolution=6, lod_a=0.1),
+        settings=cu.RenderSettings(light_resolution=6, lod_a=0.1, lighting="paper"),
     )
     camera = cu.Camera(position=(0.5, 0.5, -6.0), target=(0.5, 0.0, 0.0))
     img = cu.render_cpu(scene, camera, 12, 9)
@@ -775,7 +785,7 @@ def test_jitter_trades_the_step_rings_of_a_dense_cloud_for_noise_that_averages_o
     # A metaball cloud is entered within a step or two, so at a fixed Δ/2 offset the first
     # sample's depth jumps in whole steps from pixel to pixel: contour rings, an error that 4×4
     # averaging keeps. Jittered offsets make it a pixel-scale pattern that the averaging removes.
-    scene = cu.Scene([cu.metaball_cumulus(seed=2)])
+    scene = cu.Scene([cu.metaball_cumulus(seed=2)], settings=cu.RenderSettings(lighting="paper"))
     camera = scene.default_camera()
 
     def render(**changes):

@@ -72,7 +72,7 @@ def front_camera(z: float = -20.0, fov: float = 50.0) -> cu.Camera:
 
 # --- golden images ----------------------------------------------------------------------------
 def golden_scenes() -> dict[str, tuple[cu.Scene, cu.Camera]]:
-    exact = cu.RenderSettings(exact_noise=True)
+    exact = cu.RenderSettings(exact_noise=True, lighting="paper")
     cumulus = cumulus_scene(seed=1, settings=exact)
     sunset = default_scene(settings=exact)
     # Metaballs and rotated ellipsoids, two clouds, union marching.
@@ -94,7 +94,7 @@ def golden_scenes() -> dict[str, tuple[cu.Scene, cu.Camera]]:
         clouds=[ellipsoids, balls],
         sun=cu.Sun(direction=(-0.4, 0.8, -0.3)),
         noise=cu.Noise(seed=5),
-        settings=cu.RenderSettings(exact_noise=True, march="union"),
+        settings=cu.RenderSettings(exact_noise=True, march="union", lighting="paper"),
     )
     return {
         "cumulus": (cumulus, cumulus.default_camera()),
@@ -167,14 +167,16 @@ def test_golden_images(name: str, hand_lit: HandLitRenderer, regen_references: b
         if not regen_references:
             pytest.fail(f"reference {path} is missing; run with CUMULI_REGEN=1 to create it")
         DATA.mkdir(exist_ok=True)
-        cu.write_image(path, img)
+        cu.write_image(path, img, exposure=1.0, tonemap="none")
     ref = cu.read_image(path)
     assert ref.shape == img.shape
     m = golden_metrics(img, ref)
     if not m["ok"]:
         FAILURES.mkdir(exist_ok=True)
-        cu.write_image(FAILURES / f"render_{name}.exr", img)
-        cu.write_image(FAILURES / f"render_{name}_diff.exr", np.abs(img - ref))
+        cu.write_image(FAILURES / f"render_{name}.exr", img, exposure=1.0, tonemap="none")
+        cu.write_image(
+            FAILURES / f"render_{name}_diff.exr", np.abs(img - ref), exposure=1.0, tonemap="none"
+        )
     assert m["ok"], f"{name}: {m} (images in {FAILURES})"
     # The references are not trivial: enough cloud pixels for the cloud metrics to mean something.
     assert m["cloud_pixels"] >= 200
@@ -213,7 +215,7 @@ def test_golden_tolerances_admit_another_float_implementation(name: str) -> None
 # --- invariants ---------------------------------------------------------------------------------
 def test_no_cloud_gives_exactly_the_sky(hand_lit: HandLitRenderer) -> None:
     sun = cu.Sun(direction=(0.1, 0.05, 1))
-    scene = cu.Scene(sun=sun, sky=cu.Sky.sunset())
+    scene = cu.Scene(sun=sun, sky=cu.Sky.sunset(), settings=cu.RenderSettings(lighting="paper"))
     cam = cu.Camera(position=(0, 1, 0), target=(0, 1.2, 10), fov=60)
     img = hand_lit.render(scene, cam, W, H)
     assert (img[..., 3] == 0).all()
@@ -233,10 +235,10 @@ def test_no_cloud_gives_exactly_the_sky(hand_lit: HandLitRenderer) -> None:
 
 def test_cloud_in_front_covers_only_its_pixels(hand_lit: HandLitRenderer) -> None:
     cloud = sphere_cloud([[0, 0, 0]], [3.0])
-    scene = cu.Scene(clouds=[cloud], settings=cu.RenderSettings(absorption=5.0))
+    scene = cu.Scene(clouds=[cloud], settings=cu.RenderSettings(absorption=5.0, lighting="paper"))
     cam = front_camera()
     img = hand_lit.render(scene, cam, W, H)
-    empty = hand_lit.render(cu.Scene(), cam, W, H)
+    empty = hand_lit.render(cu.Scene(settings=cu.RenderSettings(lighting="paper")), cam, W, H)
     assert img[H // 2, W // 2, 3] > 0.9
     # The sphere subtends asin(3/20) ≈ 8.6° of a 50° vertical field: outside a disc of radius
     # ≈ 0.16·H around the centre every pixel is the sky.
@@ -249,7 +251,9 @@ def test_cloud_in_front_covers_only_its_pixels(hand_lit: HandLitRenderer) -> Non
 
 def test_forward_scattering_is_brighter_towards_the_sun(hand_lit: HandLitRenderer) -> None:
     cloud = sphere_cloud([[0, 0, 0]], [3.0])
-    settings = cu.RenderSettings(absorption=0.05, hg_g=0.7)  # thin: single scattering dominates
+    settings = cu.RenderSettings(
+        absorption=0.05, hg_g=0.7, lighting="paper"
+    )  # thin: single scattering dominates
     cam = front_camera()
     toward = cu.Scene(
         clouds=[cloud], sun=cu.Sun(direction=(0, 0, 1)), sky=BLACK_SKY, settings=settings
@@ -266,7 +270,7 @@ def test_forward_scattering_is_brighter_towards_the_sun(hand_lit: HandLitRendere
 
 
 def test_moving_the_sun_recomputes_the_light_grid(hand_lit: HandLitRenderer) -> None:
-    scene = cumulus_scene(seed=2)
+    scene = cumulus_scene(seed=2, settings=cu.RenderSettings(lighting="paper"))
     cam = scene.default_camera()
     a = hand_lit.render(scene, cam, 48, 36)
     grid_a = cu.prepare_light(scene).lights[0]
@@ -286,13 +290,18 @@ def test_moving_the_sun_recomputes_the_light_grid(hand_lit: HandLitRenderer) -> 
 
 def test_cloud_without_light_grid_gets_one_on_demand(hand_lit: HandLitRenderer) -> None:
     cloud = cu.Cloud(np.array([[0, 0, 0]], np.float32), np.array([3.0], np.float32))
-    img = hand_lit.render(cu.Scene(clouds=[cloud]), front_camera(), 32, 24)
+    img = hand_lit.render(
+        cu.Scene(clouds=[cloud], settings=cu.RenderSettings(lighting="paper")),
+        front_camera(),
+        32,
+        24,
+    )
     assert not hasattr(cloud, "light")  # the grid was made for the render, not stored
     assert img[12, 16, 3] > 0
 
 
 def test_camera_inside_a_cloud_gives_finite_values(hand_lit: HandLitRenderer) -> None:
-    scene = cumulus_scene(seed=1)
+    scene = cumulus_scene(seed=1, settings=cu.RenderSettings(lighting="paper"))
     lo, hi = scene.bounds()
     centre = (lo + hi) / 2
     cam = cu.Camera(position=tuple(centre), target=tuple(centre + [0, 0, 10]), fov=70)
@@ -314,7 +323,7 @@ def test_halving_the_step_barely_changes_the_image(hand_lit: HandLitRenderer) ->
     # A Δτ without the Δ/Δ_ref factor (exp(−φρ) per sample whatever the step) gives a bias of
     # −2.0e-2 in alpha and −1.9e-2 in RGB and a mean |change| of 2.6e-2: all three fail
     # (measured by hand on llvmpipe by rendering the 0.2 step with φ·Δ_ref/Δ).
-    scene = cumulus_scene(seed=1)
+    scene = cumulus_scene(seed=1, settings=cu.RenderSettings(lighting="paper"))
     cam = scene.default_camera()
     coarse = hand_lit.render(
         scene.replace(settings=scene.settings.replace(fixed_step=0.2)), cam, W, H
@@ -338,7 +347,9 @@ def test_paper_and_union_agree_without_overlaps_and_differ_with_them(
 ) -> None:
     apart = sphere_cloud([[-4, 0, 0], [4, 0, 0]], [2.5, 2.5])
     cam = front_camera()
-    paper = cu.Scene(clouds=[apart], settings=cu.RenderSettings(march="paper", absorption=0.05))
+    paper = cu.Scene(
+        clouds=[apart], settings=cu.RenderSettings(march="paper", absorption=0.05, lighting="paper")
+    )
     union = paper.replace(settings=paper.settings.replace(march="union"))
     np.testing.assert_allclose(
         hand_lit.render(paper, cam, W, H), hand_lit.render(union, cam, W, H), atol=1e-6
@@ -358,7 +369,9 @@ def test_each_cloud_uses_its_own_light_grid(hand_lit: HandLitRenderer) -> None:
         [2.5],
         light=np.linspace(0, 1, 8, dtype=np.float32)[None, None].repeat(8, 0).repeat(8, 1),
     )
-    scene = cu.Scene(clouds=[dim, bright], sky=BLACK_SKY, settings=cu.RenderSettings(hg_g=0.0))
+    scene = cu.Scene(
+        clouds=[dim, bright], sky=BLACK_SKY, settings=cu.RenderSettings(hg_g=0.0, lighting="paper")
+    )
     img = hand_lit.render(scene, front_camera(), W, H)
     # Looking along +z, world +x is on the image's left (r = f × up = −x).
     left, right = img[:, : W // 2, :3].sum(), img[:, W // 2 :, :3].sum()
@@ -374,18 +387,23 @@ def test_metaballs_and_rotated_ellipsoids(hand_lit: HandLitRenderer) -> None:
     rot = np.array([[[0, -1, 0], [1, 0, 0], [0, 0, 1]]], np.float32)
     tall = sphere_cloud([[0, 0, 0]], [[5, 1, 1]], rotations=rot)
     img = hand_lit.render(
-        cu.Scene(clouds=[tall], settings=cu.RenderSettings(absorption=5)), front_camera(), W, H
+        cu.Scene(clouds=[tall], settings=cu.RenderSettings(absorption=5, lighting="paper")),
+        front_camera(),
+        W,
+        H,
     )
     rows, cols = np.nonzero(img[..., 3] > 0.01)
     assert np.ptp(rows) > 2.5 * np.ptp(cols)
     balls = sphere_cloud([[-1.5, 0, 0], [1.5, 0, 0]], [1.5, 1.5], model="metaball")
-    img = hand_lit.render(cu.Scene(clouds=[balls]), front_camera(), W, H)
+    img = hand_lit.render(
+        cu.Scene(clouds=[balls], settings=cu.RenderSettings(lighting="paper")), front_camera(), W, H
+    )
     # The metaball surface bridges the two centres: the midpoint is cloud.
     assert img[H // 2, W // 2, 3] > 0.2
 
 
 def test_tiles_give_the_same_image(gl_context) -> None:
-    scene = cumulus_scene(seed=1)
+    scene = cumulus_scene(seed=1, settings=cu.RenderSettings(lighting="paper"))
     cam = scene.default_camera()
     with Renderer(context=gl_context, tile=32) as small, Renderer(context=gl_context) as big:
         a = small.render(scene, cam, W, H)
@@ -394,7 +412,7 @@ def test_tiles_give_the_same_image(gl_context) -> None:
 
 
 def test_max_steps_bounds_the_march(hand_lit: HandLitRenderer) -> None:
-    scene = cumulus_scene(seed=1)
+    scene = cumulus_scene(seed=1, settings=cu.RenderSettings(lighting="paper"))
     cam = scene.default_camera()
     full = hand_lit.render(scene, cam, 48, 36)
     capped = hand_lit.render(
@@ -405,7 +423,11 @@ def test_max_steps_bounds_the_march(hand_lit: HandLitRenderer) -> None:
 
 
 def test_render_convenience_and_backends() -> None:
-    scene = lit(cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [3.0])]))
+    scene = lit(
+        cu.Scene(
+            clouds=[sphere_cloud([[0, 0, 0]], [3.0])], settings=cu.RenderSettings(lighting="paper")
+        )
+    )
     img = cu.render(scene, front_camera(), width=32, height=24)
     assert img.shape == (24, 32, 4) and img.dtype == np.float32
     cpu = cu.render(scene, front_camera(), width=32, height=24, backend="cpu")
@@ -428,7 +450,9 @@ def test_render_convenience_and_backends() -> None:
 )
 def test_bad_sizes(hand_lit: HandLitRenderer, size, exc, message) -> None:
     with pytest.raises(exc, match=message):
-        hand_lit.render(cu.Scene(), front_camera(), *size)
+        hand_lit.render(
+            cu.Scene(settings=cu.RenderSettings(lighting="paper")), front_camera(), *size
+        )
     assert 16384 * 16384 > MAX_PIXELS
 
 
@@ -444,7 +468,7 @@ def test_primitive_limits_per_cloud(hand_lit: HandLitRenderer, model: str, limit
         return sphere_cloud(rng.uniform(-3, 3, (n, 3)), np.full(n, 0.05), model=model)
 
     # Few samples per pixel: the test is about the limit, not the image.
-    settings = cu.RenderSettings(max_steps=16)
+    settings = cu.RenderSettings(max_steps=16, lighting="paper")
     img = hand_lit.render(cu.Scene(clouds=[cloud(limit)], settings=settings), front_camera(), 8, 6)
     assert np.isfinite(img).all()
     big = cloud(limit + 1)
@@ -467,18 +491,20 @@ def test_bad_arguments(hand_lit: HandLitRenderer, gl_context) -> None:
     with pytest.raises(TypeError, match="scene"):
         hand_lit.render("scene.json", front_camera(), 8, 8)
     with pytest.raises(TypeError, match="camera"):
-        hand_lit.render(cu.Scene(), (0, 0, -5), 8, 8)
+        hand_lit.render(cu.Scene(settings=cu.RenderSettings(lighting="paper")), (0, 0, -5), 8, 8)
     with pytest.raises(ValueError, match="NaN"):
         cu.LightGrid(np.full((2, 2, 2), np.nan, np.float32), ((0, 0, 0), (1, 1, 1)))
     with pytest.raises(TypeError, match="LightGrid"):
         hand_lit.render(
-            cu.prepare_light(cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [1.0])]), lights=["x"]),
+            cu.prepare_light(cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [1.0])],
+                                      settings=cu.RenderSettings(lighting="paper")),
+                             lights=["x"]),
             front_camera(), 8, 8,
         )  # fmt: skip
     closed = Renderer(context=gl_context)
     closed.close()
     with pytest.raises(RuntimeError, match="closed"):
-        closed.render(cu.Scene(), front_camera(), 8, 8)
+        closed.render(cu.Scene(settings=cu.RenderSettings(lighting="paper")), front_camera(), 8, 8)
 
 
 # --- lifetime -----------------------------------------------------------------------------------
@@ -496,7 +522,11 @@ def _rss_kib() -> int:
 
 @pytest.mark.skipif(not Path("/proc/self/fd").is_dir(), reason="needs /proc")
 def test_creating_and_closing_renderers_does_not_leak() -> None:
-    scene = lit(cu.Scene(clouds=[sphere_cloud([[0, 0, 0]], [3.0])]))
+    scene = lit(
+        cu.Scene(
+            clouds=[sphere_cloud([[0, 0, 0]], [3.0])], settings=cu.RenderSettings(lighting="paper")
+        )
+    )
     cam = front_camera()
 
     def cycle(n: int) -> None:

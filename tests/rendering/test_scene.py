@@ -119,7 +119,7 @@ def test_settings_reject_bad_input(kwargs: dict, exc: type, message: str) -> Non
 
 
 def test_lod_step_follows_the_paper_and_clamps() -> None:
-    s = cu.RenderSettings(lod_a=0.5, lod_delta=0.01, step_min=0.05, step_max=0.4)
+    s = cu.RenderSettings(lod_a=0.5, lod_delta=0.01, step_min=0.05, step_max=0.4, lighting="paper")
     assert s.step_for(0) == 0.4  # 0.5 clamped
     assert math.isclose(s.step_for(50), 0.5 * math.exp(-0.5))
     assert s.step_for(1e4) == 0.05
@@ -133,7 +133,7 @@ def test_scene_round_trips_through_json(tmp_path: Path) -> None:
         sun=cu.Sun(direction=(0.2, 0.3, 1), colour=(1, 0.6, 0.3), intensity=2),
         sky=cu.Sky.sunset(),
         noise=cu.Noise(seed=2**63 + 5, size=32),
-        settings=cu.RenderSettings(march="union", kappa=0.3, max_steps=500),
+        settings=cu.RenderSettings(march="union", kappa=0.3, max_steps=500, lighting="paper"),
         camera=cu.Camera(position=(0, 3, -40), target=(0, 3, 0), fov=40),
     )
     path = scene.save(tmp_path / "s.json")
@@ -157,7 +157,7 @@ def test_load_scene_errors(tmp_path: Path) -> None:
     bad.write_text("{not json")
     with pytest.raises(ValueError, match="not valid JSON"):
         cu.load_scene(bad)
-    good = cu.Scene(clouds=two_clouds()).to_dict()
+    good = cu.Scene(clouds=two_clouds(), settings=cu.RenderSettings(lighting="paper")).to_dict()
     for key in ("clouds", "sun", "settings"):
         data = dict(good)
         del data[key]
@@ -187,7 +187,7 @@ def test_load_scene_errors(tmp_path: Path) -> None:
 
 
 def test_save_to_unwritable_place_leaves_nothing(tmp_path: Path) -> None:
-    scene = cu.Scene(clouds=two_clouds())
+    scene = cu.Scene(clouds=two_clouds(), settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(OSError):
         scene.save(tmp_path / "no" / "such" / "folder" / "s.json")
     target = tmp_path / "dir.json"
@@ -199,17 +199,17 @@ def test_save_to_unwritable_place_leaves_nothing(tmp_path: Path) -> None:
 
 def test_scene_validation() -> None:
     with pytest.raises(TypeError, match=r"scene.clouds\[0\]"):
-        cu.Scene(clouds=[np.zeros((3, 3))])
+        cu.Scene(clouds=[np.zeros((3, 3))], settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(TypeError, match="scene.sun"):
-        cu.Scene(sun=(0, 1, 0))
+        cu.Scene(sun=(0, 1, 0), settings=cu.RenderSettings(lighting="paper"))
     c = two_clouds()[0]
     from cumuli.scene import MAX_DRAWABLES
 
     # A field of particle clouds holds thousands; the GL marcher still draws at most 64 2018
     # clouds per pass (MarcherGL.check).
     with pytest.raises(ValueError, match="at most"):
-        cu.Scene(clouds=[c] * (MAX_DRAWABLES + 1))
-    scene = cu.Scene(clouds=[c])
+        cu.Scene(clouds=[c] * (MAX_DRAWABLES + 1), settings=cu.RenderSettings(lighting="paper"))
+    scene = cu.Scene(clouds=[c], settings=cu.RenderSettings(lighting="paper"))
     cam = scene.default_camera()
     lo, hi = scene.bounds()
     # The default camera looks at the clouds' centre.
@@ -244,7 +244,11 @@ def test_render_contract_is_where_the_code_cites_it() -> None:
 
 
 def _scene() -> cu.Scene:
-    return cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], noise=cu.Noise(seed=2, size=16))
+    return cu.Scene(
+        [cu.gaussian_cumulus(n=6, seed=1)],
+        noise=cu.Noise(seed=2, size=16),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
 
 
 # --- scene files ------------------------------------------------------------------------------
@@ -319,7 +323,7 @@ def test_strings_do_not_pass_as_numbers_in_scene_files(tmp_path: Path) -> None:
         (lambda: cu.Sun(intensity="2"), "sun.intensity"),
         (lambda: cu.Camera((0, 0, -5), (0, 0, 0), fov="45"), "camera.fov"),
         (lambda: cu.Camera("012", (0, 0, 0)), "camera.position"),
-        (lambda: cu.RenderSettings(hg_g="0.5"), "settings.hg_g"),
+        (lambda: cu.RenderSettings(hg_g="0.5", lighting="paper"), "settings.hg_g"),
         (lambda: cu.gaussian_cumulus(centre="000"), "centre"),
         (lambda: cu.gaussian_cumulus(hollow=float("nan")), "hollow"),
         (lambda: cu.gaussian_cumulus(remove_contained="no"), "remove_contained"),
@@ -336,6 +340,6 @@ def test_render_settings_refuse_the_fbm_that_noise_refuses() -> None:
     with pytest.raises(ValueError, match="gain"):
         cu.Noise(seed=1).fbm(np.zeros((1, 3)), octaves=16, gain=1e3)
     with pytest.raises(ValueError, match="settings.*gain"):
-        cu.RenderSettings(gain=1e3, octaves=16)
+        cu.RenderSettings(gain=1e3, octaves=16, lighting="paper")
     with pytest.raises(ValueError, match="settings.*frequency"):
-        cu.RenderSettings(frequency=1e30, lacunarity=10.0, octaves=16)
+        cu.RenderSettings(frequency=1e30, lacunarity=10.0, octaves=16, lighting="paper")

@@ -17,7 +17,7 @@ W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
 BLACK = cu.Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0)
 CAMERA = cu.Camera(position=(0.0, 2.0, -60.0), target=(0.0, 2.0, 0.0), fov=35)
-SETTINGS = cu.RenderSettings(exact_noise=True, absorption=3.0)
+SETTINGS = cu.RenderSettings(exact_noise=True, absorption=3.0, lighting="paper")
 RED = cu.Solid((0.0, 2.0, 0.0), 3.0, (0.9, 0.2, 0.1), (0.1, 0.1, 0.1))
 CLOSE = cu.Camera(position=(1.0, 3.0, -14.0), target=(0.0, 2.0, 0.0), fov=40)
 
@@ -43,7 +43,7 @@ def analytic(solid: cu.Solid, camera: cu.Camera, w: int, h: int) -> tuple[np.nda
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
 def test_solid_image_is_the_analytic_lambert_sphere(backend: str) -> None:
     blue = cu.Solid((1.0, 2.5, -5.0), 1.2, (0.2, 0.5, 0.9), (0.05, 0.05, 0.05))
-    scene = cu.Scene(sun=SUN, solids=(RED, blue))
+    scene = cu.Scene(sun=SUN, solids=(RED, blue), settings=cu.RenderSettings(lighting="paper"))
     if backend == "cpu":
         img = draw_solids_cpu(scene.solids, SUN, CLOSE, W, H)
     else:
@@ -69,7 +69,12 @@ def test_solid_image_is_the_analytic_lambert_sphere(backend: str) -> None:
 
 @pytest.mark.gl
 def test_solid_image_gl_and_cpu_agree() -> None:
-    scene = cu.Scene([cu.gaussian_cumulus(seed=1)], sun=SUN, solids=(RED,))
+    scene = cu.Scene(
+        [cu.gaussian_cumulus(seed=1)],
+        sun=SUN,
+        solids=(RED,),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     cpu = draw_solids_cpu(scene.solids, SUN, CLOSE, W, H)
     from cumuli.rendering.compositor import shared_renderer
     from cumuli.rendering.painters import GLPainter
@@ -138,8 +143,18 @@ def test_the_volume_marcher_stops_at_a_solid() -> None:
     pc = cu.particle_cumulus((0, 2, 0), 150, seed=3, radius=(2.0, 3.0))
     density, box = pc.to_volume(16)
     volume = cu.VolumeCloud(density=density, box=box, sigma_t=0.8, albedo=0.9, g=0.2)
-    plain = cu.prepare_light(cu.Scene([volume], sun=SUN, sky=BLACK))
-    inside = cu.prepare_light(cu.Scene([volume], sun=SUN, sky=BLACK, solids=(RED,)))
+    plain = cu.prepare_light(
+        cu.Scene([volume], sun=SUN, sky=BLACK, settings=cu.RenderSettings(lighting="paper"))
+    )
+    inside = cu.prepare_light(
+        cu.Scene(
+            [volume],
+            sun=SUN,
+            sky=BLACK,
+            solids=(RED,),
+            settings=cu.RenderSettings(lighting="paper"),
+        )
+    )
     painter = CPUPainter()
     a = painter.layer(plain, "volume", [0], CAMERA, W, H, False)
     b = painter.layer(inside, "volume", [0], CAMERA, W, H, False)
@@ -156,7 +171,14 @@ def test_particles_are_depth_tested_against_solids(backend: str) -> None:
     both = cu.ParticleCloud([(0.0, 2.0, -8.0), (0.3, 2.2, 6.0)], 4.0)
     solid = cu.Solid((0.0, 2.0, 0.0), 2.0, (0.9, 0.9, 0.2))
     ss = cu.SpriteSettings(ambient=(0.2, 0.2, 0.2))
-    sc = cu.Scene([both], sun=SUN, sky=BLACK, solids=(solid,), sprite_settings=ss)
+    sc = cu.Scene(
+        [both],
+        sun=SUN,
+        sky=BLACK,
+        solids=(solid,),
+        sprite_settings=ss,
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     img = cu.render(sc, CAMERA, W, H, backend=backend).astype(np.float64)
     f = cu.render(sc.replace(clouds=[front], solids=()), CAMERA, W, H, backend=backend)
     srgb = draw_solids_cpu((solid,), SUN, CAMERA, W, H)
@@ -173,7 +195,9 @@ def test_split_layers_composite_back_to_the_unsplit_layer(backend: str) -> None:
     """§10.3.5: over is associative, so the m + 1 layers with no object between them composite
     to the unsplit layer (within 1e−6)."""
     pc = cu.particle_cumulus((0, 2, 0), 300, seed=5, radius=(2.0, 3.5))
-    lit = cu.prepare_light(cu.Scene([pc], sun=SUN, sky=BLACK))
+    lit = cu.prepare_light(
+        cu.Scene([pc], sun=SUN, sky=BLACK, settings=cu.RenderSettings(lighting="paper"))
+    )
     cuts = [55.0, 60.0, 63.0]
     if backend == "cpu":
         painter = CPUPainter()
@@ -234,7 +258,12 @@ def test_impostors_split_only_around_solids_inside_the_cloud(backend: str) -> No
     """§10.3.6: a solid inside the bounding sphere splits the cloud's impostor (every frame); one
     outside does not. The split image keeps the solid opaque where it shows."""
     pc = cu.particle_cumulus((0, 2, 0), 300, seed=5, radius=(2.0, 3.5))
-    base = cu.Scene([pc], sun=SUN, sprite_settings=cu.SpriteSettings(ambient=(0.1,) * 3))
+    base = cu.Scene(
+        [pc],
+        sun=SUN,
+        sprite_settings=cu.SpriteSettings(ambient=(0.1,) * 3),
+        settings=cu.RenderSettings(lighting="paper"),
+    )
     inside = base.replace(solids=(cu.Solid((1.0, 3.0, -1.0), 2.5, (0.9, 0.9, 0.2)),))
     outside = base.replace(solids=(cu.Solid((0.0, 3.0, -45.0), 2.5, (0.9, 0.9, 0.2)),))
     cam = cu.Camera((6.0, 6.0, -60.0), (0.0, 2.0, 0.0), fov=35)
@@ -259,7 +288,7 @@ def test_split_impostors_gl_and_cpu_agree_in_exact_mode() -> None:
     scene = cu.Scene(
         [pc], sun=SUN, solids=(cu.Solid((1.0, 3.0, -1.0), 2.5),),
         impostor_settings=cu.ImpostorSettings(exact=True),
-    )  # fmt: skip
+    settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
     cam = cu.Camera((6.0, 6.0, -60.0), (0.0, 2.0, 0.0), fov=35)
     gl = cu.render(scene, cam, W, H, impostors=cu.ImpostorCache())
     cpu = cu.render(scene, cam, W, H, backend="cpu", impostors=cu.ImpostorCache())
@@ -271,7 +300,7 @@ def test_solids_and_impostors_do_not_depend_on_the_thread_count() -> None:
     scene = cu.Scene(
         [pc, cu.gaussian_cumulus(centre=(20, 0, 30), seed=1)], sun=SUN, solids=(RED,),
         noise=cu.Noise(seed=7, size=32),
-    )  # fmt: skip
+    settings=cu.RenderSettings(lighting="paper"))  # fmt: skip
     one = cu.render_cpu(scene, CAMERA, W, H, threads=1, impostors=cu.ImpostorCache())
     two = cu.render_cpu(scene, CAMERA, W, H, threads=2, impostors=cu.ImpostorCache())
     np.testing.assert_array_equal(one, two)

@@ -13,6 +13,10 @@ void PhysicalParams::validate() const {
   if (!(albedo >= 0.0f && albedo <= 1.0f)) throw std::invalid_argument("albedo must be in [0, 1]");
   for (float g : {g1, g2})
     if (!(g > -1.0f && g < 1.0f)) throw std::invalid_argument("phase g must be in (-1, 1)");
+  for (float g : {mie_params.g_hg, mie_params.g_d})
+    if (!(g > -1.0f && g < 1.0f)) throw std::invalid_argument("Mie lobe g must be in (-1, 1)");
+  if (!(mie_params.alpha >= 0.0f && mie_params.w_d >= 0.0f && mie_params.w_d <= 1.0f))
+    throw std::invalid_argument("Mie parameters out of range");
   if (!(blend >= 0.0f && blend <= 1.0f)) throw std::invalid_argument("hg_blend must be in [0, 1]");
   if (octaves < 1 || octaves > kMaxOctaves)
     throw std::invalid_argument("octaves must be in [1, 8]");
@@ -26,6 +30,7 @@ void PhysicalParams::validate() const {
 }
 
 float PhysicalParams::phase(float cos_theta, float scale) const {
+  if (mie) return approx_mie(mie_params, cos_theta, scale);
   const float p1 = henyey_greenstein(g1 * scale, cos_theta);
   if (!dual_hg) return p1;
   return (1.0f - blend) * p1 + blend * henyey_greenstein(g2 * scale, cos_theta);

@@ -51,7 +51,7 @@ def render_task(
     (atomically) and the path returned, else the ``(H, W, 4)`` float32 image. ``threads`` is the
     CPU backend's (0: every core of the worker's machine).
     """
-    from cumuli.io.images import write_image
+    from cumuli.io.images import display_for, write_image
     from cumuli.rendering.compositor import render, render_cpu
 
     built = Scene.from_dict(scene)
@@ -61,7 +61,8 @@ def render_task(
     else:
         img = render(built, cam, width=width, height=height, backend=backend)
     if path is not None:
-        return str(write_image(path, img, alpha=alpha))
+        exposure, tonemap = display_for(built.settings.lighting)  # each mode's display
+        return str(write_image(path, img, alpha=alpha, exposure=exposure, tonemap=tonemap))
     if alpha == "opaque":  # what write_image would save
         img[..., 3] = 1.0
     return img

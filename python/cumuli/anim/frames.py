@@ -138,7 +138,7 @@ def render_frames(
     moves less than ``scene.impostor_settings.tolerance``), or pass a cache to keep it (and its
     ``stats``) after the call; not with ``client`` (frames there are independent tasks).
     """
-    from cumuli.io.images import ALPHA_MODES, FORMATS, write_image
+    from cumuli.io.images import ALPHA_MODES, FORMATS, display_for, write_image
     from cumuli.rendering.compositor import render
     from cumuli.rendering.impostor_cache import ImpostorCache
 
@@ -233,5 +233,8 @@ def render_frames(
         else:
             frame_scene = scene_after(scene, k * dt) if dt else scene
         img = render(frame_scene, cam, width=width, height=height, backend=backend, impostors=cache)
-        paths.append(write_image(folder / name, img, alpha=alpha))
+        exposure, tonemap = display_for(frame_scene.settings.lighting)  # each mode's display
+        paths.append(
+            write_image(folder / name, img, alpha=alpha, exposure=exposure, tonemap=tonemap)
+        )
     return paths

@@ -105,6 +105,23 @@ def srgb_to_linear(encoded: np.ndarray) -> np.ndarray:
 
 #: Tone-mapping operators of :func:`to_srgb8` (applied to ``exposure · RGB``, linear in and out).
 TONEMAPS = ("none", "aces", "reinhard")
+#: The display defaults of :func:`to_srgb8`, :func:`write_image`, the CLI, the demo and the
+#: notebooks (the one place they are set): the physical lighting mode's radiance exposed by 0.8
+#: through the ACES filmic curve. The paper lighting mode was made for a plain clip
+#: (``exposure=1.0, tonemap="none"``, :data:`PAPER_DISPLAY`).
+DISPLAY_EXPOSURE = 0.8
+DISPLAY_TONEMAP = "aces"
+PAPER_DISPLAY: tuple[float, str] = (1.0, "none")
+
+
+def display_for(lighting: str) -> tuple[float, str]:
+    """``(exposure, tonemap)`` to show a render of the lighting mode ``lighting``: the display
+    defaults for ``"physical"``, :data:`PAPER_DISPLAY` for ``"paper"``."""
+    if lighting == "paper":
+        return PAPER_DISPLAY
+    if lighting == "physical":
+        return DISPLAY_EXPOSURE, DISPLAY_TONEMAP
+    raise ValueError(f"lighting must be 'paper' or 'physical', got {lighting!r}")
 
 
 def tone_map(rgb: np.ndarray, operator: str = "none") -> np.ndarray:
@@ -124,13 +141,17 @@ def tone_map(rgb: np.ndarray, operator: str = "none") -> np.ndarray:
     return np.clip(x, 0.0, 1.0)
 
 
-def to_srgb8(img: np.ndarray, exposure: float = 1.0, tonemap: str = "none") -> np.ndarray:
+def to_srgb8(
+    img: np.ndarray, exposure: float = DISPLAY_EXPOSURE, tonemap: str = DISPLAY_TONEMAP
+) -> np.ndarray:
     """Display bytes of a linear image: ``(H, W, 3|4)`` float → ``uint8`` of the same shape.
 
     RGB is multiplied by ``exposure``, tone mapped (:data:`TONEMAPS`: ``"none"`` clips to
     [0, 1], ``"aces"`` and ``"reinhard"`` roll highlights off instead) and goes through the sRGB
-    transfer function; alpha is scaled linearly and stays unassociated (colours are not
-    multiplied by it). Values are rounded to nearest.
+    transfer function (defaults: :data:`DISPLAY_EXPOSURE` and :data:`DISPLAY_TONEMAP`, made for
+    the physical lighting mode; a paper-mode render is shown with ``1.0, "none"``); alpha is
+    scaled linearly and stays unassociated (colours are not multiplied by it). Values are
+    rounded to nearest.
     """
     if isinstance(exposure, bool) or not isinstance(
         exposure, (int, float, np.integer, np.floating)
@@ -184,7 +205,7 @@ def _slab_data(ext: str, rgba: np.ndarray, y0: int, y1: int, opaque: bool) -> np
         full[..., :3] = rows[..., :3]
         full[..., 3] = 1.0
         rows = full
-    return rows if ext == ".exr" else to_srgb8(rows)
+    return rows if ext == ".exr" else to_srgb8(rows, 1.0, "none")
 
 
 def _write_with_oiio(tmp: Path, ext: str, rgba: np.ndarray, opaque: bool = False) -> None:
@@ -246,8 +267,8 @@ def write_image(
     img: np.ndarray,
     alpha: str = "opaque",
     *,
-    exposure: float = 1.0,
-    tonemap: str = "none",
+    exposure: float = DISPLAY_EXPOSURE,
+    tonemap: str = DISPLAY_TONEMAP,
 ) -> Path:
     """Write a linear ``(H, W, 3|4)`` float image to ``.exr`` (float32) or ``.png`` (8-bit sRGB).
 

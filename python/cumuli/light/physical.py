@@ -233,11 +233,22 @@ def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[fl
 
 
 def phase(settings: Any, cos_theta: float, g_scale: float = 1.0) -> float:
-    """The settings' phase function (HG or the two-lobe blend) with its g's scaled."""
+    """The settings' phase function (the approximate Mie phase, HG or the two-lobe blend) with
+    its g's scaled."""
+    return float(phase_values(settings, np.array([cos_theta]), g_scale)[0])
 
-    def hg(g: float) -> float:
-        d = 1.0 + g * g - 2.0 * g * cos_theta
-        return (1.0 - g * g) / (4.0 * math.pi * d * math.sqrt(d))
+
+def phase_values(settings: Any, cos_theta: Any, g_scale: float = 1.0) -> np.ndarray:
+    """:func:`phase` at an array of cosines (float64; the Mie phase evaluated by the core)."""
+    c = np.asarray(cos_theta, np.float64)
+    if settings.phase == "mie":
+        flat = np.ascontiguousarray(c.ravel(), np.float32)
+        out = _core.approx_mie_phase(settings.droplet_diameter, flat, g_scale)
+        return np.asarray(out, np.float64).reshape(c.shape)
+
+    def hg(g: float) -> np.ndarray:
+        d = 1.0 + g * g - 2.0 * g * c
+        return (1.0 - g * g) / (4.0 * math.pi * d * np.sqrt(d))
 
     if settings.phase == "dual_hg":
         w = settings.hg_blend

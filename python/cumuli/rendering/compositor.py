@@ -30,8 +30,10 @@ from cumuli.gl.context import GLContext, _thread_default, check_context, default
 from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
+from cumuli.rendering.air import add_air
 from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
 from cumuli.rendering.painters import CPUPainter, GLPainter
+from cumuli.rendering.resolve import resolve
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
 from cumuli.settings import RenderSettings
@@ -104,7 +106,8 @@ def compose(
     calls = plan(scene)
     if impostors is None and single_pass(scene):
         kind, indices = calls[0]
-        return painter.layer(lit, kind, indices, camera, width, height, True)
+        image = painter.layer(lit, kind, indices, camera, width, height, True)
+        return add_air(resolve(image, scene), scene, camera)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
     else:
@@ -116,12 +119,13 @@ def compose(
     layers = np.stack(layer_list) if layer_list else np.zeros((0, height, width, 4), np.float32)
     boxes = np.array(box_list, np.float32).reshape(-1, 2, 3)
     solid = painter.solids(lit, camera, width, height) if scene.solids else None
-    return _core.composite_layers(
+    image = _core.composite_layers(
         layers, boxes, camera.position, camera.target, camera.up, float(camera.fov),
         sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
         solid,
         ground_args(scene.ground, scene.sky, lit.shadow),
     )  # fmt: skip
+    return add_air(resolve(image, scene), scene, camera)
 
 
 def _lit(scene: Any) -> tuple[LitScene | None, Scene]:
@@ -557,6 +561,8 @@ def render_volume(
     to half the smallest voxel edge. ``g`` is the Henyey–Greenstein asymmetry of sun scattering.
     With ``settings=RenderSettings(lighting="physical")`` the physical mode lights the volume
     (``σt = sigma_t·volume``; ``light`` may be None, the light step computes its own).
+    ``settings`` left None is the paper mode when a ``light`` is given (the volume's own light
+    model draws it) and the physical mode (the default) when it is None.
     A thin wrapper: a scene holding one :class:`cumuli.VolumeCloud` through :func:`render`.
     """
     if backend not in BACKENDS:
@@ -568,7 +574,8 @@ def render_volume(
     width = check.integer(width, "width", 1, MAX_IMAGE)
     height = check.integer(height, "height", 1, MAX_IMAGE)
     cam = _as_camera(camera)
-    settings = RenderSettings() if settings is None else settings
+    if settings is None:  # a light given is the volume's own model, drawn outside the physical mode
+        settings = RenderSettings(lighting="paper") if light is not None else RenderSettings()
     if not isinstance(settings, RenderSettings):
         raise TypeError(f"settings must be a cumuli.RenderSettings, got {type(settings).__name__}")
     if light is None and not settings.physical:

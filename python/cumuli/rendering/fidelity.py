@@ -43,6 +43,8 @@ from cumuli.sky import Sky, Sun
 
 #: A black sky: no background and no sky light, so only the sun lights both sides.
 BLACK_SKY = Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0.0)
+#: The lighting these comparisons are made in (each kind's own light model).
+PAPER = RenderSettings(lighting="paper")
 #: Most particles :func:`light_fidelity` takes (its reference is O(N²)).
 MAX_REFERENCE_PARTICLES = 8192
 
@@ -87,7 +89,7 @@ def image_fidelity(
     # Single scattering, isotropic phase, no ambient: the volume marcher's physics.
     settings = SpriteSettings(phase="isotropic", forward=False)
     splat = render(
-        Scene([cloud], sun=sun, sky=BLACK_SKY, sprite_settings=settings),
+        Scene([cloud], sun=sun, sky=BLACK_SKY, sprite_settings=settings, settings=PAPER),
         camera, width, height, backend=backend,
     )  # fmt: skip
     density, box = cloud.to_volume(resolution, threads=threads)
@@ -101,13 +103,19 @@ def image_fidelity(
         density=density, box=box, sigma_t=1.0, albedo=albedo, g=0.0,
         light=lighting.light(0, threads=threads), light_sun=sun, light_sky=BLACK_SKY,
     )  # fmt: skip
-    vol = render(Scene([volume], sun=sun, sky=BLACK_SKY), camera, width, height, backend=backend)
+    vol = render(
+        Scene([volume], sun=sun, sky=BLACK_SKY, settings=PAPER),
+        camera,
+        width,
+        height,
+        backend=backend,
+    )
     images = {"splat": splat, "volume": vol}
     errors = {"splat_vs_volume": _relative(splat, vol, vol[..., 3] > 0.05)}
     if shape is not None:
         marched = render(
             Scene([shape], sun=sun, sky=BLACK_SKY, noise=Noise(seed=7, size=32),
-                  settings=RenderSettings(hg_g=0.0)),
+                  settings=RenderSettings(hg_g=0.0, lighting="paper")),
             camera, width, height, backend=backend,
         )  # fmt: skip
         images["marched"] = marched

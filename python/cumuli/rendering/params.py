@@ -71,6 +71,8 @@ def physical_params(settings: RenderSettings, octaves: int) -> _core.PhysicalPar
     p.g1 = float(settings.hg_g)
     p.g2 = float(settings.hg_g2)
     p.blend = float(settings.hg_blend)
+    p.mie = settings.phase == "mie"
+    p.droplet_diameter = float(settings.droplet_diameter)
     p.octaves = int(octaves)
     p.oct_a, p.oct_b, p.oct_c = OCTAVE_A, OCTAVE_B, OCTAVE_C
     p.jitter_seed = int(settings.jitter_seed)
@@ -148,6 +150,8 @@ def physical_uniforms(params: _core.PhysicalParams) -> dict[str, Any]:
         "u_phys_albedo": p.albedo,
         "u_phys_dual": p.dual_hg,
         "u_phys_g": (p.g1, p.g2, p.blend),
+        "u_phys_mie": p.mie,
+        "u_phys_mie_p": tuple(p.mie_params),
         "u_phys_octaves": p.octaves,
         "u_phys_abc": (p.oct_a, p.oct_b, p.oct_c),
         "u_phys_seed": p.jitter_seed,

@@ -19,6 +19,7 @@
 
 #include "cumuli/light/physical.hpp"
 #include "cumuli/light/volume.hpp"
+#include "cumuli/phase.hpp"
 
 namespace cumuli {
 
@@ -29,7 +30,10 @@ struct PhysicalParams {
   float albedo = 0.99f;
   bool dual_hg = false;
   float g1 = 0.6f, g2 = -0.3f, blend = 0.2f;  // blend: weight of the second lobe
-  int octaves = 4;                            // scattering orders drawn (1: single scattering)
+  bool mie = false;                           // the approximate Mie phase (phase.hpp) instead
+  float droplet_diameter = 20.0f;             // µm; mie_params are its fits
+  ApproxMie mie_params = approx_mie_params(20.0f);
+  int octaves = 4;  // scattering orders drawn (1: single scattering)
   float oct_a = 0.5f, oct_b = 0.5f, oct_c = 0.5f;
   int jitter_seed = 0;
   float min_transmittance = 1e-4f;  // the ray stops below it
