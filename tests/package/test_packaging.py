@@ -40,4 +40,4 @@ def test_the_package_is_marked_typed() -> None:
 
 
 def test_the_pytest_plugin_is_registered_by_entry_point() -> None:
-    assert PYPROJECT["project"]["entry-points"]["pytest11"] == {"cumuli": "cumuli.testing"}
+    assert PYPROJECT["project"]["entry-points"]["pytest11"] == {"cumuli.testing": "cumuli.testing"}
