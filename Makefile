@@ -7,6 +7,7 @@
 #                benchmarks/results/<machine>/ and rewrites benchmarks/RESULTS.md
 #   make lint    ruff on python/, tests/, benchmarks/; clang-format on cpp/
 #   make inplace build the extension into python/cumuli for PYTHONPATH=python development
+#   make stubs   regenerate python/cumuli/_core.pyi (the compiled module's types) from the build
 
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -16,7 +17,7 @@ SYSTEM_PACKAGES := g++ make python3 python3-venv python3-dev libglm-dev \
   libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2
 STAMP := $(VENV)/.cumuli-installed
 
-.PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace clean
+.PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace stubs clean
 
 setup: system install
 
@@ -76,6 +77,15 @@ inplace: $(PY)
 	  -DPython_EXECUTABLE=$(abspath $(PY)) \
 	  -Dpybind11_DIR=$$($(PY) -c "import pybind11; print(pybind11.get_cmake_dir())") >/dev/null
 	cmake --build build/inplace -j2
+
+# The type stubs of the compiled module, generated from the build (pybind11-stubgen, in the test
+# extra) and committed; tests/package/test_types.py checks that they are current. A default
+# argument that pybind11 can only show as `<... object at 0x...>` becomes `...`.
+STUBGEN_FLAGS := --ignore-invalid-expressions '<.*object at 0x[0-9a-f]+>' --exit-code
+stubs:
+	rm -rf build/stubs
+	$(PY) -m pybind11_stubgen cumuli._core -o build/stubs $(STUBGEN_FLAGS)
+	cp build/stubs/cumuli/_core.pyi python/cumuli/_core.pyi
 
 clean:
 	rm -rf build python/cumuli/_core*.so
