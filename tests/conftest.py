@@ -58,13 +58,15 @@ def _exact_impostors_agree(
     """Render ``scene`` (exact impostor mode) from each camera in turn on GL and on the C++ twin,
     each backend keeping its own impostor cache, and assert that the frames agree: mean per
     channel ≤ 1e−5, max ≤ 1e−4. Returns the last GL frame and the two caches."""
+    # Imported here: a module-level import would load the plugin before `pytest_plugins` does.
+    from cumuli.testing import assert_image_close, only
+
     gl_cache, cpu_cache = cu.ImpostorCache(), cu.ImpostorCache()
     gl = np.zeros((h, w, 4), dtype=np.float32)
     for cam in cameras:
         gl = renderer.render(scene, cam, w, h, impostors=gl_cache)
         cpu = cu.render_cpu(scene, cam, w, h, impostors=cpu_cache)
-        assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5
-        assert np.abs(gl - cpu).max() <= 1e-4
+        assert_image_close(gl, cpu, **only(channel_mean_abs=1e-5, max_abs=1e-4))
     return gl, gl_cache, cpu_cache
 
 

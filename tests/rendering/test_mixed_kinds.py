@@ -14,6 +14,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.rendering.compositor import plan
+from cumuli.testing import assert_image_close, only
 
 W, H = 96, 72
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
@@ -125,10 +126,10 @@ def test_all_kinds_gl_and_cpu_agree(drawables: list[object]) -> None:
     lit = cu.prepare_light(sc)
     gl = cu.render(lit, CAMERA, W, H)
     cpu = cu.render(lit, CAMERA, W, H, backend="cpu")
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-3
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-3))
     gl_i = cu.render(lit, CAMERA, W, H, impostors=cu.ImpostorCache())
     cpu_i = cu.render(lit, CAMERA, W, H, backend="cpu", impostors=cu.ImpostorCache())
-    assert np.abs(gl_i - cpu_i).mean(axis=(0, 1)).max() <= 1e-3
+    assert_image_close(gl_i, cpu_i, **only(channel_mean_abs=1e-3))
 
 
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])

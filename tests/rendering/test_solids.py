@@ -12,6 +12,7 @@ import cumuli as cu
 from cumuli.rendering.painters import CPUPainter
 from cumuli.rendering.solids import composite_split, draw_solids_cpu
 from cumuli.sky import sky_args
+from cumuli.testing import assert_image_close, only
 
 W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
@@ -263,7 +264,7 @@ def test_split_impostors_gl_and_cpu_agree_in_exact_mode() -> None:
     cam = cu.Camera((6.0, 6.0, -60.0), (0.0, 2.0, 0.0), fov=35)
     gl = cu.render(scene, cam, W, H, impostors=cu.ImpostorCache())
     cpu = cu.render(scene, cam, W, H, backend="cpu", impostors=cu.ImpostorCache())
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-5))
 
 
 def test_solids_and_impostors_do_not_depend_on_the_thread_count() -> None:

@@ -14,7 +14,7 @@ Loaded by pytest automatically once cumuli is installed (a ``pytest11`` entry po
 
 from __future__ import annotations
 
-from cumuli.testing.compare import DEFAULTS, ImageComparison, compare_images, heat_map
+from cumuli.testing.compare import DEFAULTS, ImageComparison, compare_images, heat_map, only
 from cumuli.testing.goldens import assert_image_close
 from cumuli.testing.plugin import (
     gl_context,
@@ -31,6 +31,7 @@ __all__ = [
     "compare_images",
     "gl_context",
     "heat_map",
+    "only",
 ]
 __all__ += [
     "pytest_addoption",

@@ -28,7 +28,19 @@ DEFAULTS: dict[str, float] = {
     "outlier_share": 0.01,  # outliers allowed, as a share of the covered pixels (at least 1)
     "max_abs": 0.5,  # largest |Δ| anywhere, outliers included
     "mean_abs": 2e-3,  # mean |Δ| over the whole image
+    "channel_mean_abs": float("inf"),  # largest per-channel mean |Δ| (off unless asked for)
 }
+
+
+def only(**limits: float) -> dict[str, float]:
+    """Tolerances with every per-pixel metric off (``inf``) except those given: e.g.
+    ``assert_image_close(gl, cpu, **only(channel_mean_abs=1e-3))`` checks the per-channel mean
+    alone, the usual check of two implementations of one renderer."""
+    unknown = set(limits) - set(DEFAULTS) - {"alpha_threshold", "outlier_share"}
+    if unknown:
+        raise TypeError(f"unknown tolerance(s): {', '.join(sorted(unknown))}")
+    off = {k: float("inf") for k in DEFAULTS if k not in ("alpha_threshold", "outlier_share")}
+    return off | limits
 
 
 @dataclass
@@ -97,6 +109,7 @@ def compare_images(
     outlier_share: float = DEFAULTS["outlier_share"],
     max_abs: float = DEFAULTS["max_abs"],
     mean_abs: float = DEFAULTS["mean_abs"],
+    channel_mean_abs: float = DEFAULTS["channel_mean_abs"],
     block: int | None = None,
     block_alpha: float = 0.5,
     block_rel_median: float = 0.15,
@@ -108,9 +121,10 @@ def compare_images(
     Per-pixel metrics (limits in brackets): ``covered_mean`` [covered_mean_abs], the mean |Δ|
     over covered, non-outlier pixels; ``background_max`` [background_max_abs]; ``outliers``
     [``outlier_share`` of the covered pixels, at least 1]; ``max`` [max_abs]; ``mean``
-    [mean_abs]. Covered pixels are those whose expected alpha (channel 4) exceeds
-    ``alpha_threshold``; without an alpha channel every pixel is covered. A limit of ``inf``
-    switches a metric off.
+    [mean_abs]; ``channel_mean`` [channel_mean_abs], the largest of the per-channel means of
+    |Δ| over the whole image (off by default). Covered pixels are those whose expected alpha
+    (channel 4) exceeds ``alpha_threshold``; without an alpha channel every pixel is covered. A
+    limit of ``inf`` switches a metric off (:func:`only` switches off all but those given).
 
     With ``block`` (pixels per block side) the RGB means of blocks are compared too, over the
     blocks whose expected mean alpha reaches ``block_alpha``: the median and 90th percentile of
@@ -143,6 +157,9 @@ def compare_images(
     where["max"] = _argmax2(pix, np.ones_like(outlier))
     m["mean"] = float(diff.mean())
     lim["mean"] = mean_abs
+    if channel_mean_abs != float("inf"):
+        m["channel_mean"] = float(diff.mean(axis=(0, 1)).max())
+        lim["channel_mean"] = channel_mean_abs
     if block is not None:
         if not (isinstance(block, int) and 1 <= block <= min(a.shape[:2])):
             raise ValueError(f"block must be an int in [1, {min(a.shape[:2])}], got {block!r}")

