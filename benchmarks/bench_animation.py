@@ -9,9 +9,10 @@ Measured (median / best / worst wall time of repeats, plus process CPU time):
   sweeping (``method="sweep"``: each sun-parallel line of a sheared grid integrated
   once) and by brute-force marching (one march per voxel and direction, today's method), against
   resolution: times, march/sweep ratios and the swept depths' mean difference from the marched.
-* ``precompute``: the example of docs/iwasaki-animation.md, ``VolumeLighting`` on 24 volumes of 32³ with the default
-  settings (order-4 SH over 72 directions, 32 scattering points; --quick: 4 volumes of 16³), by
-  sweeping (all cores), against marching (timed on one volume and scaled by the volume count).
+* ``precompute``: the example of docs/iwasaki-animation.md, ``VolumeLighting`` on 24 volumes of
+  32³ with the default settings (order-4 SH over 72 directions, 32 scattering points; --quick:
+  4 volumes of 16³), by sweeping (all cores), against marching (timed on one volume and scaled
+  by the volume count).
 * ``sky_accuracy``: the SH exponential (the paper's fitted eq. 7 against scaling and squaring)
   at SH orders 2–4, with swept and with marched depths: median / 90th-percentile relative error
   of the uniform-sky visibility ``∫τ dω`` against brute-force marching along every quadrature

@@ -1,8 +1,9 @@
 """cumuli: volumetric clouds from Python.
 
 A C++ core (noise, cloud generators, light precompute, a reference marcher) returns numpy arrays;
-GLSL shaders run in a headless moderngl context render them. See docs/conventions.md for conventions:
-+y up, angles in degrees, volumes indexed [z, y, x], images (H, W, 4) float32 with row 0 on top.
+GLSL shaders run in a headless moderngl context render them. See docs/conventions.md for the
+conventions: +y up, angles in degrees, volumes indexed [z, y, x], images (H, W, 4) float32 with
+row 0 on top.
 """
 
 from __future__ import annotations

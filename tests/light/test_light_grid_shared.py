@@ -3,7 +3,8 @@
 Each sun-parallel line of a grid sheared along the sun is marched once (NDT's union march, step
 Δ' = λ/round(λ/Δ) with λ the distance between voxel layers along the line) and read back at every
 voxel layer; a voxel blends the four lines around it. Tested against a slow numpy reference of
-exactly that definition, and against the per-voxel NDT grid within the bounds docs/clouds-2018.md states.
+exactly that definition, and against the per-voxel NDT grid within the bounds that
+docs/clouds-2018.md states.
 """
 
 from __future__ import annotations
