@@ -143,7 +143,7 @@ def test_all_kinds_through_impostors(drawables: list[object], backend: str) -> N
     assert cache.history[-1]["updates"] == {"missing": 7}
     assert set(cache.entries) == {0, 1, 2, 3, (4, 4), (4, 8), (4, 15)}
     # The marched cumulus's pixel-sharp fBm costs most (as for the particle kinds' own test).
-    assert np.abs(img - direct).mean() <= 2e-2
+    assert_image_close(img, direct, **only(mean_abs=2e-2))
     moved = cu.Camera((0.2, 6.05, -75.0), (0.2, 6.05, 10.0), fov=45)
     field = drawables[4]
     blown = cu.BillboardField(field.variants, field.offsets + np.float32([0.05, 0.0, 0.0]),
@@ -166,7 +166,7 @@ def test_solids_in_a_mixed_scene(drawables: list[object], backend: str) -> None:
     img = cu.render(sc, CAMERA, W, H, backend=backend, impostors=cache)
     assert cache.history[-1]["updates"] == {"split": 2, "missing": 5}
     direct = cu.render(sc, CAMERA, W, H, backend=backend)
-    assert np.abs(img - direct).mean() <= 2e-2
+    assert_image_close(img, direct, **only(mean_abs=2e-2))
     for solid in solids:
         from cumuli.rendering.solids import draw_solids_cpu
 

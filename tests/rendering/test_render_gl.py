@@ -17,7 +17,7 @@ import pytest
 import cumuli as cu
 from cumuli.demo import cumulus_scene, default_scene
 from cumuli.rendering.compositor import MAX_PIXELS, Renderer
-from cumuli.testing import ImageComparison, assert_image_close, compare_images
+from cumuli.testing import ImageComparison, assert_image_close, compare_images, only
 
 pytestmark = pytest.mark.gl
 
@@ -383,7 +383,7 @@ def test_render_convenience_and_backends() -> None:
     img = cu.render(scene, front_camera(), width=32, height=24)
     assert img.shape == (24, 32, 4) and img.dtype == np.float32
     cpu = cu.render(scene, front_camera(), width=32, height=24, backend="cpu")
-    assert float(np.abs(img - cpu).mean()) < 1e-3
+    assert_image_close(img, cpu, **only(mean_abs=1e-3))
     with pytest.raises(ValueError, match="backend"):
         cu.render(scene, front_camera(), 32, 24, backend="vulkan")
 

@@ -251,7 +251,7 @@ def test_impostors_split_only_around_solids_inside_the_cloud(backend: str) -> No
     # Split impostors against direct depth-tested splats: the same picture up to the cuts.
     direct = cu.render(inside, cam, W, H, backend=backend)
     split_img = cu.render(inside, cam, W, H, backend=backend, impostors=cu.ImpostorCache())
-    assert np.abs(split_img - direct).mean() < 2e-2
+    assert_image_close(split_img, direct, **only(mean_abs=2e-2))
 
 
 @pytest.mark.gl
@@ -312,7 +312,7 @@ def test_marched_cloud_impostors_stop_at_a_solid_inside() -> None:
         assert cache.history[-1]["updates"] in ({"missing": 1}, {"clip": 1})
     assert cache.history[-1]["updates"] == {"clip": 1}
     direct = cu.render_cpu(scene, CAMERA, W, H)
-    assert np.abs(img - direct).mean() < 2e-2
+    assert_image_close(img, direct, **only(mean_abs=2e-2))
     away = scene.replace(solids=(cu.Solid((0.0, 2.0, -45.0), 1.0),))
     cu.render_cpu(away, CAMERA, W, H, impostors=cache)
     assert cache.history[-1]["updates"] == {"clip": 1}
