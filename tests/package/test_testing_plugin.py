@@ -148,3 +148,26 @@ def test_the_documented_user_test_file_runs_under_pytest(tmp_path: Path) -> None
     assert failed.returncode == 1
     assert "covered_mean = " in failed.stdout and "worst at row" in failed.stdout
     assert (project / "fails" / "cumulus_heat.png").is_file()
+
+
+def test_gl_tests_skip_with_the_reason_where_there_is_no_gl(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The `gl` marker's skip, as a user's suite sees it on a machine without EGL: a GL test
+    is skipped with the reason, the others run."""
+    (tmp_path / "conftest.py").write_text(
+        "import cumuli.testing.plugin as plugin\n"
+        "plugin._gl_status = lambda: (False, 'no EGL display (test)')\n",
+        encoding="utf-8",
+    )
+    (tmp_path / "test_user.py").write_text(
+        "import pytest\n\n"
+        "@pytest.mark.gl\n"
+        "def test_needs_gl(gl_context):\n    raise AssertionError('must not run')\n\n"
+        "def test_plain():\n    assert True\n",
+        encoding="utf-8",
+    )
+    done = _pytest(tmp_path, "-rs", ".")
+    assert done.returncode == 0, done.stdout
+    assert "1 passed, 1 skipped" in done.stdout
+    assert "no headless OpenGL here: no EGL display (test)" in done.stdout
