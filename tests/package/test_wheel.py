@@ -1,5 +1,6 @@
 """`make wheel` gives a manylinux wheel that installs into a fresh virtual environment, outside
-the source tree and without building anything, and runs the quick start and `cumuli demo`.
+the source tree and without building anything, and runs the quick start, `cumuli demo` and a
+user's pytest file through the plugin's entry point.
 
 Slow (it compiles the core and installs the dependencies into the new environment): run it with
 ``pytest -m slow tests/package/test_wheel.py``.
@@ -58,3 +59,20 @@ def test_the_wheel_installs_and_runs_in_a_clean_environment(tmp_path: Path) -> N
     )  # fmt: skip
     assert smoke.returncode == 0, smoke.stdout[-2000:] + smoke.stderr[-3000:]
     assert f"from {venv}" in smoke.stdout  # the installed copy, not the source tree
+
+    # The pytest plugin comes with the install (its entry point): the docs' user test file runs
+    # with no -p option and no conftest.
+    pip = [str(python), "-m", "pip", "install", "-q", "--only-binary", ":all:", "pytest"]
+    assert subprocess.run(pip, env=clean, capture_output=True, timeout=600).returncode == 0
+    tests = tmp_path / "user" / "tests"
+    tests.mkdir(parents=True)
+    text = (ROOT / "docs" / "testing.md").read_text(encoding="utf-8")
+    block = text.split('```python title="test_my_clouds.py"\n', 1)[1].split("```", 1)[0]
+    (tests / "test_my_clouds.py").write_text(block, encoding="utf-8")
+    for args in (["--cumuli-update-goldens"], []):
+        run = subprocess.run(
+            [str(python), "-m", "pytest", "-q", "-p", "no:cacheprovider", "tests", *args],
+            cwd=tests.parent, env=clean, capture_output=True, text=True, timeout=600,
+        )  # fmt: skip
+        assert run.returncode == 0, run.stdout[-3000:]
+    assert (tests / "goldens" / "cumulus.exr").is_file()
