@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import subprocess
@@ -135,7 +136,7 @@ def test_one_alias_keeps_the_default_of_the_other(tmp_path: Path) -> None:
 
 def test_every_image_command_takes_the_same_size_and_quiet_options() -> None:
     parser = cli.build_parser()
-    commands = parser._subparsers._group_actions[0].choices  # type: ignore[union-attr]
+    (commands,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
     for name in ("demo", "render"):
-        options = {s for a in commands[name]._actions for s in a.option_strings}
+        options = {s for a in commands.choices[name]._actions for s in a.option_strings}
         assert {"--size", "--width", "--height", "-q", "--quiet", "-o", "--output"} <= options

@@ -10,6 +10,7 @@ import re
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import pytest
 
@@ -31,8 +32,8 @@ def site(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return out
 
 
-def _nav_pages(nav: list) -> list[str]:
-    pages = []
+def _nav_pages(nav: list[Any]) -> list[str]:
+    pages: list[str] = []
     for entry in nav:
         value = next(iter(entry.values())) if isinstance(entry, dict) else entry
         pages += _nav_pages(value) if isinstance(value, list) else [value]

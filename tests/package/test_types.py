@@ -1,5 +1,7 @@
 """Types: the compiled module's stubs are current and type-check, and the public-API examples of
-the README's quick start and of the docs type-check against the package (mypy)."""
+the README's quick start and of the docs, the `cumuli.testing` plugin and the tests that use the
+public API most (the CLI, the image checks, the golden images) type-check against the package
+(mypy)."""
 
 from __future__ import annotations
 
@@ -12,6 +14,17 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 STUB = ROOT / "python" / "cumuli" / "_core.pyi"
+#: Checked with the examples: the plugin users import, and tests written as users write them.
+TYPED = [
+    ROOT / "python" / "cumuli" / "testing",
+    ROOT / "tests" / "conftest.py",
+    *(ROOT / "tests" / "package" / f for f in (
+        "test_cli.py", "test_testing_plugin.py", "test_packaging.py", "test_docs_site.py",
+        "test_readme.py", "test_types.py", "test_wheel.py", "wheel_smoke.py",
+    )),
+    ROOT / "tests" / "rendering" / "test_render_gl.py",
+    ROOT / "tests" / "rendering" / "test_mitsuba_reference.py",
+]  # fmt: skip
 
 pytest.importorskip("mypy", reason="mypy comes with the test extra")
 
@@ -63,7 +76,7 @@ def test_the_examples_and_the_stubs_type_check(tmp_path: Path) -> None:
     folder.mkdir()
     for name, code in examples.items():
         (folder / f"{name}.py").write_text(code, encoding="utf-8")
-    done = _mypy(folder, STUB)
+    done = _mypy(folder, STUB, *TYPED)
     assert done.returncode == 0, done.stdout[-4000:]
     assert "Success" in done.stdout
 

@@ -10,6 +10,7 @@ import math
 import os
 import weakref
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -123,7 +124,7 @@ def golden_scenes() -> dict[str, tuple[cu.Scene, cu.Camera]]:
 # GOLDEN_CLOUD_MEAN_ABS = 1e-4 by ≥ 3.9×, which still leaves 3.5× over the C++ marcher's
 # 2.8e-5. The same perturbations move the whole-image mean by only 2–12e-5: the old whole-image
 # tolerance (2e-3, kept below as a loose summary) could not see them.
-GOLDEN = {
+GOLDEN: dict[str, Any] = {
     "alpha_threshold": 0.05,  # CLOUD pixels: reference alpha above this
     "covered_mean_abs": 1e-4,  # mean |Δ| over cloud pixels that are not gate pixels
     "background_max_abs": 1e-4,  # any channel of a sky pixel (sky formula: pow rounding, ~1e-7)

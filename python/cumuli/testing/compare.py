@@ -15,6 +15,7 @@ import os
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +33,7 @@ DEFAULTS: dict[str, float] = {
 }
 
 
-def only(**limits: float) -> dict[str, float]:
+def only(**limits: float) -> dict[str, Any]:
     """Tolerances with every per-pixel metric off (``inf``) except those given: e.g.
     ``assert_image_close(gl, cpu, **only(channel_mean_abs=1e-3))`` checks the per-channel mean
     alone, the usual check of two implementations of one renderer."""
@@ -141,7 +142,8 @@ def compare_images(
     allowed = max(1, int(outlier_share * covered.sum()))
     inner, outer = covered & ~outlier, ~covered & ~outlier
     out = ImageComparison(shape=a.shape)
-    m, lim, where = out.metrics, out.limits, out.where
+    m, lim = out.metrics, out.limits
+    where: dict[str, tuple[int, int] | None] = {}
     m["covered_pixels"] = int(covered.sum())
     m["covered_mean"] = float(diff[inner].mean()) if inner.any() else 0.0
     lim["covered_mean"] = covered_mean_abs
