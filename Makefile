@@ -15,12 +15,17 @@ VENV ?= .venv
 PY := $(VENV)/bin/python
 # python3-venv: Debian's python3 has no venv/ensurepip without it; python3-dev: Python.h for the
 # extension build; libgl1: glcontext's EGL backend dlopens libGL.so.1 (libegl1 does not pull it).
+# python3-openvdb: OpenVDB's own reader and writer (run by Debian's python3) that the interchange
+# tests check cumuli's .vdb files against.
 SYSTEM_PACKAGES := g++ make python3 python3-venv python3-dev libglm-dev \
-  libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2
+  libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2 python3-openvdb
+# Blender as a Python module (bpy 4.x, Python 3.11) lives in its own environment: its wheel pins
+# numpy < 2, which the test environment's packages (pandas, zarr) do not accept.
+BLENDER_VENV ?= .venv-blender
 STAMP := $(VENV)/.cumuli-installed
 
-.PHONY: setup system venv install demo test test-fast bench bench-quick lint inplace stubs wheel \
-  docs clean
+.PHONY: setup system venv install blender demo test test-fast bench bench-quick lint inplace \
+  stubs wheel docs clean
 
 setup: system install
 
@@ -47,10 +52,17 @@ install: $(PY)
 	$(PY) -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.13" cmake ninja
 	$(PY) -m pip install -q --no-build-isolation -e ".[test]"
 
+# The interchange tests run Blender in a subprocess from $(BLENDER_VENV) (tests/io/_blender.py).
+blender: $(BLENDER_VENV)/.bpy-installed
+$(BLENDER_VENV)/.bpy-installed:
+	python3 -m venv $(BLENDER_VENV)
+	@if $(BLENDER_VENV)/bin/python -m pip install -q "bpy>=4.2,<5"; then touch $@; \
+	else rm -rf $(BLENDER_VENV); echo "bpy (Python 3.11 only) is not installable here: the Blender tests will skip"; fi
+
 demo: setup
 	$(VENV)/bin/cumuli demo -o out.png
 
-test: setup
+test: setup blender
 	$(PY) -m pytest -q tests --nbmake notebooks
 
 test-fast: install

@@ -9,6 +9,7 @@ row 0 on top.
 from __future__ import annotations
 
 from cumuli import registry
+from cumuli._util.budget import BudgetError, Limits, get_limits, limits, set_limits
 from cumuli._version import __version__
 from cumuli.anim import frames, weather_presets
 from cumuli.anim.cluster import sweep
@@ -23,6 +24,9 @@ from cumuli.anim.frames import fly_towards, orbit, render_frames
 from cumuli.anim.weather import CloudLayer, Schedule, SkyState, Weather, load_weather
 from cumuli.camera import Camera
 from cumuli.ground import Ground
+from cumuli.interchange.blender import to_blender
+from cumuli.interchange.mitsuba import to_mitsuba
+from cumuli.interchange.volumes import read_volume, write_volume
 from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
 from cumuli.light.billboard_shading import BillboardShading
@@ -80,6 +84,11 @@ from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of 
 # isort: on
 
 __all__ = [
+    "BudgetError",
+    "Limits",
+    "get_limits",
+    "limits",
+    "set_limits",
     "BasisModel",
     "BillboardCloud",
     "BillboardField",
@@ -112,6 +121,10 @@ __all__ = [
     "Cloud",
     "CloudDeck",
     "density_volume",
+    "read_volume",
+    "write_volume",
+    "to_mitsuba",
+    "to_blender",
     "ellipsoids_from_mesh",
     "ExtinctionField",
     "fly_towards",

@@ -15,6 +15,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from cumuli import _core
+from cumuli._util import budget
 from cumuli._util import validate as check
 
 #: Largest lattice edge accepted: 512³ float32 is 512 MiB, and the core keeps a second,
@@ -124,6 +125,7 @@ class Noise:
     def __init__(self, seed: int = 0, size: int = 64) -> None:
         seed = check.integer(seed, "seed", 0, 2**64 - 1)
         size = check.integer(size, "size", 2, MAX_SIZE)
+        budget.check_memory(f"Noise(size={size})'s lattice", 4 * size**3)  # float32
         self._core = _core.Noise(seed, size)
 
     @property
@@ -205,6 +207,7 @@ class Noise:
             d, h, w = (check.integer(v, "shape", 1, MAX_GRID_EDGE) for v in shape)
         if d * h * w > check.MAX_POINTS:
             raise ValueError(f"shape {(d, h, w)} has more than {check.MAX_POINTS} voxels")
+        budget.check_memory(f"fbm_grid of shape {(d, h, w)}", 4 * d * h * w)  # float32 out
         lo = np.array(check.vec3(box_min, "box_min"), dtype=np.float64)
         hi = np.array(check.vec3(box_max, "box_max"), dtype=np.float64)
         if not (hi > lo).all():

@@ -68,7 +68,10 @@ class Kind:
     **Model**: ``name`` (its tag in scene files, ``model.kind``), ``model`` (the value class: it
     has ``bounds()``, ``layer_box()``, ``to_dict()`` and ``from_dict(data, where)``),
     ``paper`` (where its technique comes from) and ``modules``: its own modules (dotted names
-    under ``cumuli``), the only ones that may test ``isinstance`` against its class.
+    under ``cumuli``), the only ones that may test ``isinstance`` against its class;
+    ``cost(data)``: the memory that building one from its scene-file dict ``data`` implies beyond
+    the bytes the file holds, as ``(key, what, bytes)`` items (items of one key are counted once:
+    a shared cache), estimated before anything is built (None: nothing beyond the file).
 
     **Light**: ``light(drawable, scene, given, threads)`` its light pass in the paper mode;
     ``physical_light`` the same in the physical mode (None: ``light`` in both modes, as
@@ -114,6 +117,7 @@ class Kind:
     split_key: Callable[..., float] | None = None
     translation: Callable[[Any, Any], Any] | None = None
     order_point: Callable[[Any], Any] | None = None
+    cost: Callable[[Any], list[tuple[Any, str, int]]] | None = None
 
     def light_pass(self, physical: bool) -> Callable[..., Any]:
         """The light pass of this kind in the physical (True) or paper (False) mode."""

@@ -26,13 +26,16 @@ import numpy as np
 
 from cumuli import registry
 from cumuli._util.atomic import atomic_target
+from cumuli._util.budget import amount, get_limits
 from cumuli.camera import Camera
 from cumuli.ground import Ground
+from cumuli.io.jsonable import loads as json_loads
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.sprite_settings import SpriteSettings
 from cumuli.model.solid import Solid, as_solids
 from cumuli.noise import Noise
 from cumuli.rendering.impostors import ImpostorSettings
+from cumuli.scene_cost import check_scene
 from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
 
@@ -250,6 +253,7 @@ class Scene:
             raise ValueError(f"scene has unknown field(s): {', '.join(unknown)}")
         if not isinstance(data["clouds"], list):
             raise ValueError("scene.clouds must be a JSON list")
+        check_scene(data, "building the scene", get_limits().memory)
         clouds = [
             _drawable_from_dict(c, f"scene.clouds[{k}]") for k, c in enumerate(data["clouds"])
         ]
@@ -344,9 +348,18 @@ def load_scene(path: str | os.PathLike[str]) -> Scene:
     except UnicodeDecodeError as exc:
         raise ValueError(f"scene file {str(path)!r} is not UTF-8 JSON: {exc}") from None
     try:
-        data = json.loads(text)
-    except (json.JSONDecodeError, RecursionError) as exc:  # RecursionError: absurd nesting
+        data = json_loads(text)
+    except (ValueError, RecursionError) as exc:  # RecursionError: absurd nesting
         raise ValueError(f"scene file {str(path)!r} is not valid JSON: {exc}") from None
+    limits = get_limits()
+    allowed = limits.scene_bytes(size)
+    check_scene(
+        data, f"scene file {str(path)!r} of {amount(size)}", allowed,
+        f"cumuli.set_limits(scene_expansion=..., scene_allowance=...) (a scene file may cost "
+        f"max({limits.scene_expansion} × its size, {amount(limits.scene_allowance)}), and at "
+        f"most the memory budget, {amount(limits.memory)}: set_limits(memory=...) or "
+        "CUMULI_MEMORY_BUDGET; CUMULI_SCENE_ALLOWANCE)",
+    )  # fmt: skip
     try:
         return Scene.from_dict(data)
     except (ValueError, TypeError) as exc:

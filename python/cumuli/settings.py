@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli.light.grid import MAX_RESOLUTION
 from cumuli.light.ndt import DEFAULT_SOLID_ANGLE, LightParams
@@ -25,6 +26,20 @@ LIGHT_METHODS = ("ndt", "naive", "shared")
 LIGHTING_MODES = ("paper", "physical")
 #: Phase functions of the physical mode: one Henyey–Greenstein lobe or a blend of two.
 PHASE_FUNCTIONS = ("hg", "dual_hg")
+#: The physical mode's sun lattice: ACROSS × physical_resolution nodes across the light, ALONG ×
+#: as many along.
+ACROSS = 2
+ALONG = 8
+#: Cell-averaging of the world lattice's extinction (supersample³ points per voxel).
+SUPERSAMPLE = 2
+#: Bytes per physical_resolution³ node while one drawable's light is made: the sun lattice's
+#: optical depths (ACROSS² × ALONG float32), the world lattice's extinction, light, centres and
+#: transmittance, and the supersampled points of its extinction.
+PHYSICAL_BYTES_PER_NODE = 4 * ACROSS * ACROSS * ALONG + 4 + 16 + 12 + 4 + 12 * SUPERSAMPLE**3
+#: Bytes per node a finished light keeps (its RGBA grid and its sun depth).
+PHYSICAL_KEPT_BYTES_PER_NODE = 16 + 4 * ACROSS * ACROSS * ALONG
+#: Samples per node: the sun lattice's march points and the extinction's supersamples.
+PHYSICAL_SAMPLES_PER_NODE = ACROSS * ACROSS * ALONG + SUPERSAMPLE**3
 
 
 @dataclass(frozen=True)
@@ -284,6 +299,25 @@ class RenderSettings:
             "extinction": self.light_extinction,
             **self.fbm_params(),
         }
+
+    def physical_cost(self, media: int) -> tuple[int, int]:
+        """``(bytes, samples)`` the physical light of ``media`` drawables with a medium costs
+        at ``physical_resolution`` (one made at a time, the finished ones kept)."""
+        nodes = self.physical_resolution**3
+        if media <= 0:
+            return 0, 0
+        kept = (media - 1) * PHYSICAL_KEPT_BYTES_PER_NODE
+        return nodes * (PHYSICAL_BYTES_PER_NODE + kept), nodes * PHYSICAL_SAMPLES_PER_NODE * media
+
+    def check_physical_budget(self, media: int) -> None:
+        """Refuse the physical light of ``media`` drawables when it is over the budget."""
+        memory, samples = self.physical_cost(media)
+        what = (
+            f"the physical light of {media} drawable(s) at "
+            f"settings.physical_resolution={self.physical_resolution}"
+        )
+        budget.check_memory(what, memory)
+        budget.check_work(what, samples)
 
     def light_params(self) -> LightParams:
         """The :class:`cumuli.LightParams` of the light grids these settings render with (the

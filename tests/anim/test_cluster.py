@@ -117,3 +117,19 @@ def test_bench_cluster_quick_writes_json_and_plot(
     assert set(data["seconds"]) == {"serial", "1 worker", "2 workers"}
     assert data["ratios"]["2_workers_speedup_over_1"] > 0
     assert (tmp_path / "cluster.png").stat().st_size > 1000
+
+
+def test_workers_run_tasks_under_the_submitters_budget(client) -> None:
+    from cumuli.anim import cluster
+
+    def budget_here() -> int:
+        return cu.get_limits().memory
+
+    with cu.limits(memory="3M"):
+        seen = cluster.run([(budget_here, ()), (budget_here, ())], client, progress=False)
+    assert seen == [3 << 20, 3 << 20]  # the workers' own default is 4 GiB
+    assert cluster.run([(budget_here, ())], client, progress=False) == [cu.Limits().memory]
+    with cu.limits(memory="1M"):  # a scene the submitter refuses is refused on the workers
+        with pytest.raises(cu.BudgetError, match="Noise"):
+            cu.sweep(lambda: cu.Scene([], noise=cu.Noise(seed=1, size=128)), [{}],
+                     client=client, progress=False)  # fmt: skip

@@ -36,6 +36,7 @@ from pathlib import Path
 import numpy as np
 
 import cumuli as cu
+from cumuli.interchange.mitsuba import sky_environment
 
 HERE = Path(__file__).resolve().parent
 WIDTH, HEIGHT = 160, 120
@@ -84,72 +85,23 @@ def covered_blocks(transmittance: np.ndarray) -> np.ndarray:
 
 
 def environment(scene: cu.Scene, width: int = 1024) -> np.ndarray:
-    """``Sky.radiance`` as Mitsuba's lat-long envmap (``(H, W, 3)``): texel (i, j) shows the
-    direction ``(sinθ·sin φ, cosθ, −sinθ·cos φ)``, θ = π(i + ½)/H, φ = 2π(j + ½)/W."""
-    height = width // 2
-    theta = np.pi * (np.arange(height) + 0.5) / height
-    phi = 2 * np.pi * (np.arange(width) + 0.5) / width
-    st = np.sin(theta)[:, None]
-    d = np.stack(
-        [st * np.sin(phi)[None], np.cos(theta)[:, None] * np.ones((1, width)),
-         -st * np.cos(phi)[None]], -1,
-    ).reshape(-1, 3)  # fmt: skip
-    return scene.sky.radiance(d, scene.sun).reshape(height, width, 3)
+    """``Sky.radiance`` as Mitsuba's lat-long envmap (``cumuli.interchange.mitsuba``)."""
+    return sky_environment(scene, width)
 
 
 def mitsuba_scene(kind: str, scene: cu.Scene, camera: cu.Camera, field, spp: int, seed: int):
+    """The scene of one image, from ``cu.to_mitsuba``: every order (``ms``), the sun alone
+    (``ms_sun``), one scattering event (``ss``) or the transmittance (albedo 0 under a constant
+    environment of radiance 1)."""
     import mitsuba as mi
 
-    s = scene.settings
-    lo, hi = (np.asarray(b, np.float64) for b in field.box)
-    centre, half = (lo + hi) / 2, (hi - lo) / 2
-    grid_to_world = mi.ScalarTransform4f().translate(lo.tolist()).scale((hi - lo).tolist())
-    medium = {
-        "type": "heterogeneous",
-        "albedo": 0.0 if kind == "transmittance" else float(s.albedo),
-        "phase": {"type": "hg", "g": float(s.hg_g)},
-        "sigma_t": {
-            "type": "gridvolume",
-            "grid": mi.VolumeGrid(np.ascontiguousarray(field.values[..., None])),
-            "to_world": grid_to_world,
-        },
-        "scale": 1.0,
-    }
-    emitters: dict = {}
-    if kind == "transmittance":
-        emitters["env"] = {"type": "constant", "radiance": {"type": "rgb", "value": [1, 1, 1]}}
-    else:
-        d = -np.asarray(scene.sun.direction, np.float64)
-        emitters["sun"] = {
-            "type": "directional",
-            "direction": d.tolist(),
-            "irradiance": {"type": "rgb", "value": list(scene.sun.radiance)},
-        }
-        if kind != "ms_sun":
-            emitters["sky"] = {"type": "envmap", "bitmap": mi.Bitmap(environment(scene))}
     depth = {"ms": 512, "ms_sun": 512, "ss": 2, "transmittance": 1}[kind]
-    return mi.load_dict({
-        "type": "scene",
-        "integrator": {"type": "volpath", "max_depth": depth, "rr_depth": 512},
-        **emitters,
-        "box": {
-            "type": "cube",
-            "bsdf": {"type": "null"},
-            "to_world": mi.ScalarTransform4f().translate(centre.tolist()).scale(half.tolist()),
-            "interior": medium,
-        },
-        "sensor": {
-            "type": "perspective",
-            "fov": float(camera.fov),
-            "fov_axis": "y",
-            "to_world": mi.ScalarTransform4f().look_at(
-                origin=list(camera.position), target=list(camera.target), up=list(camera.up)
-            ),
-            "film": {"type": "hdrfilm", "width": WIDTH, "height": HEIGHT,
-                     "rfilter": {"type": "box"}, "pixel_format": "rgb"},  # fmt: skip
-            "sampler": {"type": "independent", "sample_count": spp, "seed": seed},
-        },
-    })  # fmt: skip
+    transmittance = kind == "transmittance"
+    return mi.load_dict(cu.to_mitsuba(
+        scene, camera, WIDTH, HEIGHT, spp=spp, seed=seed, max_depth=depth, rr_depth=512,
+        sun=not transmittance, sky=1.0 if transmittance else kind != "ms_sun",
+        albedo=0.0 if transmittance else None, fields=[field],
+    ))  # fmt: skip
 
 
 def half_noise(a: np.ndarray, b: np.ndarray, mask: np.ndarray) -> float:

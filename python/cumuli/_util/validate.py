@@ -133,7 +133,8 @@ def direction(value: Any, name: str) -> tuple[float, float, float]:
 def integer(value: Any, name: str, lo: int | None = None, hi: int | None = None) -> int:
     """Return ``value`` as an int within ``[lo, hi]`` (bools and floats with fractions refused)."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        raise TypeError(f"{name} must be an integer, got {type(value).__name__}")
+        shown = f" {value!r}" if isinstance(value, (float, np.floating)) else ""
+        raise TypeError(f"{name} must be an integer, got {type(value).__name__}{shown}")
     v = int(value)
     if lo is not None and v < lo:
         raise ValueError(f"{name} must be >= {lo}, got {v}")
@@ -230,3 +231,16 @@ def float_array(value: Any, name: str, shape: tuple[int, ...]) -> np.ndarray:
     if not np.isfinite(arr).all():
         raise ValueError(f"{name} contains NaN or infinite values")
     return arr
+
+
+def uploadable(arr: np.ndarray, name: str, bound: float = FLOAT32_MAX) -> None:
+    """Refuse an array about to be handed to the GPU (or the core) that holds NaN, inf or a
+    magnitude beyond ``bound``: checked on what is uploaded, not on what the API once made, so
+    an array flipped writable and changed after it was validated is still caught."""
+    if arr.size == 0:
+        return
+    lo, hi = float(np.min(arr)), float(np.max(arr))
+    if not (math.isfinite(lo) and math.isfinite(hi)):
+        raise ValueError(f"{name} contains NaN or infinite values")
+    if max(-lo, hi) > bound:
+        raise ValueError(f"{name} holds a value of magnitude {max(-lo, hi):.3g}, beyond ±{bound:g}")

@@ -26,10 +26,13 @@ from typing import Any
 
 import numpy as np
 
+from cumuli._util.budget import Limits, get_limits, within
 from cumuli.camera import Camera
 from cumuli.scene import Scene
 
 BACKENDS = ("gl", "cpu")
+#: Most renders of one `sweep` (as `render_frames`' MAX_FRAMES: its tasks are held in memory).
+MAX_SWEEP = 100_000
 
 
 def render_task(
@@ -98,6 +101,12 @@ def _check_client(client: Any, backend: str) -> None:
             )
 
 
+def _within(limits: Limits, fn: Callable[..., Any], *args: Any) -> Any:
+    """``fn(*args)`` under ``limits`` (a worker runs a task with its submitter's budget)."""
+    with within(limits):
+        return fn(*args)
+
+
 def run(
     tasks: Sequence[tuple[Callable[..., Any], tuple[Any, ...]]],
     client: Any = None,
@@ -111,8 +120,10 @@ def run(
         return [
             fn(*args) for fn, args in tqdm(tasks, desc=desc, unit="frame", disable=not progress)
         ]
-    # pure=False: every frame is a distinct task even when its arguments repeat.
-    futures = [client.submit(fn, *args, pure=False) for fn, args in tasks]
+    # pure=False: every frame is a distinct task even when its arguments repeat. Each task runs
+    # under the budget of the process that submits it (a worker's own may be the default).
+    limits = get_limits()
+    futures = [client.submit(_within, limits, fn, *args, pure=False) for fn, args in tasks]
     if progress:
         from distributed import progress as dask_progress
 
@@ -150,6 +161,8 @@ def sweep(
         raise TypeError(f"scene_fn must be callable, got {type(scene_fn).__name__}")
     if isinstance(params, (str, bytes, dict)) or not isinstance(params, Sequence):
         raise TypeError("params must be a sequence of dicts (keyword arguments of scene_fn)")
+    if len(params) > MAX_SWEEP:  # as render_frames: a list of tasks is held in memory
+        raise ValueError(f"params has {len(params)} entries, more than MAX_SWEEP={MAX_SWEEP}")
     for k, p in enumerate(params):
         if not isinstance(p, dict):
             raise TypeError(f"params[{k}] must be a dict, got {type(p).__name__}")
@@ -183,9 +196,18 @@ def _paths(out_dir: str | os.PathLike[str] | None, pattern: str, count: int) -> 
         raise ValueError(f"pattern {pattern!r} must take one frame number: {exc}") from None
     if len(set(names)) != len(names) or any(os.sep in n for n in names):
         raise ValueError(f"pattern {pattern!r} must give a distinct file name per frame")
+    from cumuli.io.images import FORMATS
+
+    if count and Path(names[0]).suffix.lower() not in FORMATS:  # before any task runs
+        raise ValueError(
+            f"pattern {pattern!r} gives {names[0]!r}, whose extension is not one of "
+            f"{sorted(FORMATS)}"
+        )
     folder = Path(out_dir)
     try:
         folder.mkdir(parents=True, exist_ok=True)
     except OSError as exc:
         raise OSError(f"cannot create out_dir {str(folder)!r}: {exc.strerror or exc}") from exc
+    if not os.access(folder, os.W_OK):
+        raise OSError(f"out_dir {str(folder)!r} is not writable")
     return [str(folder / n) for n in names]

@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
+from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli._util.atomic import atomic_target
 from cumuli.io.npz import (
@@ -40,6 +41,7 @@ from cumuli.io.npz import (
     meta_of,
     read_npz,
 )
+from cumuli.model.atlas import recipes_cost
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BasisModel, BillboardCloud, cloud_variants
 
@@ -47,6 +49,23 @@ BOUNDARIES = ("respawn", "wrap")
 MAX_INSTANCES: int = int(_core.WEATHER_MAX_INSTANCES)
 #: Most variants a whole weather may generate (NBM·NM summed over states and layers).
 MAX_VARIANTS = 4096
+#: Bytes a variant holds per box (its corners, level, seed and direction) and per billboard
+#: (centre, size, texture, box and rotation).
+BYTES_PER_VARIANT_BOX = 36
+BYTES_PER_VARIANT_BILLBOARD = 32
+
+
+def variants_cost(layers: Sequence[Any]) -> int:
+    """Bytes the variants of ``layers`` may hold: every state's NBM·NM clouds at their basis
+    model's worst case (`BasisModel.worst_case`), known before any is generated."""
+    total = 0
+    for layer in layers:
+        for state in layer.states:
+            for model in state.models:
+                boxes, billboards = model.worst_case
+                per = boxes * BYTES_PER_VARIANT_BOX + billboards * BYTES_PER_VARIANT_BILLBOARD
+                total += state.variants * per
+    return total
 
 
 @dataclass(frozen=True)
@@ -186,6 +205,10 @@ class CloudLayer:
         return cls(**kw)
 
 
+#: Most keyframes of one `Schedule` (each evaluation walks them).
+MAX_KEYFRAMES = 100_000
+
+
 @dataclass(frozen=True, init=False)
 class Schedule:
     """``CV(t)``: piecewise linear through ``keys`` ``((t, cv), ...)`` (t strictly increasing, cv
@@ -196,8 +219,17 @@ class Schedule:
     def __init__(self, keys: float | Sequence[tuple[float, float]]) -> None:
         if isinstance(keys, (int, float, np.floating)) and not isinstance(keys, bool):
             keys = [(0.0, float(keys))]
-        if not isinstance(keys, (tuple, list)) or not 1 <= len(keys) <= 100_000:
-            raise TypeError("cv must be a number or a sequence of (t, cv) keyframes")
+        if isinstance(keys, np.ndarray) and keys.ndim == 2:
+            keys = keys.tolist()
+        if not isinstance(keys, (tuple, list)):
+            raise TypeError(
+                f"cv must be a number or a sequence of (t, cv) keyframes, got {type(keys).__name__}"
+            )
+        if not 1 <= len(keys) <= MAX_KEYFRAMES:
+            raise ValueError(
+                f"cv has {len(keys)} keyframes; a schedule holds 1 to {MAX_KEYFRAMES} "
+                "(MAX_KEYFRAMES)"
+            )
         out = []
         for k in keys:
             if not isinstance(k, (tuple, list)) or len(k) != 2:
@@ -278,6 +310,7 @@ class Weather:
         total = sum(len(s.models) * s.variants for layer in layers for s in layer.states)
         if total > MAX_VARIANTS:
             raise ValueError(f"layers ask for {total} variants, more than {MAX_VARIANTS}")
+        budget.check_memory(f"a weather of {total} variants", variants_cost(layers))
         self.area = ((box[0], box[1]), (box[2], box[3]))
         self.layers: tuple[CloudLayer, ...] = tuple(layers)
         self.schedule = schedule
@@ -491,6 +524,7 @@ def _save(weather: Weather, path: Any) -> Path:
 
 
 def _load(path: Any, threads: int = 0) -> Weather:
+    threads = check.threads(threads)  # an argument's error is not the file's
     p = check_path(path, (".npz",))
     check_readable(p, "weather")
     limits = {"meta": 1 << 26}
@@ -499,6 +533,16 @@ def _load(path: Any, threads: int = 0) -> Weather:
             limits[f"layer{i}_{key}"] = _LIMIT
     arrays = read_npz(p, limits, ("meta",))
     meta = meta_of(arrays, p, FILE_FORMAT)
+    # The atlases its layers' recipes rebuild, before any is made: at most what a scene file of
+    # its size may cost.
+    recipes = recipes_cost(meta.get("config"))
+    size = p.stat().st_size
+    budget.check_memory(
+        f"weather file {p.name!r} of {budget.amount(size)} ({len(recipes)} atlas recipe(s))",
+        sum(cost for _, _, cost in recipes),
+        budget.get_limits().scene_bytes(size),
+        "cumuli.set_limits(scene_expansion=..., scene_allowance=...) or CUMULI_SCENE_ALLOWANCE",
+    )
     try:
         if meta.get("version") != FILE_VERSION:
             raise FileFormatError(
@@ -508,6 +552,13 @@ def _load(path: Any, threads: int = 0) -> Weather:
         if not isinstance(cfg, dict):
             raise ValueError("config must be an object")
         layers = [CloudLayer.from_dict(d) for d in cfg["layers"]]
+        # Its variants too, at the scene rule's budget, before any is generated.
+        budget.check_memory(
+            f"weather file {p.name!r} of {budget.amount(size)} (its layers' variants)",
+            variants_cost(layers) + sum(cost for _, _, cost in recipes),
+            budget.get_limits().scene_bytes(size),
+            "cumuli.set_limits(scene_expansion=..., scene_allowance=...) or CUMULI_SCENE_ALLOWANCE",
+        )
         weather = Weather(
             area=tuple(tuple(v) for v in cfg["area"]),
             layers=layers,
@@ -538,7 +589,7 @@ def _load(path: Any, threads: int = 0) -> Weather:
             state.append(d)
         weather._sim.set_state(float(meta["t"]), state)
         return weather
-    except FileFormatError:
+    except (FileFormatError, budget.BudgetError):
         raise
     except (ValueError, TypeError, KeyError, IndexError, RuntimeError, json.JSONDecodeError) as exc:
         raise FileFormatError(f"{p.name}: invalid weather data: {exc}") from None

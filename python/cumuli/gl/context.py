@@ -138,6 +138,10 @@ def with_defines(source: str, defines: dict[str, int]) -> str:
     return head + sep + "\n".join(lines) + "\n" + rest
 
 
+#: The core-profile OpenGL versions a context may require (``major * 100 + minor * 10``).
+GL_VERSIONS = (330, 400, 410, 420, 430, 440, 450, 460)
+
+
 class GLContext:
     """A moderngl standalone (EGL) context; use as a context manager or call :meth:`close`.
 
@@ -149,6 +153,15 @@ class GLContext:
     def __init__(self, require: int = 430) -> None:
         global _gl_pid, contexts_made
         self.closed = True  # until made: __del__ of a failed construction does nothing
+        if isinstance(require, bool) or not isinstance(require, int):
+            raise TypeError(
+                f"require must be an OpenGL version as an int (430 for 4.3), got {require!r}"
+            )
+        if require not in GL_VERSIONS:
+            raise ValueError(
+                f"require must be one of the OpenGL versions {GL_VERSIONS} (430 for 4.3: the "
+                f"compute shaders need it), got {require}"
+            )
         pid = os.getpid()
         if _gl_pid is not None and _gl_pid != pid:
             raise _fork_error(_gl_pid)
@@ -345,6 +358,15 @@ def close_default_context() -> None:
 
 
 atexit.register(close_default_context)
+
+
+def check_context(context: Any) -> None:
+    """Refuse a ``context`` argument that is neither a :class:`GLContext` nor None — on every
+    backend, so that a CPU call does not accept what the GL one would refuse."""
+    if context is not None and not isinstance(context, GLContext):
+        raise TypeError(
+            f"context must be a cumuli.gl.GLContext or None, got {type(context).__name__}"
+        )
 
 
 def _resolve_context(context: GLContext | None) -> GLContext:

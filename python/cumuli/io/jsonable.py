@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import base64
 import binascii
+import json
 import math
 from collections.abc import Mapping
 from typing import Any
@@ -18,6 +19,23 @@ import numpy as np
 
 #: Most values `array_from_json` accepts in one array (checked before decoding).
 MAX_JSON_ARRAY_VALUES = 1 << 28
+#: Most digits of an integer literal in a file read by `loads` (Python's own conversion limit is
+#: 4300); a longer one is read as a float (inf beyond 308 digits), so the field that holds it
+#: refuses it with its own name instead of Python's int-limit message.
+MAX_INT_DIGITS = 400
+
+
+def _parse_int(text: str) -> int | float:
+    if len(text) - text.startswith("-") > MAX_INT_DIGITS:
+        return float("inf") if not text.startswith("-") else float("-inf")
+    return int(text)
+
+
+def loads(text: str | bytes) -> Any:
+    """``json.loads`` for files: an integer literal longer than `MAX_INT_DIGITS` digits becomes
+    ±inf (refused by the field it lands in, with the field's name), never Python's int-limit
+    ValueError without a file or a field."""
+    return json.loads(text, parse_int=_parse_int)
 
 
 def jsonable(value: Any) -> Any:

@@ -18,6 +18,8 @@ from typing import Any
 
 import numpy as np
 
+from cumuli.io.jsonable import loads as json_loads
+
 #: Largest file the readers accept.
 MAX_FILE_BYTES = 1 << 31
 
@@ -107,7 +109,7 @@ def read_npz(
 def meta_of(arrays: dict[str, np.ndarray], path: Path, fmt: str) -> dict[str, Any]:
     """The JSON ``meta`` member, checked for the format tag."""
     try:
-        meta = json.loads(arrays.pop("meta").tobytes().decode("utf-8"))
+        meta = json_loads(arrays.pop("meta").tobytes().decode("utf-8"))
     except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
         raise FileFormatError(f"{path.name}: unreadable metadata ({exc})") from None
     if not isinstance(meta, dict) or meta.get("format") != fmt:

@@ -12,6 +12,7 @@ import numpy as np
 from cumuli import registry
 from cumuli.light import billboards as billboard_pass
 from cumuli.light.caf import ground_caf, ground_caf_digest
+from cumuli.model import billboard_field, billboards
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
 from cumuli.rendering import billboards as drawers
@@ -101,10 +102,11 @@ def _register(model: type, sphere: Any, **extra: Any) -> registry.Kind:
 CLOUD = _register(
     BillboardCloud,
     cloud_sphere,
+    cost=billboards.dict_cost,
     translation=billboard_translation,
     # Sorted by its boxes' centre c_C (RENDER_CONTRACT, "Billboards").
     order_point=lambda d: np.asarray(d.centre, np.float64),
 )
-FIELD = _register(BillboardField, field_sphere)
+FIELD = _register(BillboardField, field_sphere, cost=billboard_field.dict_cost)
 
 __all__ = ["CLOUD", "FIELD", "receiver", "shadow_digest", "transmittance"]

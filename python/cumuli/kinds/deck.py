@@ -14,6 +14,7 @@ from cumuli.light.medium import volume_core_args, volume_extinction
 from cumuli.light.memo import content_digest
 from cumuli.light.physical import physical_pass
 from cumuli.light.volume import volume_light
+from cumuli.model import deck as deck_model
 from cumuli.model.deck import CloudDeck
 from cumuli.rendering.deck import DeckGL, draw_deck_cpu
 
@@ -59,6 +60,7 @@ KIND = registry.register(
         model=CloudDeck,
         paper="beyond the papers: a layer cloud (Schneider 2015's height profiles and coverage)",
         modules=("model.deck", "rendering.deck", "kinds.deck"),
+        cost=deck_model.dict_cost,
         light=light,
         physical_light=physical_pass,
         digest=digest,

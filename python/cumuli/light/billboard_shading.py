@@ -89,18 +89,15 @@ class BillboardShading:
 
     def __post_init__(self) -> None:
         set_ = object.__setattr__
-        set_(self, "d_min", check.real(self.d_min, "d_min", 0.0))
-        set_(self, "d_max", check.real(self.d_max, "d_max", 0.0))
+        set_(self, "d_min", check.real(self.d_min, "d_min", 0.0, check.MAX_COORD))
+        set_(self, "d_max", check.real(self.d_max, "d_max", 0.0, check.MAX_COORD))
         if self.d_min > self.d_max:
             raise ValueError(f"d_min must be <= d_max, got {self.d_min} > {self.d_max}")
         set_(self, "k_dir", check.real(self.k_dir, "k_dir", 0.0, 100.0, lo_open=True))
         _choice(self.directional, "directional", DIRECTIONAL)
         if self.ambient is not None:
-            amb = check.vec3(self.ambient, "ambient")
-            if min(amb) < 0:
-                raise ValueError(f"ambient must be non-negative, got {amb}")
-            set_(self, "ambient", amb)
-        set_(self, "k_amb", check.real(self.k_amb, "k_amb", 0.0))
+            set_(self, "ambient", check.radiance(self.ambient, "ambient"))
+        set_(self, "k_amb", check.real(self.k_amb, "k_amb", 0.0, check.MAX_RADIANCE))
         _choice(self.shading, "shading", SHADING)
         if self.height_levels is not None:
             levels = self.height_levels

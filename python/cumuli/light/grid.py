@@ -23,6 +23,7 @@ import numpy as np
 from cumuli import _core
 from cumuli._util import validate as check
 from cumuli._util.atomic import atomic_target
+from cumuli.io.jsonable import loads as json_loads
 from cumuli.io.npz import check_path, check_readable, read_npz
 from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise, _fbm_params
@@ -265,7 +266,7 @@ def load_light_grid(path: str | os.PathLike[str]) -> LightGrid:
     check_readable(path, "light-grid")
     arrays = read_npz(path, {"meta": 1 << 20, "values": MAX_FILE_VOXELS}, ("meta", "values"))
     try:
-        meta = json.loads(arrays["meta"].tobytes().decode("utf-8"))
+        meta = json_loads(arrays["meta"].tobytes().decode("utf-8"))
         if not isinstance(meta, dict) or meta.get("format") != GRID_FORMAT:
             raise ValueError("not a cumuli light-grid file (format tag missing)")
         rec = meta.get("record")

@@ -18,15 +18,39 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from cumuli import _core, registry
+from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli.model.cloud import Cloud
 from cumuli.model.volume import VolumeCloud
 from cumuli.noise import Noise
 from cumuli.settings import RenderSettings
 
-#: Longest edge of a density volume, and most voxels (2³⁰ float32 = 4 GiB).
+#: Longest edge of a density volume, and most voxels (the volume-voxel limit of every call,
+#: 2²⁸: 1 GiB of float32).
 MAX_EDGE = 4096
-MAX_VOXELS = 1 << 30
+MAX_VOXELS = check.MAX_POINTS
+#: Bytes per voxel while a field is made: a 2018 cloud's (the core's float32 grid and its
+#: scaled copy) and a resampled volume's (float64 sums, the sample points in float64 and
+#: float32, the samples).
+CLOUD_BYTES_PER_VOXEL = 8
+VOLUME_BYTES_PER_VOXEL = 80
+
+
+def check_lattice(what: str, shape: Sequence[int], supersample: int, bytes_per_voxel: int) -> None:
+    """Refuse a lattice of ``shape`` beyond MAX_VOXELS, or whose memory (``bytes_per_voxel``
+    per voxel) or work (``supersample³`` samples per voxel) is over the budget, before any of
+    it is made."""
+    voxels = math.prod(shape)
+    if voxels > MAX_VOXELS:
+        raise ValueError(
+            f"{what}: resolution {tuple(shape)} has {voxels} voxels, more than the limit "
+            f"{MAX_VOXELS} (2**28, MAX_VOXELS)"
+        )
+    budget.check_memory(f"{what} at resolution {tuple(shape)}", voxels * bytes_per_voxel)
+    budget.check_work(
+        f"{what} at resolution {tuple(shape)} × supersample {supersample}³",
+        voxels * supersample**3,
+    )
 
 
 class ExtinctionField(NamedTuple):
@@ -109,8 +133,7 @@ def cloud_extinction(
     if resolution is None:
         raise ValueError("resolution=None keeps a lattice's own; give one for a cumuli.Cloud")
     shape = lattice_shape(box, resolution)
-    if math.prod(shape) * supersample**3 > MAX_VOXELS:
-        raise ValueError(f"resolution {shape} × supersample³ exceeds {MAX_VOXELS} samples")
+    check_lattice("a cloud's extinction field", shape, supersample, CLOUD_BYTES_PER_VOXEL)
     return ExtinctionField(_cloud_grid(cloud, noise, settings, (lo, hi), shape, supersample,
                                        threads), box)  # fmt: skip
 
@@ -124,8 +147,8 @@ def volume_extinction(
     lo, hi = (np.asarray(b, np.float32) for b in volume.layer_box())
     box = (tuple(float(v) for v in lo), tuple(float(v) for v in hi))
     shape = None if resolution is None else lattice_shape(box, resolution)
-    if shape is not None and math.prod(shape) > MAX_VOXELS:
-        raise ValueError(f"resolution {shape} has more than {MAX_VOXELS} voxels")
+    if shape is not None and tuple(shape) != tuple(volume.density.shape[::-1]):
+        check_lattice("a volume's resampled field", shape, supersample, VOLUME_BYTES_PER_VOXEL)
     return ExtinctionField(_volume_grid(volume, shape, supersample), box)
 
 

@@ -29,6 +29,7 @@ import numpy as np
 
 from cumuli import _core
 from cumuli._util import validate as check
+from cumuli.gl.context import check_context
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.caf import ground_caf
 from cumuli.light.sprite_settings import (  # noqa: F401 (public names)
@@ -223,6 +224,7 @@ def particle_light_many(
     if not isinstance(return_buffers, (bool, np.bool_)):
         raise TypeError("return_buffers must be a bool")
     threads = check.threads(threads)
+    check_context(context)  # on every path, as the GL one would
     dirs = light_directions(lights)
     if method == "cpu":
         results = _core.particle_light(
@@ -355,6 +357,7 @@ def phase_values(
     c = np.ascontiguousarray(c, dtype=np.float32)
     if not np.isfinite(c).all() or (np.abs(c) > 1).any():
         raise ValueError("cos_theta must be finite and within [-1, 1]")
+    check_context(context)
     if backend == "cpu":
         return _core.phase_4pi(phase, g, c)
     if backend == "gl":

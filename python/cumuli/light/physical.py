@@ -45,6 +45,7 @@ from cumuli.ground import ground_radiance_unshadowed
 from cumuli.light.digests import drawable_digest
 from cumuli.light.medium import cloud_extinction_scale, extinction_grid  # noqa: F401 (public)
 from cumuli.light.memo import remember
+from cumuli.settings import ACROSS, ALONG, SUPERSAMPLE
 from cumuli.sky import sky_args
 
 #: Scattering orders drawn as octaves (order 0 is single scattering), and their constants.
@@ -58,11 +59,13 @@ SKY_GAIN = 2.0
 #: SH order and quadrature (n_theta) of the sky visibility.
 SKY_ORDER = 3
 SKY_SAMPLES = 3
-#: The sun lattice: ACROSS × physical_resolution nodes across the light, ALONG × as many along.
-ACROSS = 2
-ALONG = 8
-#: Cell-averaging of the world lattice's extinction (supersample³ points per voxel).
-SUPERSAMPLE = 2
+
+
+def check_budget(scene: Any) -> None:
+    """Refuse a scene whose physical light (``settings.physical_resolution``³ nodes per
+    drawable with a medium) is over the memory or work budget, before any of it is made."""
+    media = sum(1 for d in scene.clouds if registry.of(d).medium is not None)
+    scene.settings.check_physical_budget(media)
 
 
 @dataclass(frozen=True, eq=False)
@@ -152,6 +155,7 @@ def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight
     medium = registry.of(drawable).medium
     if medium is None:
         raise TypeError(f"no physical light pass for {type(drawable).__name__}")
+    check_budget(scene)
     s = scene.settings
     n = s.physical_resolution
     lattice = medium.own_lattice(drawable)

@@ -118,10 +118,7 @@ class SpriteSettings:
         if quantize not in (0, 8):
             raise ValueError(f"quantize must be 0 (float) or 8 (8-bit buffer), got {quantize}")
         put("quantize", quantize)
-        ambient = check.vec3(self.ambient, "ambient")
-        if min(ambient) < 0:
-            raise ValueError(f"ambient must be non-negative, got {ambient}")
-        put("ambient", ambient)
+        put("ambient", check.radiance(self.ambient, "ambient"))
         put("near", check.real(self.near, "near", 0.0, 1e6, lo_open=True))
         put(
             "relight_tolerance", check.real(self.relight_tolerance, "relight_tolerance", 0.0, 180.0)

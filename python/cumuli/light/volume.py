@@ -20,6 +20,7 @@ from cumuli._util import progress as _progress
 from cumuli._util import validate as check
 from cumuli.light.memo import content_digest, remember
 from cumuli.model.volume import (
+    MAX_SIGMA_T,
     AnimationFrame,
     VolumeCloud,
     VolumeDatabase,
@@ -112,7 +113,7 @@ class VolumeLighting:
         self.database = database
         self.sun = sun
         self.sky = as_sky(sky)
-        self.sigma_t = check.real(sigma_t, "sigma_t", 0.0)
+        self.sigma_t = check.real(sigma_t, "sigma_t", 0.0, MAX_SIGMA_T)
         self.sh_order = check.integer(sh_order, "sh_order", 1, 4)
         self.sh_samples = check.integer(sh_samples, "sh_samples", self.sh_order, 64)
         self.step = check.real(step, "step", 1e-3, 64.0)

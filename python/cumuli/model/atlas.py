@@ -22,6 +22,7 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
+from cumuli._util import budget
 from cumuli._util import validate as check
 
 STYLES = ("sunny", "rainy", "wispy")
@@ -31,6 +32,8 @@ MIN_SPRITE_SIZE: int = int(_core.ATLAS_MIN_SIZE)
 MAX_SPRITE_SIZE: int = int(_core.ATLAS_MAX_SIZE)
 #: Largest atlas image accepted (texels).
 MAX_ATLAS_TEXELS = 8192 * 8192
+#: Bytes per texel of an atlas image (float32 RGBA).
+BYTES_PER_TEXEL = 16
 
 
 @dataclass(frozen=True, eq=False)
@@ -184,4 +187,44 @@ def sprite_atlas(style: str = "sunny", n: int = 16, size: int = 64, seed: int = 
     n = check.integer(n, "n", 1, MAX_SPRITES)
     size = check.integer(size, "size", MIN_SPRITE_SIZE, MAX_SPRITE_SIZE)
     seed = check.integer(seed, "seed", 0, 2**64 - 1)
+    budget.check_memory(f"sprite_atlas(n={n}, size={size})", atlas_bytes(n, size))
     return _generated(style, n, size, seed)
+
+
+def atlas_bytes(n: int, size: int) -> int:
+    """Bytes of a generated atlas's image: its ``nx × ny`` grid of ``size²`` float32 RGBA
+    texels (256 sprites of 512² texels: 1 GiB)."""
+    nx = int(np.ceil(np.sqrt(n)))
+    ny = -(-n // nx)
+    return nx * ny * size * size * BYTES_PER_TEXEL
+
+
+def recipes_cost(data: Any) -> list[tuple[Any, str, int]]:
+    """`recipe_cost` of every ``"atlas"`` entry anywhere in the JSON value ``data`` (a weather
+    file's layers, a basis model), each recipe once."""
+    found: dict[Any, tuple[Any, str, int]] = {}
+    stack = [data]
+    while stack:
+        node = stack.pop()
+        if isinstance(node, dict):
+            for item in recipe_cost(node.get("atlas")):
+                found.setdefault(item[0], item)
+            stack.extend(node.values())
+        elif isinstance(node, list):
+            stack.extend(node)
+    return list(found.values())
+
+
+def recipe_cost(atlas: Any) -> list[tuple[Any, str, int]]:
+    """The cost item of an atlas dict (`SpriteAtlas.to_dict`) in a file: a recipe's image, keyed
+    by the recipe (a recipe is made once however many clouds name it); nothing for a stored
+    image (the file holds its bytes) or a malformed dict (building it refuses it)."""
+    recipe = atlas.get("recipe") if isinstance(atlas, dict) else None
+    if not isinstance(recipe, dict):
+        return []
+    n, size = recipe.get("n", 16), recipe.get("size", 64)
+    if not all(isinstance(v, int) and not isinstance(v, bool) for v in (n, size)):
+        return []
+    n, size = min(max(n, 1), MAX_SPRITES), min(max(size, 1), MAX_SPRITE_SIZE)
+    key = ("atlas", str(recipe.get("style")), n, size, str(recipe.get("seed")))
+    return [(key, f"atlas recipe (n={n}, size={size})", atlas_bytes(n, size))]

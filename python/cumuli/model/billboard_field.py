@@ -19,12 +19,16 @@ from typing import Any, ClassVar
 import numpy as np
 
 from cumuli import _core
+from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli.model.billboards import ARRAY_FIELDS, BillboardCloud, rotate_y
 from cumuli.model.parts import DrawableParts
 
 #: Most instances a field holds (spec §10: ≤ 2²⁰ instances per layer).
 MAX_INSTANCES = 1 << 20
+#: Bytes one drawn billboard of a field costs a renderer or its light pass: four vertices of
+#: position, texture coordinate and colour, its sort key, index and CAF entries.
+BYTES_PER_BILLBOARD = 192
 _variant_digests: weakref.WeakKeyDictionary[BillboardCloud, str] = weakref.WeakKeyDictionary()
 _variant_spheres: weakref.WeakKeyDictionary[BillboardCloud, tuple[np.ndarray, float]] = (
     weakref.WeakKeyDictionary()
@@ -79,6 +83,8 @@ def _column(value: Any, n: int, name: str, dtype: Any, default: float) -> np.nda
         out = np.full(n, default, dtype=dtype)
     else:
         a = np.asarray(value)
+        if a.dtype.kind == "O":  # integers beyond int64, or mixed objects
+            raise ValueError(f"{name} must hold numbers within the int64/float64 range")
         if a.dtype.kind not in "fiu":
             raise TypeError(f"{name} must be numeric, got dtype {a.dtype}")
         if a.shape != (n,):
@@ -87,9 +93,41 @@ def _column(value: Any, n: int, name: str, dtype: Any, default: float) -> np.nda
             raise ValueError(f"{name} contains NaN or infinite values")
         if np.dtype(dtype).kind == "i" and (a != np.round(a)).any():
             raise ValueError(f"{name} must hold integers")
+        if np.dtype(dtype).kind == "i" and a.size:
+            info = np.iinfo(dtype)
+            if a.min() < info.min or a.max() > info.max:
+                raise ValueError(f"{name} holds integers outside [{info.min}, {info.max}]")
         out = np.array(a, dtype=dtype)
     out.setflags(write=False)
     return out
+
+
+#: The keys a billboard field's dict may hold (others are refused, as every kind's are).
+DICT_KEYS = ("kind", "variants", "offsets", "variant", "yaw", "alpha", "state", "ids", "params")
+
+
+def dict_cost(data: Any) -> list[tuple[Any, str, int]]:
+    """The memory a field's dict implies (see :attr:`cumuli.registry.Kind.cost`): its variants'
+    atlases and its drawn billboards (instances × the billboards of their variant), estimated
+    from the lists' lengths before anything is built."""
+    from cumuli.model.billboards import dict_cost as cloud_cost
+
+    if not isinstance(data, dict) or not isinstance(data.get("variants"), list):
+        return []
+    items: list[tuple[Any, str, int]] = []
+    sizes = []
+    for v in data["variants"]:
+        items += cloud_cost(v)
+        tex = v.get("texture") if isinstance(v, dict) else None
+        sizes.append(len(tex) if isinstance(tex, list) else 0)
+    offsets, variant = data.get("offsets"), data.get("variant")
+    n = len(offsets) if isinstance(offsets, list) else 0
+    if sizes and isinstance(variant, list) and len(variant) == n:
+        drawn = sum(sizes[v] for v in variant if isinstance(v, int) and 0 <= v < len(sizes))
+    else:  # the default: instances take the variants in turn
+        drawn = n * max(sizes, default=0)
+    what = f"a billboard field of {n} instances ({drawn} billboards)"
+    return [*items, ((id(data), "field"), what, drawn * BYTES_PER_BILLBOARD)]
 
 
 class BillboardField:
@@ -146,6 +184,11 @@ class BillboardField:
         )
         if n and (var.min() < 0 or var.max() >= nv):
             raise ValueError(f"variant must hold ids in [0, {nv})")
+        counts = np.array([v.n_billboards for v in variants], np.int64)
+        drawn = int(counts[var].sum()) if n else 0
+        budget.check_memory(
+            f"a billboard field of {n} instances ({drawn} billboards)", drawn * BYTES_PER_BILLBOARD
+        )
         yaw_a = _column(yaw, n, "yaw", np.float32, 0.0)
         alpha_a = _column(alpha, n, "alpha", np.float32, 1.0)
         if n and (alpha_a.min() < 0 or alpha_a.max() > 1):
@@ -342,6 +385,9 @@ class BillboardField:
             raise TypeError(f"billboard field must be an object, got {type(data).__name__}")
         if data.get("kind", cls.kind) != cls.kind:
             raise ValueError(f"kind must be {cls.kind!r}, got {data.get('kind')!r}")
+        unknown = sorted(set(data) - set(DICT_KEYS))
+        if unknown:
+            raise ValueError(f"billboard field has unknown keys {unknown}")
         for key in ("variants", "offsets"):
             if key not in data:
                 raise ValueError(f"billboard field is missing {key!r}")

@@ -28,8 +28,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from cumuli import _core
+from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli._util.atomic import atomic_target
+from cumuli.io.jsonable import loads as json_loads
 from cumuli.io.npz import (
     FileFormatError,
     check_path,
@@ -39,7 +41,7 @@ from cumuli.io.npz import (
     meta_of,
     read_npz,
 )
-from cumuli.model.atlas import MAX_ATLAS_TEXELS, SpriteAtlas, sprite_atlas
+from cumuli.model.atlas import MAX_ATLAS_TEXELS, SpriteAtlas, recipe_cost, sprite_atlas
 from cumuli.model.seedbox import (
     COUNT_PER,
     MAX_BILLBOARDS,
@@ -59,6 +61,10 @@ def _readonly(a: np.ndarray, dtype: Any, shape: tuple[int, ...], name: str) -> n
     if arr.dtype.kind == "f" and np.dtype(dtype).kind == "i":
         if not np.isfinite(arr).all() or (arr != np.round(arr)).any():
             raise ValueError(f"{name} must hold integers")
+    if np.dtype(dtype).kind == "i" and arr.size:
+        info = np.iinfo(dtype)
+        if arr.min() < info.min or arr.max() > info.max:
+            raise ValueError(f"{name} holds integers outside [{info.min}, {info.max}]")
     out = np.array(arr, dtype=dtype, order="C")
     if out.dtype.kind == "f" and not np.isfinite(out).all():
         raise ValueError(f"{name} contains NaN or infinite values")
@@ -451,11 +457,27 @@ def _cloud_to_dict(cloud: BillboardCloud) -> dict[str, Any]:
     return d
 
 
+#: The keys a billboard cloud's dict may hold (others are refused, as every kind's are).
+DICT_KEYS = frozenset(
+    ("kind", "format", "version", *ARRAY_FIELDS, "opacity", "atlas", "params", "stats")
+)
+
+
+def dict_cost(data: Any) -> list[tuple[Any, str, int]]:
+    """The memory a billboard cloud's dict implies beyond the file's bytes (see
+    :attr:`cumuli.registry.Kind.cost`): its atlas, when the dict holds a recipe."""
+    return recipe_cost(data.get("atlas")) if isinstance(data, dict) else []
+
+
 def _shaped(value: Any, key: str, width: tuple[int, ...], dtype: Any) -> np.ndarray:
+    """``value`` as an array: real numbers only (integers beyond int64 or a ragged list are
+    refused here; the constructor checks the integer fields' values and range)."""
     try:
-        a = np.asarray(value, dtype=dtype)
-    except (TypeError, ValueError) as exc:
+        a = np.asarray(value)
+    except (TypeError, ValueError, OverflowError) as exc:
         raise ValueError(f"{key} is not a numeric array ({exc})") from None
+    if a.dtype.kind not in "fiu":
+        raise ValueError(f"{key} is not an array of numbers (dtype {a.dtype})")
     if a.size == 0:  # [] has shape (0,): give it the row width
         a = a.reshape((0, *width))
     return a
@@ -468,6 +490,9 @@ def _cloud_from_dict(data: Any, atlas_image: np.ndarray | None = None) -> Billbo
         raise ValueError(f"kind must be {BillboardCloud.kind!r}, got {data.get('kind')!r}")
     if data.get("version", FILE_VERSION) != FILE_VERSION:
         raise ValueError(f"unsupported billboard cloud version {data.get('version')!r}")
+    unknown = sorted(set(data) - DICT_KEYS)
+    if unknown:
+        raise ValueError(f"billboard cloud has unknown keys {unknown}")
     widths = {"boxes": (2, 3), "centres": (3,), "sizes": (2,)}
     arrays: dict[str, np.ndarray] = {}
     for key in ARRAY_FIELDS:
@@ -531,6 +556,17 @@ def _save(cloud: BillboardCloud, path: Any) -> Path:
     return p
 
 
+def _check_file_cost(p: Path, data: Any) -> None:
+    """A file's atlas recipe costs at most what a scene file of its size may (the scene rule)."""
+    size = p.stat().st_size
+    budget.check_memory(
+        f"billboard file {p.name!r} of {budget.amount(size)} (its atlas recipe)",
+        sum(cost for _, _, cost in dict_cost(data)),
+        budget.get_limits().scene_bytes(size),
+        "cumuli.set_limits(scene_expansion=..., scene_allowance=...) or CUMULI_SCENE_ALLOWANCE",
+    )
+
+
 def _load(path: Any) -> BillboardCloud:
     p = check_path(path, (".npz", ".json"))
     check_readable(p, "billboard cloud")
@@ -540,18 +576,20 @@ def _load(path: Any) -> BillboardCloud:
             meta = meta_of(arrays, p, FILE_FORMAT)
             if meta.get("version") != FILE_VERSION:
                 raise FileFormatError(f"{p.name}: unsupported version {meta.get('version')!r}")
+            _check_file_cost(p, meta)
             data = dict(meta)
             data.update(arrays)
             image = data.pop("atlas_image", None)
             return _cloud_from_dict(data, atlas_image=image)
         try:
-            doc = json.loads(p.read_text(encoding="utf-8"))
+            doc = json_loads(p.read_text(encoding="utf-8"))
         except (UnicodeDecodeError, json.JSONDecodeError, RecursionError) as exc:
             raise FileFormatError(f"{p.name}: not readable JSON ({exc})") from None
         if not isinstance(doc, dict) or doc.get("format") != FILE_FORMAT:
             raise FileFormatError(f"{p.name}: not a {FILE_FORMAT} file (format tag missing)")
+        _check_file_cost(p, doc)
         return _cloud_from_dict(doc)
-    except FileFormatError:
+    except (FileFormatError, budget.BudgetError):
         raise
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise FileFormatError(f"{p.name}: invalid billboard cloud data: {exc}") from None

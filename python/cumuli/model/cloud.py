@@ -32,7 +32,9 @@ import numpy as np
 from cumuli._util import validate as check
 from cumuli._util.atomic import atomic_target
 from cumuli.io.jsonable import jsonable
+from cumuli.io.jsonable import loads as json_loads
 from cumuli.io.npz import check_path, check_readable, json_default, read_npz
+from cumuli.noise import _fbm_params
 
 DENSITY_MODELS = ("spheroid", "metaball")
 #: Most primitives a cloud may hold.
@@ -226,12 +228,7 @@ class Cloud:
                 raise TypeError(f"noise must be a cumuli.Noise, got {type(noise).__name__}")
         else:
             const = check.real(constant, "constant", 0.0)
-        fbm = _core.FbmParams(
-            check.integer(octaves, "octaves", 1, 16),
-            check.real(gain, "gain", 0.0, lo_open=True),
-            check.real(lacunarity, "lacunarity", 0.0, lo_open=True),
-            check.real(frequency, "frequency", 0.0, lo_open=True),
-        )
+        fbm = _core.FbmParams(*_fbm_params(octaves, gain, lacunarity, frequency))
         return _core.cloud_density(
             _core.CloudShape(*self.core_args()), pts, core_noise, const, fbm,
             check.threads(threads),
@@ -500,12 +497,12 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
 def _read_npz(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
     # Each member's declared shape is checked against its limit before numpy allocates it.
     arrays = read_npz(path, _NPZ_LIMITS, ("centres", "radii", "rotations", "meta"))
-    meta = json.loads(arrays.pop("meta").tobytes().decode("utf-8"))
+    meta = json_loads(arrays.pop("meta").tobytes().decode("utf-8"))
     return meta, arrays
 
 
 def _read_json(path: Path) -> tuple[Any, dict[str, np.ndarray]]:
-    doc = json.loads(path.read_text(encoding="utf-8"))
+    doc = json_loads(path.read_text(encoding="utf-8"))
     if not isinstance(doc, dict):
         raise ValueError(f"{path.name}: not a cumuli cloud file (top level is not an object)")
     if doc.get("format") != FILE_FORMAT:

@@ -47,9 +47,10 @@ from typing import Any, ClassVar
 import numpy as np
 
 from cumuli import _core
+from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli.io.jsonable import array_from_json, array_to_json
-from cumuli.model.volume import VolumeCloud
+from cumuli.model.volume import MAX_SIGMA_T, VolumeCloud
 from cumuli.noise import Noise, _fbm_params, check_fbm_reach
 
 #: The cloud types a deck can be.
@@ -57,6 +58,8 @@ CLOUD_TYPES = ("stratus", "stratocumulus", "altostratus")
 #: Largest edge of a deck's baked lattice, and its most voxels.
 MAX_LATTICE_EDGE = 1024
 MAX_LATTICE_VOXELS = 1 << 27
+#: Bytes per voxel of a deck's baked volume and its light (float32 density, RGBA light).
+BYTES_PER_VOXEL = 20
 #: Largest edge of a given weather map (and of an fBm-made one: `MAP_SIZE_MAX`).
 MAX_MAP_EDGE = 4096
 MAP_SIZE_MAX = 1024
@@ -168,7 +171,22 @@ def _resolution(value: Any) -> tuple[int, int, int]:
         raise ValueError(
             f"resolution {(nx, ny, nz)} has {nx * ny * nz} voxels, more than {MAX_LATTICE_VOXELS}"
         )
+    budget.check_memory(f"a deck of resolution {(nx, ny, nz)}", _bytes((nx, ny, nz)))
     return (nx, ny, nz)
+
+
+def _bytes(resolution: Sequence[int]) -> int:
+    nx, ny, nz = resolution
+    return nx * ny * nz * BYTES_PER_VOXEL
+
+
+def dict_cost(data: Any) -> list[tuple[Any, str, int]]:
+    """The memory a deck's dict implies (see :attr:`cumuli.registry.Kind.cost`): its baked
+    volume and light, from ``resolution``."""
+    res = data.get("resolution") if isinstance(data, dict) else None
+    if not (isinstance(res, list) and len(res) == 3 and all(type(v) is int for v in res)):
+        return []
+    return [((id(data), "deck"), f"a deck of resolution {tuple(res)}", _bytes(res))]
 
 
 @dataclass(frozen=True, eq=False)
@@ -233,7 +251,7 @@ class CloudDeck:
                 f"cloud_type must be one of {', '.join(CLOUD_TYPES)}, got {self.cloud_type!r}"
             )
         s(self, "density", check.real(self.density, "density", 0.0))
-        s(self, "sigma_t", check.real(self.sigma_t, "sigma_t", 0.0))
+        s(self, "sigma_t", check.real(self.sigma_t, "sigma_t", 0.0, MAX_SIGMA_T))
         s(self, "detail", check.real(self.detail, "detail", 0.0, 1.0))
         s(self, "detail_scale", check.real(self.detail_scale, "detail_scale", 0.0, lo_open=True))
         s(self, "wind", _wind(self.wind))

@@ -17,7 +17,9 @@ from __future__ import annotations
 
 import json
 import os
+import struct
 import zipfile
+import zlib
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -28,9 +30,10 @@ from cumuli import _core
 from cumuli._util import validate as check
 from cumuli._util.atomic import atomic_target
 from cumuli.io.jsonable import array_from_json, array_to_json
+from cumuli.io.jsonable import loads as json_loads
 from cumuli.io.npz import json_default
 from cumuli.model.cloud import Cloud
-from cumuli.noise import Noise
+from cumuli.noise import Noise, _fbm_params, check_fbm_reach
 
 #: Most particles one cloud holds (spec §12.5).
 MAX_PARTICLES: int = int(_core.PARTICLES_MAX)
@@ -400,16 +403,20 @@ def load_particles(path: str | os.PathLike[str]) -> ParticleCloud:
         if suffix == ".npz":
             doc = _read_npz(path)
         else:
-            doc = json.loads(path.read_text(encoding="utf-8"))
+            doc = json_loads(path.read_text(encoding="utf-8"))
     except (
+        ValueError,  # incl. JSON and UTF-8 errors, numpy's bad .npy magic, Python's int limit
         zipfile.BadZipFile,
-        json.JSONDecodeError,
-        UnicodeDecodeError,
         EOFError,
         RecursionError,
         OSError,
+        NotImplementedError,  # zipfile: an unknown compression method
+        RuntimeError,  # zipfile: an encrypted member
+        zlib.error,
+        struct.error,
     ) as exc:
-        raise ValueError(f"{path.name}: not a readable cumuli particle file ({exc})") from None
+        why = f"{type(exc).__name__}: {exc}"
+        raise ValueError(f"{path.name}: not a readable cumuli particle file ({why})") from None
     if not isinstance(doc, dict) or doc.get("format") != FILE_FORMAT:
         raise ValueError(f"{path.name}: not a cumuli particle file (format tag missing)")
     if doc.get("version") != FILE_VERSION:
@@ -442,7 +449,7 @@ def _read_npz(path: Path) -> dict[str, Any]:
                     raise ValueError(f"array {key!r} is truncated")
                 order = "F" if fortran else "C"
                 arrays[key] = np.frombuffer(data, dtype=dtype).reshape(shape, order=order)
-    doc = json.loads(arrays.pop("meta").tobytes().decode("utf-8"))
+    doc = json_loads(arrays.pop("meta").tobytes().decode("utf-8"))
     if not isinstance(doc, dict):
         raise ValueError("metadata is not an object")
     doc.update(arrays)
@@ -489,10 +496,10 @@ def particle_fill(
     tau = check.real(tau, "tau", 0.0, MAX_TAU, lo_open=True)
     albedo = check.real(albedo, "albedo", 0.0, 1.0)
     seed = check.integer(seed, "seed", 0, 2**64 - 1)
-    octaves = check.integer(octaves, "octaves", 1, 16)
-    gain = check.real(gain, "gain", 0.0, lo_open=True)
-    lacunarity = check.real(lacunarity, "lacunarity", 0.0, lo_open=True)
-    frequency = check.real(frequency, "frequency", 0.0, lo_open=True)
+    # The combinations Noise.fbm refuses (octave weights or scales beyond float32).
+    octaves, gain, lacunarity, frequency = _fbm_params(octaves, gain, lacunarity, frequency)
+    if noise is not None:
+        check_fbm_reach(_reach(cloud), (octaves, gain, lacunarity, frequency), "cloud")
     c, r, t, a = _core.particle_fill(
         _core.CloudShape(*cloud.core_args()),
         n,
@@ -524,6 +531,14 @@ def particle_fill(
         "tau_mean": float(t.mean()),
     }
     return ParticleCloud(c, r, t, a, params=params, stats=stats)
+
+
+def _reach(cloud: Cloud) -> float:
+    """The largest coordinate magnitude a particle of ``cloud`` can have (its primitives' box)."""
+    if cloud.n == 0:
+        return 0.0
+    reach = np.abs(cloud.centres).max(axis=1) + np.abs(cloud.radii).max(axis=1)
+    return float(reach.max())
 
 
 def particle_cumulus(

@@ -23,10 +23,9 @@ MAX_SOLIDS = 16
 
 
 def _colour(value: Any, name: str) -> tuple[float, float, float]:
-    c = check.vec3(value, name)
-    if min(c) < 0:
-        raise ValueError(f"{name} must be non-negative, got {c}")
-    return c
+    """A non-negative RGB within MAX_RADIANCE (the shading multiplies it by the sun's radiance
+    and the ambient light: beyond it those products overflow float32)."""
+    return check.radiance(value, name)
 
 
 @dataclass(frozen=True)

@@ -31,6 +31,11 @@ MAX_VOLUMES = 1 << 16
 #: Most volumes whose (N, N) float64 similarity matrix is computed (512 MiB at the limit; the
 #: endless walk holds a few matrices of that size).
 MAX_SIMILARITY_VOLUMES = 1 << 13
+#: Largest extinction coefficient of a volume (per world unit).
+MAX_SIGMA_T = 1e12
+#: Largest ``sigma_t × density``: an optical depth over a path of MAX_COORD world units then
+#: stays below 1e27, far inside float32 (3.4e38), on both backends.
+MAX_EXTINCTION = 1e12
 
 
 def check_similarity_size(n: int, name: str = "volumes") -> None:
@@ -304,7 +309,14 @@ class VolumeCloud:
         if not isinstance(self.box, Sequence) or len(self.box) != 2:
             raise TypeError(f"box must be (box_min, box_max), got {self.box!r}")
         s(self, "box", _box(self.box[0], self.box[1]))
-        s(self, "sigma_t", check.real(self.sigma_t, "sigma_t", 0.0))
+        s(self, "sigma_t", check.real(self.sigma_t, "sigma_t", 0.0, MAX_SIGMA_T))
+        biggest = float(dens.max()) if dens.size else 0.0
+        if self.sigma_t * biggest > MAX_EXTINCTION:
+            raise ValueError(
+                f"sigma_t × the largest density ({self.sigma_t:g} × {biggest:g}) must be at most "
+                f"{MAX_EXTINCTION:g} (MAX_EXTINCTION: beyond it the marchers' optical depths "
+                "overflow float32)"
+            )
         s(self, "albedo", check.real(self.albedo, "albedo", 0.0, 1.0))
         s(self, "g", check.real(self.g, "g", -1.0, 1.0, lo_open=True, hi_open=True))
         if self.step is not None:
@@ -339,6 +351,12 @@ class VolumeCloud:
 
         ``render`` sets ``g`` and ``step``; ``sigma_t`` and ``albedo`` are the lighting's.
         """
+        if not all(callable(getattr(lighting, k, None)) for k in ("density", "light")):
+            raise TypeError(
+                f"lighting must be a cumuli.VolumeLighting, got {type(lighting).__name__}"
+            )
+        if not isinstance(frame, AnimationFrame):
+            frame = check.integer(frame, "frame", 0, len(lighting.database) - 1)
         density = lighting.density(frame)
         index = frame.index if isinstance(frame, AnimationFrame) else int(frame)
         return cls(

@@ -26,7 +26,7 @@ from cumuli import _core, registry
 from cumuli._util import progress as _progress
 from cumuli._util import validate as check
 from cumuli.camera import Camera
-from cumuli.gl.context import GLContext, _thread_default, default_context
+from cumuli.gl.context import GLContext, _thread_default, check_context, default_context
 from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import VolumeCloud
@@ -573,6 +573,7 @@ def render_volume(
         raise TypeError(f"settings must be a cumuli.RenderSettings, got {type(settings).__name__}")
     if light is None and not settings.physical:
         raise ValueError("light is required unless settings.lighting == 'physical'")
+    check_context(context)  # on the CPU backend too
     lit = {} if light is None else {"light": light, "light_sun": sun, "light_sky": sky}
     vc = VolumeCloud(
         density=volume, box=box, sigma_t=sigma_t, albedo=albedo, g=g, step=step, **lit

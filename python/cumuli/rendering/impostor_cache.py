@@ -113,6 +113,13 @@ class ImpostorCache:
     """
 
     def __init__(self, renderer: Any = None) -> None:
+        # A GL renderer (cumuli.Renderer: it renders and owns textures) or None.
+        if renderer is not None and not (
+            callable(getattr(renderer, "render", None)) and hasattr(renderer, "close")
+        ):
+            raise TypeError(
+                f"renderer must be a cumuli.Renderer or None, got {type(renderer).__name__}"
+            )
         self.renderer = renderer
         self._entries: dict[Any, Impostor] = {}
         self._token: Any = None

@@ -16,6 +16,7 @@ from typing import Any
 import moderngl
 import numpy as np
 
+from cumuli._util import validate as check
 from cumuli.camera import Camera
 from cumuli.gl import GLContext
 from cumuli.light.ndt import LightGrid
@@ -83,6 +84,8 @@ def pack_clouds(
         prims.append(p)
         lo, hi = cloud.layer_box()
         values = np.ascontiguousarray(grid, dtype=np.float32)
+        # What the GPU is given, as the C++ twin checks it (a grid may have been changed since).
+        check.uploadable(values, f"clouds[{k}].light grid", check.MAX_RADIANCE)
         d, h, w = values.shape
         llo, lhi = grid.box
         floats[k, 0:3], floats[k, 3] = lo, cloud.candidate_scale

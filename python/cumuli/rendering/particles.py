@@ -73,9 +73,7 @@ def particle_sprites(
     settings = as_settings(settings)
     lights = as_lights(lights)
     _check_light(cloud, light, lights)
-    amb = settings.ambient if ambient is None else check.vec3(ambient, "ambient")
-    if min(amb) < 0:
-        raise ValueError(f"ambient must be non-negative, got {amb}")
+    amb = settings.ambient if ambient is None else check.radiance(ambient, "ambient")
     if not isinstance(cull, (bool, np.bool_)):
         raise TypeError("cull must be a bool")
     cam = camera_dict(camera, width, height, settings.near)

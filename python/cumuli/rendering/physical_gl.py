@@ -11,6 +11,7 @@ from typing import Any
 import moderngl
 import numpy as np
 
+from cumuli._util import validate as check
 from cumuli.ground import sky_irradiance
 from cumuli.light.physical import PhysicalLight
 from cumuli.rendering.params import physical_params, physical_uniforms
@@ -90,6 +91,8 @@ def bind_physical(
     sun-depth and light atlases on texture units 2 and 3, filtered linearly, clamped) and set
     the physical uniforms; returns the GL objects made (the caller releases them)."""
     words, depth, grid = pack_physical(lights, limit)
+    check.uploadable(depth, "the physical light's sun depth")
+    check.uploadable(grid, "the physical light", check.MAX_RADIANCE)
     made: list[Any] = [ctx.buffer(words)]
     made[0].bind_to_storage_buffer(2)
     for location, data, comps in ((2, depth, 1), (3, grid, 4)):

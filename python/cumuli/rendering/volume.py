@@ -34,7 +34,7 @@ from cumuli.gl.context import GLContext, _resolve_context
 from cumuli.light.physical import PhysicalLight
 from cumuli.light.prepare import LitScene
 from cumuli.model.solid import Solid, as_solids, solid_arrays
-from cumuli.model.volume import _box, _float_volumes
+from cumuli.model.volume import MAX_SIGMA_T, _box, _float_volumes
 from cumuli.rendering.marcher_cpu import physical_core_tuple
 from cumuli.rendering.params import physical_params, sky_params, sky_uniforms, sun_params
 from cumuli.rendering.physical_gl import bind_physical
@@ -227,7 +227,7 @@ class VolumeRenderer:
                 "u_tan_half_fov": cam["tan_half_fov"],
                 "u_resolution": (float(width), float(height)),
                 **sky_uniforms(sky, sun),
-                "u_sigma_t": check.real(sigma_t, "sigma_t", 0.0),
+                "u_sigma_t": check.real(sigma_t, "sigma_t", 0.0, MAX_SIGMA_T),
                 "u_albedo": check.real(albedo, "albedo", 0.0, 1.0),
                 "u_g": check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True),
                 "u_step": step,
@@ -303,7 +303,7 @@ def render_volume_cpu(
     rays.tan_half_fov = cam["tan_half_fov"]
     p = _core.VolumeRenderParams()
     p.width, p.height, p.sun, p.sky = width, height, sun_params(sun), sky_params(as_sky(sky))
-    p.sigma_t = check.real(sigma_t, "sigma_t", 0.0)
+    p.sigma_t = check.real(sigma_t, "sigma_t", 0.0, MAX_SIGMA_T)
     p.albedo = check.real(albedo, "albedo", 0.0, 1.0)
     p.g = check.real(g, "g", -1.0, 1.0, lo_open=True, hi_open=True)
     p.step, p.with_sky = step, bool(with_sky)
