@@ -14,18 +14,19 @@
 VENV ?= .venv
 PY := $(VENV)/bin/python
 # python3-venv: Debian's python3 has no venv/ensurepip without it; python3-dev: Python.h for the
-# extension build; libgl1: glcontext's EGL backend dlopens libGL.so.1 (libegl1 does not pull it).
+# extension build; libgl1: glcontext's EGL backend dlopens libGL.so.1 (libegl1 does not pull it);
+# chromium + chromium-driver: the headless browser the notebook viewer's test drives;
 # python3-openvdb: OpenVDB's own reader and writer (run by Debian's python3) that the interchange
 # tests check cumuli's .vdb files against.
 SYSTEM_PACKAGES := g++ make python3 python3-venv python3-dev libglm-dev \
-  libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2 python3-openvdb
+  libegl1 libegl-mesa0 libgl1 libgl1-mesa-dri libgles2 chromium chromium-driver python3-openvdb
 # Blender as a Python module (bpy 4.x, Python 3.11) lives in its own environment: its wheel pins
 # numpy < 2, which the test environment's packages (pandas, zarr) do not accept.
 BLENDER_VENV ?= .venv-blender
 STAMP := $(VENV)/.cumuli-installed
 
-.PHONY: setup system venv install blender demo test test-fast bench bench-quick lint inplace \
-  stubs wheel docs clean
+.PHONY: setup system venv install blender demo test test-notebooks-full test-fast bench \
+  bench-quick lint inplace stubs wheel docs clean
 
 setup: system install
 
@@ -62,8 +63,13 @@ $(BLENDER_VENV)/.bpy-installed:
 demo: setup
 	$(VENV)/bin/cumuli demo -o out.png
 
+# CUMULI_QUICK=1: the notebooks at small sizes (notebooks/conftest.py sets it too); opened by a
+# person they run at full size. `make test-notebooks-full` runs each at full size (slow).
 test: setup blender
-	$(PY) -m pytest -q tests --nbmake notebooks
+	CUMULI_QUICK=1 $(PY) -m pytest -q tests --nbmake notebooks
+
+test-notebooks-full: install
+	CUMULI_QUICK=0 $(PY) -m pytest -q --nbmake --nbmake-timeout=3600 notebooks
 
 test-fast: install
 	$(PY) -m pytest -q tests -x

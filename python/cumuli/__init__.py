@@ -29,6 +29,7 @@ from cumuli.interchange.mitsuba import to_mitsuba
 from cumuli.interchange.volumes import read_volume, write_volume
 from cumuli.io import meshes
 from cumuli.io.images import from_srgb8, read_image, to_srgb8, write_image
+from cumuli.jupyter import Image, show
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.caf import absorption_factors
 from cumuli.light.grid import LightGrid, LightParams, load_light_grid
@@ -83,6 +84,17 @@ from cumuli.sky import Sky, Sun
 from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of drawable)
 # isort: on
 
+
+def __getattr__(name: str) -> object:
+    # The Viewer needs the widget packages (anywidget): imported on first use only, and kept
+    # out of __all__ so that `from cumuli import *` works without them.
+    if name == "Viewer":
+        from cumuli.jupyter.viewer import Viewer
+
+        return Viewer
+    raise AttributeError(f"module 'cumuli' has no attribute {name!r}")
+
+
 __all__ = [
     "BudgetError",
     "Limits",
@@ -118,6 +130,8 @@ __all__ = [
     "similarity_matrix",
     "transition_matrix",
     "Camera",
+    "Image",
+    "show",
     "Cloud",
     "CloudDeck",
     "density_volume",

@@ -5,6 +5,7 @@ shadow map (``shaders/common/ground.glsl``). RENDER_CONTRACT, "Physical lighting
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable, Sequence
 from typing import Any
 
@@ -80,6 +81,48 @@ def pack_physical(
     return words.tobytes(), depth, grid
 
 
+#: The last packing (its lights, the limit, the bytes): a viewer or a camera path draws the
+#: same light frame after frame, and packing and copying the atlases cost more than the draw.
+#: PhysicalLight is frozen; the cache holds its lights, so their ids cannot be reused.
+_last_pack: list[Any] = [None]
+
+
+def _packed(lights: Sequence[PhysicalLight], limit: int) -> tuple[Any, ...]:
+    """`pack_physical` as bytes and shapes, reused while the same light objects come back."""
+    last = _last_pack[0]
+    if (
+        last is not None
+        and last[1] == limit
+        and len(last[0]) == len(lights)
+        and all(a is b for a, b in zip(last[0], lights, strict=True))
+    ):
+        return last[2]
+    words, depth, grid = pack_physical(lights, limit)
+    # What the GPU is given is checked, not only what the API made (the CPU twin refuses the same).
+    check.uploadable(depth, "the physical light's sun depth")
+    check.uploadable(grid, "the physical light", check.MAX_RADIANCE)
+    out = (words, depth.shape, depth.tobytes(), grid.shape, grid.tobytes())
+    _last_pack[0] = (tuple(lights), limit, out)
+    return out
+
+
+#: Per GL context, the buffer and atlases of the last packing, kept for the next draw of the same
+#: light (a viewer's or a camera path's frames): uploading them cost as much as the draw.
+_uploaded: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _upload(ctx: Any, packed: tuple[Any, ...]) -> list[Any]:
+    words, dshape, depth, gshape, grid = packed
+    made: list[Any] = [ctx.buffer(words)]
+    for shape, data, comps in ((dshape, depth, 1), (gshape, grid, 4)):
+        d, h, w = shape[:3]
+        tex = ctx.texture3d((w, h, d), comps, data, dtype="f4")
+        tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        tex.repeat_x = tex.repeat_y = tex.repeat_z = False
+        made.append(tex)
+    return made
+
+
 def bind_physical(
     ctx: Any,
     set_: Callable[[str, Any], None],
@@ -87,23 +130,26 @@ def bind_physical(
     lights: Sequence[PhysicalLight],
     limit: int,
 ) -> list:
-    """Upload the drawables' physical light (the PhysicalCloud buffer on storage binding 2, the
+    """Bind the drawables' physical light (the PhysicalCloud buffer on storage binding 2, the
     sun-depth and light atlases on texture units 2 and 3, filtered linearly, clamped) and set
-    the physical uniforms; returns the GL objects made (the caller releases them)."""
-    words, depth, grid = pack_physical(lights, limit)
-    check.uploadable(depth, "the physical light's sun depth")
-    check.uploadable(grid, "the physical light", check.MAX_RADIANCE)
-    made: list[Any] = [ctx.buffer(words)]
-    made[0].bind_to_storage_buffer(2)
-    for location, data, comps in ((2, depth, 1), (3, grid, 4)):
-        d, h, w = data.shape[:3]
-        tex = ctx.texture3d((w, h, d), comps, data.tobytes(), dtype="f4")
-        made.append(tex)
-        tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
-        tex.repeat_x = tex.repeat_y = tex.repeat_z = False
-        tex.use(location=location)
+    the physical uniforms. The GL objects are the context's, kept while the same light comes
+    back and released when another replaces it; returns the objects the caller must release
+    (none)."""
+    packed = _packed(lights, limit)
+    held = _uploaded.get(ctx)
+    if held is None or held[0] is not packed:
+        if held is not None:
+            for obj in held[1]:
+                obj.release()
+            del _uploaded[ctx]
+        _uploaded[ctx] = (packed, _upload(ctx, packed))
+        held = _uploaded[ctx]
+    buf, depth_tex, grid_tex = held[1]
+    buf.bind_to_storage_buffer(2)
+    depth_tex.use(location=2)
+    grid_tex.use(location=3)
     set_physical_uniforms(set_, settings, lights)
-    return made
+    return []
 
 
 def set_physical_uniforms(
