@@ -8,6 +8,8 @@ row 0 on top.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from cumuli import registry
 from cumuli._util.budget import BudgetError, Limits, get_limits, limits, set_limits
 from cumuli._version import __version__
@@ -83,6 +85,10 @@ from cumuli.sky import Sky, Sun
 # isort: off
 from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of drawable)
 # isort: on
+
+
+if TYPE_CHECKING:  # what `cu.Viewer` is, for type checkers (imported lazily below)
+    from cumuli.jupyter.viewer import Viewer as Viewer
 
 
 def __getattr__(name: str) -> object:

