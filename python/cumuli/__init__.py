@@ -1,11 +1,14 @@
 """cumuli: volumetric clouds from Python.
 
 A C++ core (noise, cloud generators, light precompute, a reference marcher) returns numpy arrays;
-GLSL shaders run in a headless moderngl context render them. See the README for conventions:
-+y up, angles in degrees, volumes indexed [z, y, x], images (H, W, 4) float32 with row 0 on top.
+GLSL shaders run in a headless moderngl context render them. See docs/conventions.md for the
+conventions: +y up, angles in degrees, volumes indexed [z, y, x], images (H, W, 4) float32 with
+row 0 on top.
 """
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 from cumuli import registry
 from cumuli._util.budget import BudgetError, Limits, get_limits, limits, set_limits
@@ -82,6 +85,10 @@ from cumuli.sky import Sky, Sun
 # isort: off
 from cumuli import kinds as _kinds  # noqa: E402, F401 (registers every kind of drawable)
 # isort: on
+
+
+if TYPE_CHECKING:  # what `cu.Viewer` is, for type checkers (imported lazily below)
+    from cumuli.jupyter.viewer import Viewer as Viewer
 
 
 def __getattr__(name: str) -> object:

@@ -1,5 +1,11 @@
-"""The ``cumuli`` command: ``cumuli info``, ``cumuli demo -o PATH``, ``cumuli render SCENE`` and
+"""The ``cumuli`` command: ``cumuli info``, ``cumuli demo``, ``cumuli render SCENE`` and
 ``cumuli --version``.
+
+Conventions shared by the commands: an image size is ``--size WIDTHxHEIGHT`` (``--width`` and
+``--height`` are kept as aliases of its two halves), ``-o/--output`` names the image (``cumuli
+demo`` writes ``out.png`` when it is not given), ``-q/--quiet`` prints nothing on success, and
+options that cannot go together (two figures, ``--size`` with ``--width``, an option the chosen
+figure does not use) are refused with exit status 2, like any other usage error.
 
 User errors (bad arguments, unwritable paths, a missing GL) print one ``cumuli: error: ...`` line
 to stderr and exit non-zero; they never show a traceback.
@@ -19,6 +25,12 @@ import numpy as np
 
 #: Exit status for a user error found after argument parsing (argparse itself exits with 2).
 EXIT_ERROR = 1
+#: Image size when neither ``--size`` nor ``--width``/``--height`` is given.
+DEFAULT_SIZE = (640, 480)
+#: Seed of ``cumuli demo --noise`` and ``--torchelsen`` when ``--seed`` is not given.
+DEFAULT_SEED = 7
+#: Image ``cumuli demo`` writes when ``-o`` is not given.
+DEFAULT_DEMO_OUTPUT = Path("out.png")
 
 
 def _versions() -> dict[str, str]:
@@ -118,17 +130,17 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     if args.noise:
         from cumuli.io.images import write_image
 
-        img = _demo_noise(args.width, args.height, args.seed)
+        img = _demo_noise(*args.size, args.seed)
         path = write_image(args.output, img, exposure=1.0, tonemap="none")
-        print(f"wrote {path} ({args.width}×{args.height})")
+        _say(args, f"wrote {path} ({args.size[0]}×{args.size[1]})")
         return 0
     if args.torchelsen:
         from cumuli.demo import torchelsen_sequence
 
         _check_output(args.output)
-        img = torchelsen_sequence(args.width, args.height, args.backend, args.seed)
+        img = torchelsen_sequence(*args.size, args.backend, args.seed)
         paths = _write_pair(args.output, img, *_display(args, 1.0, "none"))
-        print(f"wrote {' and '.join(map(str, paths))} (Torchelsen & Musse Fig. 14, CV 0 → 1)")
+        _say(args, f"wrote {' and '.join(map(str, paths))} (Torchelsen & Musse Fig. 14, CV 0 → 1)")
         return 0
     from cumuli.demo import DEMO_EXPOSURE, DEMO_TONEMAP, deck_scene, harris_scene, sunset_scene
     from cumuli.rendering.compositor import render
@@ -140,20 +152,81 @@ def _cmd_demo(args: argparse.Namespace) -> int:
         scene, display = deck_scene(), _display(args, DEMO_EXPOSURE, DEMO_TONEMAP)
     else:
         scene, display = sunset_scene(), _display(args, DEMO_EXPOSURE, DEMO_TONEMAP)
-    img = render(scene, scene.default_camera(), args.width, args.height, backend=args.backend)
+    w, h = args.size
+    img = render(scene, scene.default_camera(), w, h, backend=args.backend)
     paths = _write_pair(args.output, img, *display)
-    print(f"wrote {' and '.join(map(str, paths))} ({args.width}×{args.height}, {args.backend})")
+    _say(args, f"wrote {' and '.join(map(str, paths))} ({w}×{h}, {args.backend})")
     return 0
 
 
-def _size(text: str) -> tuple[int, int]:
-    try:
-        w, h = (int(v) for v in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, got {text!r}") from None
-    if not (1 <= w <= 16384 and 1 <= h <= 16384):
-        raise argparse.ArgumentTypeError(f"width and height must be in [1, 16384], got {text!r}")
-    return w, h
+def _say(args: argparse.Namespace, text: str) -> None:
+    """Print ``text`` unless ``--quiet`` was given."""
+    if not args.quiet:
+        print(text)
+
+
+def _size(lo: int, hi: int):
+    def parse(text: str) -> tuple[int, int]:
+        try:
+            w, h = (int(v) for v in text.lower().split("x"))
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected WIDTHxHEIGHT, got {text!r}") from None
+        if not (lo <= w <= hi and lo <= h <= hi):
+            raise argparse.ArgumentTypeError(
+                f"width and height must be in [{lo}, {hi}], got {text!r}"
+            )
+        return w, h
+
+    return parse
+
+
+def _size_args(parser: argparse.ArgumentParser, lo: int, hi: int) -> None:
+    """``--size WxH`` and its aliases ``--width`` / ``--height`` (resolved by `_resolve_size`)."""
+    parser.add_argument(
+        "--size", type=_size(lo, hi), default=None, metavar="WxH",
+        help=f"image size in pixels, WIDTHxHEIGHT, each in [{lo}, {hi}] "
+        f"(default {DEFAULT_SIZE[0]}x{DEFAULT_SIZE[1]})",
+    )  # fmt: skip
+    parser.add_argument(
+        "--width", type=_positive(lo, hi), default=None, help="alias: the W of --size"
+    )
+    parser.add_argument(
+        "--height", type=_positive(lo, hi), default=None, help="alias: the H of --size"
+    )
+
+
+def _resolve_size(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Set ``args.size`` from ``--size`` or its aliases; both at once is a usage error."""
+    if args.size is not None:
+        if args.width is not None or args.height is not None:
+            parser.error("--size cannot be combined with --width/--height (give one of them)")
+        return
+    args.size = (
+        DEFAULT_SIZE[0] if args.width is None else args.width,
+        DEFAULT_SIZE[1] if args.height is None else args.height,
+    )
+
+
+#: Options of ``cumuli demo`` that only some figures use, and those figures.
+_DEMO_OPTION_FIGURES = {
+    "seed": ("noise", "torchelsen"),
+    "backend": ("default", "harris", "deck", "torchelsen"),
+    "exposure": ("default", "harris", "deck", "torchelsen"),
+    "tonemap": ("default", "harris", "deck", "torchelsen"),
+}
+
+
+def _check_demo(parser: argparse.ArgumentParser, args: argparse.Namespace) -> None:
+    """Refuse options the chosen figure would ignore (a usage error, exit 2)."""
+    figure = next((f for f in ("noise", "torchelsen", "harris", "deck") if getattr(args, f)), None)
+    for option, figures in _DEMO_OPTION_FIGURES.items():
+        if getattr(args, option) is not None and (figure or "default") not in figures:
+            which = f"--{figure}" if figure else "the default demo"
+            parser.error(f"--{option} is not used by {which}")
+    if args.seed is None:
+        args.seed = DEFAULT_SEED
+    if args.backend is None:
+        args.backend = "gl"
 
 
 def _cmd_render(args: argparse.Namespace) -> int:
@@ -169,18 +242,18 @@ def _cmd_render(args: argparse.Namespace) -> int:
     exposure, tonemap = _display(args, *display_for(scene.settings.lighting))
     alpha = "keep" if args.alpha else "opaque"
     path = write_image(output, img, alpha, exposure=exposure, tonemap=tonemap)
-    print(f"wrote {path} ({w}×{h}, {args.backend})")
+    _say(args, f"wrote {path} ({w}×{h}, {args.backend})")
     return 0
 
 
-def _positive(limit: int):
+def _positive(lo: int, hi: int):
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected an integer, got {text!r}") from None
-        if not 2 <= value <= limit:
-            raise argparse.ArgumentTypeError(f"must be between 2 and {limit}, got {value}")
+        if not lo <= value <= hi:
+            raise argparse.ArgumentTypeError(f"must be between {lo} and {hi}, got {value}")
         return value
 
     return parse
@@ -235,25 +308,31 @@ def build_parser() -> argparse.ArgumentParser:
         prog="cumuli", description="Volumetric clouds: information, demos and rendering."
     )
     parser.add_argument("--version", action="version", version=f"cumuli {__version__}")
+    # Options every command takes, after its name (``cumuli demo -q``).
+    common = argparse.ArgumentParser(add_help=False)
+    common.add_argument("-q", "--quiet", action="store_true", help="print nothing on success")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
 
+    # ``info`` exists to print: it takes no --quiet.
     info = sub.add_parser("info", help="versions, GL renderer and thread count")
     info.add_argument("--json", action="store_true", help="print as JSON")
     info.set_defaults(run=_cmd_info)
 
     demo = sub.add_parser(
-        "demo", help="render the demo: three cumuli at sunset, physically lit, with ground shadows"
+        "demo",
+        parents=[common],
+        help="render the demo: three cumuli at sunset, physically lit, with ground shadows",
     )
     demo.add_argument(
         "-o",
         "--output",
-        required=True,
+        default=DEFAULT_DEMO_OUTPUT,
         type=Path,
-        help="image to write (.png or .exr); the other format is written beside it",
+        help="image to write (.png or .exr; default out.png); the other format is written "
+        "beside it",
     )
-    demo.add_argument("--width", type=_positive(4096), default=640, help="pixels (default 640)")
-    demo.add_argument("--height", type=_positive(4096), default=480, help="pixels (default 480)")
-    demo.add_argument("--backend", choices=("gl", "cpu"), default="gl", help="default gl")
+    _size_args(demo, 2, 4096)
+    demo.add_argument("--backend", choices=("gl", "cpu"), default=None, help="default gl")
     # One figure per call: asking for two is an error, not a silent choice.
     figure = demo.add_mutually_exclusive_group()
     figure.add_argument(
@@ -264,8 +343,8 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument(
         "--seed",
         type=_seed,
-        default=7,
-        help="noise seed for --noise, weather seed for --torchelsen (default 7)",
+        default=None,
+        help=f"noise seed for --noise, weather seed for --torchelsen (default {DEFAULT_SEED})",
     )
     figure.add_argument(
         "--torchelsen",
@@ -287,14 +366,14 @@ def build_parser() -> argparse.ArgumentParser:
     _display_args(
         demo, "0.8; 1 with --harris, --torchelsen", "aces; none with --harris, --torchelsen"
     )
-    demo.set_defaults(run=_cmd_demo)
+    demo.set_defaults(run=_cmd_demo, check=_check_demo)
 
-    rend = sub.add_parser("render", help="render a scene file written by Scene.save")
+    rend = sub.add_parser(
+        "render", parents=[common], help="render a scene file written by Scene.save"
+    )
     rend.add_argument("scene", type=Path, help="scene JSON")
     rend.add_argument("-o", "--output", required=True, type=Path, help="image (.png or .exr)")
-    rend.add_argument(
-        "--size", type=_size, default=(640, 480), help="WIDTHxHEIGHT (default 640x480)"
-    )
+    _size_args(rend, 1, 16384)
     rend.add_argument("--backend", choices=("gl", "cpu"), default="gl", help="default gl")
     rend.add_argument(
         "--alpha",
@@ -303,6 +382,8 @@ def build_parser() -> argparse.ArgumentParser:
     )
     _display_args(rend, "0.8, or 1 for a paper-mode scene", "aces, or none for a paper-mode scene")
     rend.set_defaults(run=_cmd_render)
+    for command in (demo, rend):
+        command.set_defaults(parser=command)
     return parser
 
 
@@ -310,6 +391,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``cumuli`` console script; returns the exit status."""
     parser = build_parser()
     args = parser.parse_args(argv)
+    if hasattr(args, "size"):
+        _resolve_size(args.parser, args)
+    if hasattr(args, "check"):
+        args.check(args.parser, args)
     try:
         return int(args.run(args))
     except (ValueError, TypeError, OSError, RuntimeError) as exc:

@@ -122,14 +122,14 @@ class Scene:
     :class:`cumuli.Ground` plane under the clouds (RENDER_CONTRACT, "Ground").
     """
 
-    clouds: tuple[Any, ...] = ()
+    clouds: Sequence[Any] = ()  # any sequence; kept as a tuple
     sun: Sun = field(default_factory=Sun)
     sky: Sky = field(default_factory=Sky)
     noise: Noise = field(default_factory=lambda: Noise(seed=0))
     settings: RenderSettings = field(default_factory=RenderSettings)
     camera: Camera | None = None
-    lights: tuple[Sun, ...] = ()
-    solids: tuple[Solid, ...] = ()
+    lights: Sequence[Sun] = ()
+    solids: Sequence[Solid] = ()
     sprite_settings: SpriteSettings = field(default_factory=SpriteSettings)
     impostor_settings: ImpostorSettings = field(default_factory=ImpostorSettings)
     billboard_shading: BillboardShading = field(default_factory=BillboardShading)

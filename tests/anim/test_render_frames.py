@@ -72,7 +72,7 @@ def test_sequences_are_exported_from_the_package(tmp_path: Path) -> None:
     assert res.returncode == 0, res.stderr
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr
-    # The README's sequence example, at a tiny size on the CPU marcher.
+    # The docs' sequence example (docs/dask.md), at a tiny size on the CPU marcher.
     scene = small_scene()
     lo, hi = scene.bounds()
     centre = (lo + hi) / 2

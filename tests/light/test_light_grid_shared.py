@@ -3,7 +3,8 @@
 Each sun-parallel line of a grid sheared along the sun is marched once (NDT's union march, step
 Δ' = λ/round(λ/Δ) with λ the distance between voxel layers along the line) and read back at every
 voxel layer; a voxel blends the four lines around it. Tested against a slow numpy reference of
-exactly that definition, and against the per-voxel NDT grid within the bounds the README states.
+exactly that definition, and against the per-voxel NDT grid within the bounds that
+docs/clouds-2018.md states.
 """
 
 from __future__ import annotations
@@ -27,7 +28,7 @@ import cumuli as cu
 from cumuli.light.ndt import DEFAULT_EXTINCTION
 
 # The stated difference between "shared" and the per-voxel "ndt" grid on the default cumulus
-# (README, "Light precompute"): mean |ΔL| and max |ΔL| over the voxels.
+# (docs/clouds-2018.md, "Light precompute"): mean |ΔL| and max |ΔL| over the voxels.
 BOUND_MEAN = 0.02
 BOUND_MAX = 0.3
 # With the sun along a grid axis every line runs through voxel centres: only the step and the

@@ -3,8 +3,9 @@
 ``method="sweep"`` integrates each sun-parallel line of a sheared grid once (sun and every SH
 quadrature direction) and sweeps outwards from each multiple-scattering point; ``"march"`` marches
 every voxel's ray. A constant density must come out exact (the sweeps blend the mean density
-along the rays, not the depth); on a cloud the sweeps must stay within the bounds stated in the
-README, and the sky visibility against brute-force marching must keep its accuracy.
+along the rays, not the depth); on a cloud the sweeps must stay within the bounds stated in
+docs/iwasaki-animation.md, and the sky visibility against brute-force marching must keep its
+accuracy.
 """
 
 from __future__ import annotations
@@ -26,7 +27,8 @@ from cumuli.light.volume import (
 LO, HI = (0.0, 0.0, 0.0), (2.0, 1.0, 3.0)
 DIRECTIONS = [(0, 1, 0), (0.3, 0.8, -0.4), (-0.9, 0.2, 0.3), (0.2, -0.3, -0.93), (1, 1, 1)]
 
-# Stated differences between the swept and the marched depths of a cumulus volume (README):
+# Stated differences between the swept and the marched depths of a cumulus volume
+# (docs/iwasaki-animation.md):
 # mean |Δf| over the mean depth.
 SUN_BOUND = 0.06
 SKY_BOUND = 0.05
@@ -100,7 +102,8 @@ def test_sweep_differs_from_march_on_a_single_voxel_but_conserves_its_mass() -> 
 
 
 def test_sky_visibility_keeps_its_accuracy_against_brute_force(cumulus: cu.VolumeDatabase) -> None:
-    """The README's statement: uniform-sky visibility ∫τ dω against brute-force marching along
+    """The statement of docs/iwasaki-animation.md: uniform-sky visibility ∫τ dω against
+    brute-force marching along
     every quadrature direction, order 4, scaling and squaring: median error ~10 %, and the
     swept precompute no worse than the marched one by more than a point."""
     dirs, w = sphere_quadrature(6)

@@ -37,7 +37,7 @@ def test_bench_animation_quick(tmp_path: Path, run_bench: Callable[..., str]) ->
     assert (pre["volumes"], pre["resolution"]) == (4, 16)
     assert pre["march_estimate_s"] > 0 and pre["march_over_sweep"] > 0
     assert 0 < pre["sweep_minus_march"]["light"] < 0.2
-    # Issue 14's targets: the README example is not run in --quick (no verdict); the accuracy
+    # Issue 14's targets: the docs example is not run in --quick (no verdict); the accuracy
     # target compares the swept depths' sky error with the marched ones'.
     targets = data["targets"]
     assert targets["precompute_readme_s"]["reached"] is None

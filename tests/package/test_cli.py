@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import argparse
 import json
 import os
 import subprocess
@@ -81,7 +82,17 @@ def test_demo_image_matches_the_function_it_calls(tmp_path: Path) -> None:
         (["demo", "-o", "x.png", "--width", "abc"], 2, "--width"),
         (["demo", "-o", "x.png", "--height", "0"], 2, "--height"),
         (["demo", "-o", "x.png", "--seed", "-4"], 2, "--seed"),
-        (["demo"], 2, "-o"),
+        (["demo", "--size", "64"], 2, "WIDTHxHEIGHT"),
+        (["demo", "--size", "1x8"], 2, "[2, 4096]"),
+        (["demo", "--size", "64x48", "--width", "32"], 2, "cannot be combined"),
+        (["demo", "--harris", "--torchelsen"], 2, "not allowed with"),
+        (["demo", "--noise", "--deck"], 2, "not allowed with"),
+        (["demo", "--seed", "3"], 2, "--seed is not used by the default demo"),
+        (["demo", "--harris", "--seed", "3"], 2, "--seed is not used by --harris"),
+        (["demo", "--noise", "--backend", "cpu"], 2, "--backend is not used by --noise"),
+        (["demo", "--noise", "--exposure", "2"], 2, "--exposure is not used by --noise"),
+        (["render", "s.json", "-o", "x.png", "--size", "8x8", "--height", "4"], 2, "combined"),
+        (["info", "--quiet"], 2, "unrecognized arguments"),
         (["frobnicate"], 2, "invalid choice"),
         ([], 2, "required"),
         (["demo", "-o", "x.jpg"], 1, "extension"),
@@ -96,3 +107,36 @@ def test_bad_arguments_give_a_clear_error(
     assert message in res.stderr
     assert "Traceback" not in res.stderr + res.stdout
     assert list(tmp_path.iterdir()) == []
+
+
+def test_demo_writes_out_png_by_default_and_quiet_prints_nothing(tmp_path: Path) -> None:
+    res = run("demo", "--noise", "--size", "40x20", "--quiet", cwd=tmp_path)
+    assert res.returncode == 0, res.stderr
+    assert res.stdout == "" and res.stderr == ""
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.png"]
+    assert cu.read_image(tmp_path / "out.png").shape == (20, 40, 4)
+    loud = run("demo", "--noise", "--size", "40x20", "-o", "n.png", cwd=tmp_path)
+    assert loud.returncode == 0 and "wrote" in loud.stdout and "40×20" in loud.stdout
+
+
+@pytest.mark.parametrize(
+    "size_args", [["--size", "36x18"], ["--width", "36", "--height", "18"], ["--size", "36X18"]]
+)
+def test_size_and_its_width_height_aliases_agree(tmp_path: Path, size_args: list[str]) -> None:
+    path = tmp_path / "n.exr"
+    assert cli.main(["demo", "--noise", "-q", "-o", str(path), *size_args]) == 0
+    np.testing.assert_array_equal(cu.read_image(path), cli._demo_noise(36, 18, cli.DEFAULT_SEED))
+
+
+def test_one_alias_keeps_the_default_of_the_other(tmp_path: Path) -> None:
+    path = tmp_path / "n.exr"
+    assert cli.main(["demo", "--noise", "-q", "-o", str(path), "--width", "30"]) == 0
+    assert cu.read_image(path).shape == (cli.DEFAULT_SIZE[1], 30, 4)
+
+
+def test_every_image_command_takes_the_same_size_and_quiet_options() -> None:
+    parser = cli.build_parser()
+    (commands,) = [a for a in parser._actions if isinstance(a, argparse._SubParsersAction)]
+    for name in ("demo", "render"):
+        options = {s for a in commands.choices[name]._actions for s in a.option_strings}
+        assert {"--size", "--width", "--height", "-q", "--quiet", "-o", "--output"} <= options

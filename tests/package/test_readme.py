@@ -1,5 +1,10 @@
-"""The README runs: every ```python block is executed on its own in an empty folder, every
-`cumuli ...` line of the ```sh blocks is run, and the size-limit table matches the code.
+"""The README and the docs pages (docs/*.md) run: every ```python block is executed on its own
+in an empty folder, every `cumuli ...` line of the ```sh blocks is run, and the size-limit table
+(docs/conventions.md) matches the code. The README is a landing page of at most 200 lines.
+
+Two kinds of ```python block are not run as scripts: a block headed ``title="test_….py"`` is a
+pytest file (test_testing_plugin.py runs it under pytest), and a block on the line after an
+``<!-- no-run -->`` comment is shown, not run (say why in the text around it).
 
 (The `make` lines of the README are the suite's own entry points; test_makefile.py and
 test_onboarding.py, beside this file, check them without recursing into them.)
@@ -19,21 +24,36 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text(encoding="utf-8")
+PAGES = {"README": README} | {
+    f"docs-{p.stem}": p.read_text(encoding="utf-8") for p in sorted((ROOT / "docs").glob("*.md"))
+}
+#: The most lines the README may have: a landing page; the rest is in docs/.
+README_MAX_LINES = 200
 
 pytestmark = pytest.mark.gl  # the examples render with GL, as a reader's would
 
 
-def _blocks(language: str) -> list[tuple[str, str]]:
-    """``(id, code)`` of every fenced block of ``language``, named after its section."""
+_FENCE = re.compile(
+    r"^(#{1,4} [^\n]+)$|(<!-- no-run -->\n)?^```(\w*)([^\n]*)\n(.*?)^```$", re.M | re.S
+)
+
+
+def _blocks(language: str, pages: dict[str, str] = PAGES) -> list[tuple[str, str]]:
+    """``(id, code)`` of every fenced block of ``language`` meant to run, named after its page
+    and section."""
     out = []
-    heading = "top"
-    counts: dict[str, int] = {}
-    for match in re.finditer(r"^(#{1,4} [^\n]+)$|^```(\w*)\n(.*?)^```$", README, re.M | re.S):
-        if match.group(1):
-            heading = re.sub(r"\W+", "-", match.group(1).lstrip("# ").lower()).strip("-")
-        elif match.group(2) == language:
-            counts[heading] = counts.get(heading, 0) + 1
-            out.append((f"{heading}-{counts[heading]}", match.group(3)))
+    for page, text in pages.items():
+        heading = "top"
+        counts: dict[str, int] = {}
+        for match in _FENCE.finditer(text):
+            if match.group(1):
+                heading = re.sub(r"\W+", "-", match.group(1).lstrip("# ").lower()).strip("-")
+            elif match.group(3) == language:
+                if match.group(2) or re.search(r'title="test_\w+\.py"', match.group(4)):
+                    continue  # shown, not run; or a pytest file
+                key = f"{page}-{heading}"
+                counts[key] = counts.get(key, 0) + 1
+                out.append((f"{key}-{counts[key]}", match.group(5)))
     return out
 
 
@@ -50,10 +70,30 @@ def _env() -> dict[str, str]:
     return {**os.environ, "CUMULI_PROGRESS": "0"}
 
 
-def test_the_readme_has_code_to_run() -> None:
+def test_the_readme_and_docs_have_code_to_run() -> None:
     assert len(PYTHON) >= 8 and len(SHELL) >= 3
+    assert any(name.startswith("README-") for name, _ in PYTHON)
     for name, code in PYTHON:
         assert "import cumuli" in code, f"{name} does not import cumuli: not self-contained"
+
+
+def test_the_readme_is_a_landing_page() -> None:
+    lines = README.splitlines()
+    assert len(lines) <= README_MAX_LINES, f"README.md has {len(lines)} lines"
+    first_screen = "\n".join(lines[:60])
+    assert "make demo" in first_screen and "make test" in first_screen
+    for link in re.findall(r"\]\((docs/[^)#]+)", README):
+        assert (ROOT / link).is_file(), link
+    pictures = re.findall(r"!\[[^\]]+\]\(([^)]+)\)", README)
+    assert pictures, "the README shows a picture"
+    for picture in pictures:
+        assert (ROOT / picture).is_file() and (ROOT / picture).stat().st_size < 300_000, picture
+
+
+def test_the_markers_are_understood() -> None:
+    page = "# T\n<!-- no-run -->\n```python\nraise SystemExit(1)\n```\n\n```python\nx = 1\n```\n"
+    pytest_file = '```python title="test_x.py"\ndef test_x(): ...\n```\n'
+    assert _blocks("python", {"p": page + pytest_file}) == [("p-t-1", "x = 1\n")]
 
 
 @pytest.mark.parametrize(("name", "code"), PYTHON, ids=[n for n, _ in PYTHON])
@@ -64,7 +104,7 @@ def test_python_block_runs_on_its_own(name: str, code: str, tmp_path: Path) -> N
         [sys.executable, str(script)], cwd=tmp_path, env=_env(), capture_output=True, text=True,
         timeout=300,
     )  # fmt: skip
-    assert done.returncode == 0, f"README block {name} failed:\n{done.stderr[-3000:]}"
+    assert done.returncode == 0, f"block {name} failed:\n{done.stderr[-3000:]}"
 
 
 @pytest.mark.parametrize(("name", "line"), SHELL, ids=[n for n, _ in SHELL])
@@ -74,13 +114,16 @@ def test_cli_line_runs(name: str, line: str, tmp_path: Path) -> None:
         [sys.executable, "-m", "cumuli", *args], cwd=tmp_path, env=_env(), capture_output=True,
         text=True, timeout=300,
     )  # fmt: skip
-    assert done.returncode == 0, f"README line {line!r} failed:\n{done.stderr[-3000:]}"
+    assert done.returncode == 0, f"line {line!r} ({name}) failed:\n{done.stderr[-3000:]}"
     if "-o" in args:
         assert (tmp_path / args[args.index("-o") + 1]).is_file()
+    elif args[:1] == ["demo"]:
+        assert (tmp_path / "out.png").is_file()
 
 
 def _limit_rows() -> list[tuple[str, str, str]]:
-    section = README.split("## Size limits", 1)[1].split("\n## ", 1)[0]
+    conventions = (ROOT / "docs" / "conventions.md").read_text(encoding="utf-8")
+    section = conventions.split("## Size limits", 1)[1].split("\n## ", 1)[0]
     rows = []
     for line in section.splitlines():
         cells = [c.strip() for c in line.strip().strip("|").split("|")]

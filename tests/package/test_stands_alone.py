@@ -7,7 +7,7 @@ import re
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
-FOLDERS = ("python", "cpp", "shaders", "benchmarks", "tests", "notebooks")
+FOLDERS = ("python", "cpp", "shaders", "benchmarks", "tests", "notebooks", "docs")
 SUFFIXES = {".py", ".hpp", ".cpp", ".glsl", ".md", ".ipynb", ".toml"}
 #: What a reader of the repository cannot open.
 OUTSIDE = re.compile(r"shared/|DESIGN\.md|\b(?:harris|torchelsen)\.md|\bissue \d+")

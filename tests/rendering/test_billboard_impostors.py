@@ -20,6 +20,7 @@ from cumuli.rendering.impostors import (
     required_resolution,
     translation_error,
 )
+from cumuli.testing import assert_image_close, only
 
 W, H = 96, 72
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
@@ -194,7 +195,7 @@ def test_relighting_and_content_changes_invalidate() -> None:
         img = cu.render(changed, CAMERA, W, H, backend="cpu", impostors=cache)
         assert cache.history[-1]["updates"] == {"light": 4}
         direct = cu.render(changed, CAMERA, W, H, backend="cpu")
-        assert np.abs(img - direct).mean() <= 1e-2
+        assert_image_close(img, direct, **only(mean_abs=1e-2))
     last = changes[-1]
     cu.render(last, CAMERA, W, H, backend="cpu", impostors=cache)
     assert cache.history[-1]["updates"] == {}

@@ -14,6 +14,7 @@ import cumuli as cu
 from cumuli.cli import main
 from cumuli.io.images import read_image
 from cumuli.rendering.compositor import plan
+from cumuli.testing import assert_image_close, only
 
 W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, 0.3), intensity=2.0)
@@ -57,7 +58,7 @@ def test_mixed_scene_gl_and_cpu_agree(frame, nimbus) -> None:
     assert plan(scene.scene) == [("cloud", [0]), ("billboards", [1]), ("volume", [2])]
     gl = cu.render(scene, CAMERA, W, H)
     cpu = cu.render(scene, CAMERA, W, H, backend="cpu")
-    assert np.abs(gl.astype(np.float64) - cpu).mean(axis=(0, 1)).max() <= 1e-3
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-3))
     a = [cu.render(alone(scene.scene, k), CAMERA, W, H, backend="cpu")[..., 3] for k in range(3)]
     assert ((a[0] > 0.05) & (a[1] > 0.05)).sum() > 20  # billboards over the cumulus
     assert ((a[1] > 0.05) & (a[2] > 0.05)).sum() > 5  # and over the volume

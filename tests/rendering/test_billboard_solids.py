@@ -13,6 +13,7 @@ import cumuli as cu
 from cumuli.rendering.billboards import sort_key
 from cumuli.rendering.painters import CPUPainter, GLPainter
 from cumuli.rendering.solids import composite_split, draw_solids_cpu
+from cumuli.testing import assert_image_close, only
 
 W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
@@ -69,7 +70,7 @@ def test_depth_tested_billboards_gl_and_cpu_agree() -> None:
     sc = scene(billboard_shading=cu.BillboardShading(exact_textures=True))
     gl = cu.render(sc, CAMERA, W, H)
     cpu = cu.render(sc, CAMERA, W, H, backend="cpu")
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5 and np.abs(gl - cpu).max() <= 1e-4
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-5, max_abs=1e-4))
 
 
 @pytest.mark.parametrize("shading", ["vertex", "fragment"])
@@ -139,7 +140,7 @@ def test_split_gl_and_cpu_agree_in_exact_mode() -> None:
     with cu.Renderer() as r:
         gl = r.render(sc, CAMERA, W, H, impostors=cu.ImpostorCache())
     cpu = cu.render_cpu(sc, CAMERA, W, H, impostors=cu.ImpostorCache())
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5 and np.abs(gl - cpu).max() <= 1e-4
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-5, max_abs=1e-4))
 
 
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])

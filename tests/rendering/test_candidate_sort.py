@@ -15,6 +15,7 @@ import cumuli as cu
 from cumuli.gl import with_defines
 from cumuli.rendering.compositor import Renderer
 from cumuli.settings import CANDIDATE_SORTS
+from cumuli.testing import assert_image_close, only
 
 W, H = 64, 48
 SORTED = ("insertion", "quicksort", "oddeven")
@@ -65,9 +66,9 @@ def test_unsorted_differs_and_matches_cpu(renderer: Renderer) -> None:
     # Paper marching composites in candidate order: out of order, overlaps shade differently.
     assert np.abs(unsorted - sorted_img).max() > 0.05
     cpu = cu.render_cpu(overlapping_scene(candidate_sort="none"), CAMERA, W, H)
-    assert np.abs(unsorted - cpu).mean() <= 1e-3
+    assert_image_close(unsorted, cpu, **only(mean_abs=1e-3))
     cpu_sorted = cu.render_cpu(overlapping_scene(candidate_sort="oddeven"), CAMERA, W, H)
-    assert np.abs(sorted_img - cpu_sorted).mean() <= 1e-3
+    assert_image_close(sorted_img, cpu_sorted, **only(mean_abs=1e-3))
 
 
 def test_cpu_sorted_modes_identical_and_none_differs() -> None:

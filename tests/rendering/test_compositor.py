@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
+from cumuli.testing import assert_image_close, only
 
 W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, 0.3), intensity=2.0)
@@ -54,7 +55,7 @@ def test_mixed_scene_gl_and_cpu_agree(frame: cu.VolumeCloud) -> None:
     cpu = cu.render(scene, CAMERA, W, H, backend="cpu")
     assert np.isfinite(gl).all() and gl.shape == (H, W, 4)
     # The render pass's parity tolerance (RENDER_CONTRACT): mean per channel ≤ 1e-3.
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-3
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-3))
     # Both clouds are in the picture and overlap on screen.
     a0 = cu.render(alone(scene.scene, 0), CAMERA, W, H, backend="cpu")[..., 3]
     a1 = cu.render(alone(scene.scene, 1), CAMERA, W, H, backend="cpu")[..., 3]

@@ -13,6 +13,7 @@ import pytest
 
 import cumuli as cu
 from cumuli import _core
+from cumuli.testing import assert_image_close, only
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
 
@@ -97,7 +98,7 @@ def test_cpu_skipping_is_bit_exact_and_fast_setting_saves_fbm(name, march):
         assert s_skip.skipped > 0.2 * s_skip.steps  # most empty samples of the grown boxes
     # The early exit: the image bound on every benchmark scene, fewer fBm evaluations
     # (÷ 2 on the paper march, the benchmark; the union march exits a little later).
-    assert np.abs(fast - off).mean() <= 2e-3
+    assert_image_close(fast, off, **only(mean_abs=2e-3))
     ratio = s_off.fbm_evaluations / s_fast.fbm_evaluations
     assert ratio >= (2.0 if march == "paper" else 1.5), ratio
 
@@ -200,7 +201,7 @@ def test_gl_skipping_is_exact_and_matches_cpu(renderer, name, lighting):
     cam = scene.default_camera()
     off = renderer.render(_with(scene, empty_space_skipping=False), cam, W, H)
     on = renderer.render(scene, cam, W, H)
-    assert np.abs(on - off).mean() <= 2e-3
+    assert_image_close(on, off, **only(mean_abs=2e-3))
     np.testing.assert_array_equal(on, off)  # measured: bit for bit on llvmpipe
     cpu = cu.render_cpu(scene, cam, W, H)
     diff = np.abs(on.astype(np.float64) - cpu)
@@ -208,5 +209,5 @@ def test_gl_skipping_is_exact_and_matches_cpu(renderer, name, lighting):
     assert ((diff > 5e-2).any(axis=-1)).sum() <= int(1e-3 * W * H)
     fast = _with(scene, **FAST)
     gl_fast = renderer.render(fast, cam, W, H)
-    assert np.abs(gl_fast - off).mean() <= 2e-3
+    assert_image_close(gl_fast, off, **only(mean_abs=2e-3))
     assert np.abs(gl_fast.astype(np.float64) - cu.render_cpu(fast, cam, W, H)).mean() <= 1e-3

@@ -12,6 +12,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
+from cumuli.testing import assert_image_close, only
 
 W, H = 96, 72
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
@@ -55,7 +56,7 @@ def test_exact_display_gl_and_cpu_agree(exact_impostors_agree: Callable) -> None
         assert gl_cache.history[-1]["updates"] == {}  # reused from the moved eye
         fast = r.render(scene(tolerance=1.0), moved, W, H, impostors=cu.ImpostorCache())
     fresh = cu.render_cpu(scene(tolerance=1.0), moved, W, H, impostors=cu.ImpostorCache())
-    assert np.abs(fast - fresh).mean() <= 1e-3
+    assert_image_close(fast, fresh, **only(mean_abs=1e-3))
 
 
 def popping(tolerance: float) -> float:
@@ -126,7 +127,7 @@ def test_changes_invalidate_and_translation_keeps_the_impostor() -> None:
         img = cu.render(changed, CAMERA, W, H, backend="cpu", impostors=cache)
         assert cache.history[-1]["updates"] == {"light": 1}
         direct = cu.render(changed, CAMERA, W, H, backend="cpu")
-        assert np.abs(img - direct).mean() <= 1e-2
+        assert_image_close(img, direct, **only(mean_abs=1e-2))
 
 
 def field() -> cu.Scene:
@@ -217,7 +218,7 @@ def test_impostors_for_marched_clouds_and_volumes(backend: str) -> None:
         direct = cu.render(sc, cam, W, H, backend=backend)
         # Resampling the marched cumulus's pixel-sharp fBm detail costs most (~1e−2 at
         # res = f_px·2R/d, half that at twice the resolution); particles and volume ~6e−4.
-        assert np.abs(img - direct).mean() <= 2e-2
+        assert_image_close(img, direct, **only(mean_abs=2e-2))
     assert cache.stats["impostors"] == 3 and cache.history[0]["updates"] == {"missing": 3}
     assert cache.history[-1]["updates"].get("missing", 0) == 0
 

@@ -14,6 +14,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.rendering.compositor import plan
+from cumuli.testing import assert_image_close, only
 
 W, H = 96, 72
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
@@ -125,10 +126,10 @@ def test_all_kinds_gl_and_cpu_agree(drawables: list[object]) -> None:
     lit = cu.prepare_light(sc)
     gl = cu.render(lit, CAMERA, W, H)
     cpu = cu.render(lit, CAMERA, W, H, backend="cpu")
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-3
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-3))
     gl_i = cu.render(lit, CAMERA, W, H, impostors=cu.ImpostorCache())
     cpu_i = cu.render(lit, CAMERA, W, H, backend="cpu", impostors=cu.ImpostorCache())
-    assert np.abs(gl_i - cpu_i).mean(axis=(0, 1)).max() <= 1e-3
+    assert_image_close(gl_i, cpu_i, **only(channel_mean_abs=1e-3))
 
 
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
@@ -142,7 +143,7 @@ def test_all_kinds_through_impostors(drawables: list[object], backend: str) -> N
     assert cache.history[-1]["updates"] == {"missing": 7}
     assert set(cache.entries) == {0, 1, 2, 3, (4, 4), (4, 8), (4, 15)}
     # The marched cumulus's pixel-sharp fBm costs most (as for the particle kinds' own test).
-    assert np.abs(img - direct).mean() <= 2e-2
+    assert_image_close(img, direct, **only(mean_abs=2e-2))
     moved = cu.Camera((0.2, 6.05, -75.0), (0.2, 6.05, 10.0), fov=45)
     field = drawables[4]
     blown = cu.BillboardField(field.variants, field.offsets + np.float32([0.05, 0.0, 0.0]),
@@ -165,7 +166,7 @@ def test_solids_in_a_mixed_scene(drawables: list[object], backend: str) -> None:
     img = cu.render(sc, CAMERA, W, H, backend=backend, impostors=cache)
     assert cache.history[-1]["updates"] == {"split": 2, "missing": 5}
     direct = cu.render(sc, CAMERA, W, H, backend=backend)
-    assert np.abs(img - direct).mean() <= 2e-2
+    assert_image_close(img, direct, **only(mean_abs=2e-2))
     for solid in solids:
         from cumuli.rendering.solids import draw_solids_cpu
 

@@ -20,6 +20,7 @@ from cumuli.gl.sprites import (
 from cumuli.light.particles import ParticleLight, SpriteSettings, particle_light
 from cumuli.model.particles import ParticleCloud, particle_cumulus
 from cumuli.rendering.particles import draw_particles_cpu, draw_particles_gl, particle_sprites
+from cumuli.testing import assert_image_close, only
 
 EYE = cu.Camera((0.0, 0.0, 0.0), (0.0, 0.0, 1.0), fov=60.0)
 W = H = 33  # odd: the optical axis hits the centre of pixel (16, 16)
@@ -352,7 +353,7 @@ def test_billboards_gl_matches_cpu(gl_context) -> None:
         )
     assert cpu[..., 3].mean() > 0.1
     assert_parity(gl, cpu)
-    assert np.abs(fast - cpu).mean() < 1e-2  # hardware filter: close, not exact
+    assert_image_close(fast, cpu, **only(mean_abs=1e-2))  # hardware filter: close, not exact
 
 
 @pytest.mark.gl

@@ -134,7 +134,7 @@ def test_fidelity_against_the_blob_volume() -> None:
     """§10.4: the particle cloud against the same density as a volume (single scattering,
     isotropic, black sky) and the 2018 cloud it fills. Coverage agrees; radiance does not — the
     splat scatters a·τ/4π where a blob of optical depth τ can scatter at most a(1 − e^{−τ})/4π,
-    so the ratio shrinks towards 1 as τ → 0; the figures go to the notebook and the README."""
+    so the ratio shrinks towards 1 as τ → 0; the figures go to the notebook and the docs."""
     shape = cu.gaussian_cumulus(centre=(0, 0, 0), seed=1)
     ratios = []
     for tau in (8.0, 0.5):

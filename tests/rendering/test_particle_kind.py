@@ -12,6 +12,7 @@ import pytest
 import cumuli as cu
 from cumuli.light.prepare import clear_memo
 from cumuli.rendering.compositor import plan
+from cumuli.testing import assert_image_close, only
 
 W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, 0.3), intensity=2.0)
@@ -99,7 +100,7 @@ def test_a_scene_of_particle_clouds_is_one_pass_gl_and_cpu_agree() -> None:
     gl = cu.render(lit, CAMERA, W, H)
     cpu = cu.render(lit, CAMERA, W, H, backend="cpu")
     # The sprite contract's parity (RENDER_CONTRACT "Sprites").
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5 and np.abs(gl - cpu).max() <= 1e-4
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-5, max_abs=1e-4))
     assert (cpu[..., 3] > 0.5).sum() > 50
     with cu.Renderer() as r:
         direct = r.drawer("particles").draw(lit, [0, 1, 2], CAMERA, W, H, True)
@@ -150,7 +151,7 @@ def test_mixed_scene_gl_and_cpu_agree() -> None:
     gl = cu.render(scene, CAMERA, W, H)
     cpu = cu.render(scene, CAMERA, W, H, backend="cpu")
     assert np.isfinite(gl).all()
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-3  # the render pass's tolerance
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-3))  # the render pass's tolerance
     alone = [
         cu.render(scene.scene.replace(clouds=[c]), CAMERA, W, H, backend="cpu")[..., 3]
         for c in scene.scene.clouds

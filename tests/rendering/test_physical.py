@@ -13,6 +13,7 @@ import cumuli as cu
 from cumuli import _core
 from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, phase, physical_light
 from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
+from cumuli.testing import assert_image_close, only
 
 F = np.float32
 SUN = cu.Sun(direction=(0.8, 0.45, -0.3), colour=(1.0, 0.9, 0.8), intensity=5.0)
@@ -386,7 +387,7 @@ def test_volume_renderer_draws_the_same_medium(gl_context) -> None:
     cpu = cu.render_cpu(lit, cam, 48, 36)
     with cu.Renderer(context=gl_context) as r:
         gl = r.render(lit, cam, 48, 36)
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-3
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-3))
     marcher = cu.render_cpu(scene, cam, 48, 36)
     cov = marcher[..., 3] > 0.5
     assert cov.mean() > 0.05

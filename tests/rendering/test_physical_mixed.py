@@ -8,6 +8,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.model.particles import particle_cumulus
+from cumuli.testing import assert_image_close, only
 
 SUN = cu.Sun(direction=(0.6, 0.7, -0.3), intensity=6.0)
 CAMERA = cu.Camera(position=(0, 4, -40), target=(0, 0, 0), fov=50)
@@ -45,7 +46,7 @@ def test_mixed_scene_over_a_ground_gl_matches_cpu(gl_context, lighting: str) -> 
     gl = cu.render(scene, CAMERA, 96, 72, backend="gl")
     cpu = cu.render(scene, CAMERA, 96, 72, backend="cpu")
     assert np.isfinite(gl).all()
-    assert np.abs(gl - cpu).mean() < 1e-4
+    assert_image_close(gl, cpu, **only(mean_abs=1e-4))
     # Both clouds are drawn and the ground shows below the horizon.
     no_clouds = cu.render(scene.replace(clouds=[]), CAMERA, 96, 72, backend="cpu")
     changed = np.abs(cpu[..., :3] - no_clouds[..., :3]).sum(-1) > 1e-3

@@ -10,6 +10,7 @@ import math
 import os
 import weakref
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import pytest
@@ -17,11 +18,11 @@ import pytest
 import cumuli as cu
 from cumuli.demo import cumulus_scene, default_scene
 from cumuli.rendering.compositor import MAX_PIXELS, Renderer
+from cumuli.testing import ImageComparison, assert_image_close, compare_images, only
 
 pytestmark = pytest.mark.gl
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-FAILURES = Path(__file__).resolve().parents[1] / "_failures"
 W, H = 96, 72
 BLACK_SKY = cu.Sky(zenith=(0, 0, 0), horizon=(0, 0, 0), ground=(0, 0, 0), sun_disc_intensity=0)
 
@@ -112,7 +113,7 @@ def golden_scenes() -> dict[str, tuple[cu.Scene, cu.Camera]]:
 # Another driver may round transcendental functions (exp, pow, sqrt) differently in the last
 # bits. Where that moves fBm across eq. (2)'s gate ρ < γ a single sample appears or vanishes,
 # changing that pixel by up to a few tenths (one sample's (1 − Δτ) share at most): such GATE
-# pixels (beyond GOLDEN_BAD_DIFF) are counted, not averaged, and bounded by GOLDEN_MAX_ABS.
+# pixels (beyond "outlier_abs") are counted, not averaged, and bounded by "max_abs".
 # Everywhere else the differences are rounding-sized. The C++ marcher is a second float
 # implementation of the same contract and shows what to expect: against these references it
 # gives 0.5–2.8e-5 mean on cloud pixels off the gate, 1 gate pixel (sunset, 0.14) and 2e-7 on
@@ -123,63 +124,34 @@ def golden_scenes() -> dict[str, tuple[cu.Scene, cu.Camera]]:
 # GOLDEN_CLOUD_MEAN_ABS = 1e-4 by ≥ 3.9×, which still leaves 3.5× over the C++ marcher's
 # 2.8e-5. The same perturbations move the whole-image mean by only 2–12e-5: the old whole-image
 # tolerance (2e-3, kept below as a loose summary) could not see them.
-CLOUD_ALPHA = 0.05
-GOLDEN_CLOUD_MEAN_ABS = 1e-4  # mean |Δ| over cloud pixels that are not gate pixels
-GOLDEN_SKY_MAX_ABS = 1e-4  # any channel of a sky pixel (sky formula: pow rounding only, ~1e-7)
-GOLDEN_BAD_DIFF = 0.05  # a pixel with a channel beyond this is a gate pixel
-GOLDEN_BAD_SHARE = 0.01  # gate pixels allowed, as a share of the cloud pixels (at least 1)
-GOLDEN_MAX_ABS = 0.5  # any pixel, gate pixels included
-GOLDEN_MEAN_ABS = 2e-3  # whole image (diluted by the sky; a summary, not the sensitive check)
+GOLDEN: dict[str, Any] = {
+    "alpha_threshold": 0.05,  # CLOUD pixels: reference alpha above this
+    "covered_mean_abs": 1e-4,  # mean |Δ| over cloud pixels that are not gate pixels
+    "background_max_abs": 1e-4,  # any channel of a sky pixel (sky formula: pow rounding, ~1e-7)
+    "outlier_abs": 0.05,  # a pixel with a channel beyond this is a gate pixel
+    "outlier_share": 0.01,  # gate pixels allowed, as a share of the cloud pixels (at least 1)
+    "max_abs": 0.5,  # any pixel, gate pixels included
+    "mean_abs": 2e-3,  # whole image (diluted by the sky; a summary, not the sensitive check)
+}
+GOLDEN_CLOUD_MEAN_ABS = GOLDEN["covered_mean_abs"]
+GOLDEN_MEAN_ABS = GOLDEN["mean_abs"]
+CLOUD_ALPHA = GOLDEN["alpha_threshold"]
 
 
-def golden_metrics(img: np.ndarray, ref: np.ndarray) -> dict[str, float]:
-    """The golden-image metrics of ``img`` against ``ref`` and whether they pass."""
-    diff = np.abs(img.astype(np.float64) - ref)
-    cloud = ref[..., 3] > CLOUD_ALPHA
-    gate = diff.max(axis=-1) > GOLDEN_BAD_DIFF
-    allowed = max(1, int(GOLDEN_BAD_SHARE * cloud.sum()))
-    m = {
-        "cloud_pixels": int(cloud.sum()),
-        "cloud_mean": float(diff[cloud & ~gate].mean()),
-        "cloud_max": float(diff[cloud & ~gate].max(initial=0.0)),
-        "sky_max": float(diff[~cloud & ~gate].max(initial=0.0)),
-        "gate_pixels": int(gate.sum()),
-        "gate_allowed": allowed,
-        "max": float(diff.max()),
-        "mean": float(diff.mean()),
-    }
-    m["ok"] = (
-        m["cloud_mean"] <= GOLDEN_CLOUD_MEAN_ABS
-        and m["sky_max"] <= GOLDEN_SKY_MAX_ABS
-        and m["gate_pixels"] <= allowed
-        and m["max"] <= GOLDEN_MAX_ABS
-        and m["mean"] <= GOLDEN_MEAN_ABS
-    )
-    return m
+def golden_metrics(img: np.ndarray, ref: np.ndarray) -> ImageComparison:
+    """The golden-image comparison of ``img`` against ``ref`` (``cumuli.testing``'s metrics at
+    the tolerances above)."""
+    return compare_images(img, ref, **GOLDEN)
 
 
 @pytest.mark.parametrize("name", ["cumulus", "sunset", "mixed"])
-def test_golden_images(name: str, hand_lit: HandLitRenderer, regen_references: bool) -> None:
+def test_golden_images(name: str, hand_lit: HandLitRenderer) -> None:
     scene, camera = golden_scenes()[name]
     img = hand_lit.render(scene, camera, W, H)
-    path = DATA / f"render_{name}.exr"
-    if regen_references or not path.exists():
-        if not regen_references:
-            pytest.fail(f"reference {path} is missing; run with CUMULI_REGEN=1 to create it")
-        DATA.mkdir(exist_ok=True)
-        cu.write_image(path, img, exposure=1.0, tonemap="none")
-    ref = cu.read_image(path)
-    assert ref.shape == img.shape
-    m = golden_metrics(img, ref)
-    if not m["ok"]:
-        FAILURES.mkdir(exist_ok=True)
-        cu.write_image(FAILURES / f"render_{name}.exr", img, exposure=1.0, tonemap="none")
-        cu.write_image(
-            FAILURES / f"render_{name}_diff.exr", np.abs(img - ref), exposure=1.0, tonemap="none"
-        )
-    assert m["ok"], f"{name}: {m} (images in {FAILURES})"
+    m = assert_image_close(img, DATA / f"render_{name}.exr", **GOLDEN)
     # The references are not trivial: enough cloud pixels for the cloud metrics to mean something.
-    assert m["cloud_pixels"] >= 200
+    ref = cu.read_image(DATA / f"render_{name}.exr")
+    assert m["covered_pixels"] >= 200
     assert ((ref[..., 3] > 0) & (ref[..., 3] <= CLOUD_ALPHA)).mean() < 0.01
 
 
@@ -187,7 +159,7 @@ def test_golden_metrics_catch_small_changes(hand_lit: HandLitRenderer) -> None:
     """The tolerances are tight enough to see a slightly different phase or absorption."""
     scene, camera = golden_scenes()["cumulus"]
     ref = hand_lit.render(scene, camera, W, H)
-    assert golden_metrics(ref, ref)["ok"]
+    assert golden_metrics(ref, ref).ok
     for change in (
         {"hg_g": scene.settings.hg_g + 0.02},
         {"absorption": 1.02 * scene.settings.absorption},
@@ -196,7 +168,8 @@ def test_golden_metrics_catch_small_changes(hand_lit: HandLitRenderer) -> None:
             scene.replace(settings=scene.settings.replace(**change)), camera, W, H
         )
         m = golden_metrics(img, ref)
-        assert not m["ok"] and m["cloud_mean"] > 3 * GOLDEN_CLOUD_MEAN_ABS, (change, m)
+        assert m.failed == ["covered_mean"], (change, m.report())
+        assert m["covered_mean"] > 3 * GOLDEN_CLOUD_MEAN_ABS
         assert m["mean"] < GOLDEN_MEAN_ABS  # the whole-image mean alone would have passed
 
 
@@ -208,8 +181,8 @@ def test_golden_tolerances_admit_another_float_implementation(name: str) -> None
     m = golden_metrics(
         cu.render_cpu(scene, camera, W, H), cu.read_image(DATA / f"render_{name}.exr")
     )
-    assert m["ok"], m
-    assert m["cloud_mean"] < GOLDEN_CLOUD_MEAN_ABS / 3  # with margin
+    assert m.ok, m.report()
+    assert m["covered_mean"] < GOLDEN_CLOUD_MEAN_ABS / 3  # with margin
 
 
 # --- invariants ---------------------------------------------------------------------------------
@@ -431,7 +404,7 @@ def test_render_convenience_and_backends() -> None:
     img = cu.render(scene, front_camera(), width=32, height=24)
     assert img.shape == (24, 32, 4) and img.dtype == np.float32
     cpu = cu.render(scene, front_camera(), width=32, height=24, backend="cpu")
-    assert float(np.abs(img - cpu).mean()) < 1e-3
+    assert_image_close(img, cpu, **only(mean_abs=1e-3))
     with pytest.raises(ValueError, match="backend"):
         cu.render(scene, front_camera(), 32, 24, backend="vulkan")
 

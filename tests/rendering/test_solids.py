@@ -12,6 +12,7 @@ import cumuli as cu
 from cumuli.rendering.painters import CPUPainter
 from cumuli.rendering.solids import composite_split, draw_solids_cpu
 from cumuli.sky import sky_args
+from cumuli.testing import assert_image_close, only
 
 W, H = 64, 48
 SUN = cu.Sun(direction=(0.4, 0.8, -0.3), intensity=2.0)
@@ -279,7 +280,7 @@ def test_impostors_split_only_around_solids_inside_the_cloud(backend: str) -> No
     # Split impostors against direct depth-tested splats: the same picture up to the cuts.
     direct = cu.render(inside, cam, W, H, backend=backend)
     split_img = cu.render(inside, cam, W, H, backend=backend, impostors=cu.ImpostorCache())
-    assert np.abs(split_img - direct).mean() < 2e-2
+    assert_image_close(split_img, direct, **only(mean_abs=2e-2))
 
 
 @pytest.mark.gl
@@ -292,7 +293,7 @@ def test_split_impostors_gl_and_cpu_agree_in_exact_mode() -> None:
     cam = cu.Camera((6.0, 6.0, -60.0), (0.0, 2.0, 0.0), fov=35)
     gl = cu.render(scene, cam, W, H, impostors=cu.ImpostorCache())
     cpu = cu.render(scene, cam, W, H, backend="cpu", impostors=cu.ImpostorCache())
-    assert np.abs(gl - cpu).mean(axis=(0, 1)).max() <= 1e-5
+    assert_image_close(gl, cpu, **only(channel_mean_abs=1e-5))
 
 
 def test_solids_and_impostors_do_not_depend_on_the_thread_count() -> None:
@@ -340,7 +341,7 @@ def test_marched_cloud_impostors_stop_at_a_solid_inside() -> None:
         assert cache.history[-1]["updates"] in ({"missing": 1}, {"clip": 1})
     assert cache.history[-1]["updates"] == {"clip": 1}
     direct = cu.render_cpu(scene, CAMERA, W, H)
-    assert np.abs(img - direct).mean() < 2e-2
+    assert_image_close(img, direct, **only(mean_abs=2e-2))
     away = scene.replace(solids=(cu.Solid((0.0, 2.0, -45.0), 1.0),))
     cu.render_cpu(away, CAMERA, W, H, impostors=cache)
     assert cache.history[-1]["updates"] == {"clip": 1}

@@ -1,4 +1,5 @@
-"""Progress bars (tqdm) for every step that can take more than a few seconds (README, "Progress").
+"""Progress bars (tqdm) for every step that can take more than a few seconds
+(docs/conventions.md, "Progress").
 
 A bar appears only once its step has run for :data:`DELAY` seconds, so quick calls print nothing.
 Each long step takes ``progress=``: ``None`` (the default) shows bars unless the environment

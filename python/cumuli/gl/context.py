@@ -4,7 +4,7 @@ Every GL pipeline in cumuli (the fBm parity path, the ray marchers) gets its con
 its GLSL from ``shaders/`` with the small ``#include "file.glsl"`` mechanism below, and releases
 every GL object with the context.
 
-Processes and threads (README, "GL, threads and processes"):
+Processes and threads (docs/conventions.md, "GL, threads and processes"):
 
 - **One context per thread.** An EGL context is current in one thread at a time, so
   :func:`default_context` (what ``cu.render``, ``cu.Renderer()``, ``cumuli.gl.fbm`` and

@@ -13,7 +13,7 @@ intervals once, attributing a sample to the covering primitive with the smallest
 ``method="naive"`` marches every interval in full, overlaps twice, as the paper's baseline;
 ``method="shared"`` shares samples between voxels: each sun-parallel line of a grid sheared along
 the sun is marched once (as NDT marches a ray) and every voxel blends the four lines around it
-(not the per-voxel definition; its difference from ``"ndt"`` is stated in the README).
+(not the per-voxel definition; its difference from ``"ndt"`` is stated in docs/clouds-2018.md).
 See ``cpp/include/cumuli/light/ndt.hpp`` for the exact definition.
 
 A grid is a :class:`LightGrid`: the values, the world box they span, the sun direction and the
@@ -208,7 +208,7 @@ def light_grid(
         A :class:`LightParams` (its ``kappa``, when set, overrides the cloud's κ).
     progress:
         A progress bar when the march takes more than a few seconds (``None``: unless
-        ``CUMULI_PROGRESS=0``; ``False``: never). See README, "Progress".
+        ``CUMULI_PROGRESS=0``; ``False``: never). See docs/conventions.md, "Progress".
 
     Returns
     -------

@@ -21,7 +21,7 @@ maths):
   sees the first mean free path of the cloud while a lattice cell spans several, and the
   diffuse light there is larger than its cell mean: the fluence is read with the gain
   :data:`SUN_GAIN` = 1.5, calibrated once against Mitsuba 3 on the side-lit default cumulus
-  and checked front-, back- and top-lit (see the README for the errors).
+  and checked front-, back- and top-lit (see docs/lighting.md for the errors).
 - **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
   quadrature with 2·:data:`SKY_SAMPLES`² directions) times the sky's SH projection gives the
   sky irradiance reaching each voxel unscattered; with multiple scattering on, it and its

@@ -67,8 +67,9 @@ class VolumeLighting:
     sample point the volume is swept outwards from the point, each voxel continuing the depth of
     the voxels one slice closer (see ``light/volume.hpp``). ``method="march"`` marches every
     voxel's ray (the brute-force reference, tens of times slower). Against ``"march"``, the swept
-    depths of the README's cumulus database differ by a few per cent on average (the benchmark
-    states the figures) and the sky visibility error quoted above is unchanged.
+    depths of the cumulus database of docs/iwasaki-animation.md differ by a few per cent on
+    average (the benchmark states the figures) and the sky visibility error quoted above is
+    unchanged.
 
     Multiple isotropic scattering (§3.2, eq. 8) goes through ``ms_points`` sample points spread
     uniformly over the box (seeded): the optical depth from every voxel to every point is

@@ -211,7 +211,7 @@ class BillboardCloud:
             **fields, opacity=self.opacity, atlas=self.atlas, params=params, stats=self.stats
         )
 
-    def translated(self, offset: Sequence[float]) -> BillboardCloud:
+    def translated(self, offset: Sequence[float] | np.ndarray) -> BillboardCloud:
         """A copy moved by ``offset`` (world units)."""
         off = np.array(check.vec3(offset, "offset", bound=check.MAX_COORD))
         boxes = (self.boxes.astype(np.float64) + off).astype(np.float32)

@@ -251,7 +251,7 @@ class Cloud:
         fields.update(changes)
         return Cloud(**fields)
 
-    def translated(self, offset: Sequence[float]) -> Cloud:
+    def translated(self, offset: Sequence[float] | np.ndarray) -> Cloud:
         """A copy moved by ``offset`` (world units)."""
         off = check.vec3(offset, "offset")
         centres = (self.centres.astype(np.float64) + np.array(off)).astype(np.float32)

@@ -186,7 +186,7 @@ class ParticleCloud:
             centres, radii, self._tau, self._albedo, params=params, stats=dict(self.stats)
         )
 
-    def translated(self, offset: Sequence[float]) -> ParticleCloud:
+    def translated(self, offset: Sequence[float] | np.ndarray) -> ParticleCloud:
         """The cloud moved by ``offset`` (wind). The light of a cloud only depends on relative
         positions, so a translated cloud can keep using its light."""
         off = check.vec3(offset, "offset", bound=check.MAX_COORD)

@@ -4,6 +4,7 @@ Musse 2005 §3.1–3.2, eq. (1); spec §2–3, §10). Generation is `cumuli.mode
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -60,8 +61,8 @@ class SeedBox:
 
     centre: tuple[float, float, float] = (0.0, 0.0, 0.0)
     half_size: tuple[float, float, float] = (4.0, 1.5, 3.0)
-    directions: tuple[tuple[float, float, float], ...] = DEFAULT_DIRECTIONS
-    apertures: tuple[float, ...] = DEFAULT_APERTURES
+    directions: Sequence[Sequence[float]] = DEFAULT_DIRECTIONS  # kept as tuples
+    apertures: Sequence[float] = DEFAULT_APERTURES
     levels: int = 3
     boxes_per_level: tuple[int, int] = (1, 3)
     reach: float | None = None
@@ -181,7 +182,7 @@ class BasisModel:
     every sprite's alpha. The worst-case counts are checked here against the limits.
     """
 
-    seeds: tuple[SeedBox, ...]
+    seeds: SeedBox | Sequence[SeedBox]  # kept as a tuple
     atlas: SpriteAtlas | None = None
     textures: tuple[int, ...] | None = None
     billboard_size: tuple[float, float] = (0.8, 1.4)

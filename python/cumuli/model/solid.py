@@ -46,7 +46,7 @@ class Solid:
         object.__setattr__(self, "colour", _colour(self.colour, "colour"))
         object.__setattr__(self, "ambient", _colour(self.ambient, "ambient"))
 
-    def translated(self, offset: Sequence[float]) -> Solid:
+    def translated(self, offset: Sequence[float] | np.ndarray) -> Solid:
         """The solid moved by ``offset`` (an airplane flying through a cloud field)."""
         off = check.vec3(offset, "offset", bound=check.MAX_COORD)
         return Solid(

@@ -288,7 +288,7 @@ class VolumeCloud:
     kind: ClassVar[str] = "volume"
 
     density: np.ndarray
-    box: tuple[tuple[float, float, float], tuple[float, float, float]]
+    box: tuple[Sequence[float], Sequence[float]]  # (lo, hi), kept as float tuples
     sigma_t: float = 1.0
     albedo: float = 1.0
     g: float = 0.2
@@ -385,7 +385,7 @@ class VolumeCloud:
         lo, hi = self.box
         return np.asarray(lo, np.float32), np.asarray(hi, np.float32)
 
-    def translated(self, offset: Sequence[float]) -> VolumeCloud:
+    def translated(self, offset: Sequence[float] | np.ndarray) -> VolumeCloud:
         """A copy moved by ``offset`` (a precomputed light stays valid: it moves with it)."""
         off = check.vec3(offset, "offset")
         lo, hi = self.box
