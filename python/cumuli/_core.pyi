@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ATLAS_MAX_SIZE', 'ATLAS_MAX_SPRITES', 'ATLAS_MIN_SIZE', 'CameraParams', 'CloudShape', 'DECK_DETAIL_CONTRAST', 'DECK_MAX_LATTICE_EDGE', 'DECK_MAX_MAP_EDGE', 'DECK_MAX_VOXELS', 'DeckShape', 'EndlessWalk', 'EvolutionParams', 'FbmParams', 'GaussianCumulusParams', 'LIGHT_MAX_RESOLUTION', 'LIGHT_MAX_STEPS_PER_RAY', 'LSYSTEM_MAX_LENGTH', 'MarchSettings', 'Noise', 'PARTICLES_MAX', 'ParticleSpriteSettings', 'PhysicalParams', 'SEEDBOX_MAX_BILLBOARDS', 'SEEDBOX_MAX_BOXES', 'SEEDBOX_MAX_SEEDS', 'ShadeParams', 'SkyParams', 'SpriteRasterSettings', 'SunParams', 'TurtleParams', 'Viewport', 'VolumeCamera', 'VolumeRenderParams', 'WEATHER_MAX_INSTANCES', 'WeatherSim', 'add_multiple_scattering', 'atlas_grid', 'billboard_corners', 'billboard_shade', 'billboard_sprites', 'billboard_vertex_colours', 'blend_volumes', 'caf_path_lengths', 'caf_values', 'cloud_density', 'composite_layers', 'composite_split', 'crossfade_weight', 'deck_density', 'deck_lattice', 'density_grid', 'diffusion_light', 'display_impostors', 'draw_solids', 'ellipsoids_from_mesh', 'evolving_cloud_box', 'evolving_cloud_volumes', 'field_path_lengths', 'fit_shexp', 'gaussian_cumulus', 'impostor_backwards', 'impostor_focal_length_px', 'impostor_half_diagonal_fov', 'impostor_near_corner_radius', 'impostor_rects', 'impostor_required_resolution', 'impostor_resolution', 'impostor_resolution_skyworks', 'impostor_translation_error', 'light_frame', 'light_grid', 'light_space_depth', 'light_volume', 'lsystem_expand', 'lsystem_interpret', 'lsystem_length', 'medium_optical_depth', 'needs_screen_impostor', 'occupancy_grid', 'particle_fill', 'particle_light', 'particle_light_splats', 'particle_shadow', 'particle_sphere', 'particle_sprites', 'particles_from_volume', 'particles_to_volume', 'phase_4pi', 'point_optical_depth', 'project_sprites', 'rasterise_sprites', 'remove_contained_spheres', 'render_cpu', 'render_volume_cpu', 'sample_frame', 'sample_volume', 'screen_impostor_size', 'seed_box_cloud', 'seed_box_worst_case', 'set_progress', 'set_simd_fetch', 'set_simd_level', 'sh_eval', 'sh_optical_depth', 'shexp_apply', 'simd_fetch', 'simd_fetch_preferred', 'simd_level', 'simd_levels', 'similarity_matrix', 'sky_irradiance', 'sky_sh', 'sphere_outside_frustum', 'sphere_quadrature', 'splat_kernel', 'sprite_atlas', 'sun_optical_depth', 'tight_impostor_view', 'transition_matrix', 'variant_seed', 'volume_sample_points', 'yaw_cos_sin']
+__all__: list[str] = ['ATLAS_MAX_SIZE', 'ATLAS_MAX_SPRITES', 'ATLAS_MIN_SIZE', 'CameraParams', 'CloudShape', 'DECK_DETAIL_CONTRAST', 'DECK_MAX_LATTICE_EDGE', 'DECK_MAX_MAP_EDGE', 'DECK_MAX_VOXELS', 'DeckShape', 'EndlessWalk', 'EvolutionParams', 'FbmParams', 'GaussianCumulusParams', 'LIGHT_MAX_RESOLUTION', 'LIGHT_MAX_STEPS_PER_RAY', 'LSYSTEM_MAX_LENGTH', 'MarchSettings', 'Noise', 'PARTICLES_MAX', 'ParticleSpriteSettings', 'PhysicalParams', 'SEEDBOX_MAX_BILLBOARDS', 'SEEDBOX_MAX_BOXES', 'SEEDBOX_MAX_SEEDS', 'ShadeParams', 'SkyParams', 'SpriteRasterSettings', 'SunParams', 'TurtleParams', 'Viewport', 'VolumeCamera', 'VolumeRenderParams', 'WEATHER_MAX_INSTANCES', 'WeatherSim', 'add_multiple_scattering', 'approx_mie_mean_cosine', 'approx_mie_params', 'approx_mie_phase', 'atlas_grid', 'billboard_corners', 'billboard_shade', 'billboard_sprites', 'billboard_vertex_colours', 'blend_volumes', 'caf_path_lengths', 'caf_values', 'cloud_density', 'composite_layers', 'composite_split', 'crossfade_weight', 'deck_density', 'deck_lattice', 'density_grid', 'diffusion_light', 'display_impostors', 'draw_solids', 'ellipsoids_from_mesh', 'evolving_cloud_box', 'evolving_cloud_volumes', 'field_path_lengths', 'fit_shexp', 'gaussian_cumulus', 'impostor_backwards', 'impostor_focal_length_px', 'impostor_half_diagonal_fov', 'impostor_near_corner_radius', 'impostor_rects', 'impostor_required_resolution', 'impostor_resolution', 'impostor_resolution_skyworks', 'impostor_translation_error', 'light_frame', 'light_grid', 'light_space_depth', 'light_volume', 'lsystem_expand', 'lsystem_interpret', 'lsystem_length', 'medium_optical_depth', 'needs_screen_impostor', 'occupancy_grid', 'particle_fill', 'particle_light', 'particle_light_splats', 'particle_shadow', 'particle_sphere', 'particle_sprites', 'particles_from_volume', 'particles_to_volume', 'phase_4pi', 'point_optical_depth', 'project_sprites', 'rasterise_sprites', 'remove_contained_spheres', 'render_cpu', 'render_volume_cpu', 'sample_frame', 'sample_volume', 'screen_impostor_size', 'seed_box_cloud', 'seed_box_worst_case', 'set_progress', 'set_simd_fetch', 'set_simd_level', 'sh_eval', 'sh_optical_depth', 'shexp_apply', 'simd_fetch', 'simd_fetch_preferred', 'simd_level', 'simd_levels', 'similarity_matrix', 'sky_irradiance', 'sky_sh', 'sphere_outside_frustum', 'sphere_quadrature', 'splat_kernel', 'sprite_atlas', 'sun_optical_depth', 'tight_impostor_view', 'transition_matrix', 'variant_seed', 'volume_sample_points', 'yaw_cos_sin']
 class FbmParams:
     """
     fBm of eq. (1): octaves n, gain w, lacunarity s, frequency f (lattice texels per world unit).
@@ -438,7 +438,10 @@ class PhysicalParams:
     The physical lighting mode's shading (RENDER_CONTRACT "Physical lighting").
     """
     dual_hg: bool
+    mie: bool
     def __init__(self) -> None:
+        ...
+    def phase(self, cos_theta: typing.SupportsFloat | typing.SupportsIndex, scale: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> float:
         ...
     def validate(self) -> None:
         ...
@@ -453,6 +456,12 @@ class PhysicalParams:
         ...
     @blend.setter
     def blend(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def droplet_diameter(self) -> float:
+        ...
+    @droplet_diameter.setter
+    def droplet_diameter(self, arg1: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def extinction_scale(self) -> float:
@@ -477,6 +486,9 @@ class PhysicalParams:
         ...
     @jitter_seed.setter
     def jitter_seed(self, arg0: typing.SupportsInt | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def mie_params(self) -> tuple[float, float, float, float]:
         ...
     @property
     def min_transmittance(self) -> float:
@@ -846,6 +858,18 @@ class WeatherSim:
 def add_multiple_scattering(arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg2: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg3: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg4: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg5: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg6: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg7: typing.SupportsFloat | typing.SupportsIndex, arg8: typing.SupportsFloat | typing.SupportsIndex, arg9: typing.SupportsInt | typing.SupportsIndex, arg10: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.float32]:
     """
     Light plus `orders` orders of isotropic multiple scattering through the sample points.
+    """
+def approx_mie_mean_cosine(diameter: typing.SupportsFloat | typing.SupportsIndex) -> float:
+    """
+    The approximate Mie phase's mean cosine.
+    """
+def approx_mie_params(diameter: typing.SupportsFloat | typing.SupportsIndex) -> tuple[float, float, float, float]:
+    """
+    (g_HG, g_D, alpha, w_D) of the approximate Mie phase for droplets of `diameter` µm.
+    """
+def approx_mie_phase(diameter: typing.SupportsFloat | typing.SupportsIndex, cos_theta: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], scale: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> numpy.typing.NDArray[numpy.float32]:
+    """
+    The approximate Mie phase (normalised by 1/4π) at cosines, lobes' g scaled by `scale`.
     """
 def atlas_grid(n: typing.SupportsInt | typing.SupportsIndex) -> tuple[int, int]:
     ...
