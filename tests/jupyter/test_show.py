@@ -113,7 +113,27 @@ def test_an_image_keeps_its_settings_unless_told(monkeypatch: pytest.MonkeyPatch
     kept = cu.Image(img, exposure=0.5, tonemap="aces", title="mine")
     cu.show([img, kept], title=["plain", None])  # type: ignore[list-item]
     plain, mine = shown[-1].images
-    assert (plain.exposure, plain.tonemap, plain.title) == (1.0, "none", "plain")
+    # An array gets the package's display defaults, the same as to_srgb8 and write_image.
+    shown_default = (cu.io.images.DISPLAY_EXPOSURE, cu.io.images.DISPLAY_TONEMAP, "plain")
+    assert (plain.exposure, plain.tonemap, plain.title) == shown_default
     assert (mine.exposure, mine.tonemap, mine.title) == (0.5, "aces", "mine")
     cu.show(kept, tonemap="reinhard")
     assert (shown[-1].exposure, shown[-1].tonemap, shown[-1].title) == (0.5, "reinhard", "mine")
+
+
+def test_a_scene_is_shown_as_its_lighting_mode_is_meant_to_be_seen(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The paper mode untoned (its figures), the physical default through the filmic curve."""
+    shown = _capture(monkeypatch)
+    cloud = cu.gaussian_cumulus(n=4, seed=1)
+    paper = cu.Scene([cloud], settings=cu.RenderSettings(lighting="paper"))
+    cu.show([paper, cu.Scene([cloud])], size=(8, 6), backend="cpu")
+    as_paper, as_physical = shown[-1].images
+    assert (
+        (as_paper.exposure, as_paper.tonemap) == cu.io.images.display_for("paper") == (1.0, "none")
+    )
+    assert (as_physical.exposure, as_physical.tonemap) == cu.io.images.display_for("physical")
+    assert as_physical.tonemap != "none"
+    cu.show(paper, size=(8, 6), backend="cpu", exposure=2.0)  # what is given wins
+    assert (shown[-1].exposure, shown[-1].tonemap) == (2.0, "none")

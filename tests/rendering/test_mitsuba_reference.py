@@ -84,7 +84,9 @@ def test_physical_mode_matches_mitsuba(reference, backend: str) -> None:
 def test_the_paper_mode_is_far_off(reference) -> None:
     """What the physical mode fixes (the issue's measurement): the same scene in paper mode."""
     scene, camera = ref.reference_scene()
-    img = cu.render_cpu(scene.replace(settings=cu.RenderSettings(lighting="paper")), camera, ref.WIDTH, ref.HEIGHT)
+    img = cu.render_cpu(
+        scene.replace(settings=cu.RenderSettings(lighting="paper")), camera, ref.WIDTH, ref.HEIGHT
+    )
     m = compare_images(img, mitsuba_image(reference), **BLOCKS)
     assert m["block_rel_median"] > 0.3, m.report()
     assert transmittance_error(img, reference["T"]) < 0.01

@@ -9,7 +9,13 @@ from typing import Any
 
 import numpy as np
 
-from cumuli.io.images import TONEMAPS, to_srgb8
+from cumuli.io.images import (
+    DISPLAY_EXPOSURE,
+    DISPLAY_TONEMAP,
+    TONEMAPS,
+    display_for,
+    to_srgb8,
+)
 from cumuli.io.png import png_bytes
 from cumuli.light.prepare import LitScene
 from cumuli.rendering.compositor import render
@@ -28,7 +34,11 @@ class Image:
     """
 
     def __init__(
-        self, pixels: Any, exposure: float = 1.0, tonemap: str = "none", title: str = ""
+        self,
+        pixels: Any,
+        exposure: float = DISPLAY_EXPOSURE,
+        tonemap: str = DISPLAY_TONEMAP,
+        title: str = "",
     ) -> None:
         arr = np.asarray(pixels)
         # to_srgb8 checks the array (float, (H, W, 3|4), finite) and the settings.
@@ -113,7 +123,9 @@ def as_image(
     """An `Image` of ``obj``: an image array as it is, a `Scene` or `LitScene` rendered at
     ``size`` (``(width, height)``, default 640×360) with ``render_kwargs`` (``camera``,
     ``backend``, …: :func:`cumuli.render`'s). An `Image` keeps its own exposure, tone map and
-    title where these are not given; anything else gets 1, ``"none"`` and no title."""
+    title where these are not given; a scene gets its lighting mode's display
+    (:func:`cumuli.io.images.display_for`), an array the package's display defaults
+    (:data:`~cumuli.io.images.DISPLAY_EXPOSURE`, :data:`~cumuli.io.images.DISPLAY_TONEMAP`)."""
     if tonemap is not None and tonemap not in TONEMAPS:
         raise ValueError(f"tonemap must be one of {TONEMAPS}, got {tonemap!r}")
     if isinstance(obj, Image):
@@ -122,6 +134,11 @@ def as_image(
         title = obj.title if title is None else title
         obj = obj.pixels
     if isinstance(obj, (Scene, LitScene)):
+        # A scene is shown as its lighting mode is meant to be seen (the paper mode untoned).
+        scene = obj.scene if isinstance(obj, LitScene) else obj
+        shown = display_for(scene.settings.lighting)
+        exposure = shown[0] if exposure is None else exposure
+        tonemap = shown[1] if tonemap is None else tonemap
         w, h = _size(size)
         render_kwargs.setdefault("progress", False)
         obj = render(obj, width=w, height=h, **render_kwargs)
@@ -134,8 +151,8 @@ def as_image(
         )
     return Image(
         obj,
-        exposure=1.0 if exposure is None else exposure,
-        tonemap="none" if tonemap is None else tonemap,
+        exposure=DISPLAY_EXPOSURE if exposure is None else exposure,
+        tonemap=DISPLAY_TONEMAP if tonemap is None else tonemap,
         title="" if title is None else title,
     )
 
@@ -164,7 +181,8 @@ def show(
     then one caption each). ``exposure`` and ``tonemap`` are the display
     settings of :func:`cumuli.to_srgb8`; ``size`` ``(width, height)`` and ``render_kwargs``
     (``camera=``, ``backend=``, …) apply to scenes. A `cumuli.Image` keeps its own settings and
-    title where these are not given (default exposure 1, tone map ``"none"``). Returns nothing,
+    title where these are not given; otherwise a scene is shown in its lighting mode's display
+    and an array with the package's display defaults (exposure 0.8, ACES). Returns nothing,
     like ``plt.show``, so that a cell ending with it shows the image once; :class:`cumuli.Image`
     is the object to keep (it shows itself when it is a cell's value).
     """

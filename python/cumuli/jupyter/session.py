@@ -15,7 +15,7 @@ import numpy as np
 from cumuli._util import validate as check
 from cumuli.anim.frames import scene_after
 from cumuli.anim.weather import Weather
-from cumuli.io.images import TONEMAPS, to_srgb8
+from cumuli.io.images import TONEMAPS, display_for, to_srgb8
 from cumuli.io.png import png_bytes
 from cumuli.jupyter.orbit import Orbit, angles, direction
 from cumuli.light.prepare import LitScene, prepare_light
@@ -71,8 +71,8 @@ class ViewerSession:
         size: tuple[int, int] = (960, 540),
         preview_size: tuple[int, int] = (240, 135),
         backend: str = "cpu",
-        exposure: float = 1.0,
-        tonemap: str = "none",
+        exposure: float | None = None,
+        tonemap: str | None = None,
         duration: float | None = None,
     ) -> None:
         if isinstance(source, Weather):
@@ -97,10 +97,12 @@ class ViewerSession:
         self.size = self._size(size, "size")
         self.preview_size = self._size(preview_size, "preview_size")
         self.backend = check.choice(backend, "backend", BACKENDS)
-        self.exposure = float(exposure)
-        self.tonemap = check.choice(tonemap, "tonemap", TONEMAPS)
-        to_srgb8(np.zeros((1, 1, 3), np.float32), self.exposure, self.tonemap)  # checks them
         first = self.scene_at_time()
+        # Unless given, the display of the first scene's lighting mode (the paper mode untoned).
+        shown = display_for(first.settings.lighting)
+        self.exposure = float(shown[0] if exposure is None else exposure)
+        self.tonemap = check.choice(shown[1] if tonemap is None else tonemap, "tonemap", TONEMAPS)
+        to_srgb8(np.zeros((1, 1, 3), np.float32), self.exposure, self.tonemap)  # checks them
         if camera is None:
             camera = first.default_camera()
         self.orbit = Orbit.from_camera(camera)
