@@ -139,7 +139,9 @@ def _grid_flipped_to_nan(cloud: cu.Cloud) -> cu.LightGrid:
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
 def test_nan_in_a_light_grid_is_refused_by_both_backends(backend: str) -> None:
     cloud = cu.gaussian_cumulus(n=6, seed=1)
-    scene = cu.Scene([cloud], noise=cu.Noise(seed=2, size=16))
+    # A LightGrid is the paper mode's light (the physical mode's is a PhysicalLight).
+    paper = cu.RenderSettings(lighting="paper")
+    scene = cu.Scene([cloud], noise=cu.Noise(seed=2, size=16), settings=paper)
     lit = cu.prepare_light(scene, lights=[_grid_flipped_to_nan(cloud)])
     with pytest.raises(ValueError, match="light grid contains NaN"):
         cu.render(lit, scene.default_camera(), 16, 12, backend=backend)

@@ -138,10 +138,10 @@ def test_the_documented_user_test_file_runs_under_pytest(tmp_path: Path) -> None
     again = _pytest(project, "tests", "-rs")
     assert again.returncode == 0, again.stdout
     assert re.search(r"3 passed|2 passed, 1 skipped", again.stdout), again.stdout
-    # A golden made with another absorption: the check fails, says how, leaves its images.
+    # A golden made with another extinction: the check fails, says how, leaves its images.
     scene = cu.Scene([cu.gaussian_cumulus(n=6, seed=1)], noise=cu.Noise(seed=2, size=16))
     denser = scene.replace(
-        settings=scene.settings.replace(absorption=1.1 * scene.settings.absorption)
+        settings=scene.settings.replace(extinction_scale=1.1 * scene.settings.extinction_scale)
     )
     cu.write_image(golden, cu.render_cpu(denser, scene.default_camera(), 48, 36), "keep")
     failed = _pytest(project, "tests", "--cumuli-failures", "fails")
