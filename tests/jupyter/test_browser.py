@@ -1,7 +1,8 @@
-"""The viewer in a real browser: JupyterLab served on 127.0.0.1, a notebook with a `cu.Viewer`
-run in headless Chromium (Debian's ``chromium`` + ``chromium-driver``, driven by Selenium;
-nothing is downloaded), a mouse drag over the image and a slider moved; the camera, the sun and
-the displayed frame must change. Screenshots are kept in ``tests/artifacts/browser/``."""
+"""The viewer in a real browser: JupyterLab and Notebook 7 served on 127.0.0.1, a notebook with
+a `cu.Viewer` run in headless Chromium (Debian's ``chromium`` + ``chromium-driver``, driven by
+Selenium; nothing is downloaded), a mouse drag over the image and a slider moved; the camera, the
+sun and the displayed frame must change. Screenshots are kept in ``tests/artifacts/browser/``
+(one folder per front end)."""
 
 from __future__ import annotations
 
@@ -36,7 +37,7 @@ viewer"""
 
 def _needs() -> str | None:
     """Why the browser test cannot run here (None: it can)."""
-    for module in ("selenium", "jupyterlab", "anywidget"):
+    for module in ("selenium", "jupyterlab", "notebook", "anywidget"):
         try:
             __import__(module)
         except ImportError:
@@ -64,14 +65,26 @@ def _jupyter_path() -> str:
     return os.pathsep.join(found)
 
 
-@pytest.fixture(scope="module")
-def lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
+#: The two front ends the viewer must work in: (module to run, its app's config class, the path
+#: that opens a notebook). Both are JupyterLab's components (Notebook 7 is built from them), so the
+#: same commands run the cells.
+FRONT_ENDS = {
+    "jupyterlab": ("jupyterlab", "LabApp", "lab/tree"),
+    "notebook7": ("notebook", "JupyterNotebookApp", "notebooks"),
+}
+
+
+@pytest.fixture(scope="module", params=sorted(FRONT_ENDS))
+def lab(
+    request: pytest.FixtureRequest, tmp_path_factory: pytest.TempPathFactory
+) -> Iterator[tuple[str, Path]]:
     reason = _needs()
     if reason:
         pytest.skip(reason)
     import nbformat
 
-    root = tmp_path_factory.mktemp("lab")
+    module, app, opens = FRONT_ENDS[request.param]
+    root = tmp_path_factory.mktemp(request.param)
     nb = nbformat.v4.new_notebook()
     nb.cells = [nbformat.v4.new_code_cell(NOTEBOOK_CELL)]
     nb.metadata["kernelspec"] = {
@@ -94,11 +107,12 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
         CUMULI_PROGRESS="0",
     )
     cmd = [
-        sys.executable, "-m", "jupyterlab", "--no-browser", "--ip=127.0.0.1", f"--port={port}",
+        sys.executable, "-m", module, "--no-browser", "--ip=127.0.0.1", f"--port={port}",
         f"--IdentityProvider.token={token}", f"--ServerApp.root_dir={root}",
-        "--ServerApp.port_retries=0", "--LabApp.expose_app_in_browser=True",
-        "--LabApp.news_url=None",
+        "--ServerApp.port_retries=0", f"--{app}.expose_app_in_browser=True",
     ]  # fmt: skip
+    if module == "jupyterlab":
+        cmd.append("--LabApp.news_url=None")
     if hasattr(os, "geteuid") and os.geteuid() == 0:  # containers and CI run as root
         cmd.append("--allow-root")
     log = (root / "lab.log").open("w")
@@ -107,15 +121,15 @@ def lab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[str, Path]]:
         deadline = time.monotonic() + 60
         while time.monotonic() < deadline:
             if server.poll() is not None:
-                pytest.fail("JupyterLab exited: " + (root / "lab.log").read_text()[-2000:])
+                pytest.fail(f"{module} exited: " + (root / "lab.log").read_text()[-2000:])
             try:
                 with socket.create_connection(("127.0.0.1", port), timeout=1):
                     break
             except OSError:
                 time.sleep(0.3)
         else:
-            pytest.fail("JupyterLab did not listen within 60 s")
-        yield f"http://127.0.0.1:{port}/lab/tree/viewer.ipynb?token={token}", root
+            pytest.fail(f"{module} did not listen within 60 s")
+        yield f"http://127.0.0.1:{port}/{opens}/viewer.ipynb?token={token}", root
     finally:
         server.terminate()
         try:
@@ -171,12 +185,14 @@ return !!(w && w.sessionContext && w.sessionContext.session
           && w.sessionContext.session.kernel);"""
 
 
-def test_viewer_in_jupyterlab(lab: tuple[str, Path], browser: Any) -> None:
+def test_viewer_in_the_browser(lab: tuple[str, Path], browser: Any) -> None:
+    """In each front end: drag over the frame, move the sun's slider."""
     from selenium.webdriver.common.action_chains import ActionChains
 
     url, _root = lab
     d = browser
-    ARTIFACTS.mkdir(parents=True, exist_ok=True)
+    shots = ARTIFACTS / ("notebook7" if "/notebooks/" in url else "jupyterlab")
+    shots.mkdir(parents=True, exist_ok=True)
     d.get(url)
     _wait(d, lambda d: d.execute_script(KERNEL_READY), 45, "the notebook's kernel")
     d.execute_script("window.jupyterapp.commands.execute('notebook:run-all-cells');")
@@ -187,7 +203,7 @@ def test_viewer_in_jupyterlab(lab: tuple[str, Path], browser: Any) -> None:
     _wait(d, lambda d: img.get_attribute("naturalWidth") not in (None, "0"), 20, "the image")
     before = _state(d)
     shot0 = img.screenshot_as_png
-    d.save_screenshot(str(ARTIFACTS / "1_opened.png"))
+    d.save_screenshot(str(shots / "1_opened.png"))
 
     # Drag over the image: previews while moving, then the full frame.
     chain = ActionChains(d).move_to_element(img).click_and_hold()
@@ -209,7 +225,7 @@ def test_viewer_in_jupyterlab(lab: tuple[str, Path], browser: Any) -> None:
     assert dragged["camera"]["position"] != before["camera"]["position"]
     _wait(d, lambda d: img.screenshot_as_png != shot0, 10, "the displayed frame to change")
     shot1 = img.screenshot_as_png
-    d.save_screenshot(str(ARTIFACTS / "2_dragged.png"))
+    d.save_screenshot(str(shots / "2_dragged.png"))
 
     # The sun's azimuth slider, moved with the mouse.
     slider = d.find_element("css selector", ".cumuli-viewer input.cumuli-sun-azimuth")
@@ -225,6 +241,6 @@ def test_viewer_in_jupyterlab(lab: tuple[str, Path], browser: Any) -> None:
     after = _state(d)
     assert after["sun"][0] != dragged["sun"][0] and after["camera"] == dragged["camera"]
     _wait(d, lambda d: img.screenshot_as_png != shot1, 10, "the displayed frame to change")
-    d.save_screenshot(str(ARTIFACTS / "3_sun_moved.png"))
+    d.save_screenshot(str(shots / "3_sun_moved.png"))
     states = {"before": before, "dragged": dragged, "after": after}
-    (ARTIFACTS / "state.json").write_text(json.dumps(states, indent=1))
+    (shots / "state.json").write_text(json.dumps(states, indent=1))
