@@ -8,7 +8,8 @@ plane: *copies* (the cumulus translated) and *seeds* (``gaussian_cumulus(seed=1.
 
 Per (series, count): the whole light step as the renderer runs it (``cumuli.prepare_light`` with
 the light memo cleared before each repeat; median / min / max of the repeats, the two series
-interleaved) and its breakdown into the stages of `cumuli.light.physical.physical_light`
+interleaved; the process CPU time beside it, which other load on a shared machine does not
+inflate) and its breakdown into the stages of `cumuli.light.physical.physical_light`
 (``STAGES``: the extinction lattice, the cloud's own optical depth on the sun's lattice, the
 optical depth of the other clouds upstream of it, the sun's transmittance on the world lattice,
 the SH sky visibility, the diffusion solve), summed over the clouds, from one more pass. The
@@ -93,10 +94,13 @@ def main(argv: list[str] | None = None) -> int:
         timed = common.interleaved_repeats(fns, repeats, warmup=0 if count > 4 else 1)
         for s, sc in scenes.items():
             wall = common.spread(timed[s][0])
+            cpu = common.spread(timed[s][1])
             per_stage = stages(sc)
             results[s][str(count)] = {
                 "clouds": count,
                 "light_step_s": wall,
+                # Process CPU seconds (both threads): robust to other load on a shared machine.
+                "light_step_cpu_s": cpu,
                 "per_cloud_ms": 1e3 * wall["median"] / count,
                 "stages_s": per_stage,
                 "stages_share": {
