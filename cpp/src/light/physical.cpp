@@ -68,6 +68,22 @@ void split(float u, int n, int& i0, int& i1, float& f) {
 
 // Fixed blocks for reductions: sums do not depend on the thread count.
 constexpr std::size_t kBlock = 4096;
+
+template <class F>
+double block_sum(std::size_t n, int threads, F&& term) {
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<double> part(blocks, 0.0);
+  parallel_for(blocks, threads, [&](std::size_t b) {
+    double s = 0.0;
+    const std::size_t end = std::min(n, (b + 1) * kBlock);
+    for (std::size_t i = b * kBlock; i < end; ++i) s += term(i);
+    part[b] = s;
+  });
+  double total = 0.0;
+  for (double s : part) total += s;
+  return total;
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -348,110 +364,56 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
       diag[i] += minus ? cond[3 * (i - stride[a]) + a] : leak(D[i], h[a]);
     }
   }
-  // Preconditioned conjugate gradients (Jacobi), all channels in one sweep of the lattice per
-  // step: each channel keeps its own scalars and stops on its own, and every value and sum is
-  // computed as a channel alone would (the same operations in the same order), so the result
-  // does not depend on how many channels share the sweeps.
-  const std::size_t C = static_cast<std::size_t>(channels);
-  std::vector<double> x(n * C, 0.0), r(n * C), z(n * C), q(n * C), Ap(n * C, 0.0);
-  std::vector<unsigned char> active(C, 0);
-  // Per channel, Σ_i term(i, c) summed in the fixed blocks of block_sum (same order).
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<double> part(blocks * C);
-  auto sums = [&](auto&& term, std::vector<double>& total) {
-    parallel_for(blocks, threads, [&](std::size_t b) {
-      double acc[8] = {};
-      const std::size_t end = std::min(n, (b + 1) * kBlock);
-      for (std::size_t i = b * kBlock; i < end; ++i)
-        for (std::size_t c = 0; c < C; ++c)
-          if (active[c]) acc[c] += term(i * C + c);
-      for (std::size_t c = 0; c < C; ++c) part[b * C + c] = acc[c];
+  auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
+    parallel_for(n, threads, [&](std::size_t i) {
+      if (!medium[i]) {
+        y[i] = 0.0;
+        return;
+      }
+      double s = static_cast<double>(diag[i]) * x[i];
+      for (int a = 0; a < 3; ++a) {
+        if (cond[3 * i + a] > 0.0f) s -= static_cast<double>(cond[3 * i + a]) * x[i + stride[a]];
+        if (coord(i, a) > 0 && medium[i - stride[a]])
+          s -= static_cast<double>(cond[3 * (i - stride[a]) + a]) * x[i - stride[a]];
+      }
+      y[i] = s;
     });
-    for (std::size_t c = 0; c < C; ++c) {
-      double t = 0.0;
-      for (std::size_t b = 0; b < blocks; ++b) t += part[b * C + c];
-      total[c] = t;
-    }
   };
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t c = 0; c < C; ++c) {
-      const double b = medium[i] ? source[i * C + c] : 0.0;
-      r[i * C + c] = b;
-      z[i * C + c] = b / diag[i];
-      q[i * C + c] = z[i * C + c];
+  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
+  std::vector<double> x(n), r(n), z(n), q(n), Ap(n);
+  for (int c = 0; c < channels; ++c) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const double b = medium[i] ? source[i * channels + c] : 0.0;
+      x[i] = 0.0;
+      r[i] = b;
+      z[i] = r[i] / diag[i];
+      q[i] = z[i];
     }
-  std::vector<double> bnorm(C), rz(C), qAq(C), rn(C), rz2(C), alpha(C, 0.0), beta(C, 0.0);
-  std::fill(active.begin(), active.end(), 1);
-  sums([&](std::size_t k) { return r[k] * r[k]; }, bnorm);
-  int live = 0;
-  for (std::size_t c = 0; c < C; ++c) {
-    bnorm[c] = std::sqrt(bnorm[c]);
-    active[c] = bnorm[c] > 0.0;
-    live += active[c];
+    const double bnorm =
+        std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
+    if (!(bnorm > 0.0)) continue;
+    double rz = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
+    for (int it = 0; it < p.max_iterations; ++it) {
+      apply(q, Ap);
+      const double qAq = block_sum(n, threads, [&](std::size_t i) { return q[i] * Ap[i]; });
+      if (!(qAq > 0.0)) break;
+      const double alpha = rz / qAq;
+      parallel_for(n, threads, [&](std::size_t i) {
+        x[i] += alpha * q[i];
+        r[i] -= alpha * Ap[i];
+      });
+      const double rn =
+          std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
+      if (rn <= p.tolerance * bnorm) break;
+      parallel_for(n, threads, [&](std::size_t i) { z[i] = r[i] / diag[i]; });
+      const double rz2 = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
+      const double beta = rz2 / rz;
+      rz = rz2;
+      parallel_for(n, threads, [&](std::size_t i) { q[i] = z[i] + beta * q[i]; });
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      out[i * channels + c] = medium[i] ? static_cast<float>(std::max(0.0, x[i])) : 0.0f;
   }
-  sums([&](std::size_t k) { return r[k] * z[k]; }, rz);
-  for (int it = 0; it < p.max_iterations && live > 0; ++it) {
-    parallel_for(n, threads, [&](std::size_t i) {
-      for (std::size_t c = 0; c < C; ++c) {
-        if (!active[c]) continue;
-        if (!medium[i]) {
-          Ap[i * C + c] = 0.0;
-          continue;
-        }
-        double s = static_cast<double>(diag[i]) * q[i * C + c];
-        for (int a = 0; a < 3; ++a) {
-          if (cond[3 * i + a] > 0.0f)
-            s -= static_cast<double>(cond[3 * i + a]) * q[(i + stride[a]) * C + c];
-          if (coord(i, a) > 0 && medium[i - stride[a]])
-            s -= static_cast<double>(cond[3 * (i - stride[a]) + a]) * q[(i - stride[a]) * C + c];
-        }
-        Ap[i * C + c] = s;
-      }
-    });
-    sums([&](std::size_t k) { return q[k] * Ap[k]; }, qAq);
-    for (std::size_t c = 0; c < C; ++c) {
-      if (!active[c]) continue;
-      if (!(qAq[c] > 0.0)) {
-        active[c] = 0;
-        --live;
-        continue;
-      }
-      alpha[c] = rz[c] / qAq[c];
-    }
-    parallel_for(n, threads, [&](std::size_t i) {
-      for (std::size_t c = 0; c < C; ++c) {
-        if (!active[c]) continue;
-        x[i * C + c] += alpha[c] * q[i * C + c];
-        r[i * C + c] -= alpha[c] * Ap[i * C + c];
-      }
-    });
-    sums([&](std::size_t k) { return r[k] * r[k]; }, rn);
-    for (std::size_t c = 0; c < C; ++c) {
-      if (active[c] && std::sqrt(rn[c]) <= p.tolerance * bnorm[c]) {
-        active[c] = 0;
-        --live;
-      }
-    }
-    if (live == 0) break;
-    parallel_for(n, threads, [&](std::size_t i) {
-      for (std::size_t c = 0; c < C; ++c)
-        if (active[c]) z[i * C + c] = r[i * C + c] / diag[i];
-    });
-    sums([&](std::size_t k) { return r[k] * z[k]; }, rz2);
-    for (std::size_t c = 0; c < C; ++c) {
-      if (!active[c]) continue;
-      beta[c] = rz2[c] / rz[c];
-      rz[c] = rz2[c];
-    }
-    parallel_for(n, threads, [&](std::size_t i) {
-      for (std::size_t c = 0; c < C; ++c)
-        if (active[c]) q[i * C + c] = z[i * C + c] + beta[c] * q[i * C + c];
-    });
-  }
-  std::vector<float> out(n * C, 0.0f);
-  for (std::size_t i = 0; i < n; ++i)
-    for (std::size_t c = 0; c < C; ++c)
-      out[i * C + c] = medium[i] ? static_cast<float>(std::max(0.0, x[i * C + c])) : 0.0f;
   // Empty cells next to the medium: the mean boundary value φ·4D/(h + 4D) of their medium
   // neighbours, so that lookups between a surface cell and an empty one see the surface value.
   std::vector<float> fill(n * static_cast<std::size_t>(channels), 0.0f);
