@@ -49,8 +49,9 @@ $(PY):
 venv: $(PY)
 
 # Editable install with a persistent build folder, so a re-run only recompiles what changed.
+# numpy and wheel first: pyfastnoisesimd (the test extra) builds from source against them.
 install: $(PY)
-	$(PY) -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.13" cmake ninja
+	$(PY) -m pip install -q "scikit-build-core>=0.10" "pybind11>=2.13" cmake ninja numpy wheel
 	$(PY) -m pip install -q --no-build-isolation -e ".[test]"
 
 # The interchange tests run Blender in a subprocess from $(BLENDER_VENV) (tests/io/_blender.py).

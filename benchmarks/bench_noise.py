@@ -13,7 +13,10 @@ started with the variable set): ``glsl_*_1_thread`` / ``glsl_*_2_threads`` and t
 pyfastnoiselite (FastNoiseLite, NoiseType_Value, FractalType_FBm, 5 octaves, gen_from_coords) is
 the reference point: a hashed value noise, single-threaded (its CPU time equals its wall time;
 the JSON records the ratio), timed interleaved with the C++ kernels so that both see the same
-machine.
+machine. pyfastnoisesimd (FastNoiseSIMD, ``NoiseType.ValueFractal`` with FBM, 5 octaves, one
+worker, ``genFromCoords``; the best SIMD noise library on PyPI: it hashes its lattice values and
+reads no table) is timed beside it, interleaved the same way; where it is not installed (it has
+no wheel for Python 3.11 and builds only without pip's build isolation) ``skipped`` says so.
 
 SIMD: the C++ fBm is also timed on 1 thread with every kernel this CPU runs
 (``cpp_1_thread_scalar``, and ``cpp_1_thread_<level>_<fetch>`` for each wide level, avx2 and
@@ -24,6 +27,7 @@ method before the hand-written SIMD paths), the others give bit-identical values
 ``cpp_1_thread_<level>_<fetch>_over_gather`` compare each fetch with the gathers, per CPU-second.
 Targets, each ``{limit, comparison, reached, met}`` with today's scalar path as ``baseline``
 (value and ratio): ≥ 100 M samples/s per thread, ≥ 7× pyfastnoiselite per thread (CPU time),
+≥ 1.0× pyfastnoisesimd's value fBm per thread (CPU time, the default kernel),
 ≥ 1.8× from 1 to 2 threads (only meaningful when two cores are free; the load average is
 recorded). The thread counts are interleaved with each timed call after an untimed one of its own
 (the pool's helper thread awake, as in a run of calls); the "cold" ratio beside it times each
@@ -55,6 +59,7 @@ OCTAVES = 5
 TARGET_MSPS = 100.0
 TARGET_VS_FASTNOISE = 7.0
 TARGET_2_THREADS = 1.8
+TARGET_VS_FASTNOISESIMD = 1.0
 #: llvmpipe thread counts GLSL is timed at (each in a child process with LP_NUM_THREADS set).
 LLVMPIPE_THREADS = (1, 2)
 #: Command-line flag that makes this script a GLSL timing child (see `glsl_worker`).
@@ -269,6 +274,36 @@ def fastnoise_call(pts: np.ndarray) -> Callable[[], Any]:
     return lambda: fnl.gen_from_coords(coords)
 
 
+def fastnoisesimd_call(pts: np.ndarray) -> Callable[[], Any]:
+    """pyfastnoisesimd's value fBm (FastNoiseSIMD, ``NoiseType.ValueFractal``, FBM) at ``pts``
+    on one worker thread, as a call to time (ImportError without it)."""
+    import pyfastnoisesimd as fns
+
+    noise = fns.Noise(seed=7, numWorkers=1)
+    noise.noiseType = fns.NoiseType.ValueFractal
+    noise.fractal.fractalType = fns.FractalType.FBM
+    noise.fractal.octaves = OCTAVES
+    noise.fractal.gain = 0.5
+    noise.fractal.lacunarity = 2.0
+    noise.frequency = 1.0
+    coords = fns.empty_coords(len(pts))  # (3, N), aligned for its SIMD loads
+    coords[:] = pts.T
+    return lambda: noise.genFromCoords(coords)
+
+
+#: What each library compared with is, in the JSON.
+LIBRARIES = {
+    "pyfastnoiselite": ("FastNoiseLite value fBm, gen_from_coords", fastnoise_call),
+    "pyfastnoisesimd": (
+        "FastNoiseSIMD ValueFractal FBM, genFromCoords, 1 worker",
+        fastnoisesimd_call,
+    ),
+}
+#: pyfastnoisesimd has no wheel for Python 3.11: pip builds it, which needs numpy and wheel at
+#: build time (``pip install --no-build-isolation pyfastnoisesimd``).
+FASTNOISESIMD_HINT = "pip install wheel && pip install --no-build-isolation pyfastnoisesimd"
+
+
 def plot(result: dict[str, Any], path: Path) -> None:
     plt = common.pyplot()
     methods = result["methods"]
@@ -327,14 +362,17 @@ def main(argv: list[str] | None = None) -> int:
             methods[key]["simd_level"] = widest
             methods[key]["simd_fetch"] = fetch if widest != "scalar" else None
     others: dict[str, Callable[[], Any]] = {}
-    try:
-        others["pyfastnoiselite"] = fastnoise_call(pts)
-    except ImportError as exc:
-        skipped["pyfastnoiselite"] = f"not installed ({exc})"
+    for name, (_, make) in LIBRARIES.items():
+        try:
+            others[name] = make(pts)
+        except ImportError as exc:
+            hint = f"; it builds with `{FASTNOISESIMD_HINT}`" if name == "pyfastnoisesimd" else ""
+            skipped[name] = f"not installed ({exc}){hint}"
+            common.log(f"{name}: {skipped[name]}")
     simd = bench_simd(noise, pts, repeats, others)
     for name, m in simd.items():
         if name in others:
-            methods[name] = m | {"noise": "FastNoiseLite value fBm, gen_from_coords"}
+            methods[name] = m | {"noise": LIBRARIES[name][0]}
         else:
             methods[f"cpp_1_thread_{name}"] = m
     glsl_threads: list[int] = []
@@ -434,6 +472,24 @@ def main(argv: list[str] | None = None) -> int:
             ">=",
             measure=f"samples per CPU-second, 1 thread each, kernel {kernel}",
             baseline={"method": "scalar", "reached": base, "ratio": value / base},
+        )
+    if "pyfastnoisesimd" in methods:
+        # The best SIMD noise library's value fBm on one thread (CPU time, as above), against
+        # cumuli's default kernel.
+        simd_cpu = methods["pyfastnoisesimd"]["samples_per_cpu_s"]
+        ratios["cpp_1_thread_over_fastnoisesimd_cpu_time"] = best["samples_per_cpu_s"] / simd_cpu
+        ratios["cpp_1_thread_over_fastnoisesimd"] = med("cpp_1_thread") / med("pyfastnoisesimd")
+        targets["cpp_per_thread_vs_fastnoisesimd"] = common.target(
+            TARGET_VS_FASTNOISESIMD,
+            best["samples_per_cpu_s"] / simd_cpu,
+            ">=",
+            measure=f"samples per CPU-second, 1 thread each, kernel {kernel} over "
+            "FastNoiseSIMD's value fBm",
+            baseline={
+                "method": "scalar",
+                "reached": scalar["samples_per_cpu_s"] / simd_cpu,
+                "ratio": best["samples_per_cpu_s"] / scalar["samples_per_cpu_s"],
+            },
         )
     targets["cpp_2_threads_over_1"] = common.target(
         TARGET_2_THREADS,

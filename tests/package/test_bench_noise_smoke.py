@@ -71,6 +71,17 @@ def test_bench_noise_quick_writes_json_and_plot(
     if "pyfastnoiselite" in methods:
         assert "cpp_1_thread_over_fastnoise" in data["ratios"]
         assert data["targets"]["cpp_per_thread_vs_fastnoise"]["met"] in (True, False)
+    if "pyfastnoisesimd" in methods:
+        assert methods["pyfastnoisesimd"]["samples_per_s"]["median"] > 0
+        t = data["targets"]["cpp_per_thread_vs_fastnoisesimd"]
+        assert t["limit"] == 1.0 and t["met"] in (True, False)
+        assert t["reached"] == pytest.approx(
+            methods["cpp_1_thread_" + _default_kernel(methods)]["samples_per_cpu_s"]
+            / methods["pyfastnoisesimd"]["samples_per_cpu_s"]
+        )
+    else:  # it builds only without pip's build isolation: the output says so
+        assert "pyfastnoisesimd" in data["skipped"]
+        assert "no-build-isolation" in data["skipped"]["pyfastnoisesimd"]
     assert data["ratios"]["cpp_2_threads_over_1"] > 0
     # The thread counts timed warm (the target) and cold (each 2-thread call after a 1-thread one).
     assert {"cpp_1_thread_cold", "cpp_2_threads_cold"} <= set(methods)
@@ -87,6 +98,12 @@ def test_bench_noise_quick_writes_json_and_plot(
         for fetch in SIMD_FETCHES:
             assert methods[f"cpp_1_thread_{level}_{fetch}"]["simd_fetch"] == fetch
     assert "target" in stdout and "noise.json" in stdout
+
+
+def _default_kernel(methods: dict) -> str:
+    """The key suffix of the default kernel (the widest level and its fetch)."""
+    m = methods["cpp_1_thread"]
+    return m["simd_level"] if m["simd_fetch"] is None else f"{m['simd_level']}_{m['simd_fetch']}"
 
 
 def test_run_all_passes_quick_and_out_through(tmp_path: Path) -> None:

@@ -459,3 +459,35 @@ def test_clouds_shade_each_other() -> None:
     assert (extra >= -1e-4).all() and extra.max() > 5  # some columns pass through the other cloud
     # The same all along each column (up to float32 rounding of the sums).
     np.testing.assert_allclose(extra.min(axis=0), extra.max(axis=0), atol=1e-3, rtol=1e-5)
+
+
+def test_only_clouds_upstream_of_a_lattice_shade_it() -> None:
+    """Clouds beside or downstream of a cloud's sun lattice are culled (linear in clouds), a cloud
+    upstream is kept, and culling changes no light: the light with every other cloud marched
+    equals the light with only the upstream one."""
+    from cumuli.light.physical import upstream_of
+
+    first = small_cloud()
+    lo, hi = first.layer_box()
+    size = float(np.max(hi - lo))
+    sun = np.asarray(SUN.direction)
+    upstream = first.translated(tuple(float(v) for v in sun * 1.2 * size))
+    downstream = first.translated(tuple(float(v) for v in -sun * 1.2 * size))
+    beside = first.translated((0.0, 0.0, 3.0 * size))
+    scene = small_scene().replace(clouds=[first, upstream, downstream, beside])
+    frame = physical_light(first, small_scene()).frame
+    assert upstream_of(frame, [upstream, downstream, beside]) == [upstream]
+    culled = physical_light(first, scene)
+    only_upstream = physical_light(first, small_scene().replace(clouds=[first, upstream]))
+    np.testing.assert_array_equal(culled.sun_depth, only_upstream.sun_depth)
+    np.testing.assert_array_equal(culled.grid, only_upstream.grid)
+    alone = physical_light(first, small_scene())
+    assert (culled.sun_depth - alone.sun_depth).max() > 5
+    # The light step's memo keys a light by the clouds upstream of it: moving the cloud beside
+    # reuses the first cloud's light, moving the upstream one relights it.
+    cu.light.prepare.clear_memo()
+    before = cu.prepare_light(scene).lights[0]
+    moved_beside = scene.replace(clouds=[first, upstream, downstream, beside.translated((1, 0, 0))])
+    assert cu.prepare_light(moved_beside).lights[0] is before
+    moved_up = scene.replace(clouds=[first, upstream.translated((0.5, 0, 0)), downstream, beside])
+    assert cu.prepare_light(moved_up).lights[0] is not before

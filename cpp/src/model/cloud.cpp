@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
+#include <vector>
 
 #include <glm/geometric.hpp>
 #include <glm/matrix.hpp>
@@ -113,17 +114,63 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
       (box.hi - box.lo) /
       glm::vec3(static_cast<float>(res[0]), static_cast<float>(res[1]), static_cast<float>(res[2]));
   const float inv_n = 1.0f / static_cast<float>(ss * ss * ss);
+  // Spheroids: a sample's density is that of the primitive nearest in normalised distance, and
+  // zero unless that distance is ≤ 1, i.e. unless the sample lies inside it. So only primitives
+  // whose (slightly grown) bounds meet the cell can give a sample a density: each cell tests
+  // those, in index order (the same nearest primitive, the same first one on a tie), and the
+  // values are those of testing every primitive.
+  const bool spheroid = cloud.density.model != DensityModel::Metaball;
+  const std::size_t np = cloud.primitives.size();
+  std::vector<glm::vec3> plo(np), phi(np);
+  for (std::size_t k = 0; k < np; ++k) {
+    cloud.primitives[k].bounds(plo[k], phi[k]);
+    const glm::vec3 pad = 1e-4f * (phi[k] - plo[k]) + 1e-6f;
+    plo[k] -= pad;
+    phi[k] += pad;
+  }
   parallel_for(nz * ny, threads, [&](std::size_t row) {
     const std::size_t z = row / ny, y = row % ny;
+    const glm::vec3 row_lo =
+        box.lo + glm::vec3(0.0f, static_cast<float>(y), static_cast<float>(z)) * cell;
+    const glm::vec3 row_hi = row_lo + cell;
+    std::vector<int> in_row, in_cell;
+    in_row.reserve(np);
+    in_cell.reserve(np);
+    for (std::size_t k = 0; k < np; ++k)
+      if (plo[k].y <= row_hi.y && phi[k].y >= row_lo.y && plo[k].z <= row_hi.z &&
+          phi[k].z >= row_lo.z)
+        in_row.push_back(static_cast<int>(k));
     for (std::size_t x = 0; x < nx; ++x) {
+      in_cell.clear();
+      const float x0 = box.lo.x + static_cast<float>(x) * cell.x, x1 = x0 + cell.x;
+      for (int k : in_row)
+        if (plo[k].x <= x1 && phi[k].x >= x0) in_cell.push_back(k);
       double sum = 0.0;
+      if (spheroid && in_cell.empty()) {
+        out[row * nx + x] = 0.0f;
+        continue;
+      }
       for (int c = 0; c < ss; ++c)
         for (int b = 0; b < ss; ++b)
           for (int a = 0; a < ss; ++a) {
             const glm::vec3 f((static_cast<float>(x) + (static_cast<float>(a) + 0.5f) / ss),
                               (static_cast<float>(y) + (static_cast<float>(b) + 0.5f) / ss),
                               (static_cast<float>(z) + (static_cast<float>(c) + 0.5f) / ss));
-            sum += field_density(cloud, box.lo + f * cell, src).rho;
+            const glm::vec3 p = box.lo + f * cell;
+            if (!spheroid) {
+              sum += field_density(cloud, p, src).rho;
+              continue;
+            }
+            int best = -1;
+            float best_q = INFINITY;
+            for (int k : in_cell) {
+              const float q = cloud.primitives[static_cast<std::size_t>(k)].normalised_distance(p);
+              if (q < best_q) {
+                best_q = q;
+                best = k;
+              }
+            }
+            if (best_q <= 1.0f) sum += spheroid_density(cloud, best, p, src).rho;
           }
       out[row * nx + x] = ss == 1 ? static_cast<float>(sum) : static_cast<float>(sum) * inv_n;
     }

@@ -35,6 +35,9 @@ drawable when ``settings.lighting == "physical"``.
 from __future__ import annotations
 
 import math
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
 
@@ -43,6 +46,7 @@ import numpy as np
 from cumuli import _core, registry
 from cumuli.ground import ground_radiance_unshadowed
 from cumuli.light.digests import drawable_digest
+from cumuli.light.footprint import box_corners
 from cumuli.light.medium import cloud_extinction_scale, extinction_grid  # noqa: F401 (public)
 from cumuli.light.memo import remember
 from cumuli.settings import ACROSS, ALONG, SUPERSAMPLE
@@ -149,9 +153,27 @@ def optical_depth(
     return tau
 
 
-def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight:
+#: The stages :func:`physical_light` times when asked (``timings``), in the order they run.
+STAGES = ("extinction", "sun_depth", "upstream", "sun_transmittance", "sky", "diffusion")
+
+
+@contextmanager
+def _stage(timings: dict[str, float] | None, name: str) -> Iterator[None]:
+    """Adds the wall seconds of the block to ``timings[name]`` (nothing when None)."""
+    t0 = time.perf_counter()
+    try:
+        yield
+    finally:
+        if timings is not None:
+            timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
+
+
+def physical_light(
+    drawable: Any, scene: Any, threads: int = 0, timings: dict[str, float] | None = None
+) -> PhysicalLight:
     """The :class:`PhysicalLight` of a drawable with a medium (a `Cloud`, a `VolumeCloud`, ...)
-    under ``scene``'s sun and sky."""
+    under ``scene``'s sun and sky. ``timings``, a dict, receives the wall seconds of each of the
+    :data:`STAGES` (added to what it holds: the benchmarks profile the light step with it)."""
     medium = registry.of(drawable).medium
     if medium is None:
         raise TypeError(f"no physical light pass for {type(drawable).__name__}")
@@ -160,41 +182,77 @@ def physical_light(drawable: Any, scene: Any, threads: int = 0) -> PhysicalLight
     n = s.physical_resolution
     lattice = medium.own_lattice(drawable)
     own = lattice is not None and max(lattice) <= n
-    field = extinction_grid(drawable, scene.noise, s, None if own else n, SUPERSAMPLE, threads)
+    with _stage(timings, "extinction"):
+        field = extinction_grid(drawable, scene.noise, s, None if own else n, SUPERSAMPLE, threads)
     lo, hi = field.box
     to_sun = scene.sun.direction
-    across = ACROSS * n
-    frame = _core.light_frame(lo, hi, to_sun, (across, across, ALONG * n))
+    frame = sun_frame(lo, hi, to_sun, n)
     clouds, volumes = medium_args([drawable], s)
     step = float(min(march_step(drawable, s.light_step), (frame[4][2] - frame[3][2]) / (ALONG * n)))
-    depth = _core.light_space_depth(
-        clouds, volumes, scene.noise._core, *fbm_args(s), frame, step, threads
-    )
-    others = [d for d in scene.clouds if d is not drawable]
-    if others:  # the other drawables' shadow: their optical depth upstream of every column
-        depth += _upstream_depth(others, scene, frame, step, threads)[None]
+    with _stage(timings, "sun_depth"):
+        depth = _core.light_space_depth(
+            clouds, volumes, scene.noise._core, *fbm_args(s), frame, step, threads
+        )
+    # The other drawables' shadow: their optical depth upstream of every column, from those
+    # whose box the sun's lattice can see upstream (the others cast nothing on it).
+    others = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
+    if others:
+        with _stage(timings, "upstream"):
+            depth += _upstream_depth(others, scene, frame, step, threads)[None]
     ext = field.values
     d, h, w = ext.shape
-    centres = _lattice_centres(lo, hi, (w, h, d))
-    sun_t = np.exp(-_core.sample_frame(depth, frame, centres)).astype(np.float32).reshape(ext.shape)
+    with _stage(timings, "sun_transmittance"):
+        centres = _lattice_centres(lo, hi, (w, h, d))
+        tau = _core.sample_frame(depth, frame, centres)
+        sun_t = np.exp(-tau).astype(np.float32).reshape(ext.shape)
     grid = np.zeros((d, h, w, 4), np.float32)
     sky_e = None
     if s.sky_light:
-        coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
-        sky_e = _core.sky_irradiance(ext, lo, hi, coeffs, SKY_ORDER, SKY_SAMPLES, 1.0, threads)
+        with _stage(timings, "sky"):
+            coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
+            sky_e = _core.sky_irradiance(ext, lo, hi, coeffs, SKY_ORDER, SKY_SAMPLES, 1.0, threads)
         grid[..., 1:4] = sky_e
     octaves = 1
     if s.multiple_scattering:
         octaves = OCTAVES
-        phi = _core.diffusion_light(
-            ext, lo, hi, sun_t, to_sun, sky_e, s.albedo, s.mean_cosine, 2000, 1e-3, threads
-        )
+        with _stage(timings, "diffusion"):
+            phi = _core.diffusion_light(
+                ext, lo, hi, sun_t, to_sun, sky_e, s.albedo, s.mean_cosine, 2000, 1e-3, threads
+            )
         grid[..., 0] = SUN_GAIN * phi[..., 0]
         if sky_e is not None:
             grid[..., 1:4] = SKY_GAIN * (sky_e + phi[..., 1:4])
     depth.setflags(write=False)
     grid.setflags(write=False)
     return PhysicalLight(frame, depth, grid, (lo, hi), octaves)
+
+
+def sun_frame(lo: Any, hi: Any, to_sun: Any, n: int) -> tuple:
+    """The sun's lattice over the box ``[lo, hi]`` at ``physical_resolution`` ``n``: ACROSS·n
+    nodes across the light, ALONG·n along it (``_core.light_frame``'s tuple)."""
+    lo3, hi3 = tuple(map(float, lo)), tuple(map(float, hi))
+    return _core.light_frame(lo3, hi3, to_sun, (ACROSS * n, ACROSS * n, ALONG * n))
+
+
+def upstream_of(frame: tuple, drawables: Any) -> list[Any]:
+    """The ``drawables`` with a medium whose box reaches the sun's lattice ``frame`` upstream:
+    it overlaps the lattice's columns across the light and begins before the lattice's sun-side
+    face along it. A medium is zero outside its box, so the others add nothing to the lattice's
+    optical depth: culling them keeps every cloud's light step linear in the scene's clouds
+    where they do not stand in each other's light."""
+    u, v, w, lo, hi, _ = frame
+    axes = np.array([u, v, w], np.float64)
+    out = []
+    for d in drawables:
+        if registry.of(d).medium is None:
+            continue
+        blo, bhi = d.layer_box()
+        f = box_corners(blo, bhi) @ axes.T  # (8, 3) frame coordinates
+        fmin, fmax = f.min(axis=0), f.max(axis=0)
+        if (fmax[0] > lo[0] and fmin[0] < hi[0] and fmax[1] > lo[1] and fmin[1] < hi[1]
+                and fmin[2] < lo[2]):  # fmt: skip
+            out.append(d)
+    return out
 
 
 def _upstream_depth(others: Any, scene: Any, frame: tuple, step: float, threads: int) -> np.ndarray:
@@ -278,7 +336,12 @@ def physical_pass(drawable: Any, scene: Any, given: Any = None, threads: int = 0
         # the drawable's own light underneath; the light step shades it again as the scene is.
         return given.shaded_from or given
     sky = light_sky(scene)
-    others = tuple(drawable_digest(d) for d in scene.clouds if d is not drawable)
+    # Only the media upstream of its sun lattice shade it (the culling of `physical_light`):
+    # moving a cloud relights the clouds it shades, not every cloud of the scene.
+    lo, hi = drawable.layer_box()
+    frame = sun_frame(lo, hi, scene.sun.direction, scene.settings.physical_resolution)
+    upstream = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
+    others = tuple(drawable_digest(d) for d in upstream)
     key = ("physical", drawable_digest(drawable), others, scene.noise.seed, scene.noise.size,
            scene.settings, scene.sun, sky)  # fmt: skip
     return remember(key, lambda: physical_light(drawable, replace(scene, sky=sky), threads))

@@ -1,0 +1,191 @@
+"""The physical mode's light step (the default lighting): where its time goes, per cloud count.
+
+Scenes: the demo's cumulus scene (`cumuli.demo.cumulus_scene`: `gaussian_cumulus(seed=1)`, sun
+(0.45, 0.75, 0.5), noise seed 7, default settings: ``physical_resolution`` 48, Mie phase, sky
+light and multiple scattering on) with 1, 2, 4, 8 and 16 clouds (--quick: 1, 2, 4 at
+``physical_resolution`` 16) in two series, on a square grid 32 units apart in the horizontal
+plane: *copies* (the cumulus translated) and *seeds* (``gaussian_cumulus(seed=1..n)``), 2 threads.
+
+Per (series, count): the whole light step as the renderer runs it (``cumuli.prepare_light`` with
+the light memo cleared before each repeat; median / min / max of the repeats, the two series
+interleaved; the process CPU time beside it, which other load on a shared machine does not
+inflate) and its breakdown into the stages of `cumuli.light.physical.physical_light`
+(``STAGES``: the extinction lattice, the cloud's own optical depth on the sun's lattice, the
+optical depth of the other clouds upstream of it, the sun's transmittance on the world lattice,
+the SH sky visibility, the diffusion solve), summed over the clouds, from one more pass. The
+growth exponent is the least-squares slope of log(time) over log(clouds).
+
+Targets (the light step of the physical default): ≤ 40 ms per default cloud (the one-cloud
+scene), and linear in clouds: 16 clouds ≤ 16× one (each series; ``met`` is null in --quick).
+Nothing passes or fails on time.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+from pathlib import Path
+from typing import Any
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import _common as common  # noqa: E402
+import numpy as np  # noqa: E402
+
+import cumuli as cu  # noqa: E402
+from cumuli.demo import cumulus_scene  # noqa: E402
+from cumuli.light.physical import STAGES, physical_light  # noqa: E402
+
+THREADS = 2
+SPACING = 32.0
+COUNTS = (1, 2, 4, 8, 16)
+QUICK_COUNTS = (1, 2, 4)
+SERIES = ("copies", "seeds")
+TARGET_ONE_MS = 40.0
+TARGET_GROWTH = 16.0
+
+
+def scene(series: str, count: int, resolution: int | None) -> cu.Scene:
+    """``count`` clouds of ``series`` on a square grid in the horizontal plane."""
+    settings = cu.RenderSettings() if resolution is None else cu.RenderSettings(
+        physical_resolution=resolution
+    )  # fmt: skip
+    base = cumulus_scene(settings=settings)
+    side = math.ceil(math.sqrt(count))
+    clouds = []
+    for k in range(count):
+        row, col = divmod(k, side)
+        offset = ((col - (side - 1) / 2) * SPACING, 0.0, (row - (side - 1) / 2) * SPACING)
+        cloud = base.clouds[0] if series == "copies" else cu.gaussian_cumulus(seed=1 + k)
+        clouds.append(cloud.translated(offset))
+    return base.replace(clouds=clouds)
+
+
+def light_step(sc: cu.Scene) -> None:
+    """The renderer's light step from nothing memoised."""
+    cu.light.prepare.clear_memo()
+    cu.prepare_light(sc, threads=THREADS, progress=False)
+
+
+def stages(sc: cu.Scene) -> dict[str, float]:
+    """Seconds per stage of the physical light of every cloud of ``sc``, summed."""
+    timings: dict[str, float] = {}
+    for cloud in sc.clouds:
+        physical_light(cloud, sc, THREADS, timings)
+    return {name: timings.get(name, 0.0) for name in STAGES}
+
+
+def exponent(counts: list[int], seconds: list[float]) -> float | None:
+    """Least-squares slope of log(seconds) over log(counts)."""
+    if len(counts) < 2:
+        return None
+    return float(np.polyfit(np.log(counts), np.log(seconds), 1)[0])
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = common.parse_args(__doc__.splitlines()[0], argv)
+    counts = QUICK_COUNTS if args.quick else COUNTS
+    resolution = 16 if args.quick else None
+    repeats = 1 if args.quick else 3
+    results: dict[str, Any] = {s: {} for s in SERIES}
+    for count in counts:
+        scenes = {s: scene(s, count, resolution) for s in SERIES}
+        fns = {s: (lambda sc=sc: light_step(sc)) for s, sc in scenes.items()}
+        timed = common.interleaved_repeats(fns, repeats, warmup=0 if count > 4 else 1)
+        for s, sc in scenes.items():
+            wall = common.spread(timed[s][0])
+            cpu = common.spread(timed[s][1])
+            per_stage = stages(sc)
+            results[s][str(count)] = {
+                "clouds": count,
+                "light_step_s": wall,
+                # Process CPU seconds (both threads): robust to other load on a shared machine.
+                "light_step_cpu_s": cpu,
+                "per_cloud_ms": 1e3 * wall["median"] / count,
+                "stages_s": per_stage,
+                "stages_share": {
+                    k: v / max(sum(per_stage.values()), 1e-12) for k, v in per_stage.items()
+                },
+            }
+            common.log(
+                f"{s:6s} {count:2d} clouds: {1e3 * wall['median']:8.1f} ms  ("
+                + ", ".join(f"{k} {1e3 * v:.1f}" for k, v in per_stage.items())
+                + " ms)"
+            )
+    growth: dict[str, Any] = {}
+    for s in SERIES:
+        rows = [results[s][str(c)] for c in counts]
+        secs = [r["light_step_s"]["median"] for r in rows]
+        growth[s] = {
+            "exponent": exponent(list(counts), secs),
+            "stage_exponents": {
+                k: exponent(list(counts), [max(r["stages_s"][k], 1e-9) for r in rows])
+                for k in STAGES
+            },
+            "last_over_one": secs[-1] / secs[0],
+        }
+    full = not args.quick
+    one_ms = 1e3 * results["copies"]["1"]["light_step_s"]["median"]
+    targets = {
+        "per_default_cloud_ms": common.target(TARGET_ONE_MS, one_ms if full else None, "<="),
+    }
+    for s in SERIES:
+        targets[f"sixteen_over_one_{s}"] = common.target(
+            TARGET_GROWTH, growth[s]["last_over_one"] if full else None, "<="
+        )
+    data = {
+        "benchmark": "physical_light",
+        "machine": common.machine_info(),
+        "quick": args.quick,
+        "threads": THREADS,
+        "physical_resolution": cu.RenderSettings().physical_resolution
+        if resolution is None
+        else resolution,
+        "counts": list(counts),
+        "repeats": repeats,
+        "stages": list(STAGES),
+        "series": results,
+        "growth": growth,
+        "targets": targets,
+    }
+    for name, t in targets.items():
+        common.log(common.show_target(name, t))
+    for s in SERIES:
+        common.log(f"growth exponent ({s}): {growth[s]['exponent']:.3f}")
+    path = common.write_json(args.out / "physical_light.json", data)
+    plot(data, args.out / "physical_light.png")
+    common.log(f"wrote {path} and {args.out / 'physical_light.png'}")
+    return 0
+
+
+def plot(data: dict[str, Any], path: Path) -> None:
+    plt = common.pyplot()
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4))
+    counts = data["counts"]
+    for s, style in zip(SERIES, ("-o", "--s"), strict=True):
+        rows = [data["series"][s][str(c)] for c in counts]
+        axes[0].plot(counts, [1e3 * r["light_step_s"]["median"] for r in rows], style, label=s)
+    axes[0].plot(counts, [TARGET_ONE_MS * c for c in counts], "k:", label="40 ms × clouds")
+    axes[0].set(xscale="log", yscale="log", xlabel="clouds", ylabel="light step (ms)",
+                title=f"physical light step, {data['threads']} threads")  # fmt: skip
+    rows = [data["series"]["seeds"][str(c)] for c in counts]
+    bottom = np.zeros(len(counts))
+    for k in data["stages"]:
+        vals = np.array([1e3 * r["stages_s"][k] for r in rows])
+        axes[1].bar([str(c) for c in counts], vals, bottom=bottom, label=k)
+        bottom += vals
+    axes[1].set(xlabel="clouds (seeds series)", ylabel="ms", title="time per stage")
+    for ax in axes:
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=8)
+    m = data["machine"]
+    fig.suptitle(f"{m['cpu_model']}, {m['cores']} cores", fontsize=9)
+    fig.tight_layout()
+    tmp = path.with_name(f".{path.name}.tmp.png")
+    fig.savefig(tmp, dpi=100)
+    plt.close(fig)
+    tmp.replace(path)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

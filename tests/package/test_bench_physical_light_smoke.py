@@ -1,0 +1,45 @@
+"""The physical light step's benchmark runs in --quick mode and writes the documented JSON
+(per stage, per cloud count, the growth exponents and the targets; speed not checked)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from cumuli.light.physical import STAGES
+
+
+def test_bench_physical_light_quick_writes_json_and_plot(
+    tmp_path: Path, run_bench: Callable[..., str]
+) -> None:
+    stdout = run_bench("bench_physical_light.py", tmp_path, timeout=300)
+    data = json.loads((tmp_path / "physical_light.json").read_text())
+    assert (tmp_path / "physical_light.png").stat().st_size > 1000
+    assert data["benchmark"] == "physical_light" and data["quick"] is True
+    assert data["threads"] == 2 and data["counts"] == [1, 2, 4]
+    assert data["stages"] == list(STAGES)
+    for series in ("copies", "seeds"):
+        rows = data["series"][series]
+        for count in data["counts"]:
+            row = rows[str(count)]
+            wall = row["light_step_s"]
+            assert wall["min"] <= wall["median"] <= wall["max"] and wall["n"] == data["repeats"]
+            assert set(row["stages_s"]) == set(STAGES)
+            # Every cloud extincts, marches its own sun lattice and solves its diffusion.
+            for stage in ("extinction", "sun_depth", "sky", "diffusion"):
+                assert row["stages_s"][stage] > 0
+            assert sum(row["stages_share"].values()) == pytest.approx(1.0)
+            assert row["per_cloud_ms"] == pytest.approx(1e3 * wall["median"] / count)
+        # One cloud has no other upstream.
+        assert rows["1"]["stages_s"]["upstream"] == 0.0
+        growth = data["growth"][series]
+        assert growth["exponent"] is not None and growth["last_over_one"] > 0
+        assert set(growth["stage_exponents"]) == set(STAGES)
+    for name in ("per_default_cloud_ms", "sixteen_over_one_copies", "sixteen_over_one_seeds"):
+        t = data["targets"][name]
+        assert t["met"] is None and t["reached"] is None  # --quick measures no target
+        assert t["limit"] > 0
+    assert "growth exponent" in stdout and "target per_default_cloud_ms" in stdout
