@@ -226,6 +226,20 @@ def pyplot():
     return plt
 
 
+def save_figure(fig: Any, path: Path, dpi: int = 100) -> Path:
+    """Save a matplotlib figure as PNG atomically (a hidden temporary beside it, then replace)
+    and close it."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.tmp.png")
+    try:
+        fig.savefig(tmp, dpi=dpi)
+        tmp.replace(path)
+    finally:
+        tmp.unlink(missing_ok=True)
+        pyplot().close(fig)
+    return path
+
+
 def log(message: str) -> None:
     print(message, flush=True, file=sys.stdout)
 

@@ -318,7 +318,4 @@ def plot(data: dict[str, Any], path: Any) -> None:
     m = data["machine"]
     fig.suptitle(f"Harris 2002 impostors — {m['cpu_model']}, GL: {m['gl_renderer']}", fontsize=9)
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=100)
-    plt.close(fig)
-    tmp.replace(path)
+    common.save_figure(fig, path)

@@ -505,10 +505,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
     fig.suptitle(f"cumuli billboard clouds — {m['cpu_model']}, {m['cores']} cores, GL "
                  f"{m.get('gl_renderer')}", fontsize=9)  # fmt: skip
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=100)
-    plt.close(fig)
-    tmp.replace(path)
+    common.save_figure(fig, path)
 
 
 def plot_render(render: dict[str, Any], axes: Any) -> None:

@@ -286,10 +286,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
     fig.suptitle(f"cumuli light pass, step {STEP} — {m['cpu_model']}, {m['cores']} cores",
                  fontsize=9)  # fmt: skip
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=100)
-    plt.close(fig)
-    tmp.replace(path)
+    common.save_figure(fig, path)
 
 
 if __name__ == "__main__":

@@ -254,10 +254,7 @@ def plot(data: dict[str, Any], path: Path) -> None:
         fontsize=9,
     )
     fig.tight_layout()
-    tmp = path.with_name(f".{path.name}.tmp.png")
-    fig.savefig(tmp, dpi=100)
-    plt.close(fig)
-    tmp.replace(path)
+    common.save_figure(fig, path)
 
 
 if __name__ == "__main__":
