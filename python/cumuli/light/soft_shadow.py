@@ -51,7 +51,7 @@ def chord_midpoints(box: Any, points: np.ndarray, direction: Any) -> np.ndarray:
         b = np.where(np.isnan(b), np.inf, b)
         t0 = np.maximum(np.minimum(a, b).max(-1), 0.0)
         t1 = np.maximum(a, b).min(-1)
-    return np.where(t1 >= t0, 0.5 * (t0 + t1), np.nan)
+        return np.where(t1 >= t0, 0.5 * (t0 + t1), np.nan)
 
 
 def caster_distance(taus: list[np.ndarray], mids: list[np.ndarray]) -> np.ndarray:
