@@ -30,42 +30,72 @@ import numpy as np
 from cumuli.light.physical import phase_values
 
 
-def aureole(scene: Any, camera: Any, width: int, height: int) -> np.ndarray | None:
-    """``(H, W, 3)`` float32: the aureole's radiance per pixel of ``camera``'s image, or None
-    where there is none (the paper mode, ``haze = 0``, a black sun)."""
+def _aureole_at(scene: Any, dirs: np.ndarray) -> np.ndarray | None:
     s = scene.settings
     if not s.physical or s.haze == 0.0:
         return None
     radiance = np.asarray(scene.sun.radiance, np.float64)
     if not radiance.any():
         return None
-    dirs = camera.ray_directions(width, height).astype(np.float64)
-    c = dirs @ np.asarray(scene.sun.direction, np.float64)
+    c = dirs.astype(np.float64) @ np.asarray(scene.sun.direction, np.float64)
     rim = math.cos(math.radians(scene.sky.sun_disc_radius))
     p = phase_values(s, np.minimum(c, rim))
     return (p[..., None] * (s.haze * radiance)).astype(np.float32)
+
+
+def aureole(scene: Any, camera: Any, width: int, height: int) -> np.ndarray | None:
+    """``(H, W, 3)`` float32: the aureole's radiance per pixel of ``camera``'s image, or None
+    where there is none (the paper mode, ``haze = 0``, a black sun)."""
+    return _aureole_at(scene, camera.ray_directions(width, height))
 
 
 def _ground_distance(scene: Any, camera: Any, dirs: np.ndarray) -> np.ndarray:
     """Distance along each ray to the ground plane, ``inf`` where it misses it (or no ground)."""
     if scene.ground is None:
         return np.full(dirs.shape[:-1], np.inf)
-    dy = dirs[..., 1]
+    dy = dirs[..., 1].astype(np.float64)
     above = float(camera.position[1]) - float(scene.ground.height)
     with np.errstate(divide="ignore", invalid="ignore"):
         return np.where((dy < 0) & (above > 0), above / -dy, np.inf)
+
+
+def _background_distance_at(scene: Any, camera: Any, dirs: np.ndarray) -> np.ndarray:
+    ground = _ground_distance(scene, camera, dirs)
+    dy = np.abs(dirs[..., 1].astype(np.float64))
+    with np.errstate(divide="ignore"):
+        sky = np.where(dy > 0, scene.settings.air_height / dy, np.inf)
+    return np.where(np.isfinite(ground), ground, sky)
 
 
 def background_distance(scene: Any, camera: Any, width: int, height: int) -> np.ndarray:
     """``(H, W)`` float64: the distance of the air before each pixel's background: the ground
     plane's where the ray meets it, else ``air_height/|d.y|`` (the hazy layer's path; ``inf``
     along the horizon)."""
-    dirs = camera.ray_directions(width, height).astype(np.float64)
-    ground = _ground_distance(scene, camera, dirs)
-    dy = np.abs(dirs[..., 1])
-    with np.errstate(divide="ignore"):
-        sky = np.where(dy > 0, scene.settings.air_height / dy, np.inf)
-    return np.where(np.isfinite(ground), ground, sky)
+    return _background_distance_at(scene, camera, camera.ray_directions(width, height))
+
+
+def _cloud_depth_at(scene: Any, camera: Any, dirs: np.ndarray) -> np.ndarray:
+    o = np.asarray(camera.position, np.float64)
+    d = [dirs[..., k].astype(np.float64) for k in range(3)]
+    depth = np.full(dirs.shape[:-1], np.nan)
+    entry = np.full(dirs.shape[:-1], np.inf)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = [1.0 / v for v in d]
+        for drawable in scene.clouds:
+            lo, hi = (np.asarray(v, np.float64) for v in drawable.layer_box())
+            t0 = np.zeros(dirs.shape[:-1])
+            t1 = np.full(dirs.shape[:-1], np.inf)
+            for k in range(3):
+                a, b = (lo[k] - o[k]) * inv[k], (hi[k] - o[k]) * inv[k]
+                # A ray parallel to a slab's faces: inside it (nan on a face) or not at all.
+                a = np.where(np.isnan(a), -np.inf, a)
+                b = np.where(np.isnan(b), np.inf, b)
+                t0 = np.maximum(t0, np.minimum(a, b))
+                t1 = np.minimum(t1, np.maximum(a, b))
+            first = (t1 >= t0) & (t0 < entry)
+            entry = np.where(first, t0, entry)
+            depth = np.where(first, 0.5 * (t0 + t1), depth)
+    return depth
 
 
 def cloud_depth(scene: Any, camera: Any, width: int, height: int) -> np.ndarray:
@@ -73,23 +103,7 @@ def cloud_depth(scene: Any, camera: Any, width: int, height: int) -> np.ndarray:
     chord through the first drawable box (``layer_box()``) it enters (from the camera when it
     starts inside), ``nan`` where it enters none. A geometric estimate, the same for every
     backend: within a box the cloud's own depth differs from it by at most half the chord."""
-    dirs = camera.ray_directions(width, height).astype(np.float64)
-    o = np.asarray(camera.position, np.float64)
-    depth = np.full(dirs.shape[:-1], np.nan)
-    entry = np.full(dirs.shape[:-1], np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = 1.0 / dirs
-        for d in scene.clouds:
-            lo, hi = (np.asarray(v, np.float64) for v in d.layer_box())
-            a, b = (lo - o) * inv, (hi - o) * inv
-            a = np.where(np.isnan(a), -np.inf, a)  # a ray parallel to a slab, on its face
-            b = np.where(np.isnan(b), np.inf, b)
-            t0 = np.maximum(np.minimum(a, b).max(-1), 0.0)
-            t1 = np.maximum(a, b).min(-1)
-            first = (t1 >= t0) & (t0 < entry)
-            entry = np.where(first, t0, entry)
-            depth = np.where(first, 0.5 * (t0 + t1), depth)
-    return depth
+    return _cloud_depth_at(scene, camera, camera.ray_directions(width, height))
 
 
 def shadow_lookup(shadow: Any, x: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -113,13 +127,9 @@ def shadow_lookup(shadow: Any, x: np.ndarray, z: np.ndarray) -> np.ndarray:
     return np.where(inside, a + wv * (b - a), 1.0)
 
 
-def background(scene: Any, camera: Any, width: int, height: int, shadow: Any = None) -> np.ndarray:
-    """``(H, W, 3)`` float32: the background radiance of each pixel's ray (numpy twin of the
-    renderers' ``background``, RENDER_CONTRACT "Ground"): the ground lit through ``shadow`` (a
-    :class:`cumuli.ShadowMap` or None) where the ray meets it, else the sky with its disc."""
+def _background_at(scene: Any, camera: Any, dirs: np.ndarray, shadow: Any) -> np.ndarray:
     from cumuli.ground import sky_irradiance
 
-    dirs = camera.ray_directions(width, height)
     out = scene.sky.colour(dirs, scene.sun).astype(np.float64)
     if scene.ground is None:
         return out.astype(np.float32)
@@ -141,6 +151,13 @@ def background(scene: Any, camera: Any, width: int, height: int, shadow: Any = N
     return out.astype(np.float32)
 
 
+def background(scene: Any, camera: Any, width: int, height: int, shadow: Any = None) -> np.ndarray:
+    """``(H, W, 3)`` float32: the background radiance of each pixel's ray (numpy twin of the
+    renderers' ``background``, RENDER_CONTRACT "Ground"): the ground lit through ``shadow`` (a
+    :class:`cumuli.ShadowMap` or None) where the ray meets it, else the sky with its disc."""
+    return _background_at(scene, camera, camera.ray_directions(width, height), shadow)
+
+
 def air_fades(
     scene: Any, camera: Any, width: int, height: int
 ) -> tuple[np.ndarray, np.ndarray] | None:
@@ -150,11 +167,18 @@ def air_fades(
     s = scene.settings
     if not s.physical or s.air_extinction == 0.0:
         return None
-    k = s.air_extinction
-    t_bg = background_distance(scene, camera, width, height)
-    depth = np.nan_to_num(cloud_depth(scene, camera, width, height), nan=0.0)
-    behind = np.where(np.isfinite(t_bg), -np.expm1(-k * np.where(np.isfinite(t_bg), t_bg, 0)), 1)
-    return behind.astype(np.float32), (-np.expm1(-k * depth)).astype(np.float32)
+    dirs = camera.ray_directions(width, height)
+    behind = _fade(s.air_extinction, _background_distance_at(scene, camera, dirs))
+    depth = np.nan_to_num(_cloud_depth_at(scene, camera, dirs), nan=0.0)
+    return behind, _fade(s.air_extinction, depth)
+
+
+def _fade(k: float, t: np.ndarray) -> np.ndarray:
+    """``1 − exp(−k·t)`` in float32, 1 where ``t`` is infinite."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        return np.where(
+            np.isfinite(t), -np.expm1(-k * np.where(np.isfinite(t), t, 0.0)), 1.0
+        ).astype(np.float32)
 
 
 def ground_haze(scene: Any, camera: Any, width: int, height: int) -> np.ndarray | None:
@@ -173,24 +197,43 @@ def ground_haze(scene: Any, camera: Any, width: int, height: int) -> np.ndarray 
 
 def add_air(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None) -> np.ndarray:
     """``image`` seen through the air (module doc); ``shadow`` the ground's shadow map the image
-    was drawn with. A new array when anything changes."""
-    h, w = image.shape[:2]
-    glow = aureole(scene, camera, w, h)
-    fades = air_fades(scene, camera, w, h)
-    if glow is None and fades is None:
+    was drawn with. A new array when anything changes. The clouds' depth is found only where
+    a pixel has coverage, the background only where it is partial (elsewhere it is the pixel
+    itself or hidden)."""
+    s = scene.settings
+    fading = s.physical and s.air_extinction > 0.0
+    glowing = s.physical and s.haze > 0.0 and any(scene.sun.radiance)
+    if not (fading or glowing):
         return image
-    out = image.copy()
-    alpha = np.clip(image[..., 3:4], 0.0, 1.0)
+    h, w = image.shape[:2]
+    dirs = camera.ray_directions(w, h).reshape(-1, 3)
+    flat = image.reshape(-1, 4)
+    rgb = np.ascontiguousarray(flat[:, :3], np.float32)
+    alpha = np.clip(flat[:, 3], 0.0, 1.0)
     clear = 1.0 - alpha
     front = np.zeros_like(alpha)
-    if fades is not None:
-        behind, front = fades[0][..., None], fades[1][..., None]
+    if fading:
+        k = s.air_extinction
         horizon = np.asarray(scene.sky.horizon, np.float32)
-        bg = background(scene, camera, w, h, shadow)
-        clouds = out[..., :3] - clear * bg  # the clouds' own (premultiplied) radiance
-        out[..., :3] = (
-            clouds + front * (alpha * horizon - clouds) + clear * (bg + behind * (horizon - bg))
-        )
-    if glow is not None:
-        out[..., :3] += (clear + alpha * front) * glow
-    return out
+        behind = _fade(k, _background_distance_at(scene, camera, dirs))[:, None]
+        # Where nothing covers the pixel, its colour is its background.
+        bg = rgb.copy()
+        covered = np.nonzero(alpha > 0)[0]
+        partial = covered[alpha[covered] < 1]
+        bg[partial] = _background_at(scene, camera, dirs[partial], shadow)
+        depth = np.nan_to_num(_cloud_depth_at(scene, camera, dirs[covered]), nan=0.0)
+        front[covered] = _fade(k, depth)
+        # Everywhere: the background faded by its distance (where nothing covers the pixel,
+        # exactly the pixel); where something does, its clouds faded by theirs on top.
+        faded = bg + behind * (horizon - bg)
+        a, c = alpha[covered, None], clear[covered, None]
+        f = front[covered, None]
+        clouds = rgb[covered] - c * bg[covered]  # the clouds' own (premultiplied) radiance
+        faded[covered] = clouds + f * (a * horizon - clouds) + c * faded[covered]
+        rgb = faded
+    if glowing:
+        glow = _aureole_at(scene, dirs)
+        glow *= (clear + alpha * front)[:, None]
+        rgb = rgb + glow
+    out = np.concatenate([rgb, flat[:, 3:]], axis=1).astype(np.float32)
+    return out.reshape(image.shape)
