@@ -12,6 +12,7 @@ the scene's ``sprite_settings``) — and of every billboard cloud or field — t
 billboards would get at the ground point (:func:`cumuli.light.caf.ground_caf` with the scene's
 ``billboard_shading``; beyond Torchelsen & Musse 2005). The light step makes one for a scene
 with a ground (:func:`scene_shadow`), over the ground the clouds' boxes can shade.
+In the physical mode the map is softened (:mod:`cumuli.light.soft_shadow`).
 """
 
 from __future__ import annotations
@@ -289,7 +290,10 @@ def shadow_map(
     ``(j, i)`` is the ray from ``(x0 + (i + ½)(x1 − x0)/nx, height, z0 + (j + ½)(z1 − z0)/nz)``
     towards the sun. ``resolution`` is one int or ``(nx, nz)``. A sun at or below the horizon
     gives ones (no direct sunlight is shaded). For terrain and solar-irradiance work: multiply
-    by ``E_sun·max(sun.y, 0)`` for the direct irradiance.
+    by ``E_sun·max(sun.y, 0)`` for the sun's irradiance. In the physical mode the map is soft
+    (:mod:`cumuli.light.soft_shadow`): the sun disc's penumbra (``sun_angular_diameter``) and
+    the light the clouds scatter through (``diffuse_shadows``); turn both off for the direct
+    transmittance of a point sun.
     """
     from cumuli.scene import Scene
 
