@@ -127,7 +127,8 @@ def deck_scene(settings: RenderSettings | None = None, seed: int = 4) -> Scene:
         clouds=[deck],
         sun=Sun(direction=(0.35, 0.6, 0.7), colour=(1.0, 0.93, 0.85), intensity=9.0),
         sky=Sky(),
-        settings=settings or RenderSettings(lighting="physical"),
+        # Metres: air of about 40 km visibility in a boundary layer 1 km deep.
+        settings=settings or RenderSettings(air_extinction=1e-4, air_height=1000.0),
         camera=Camera(position=(0.0, 60.0, -3000.0), target=(0.0, 1100.0, 6000.0), fov=65.0),
         ground=Ground(height=0.0, albedo=(0.2, 0.22, 0.15)),
     )
