@@ -141,11 +141,13 @@ def penumbra(
     texel = ((x1 - x0) / nx, (z1 - z0) / nz)
     d_max = float(np.max(distance, initial=0.0))
     wx_max, wz_max = penumbra_widths(np.array(d_max), sun, angle_deg, texel)
-    reach = float(max(wx_max, wz_max))
+    # A blur wider than the map is the map's mean (a grazing sun): widths are capped there.
+    limit = 2.0 * max(nx, nz)
+    reach = min(float(max(wx_max, wz_max)), limit)
     if reach < 1e-3:
         return np.asarray(values, np.float32)
     d = spread_distance(distance, weight, reach)
-    wx, wz = penumbra_widths(d, sun, angle_deg, texel)
+    wx, wz = (np.minimum(v, limit) for v in penumbra_widths(d, sun, angle_deg, texel))
     out = np.asarray(values, np.float64)
     for _ in range(2):
         out = _box_1d(out, BOX_SHARE * wx, 1)
