@@ -66,7 +66,10 @@ def reference_scene() -> tuple[cu.Scene, cu.Camera]:
         sun=sun,
         sky=cu.Sky(),
         noise=cu.Noise(seed=7),
-        settings=cu.RenderSettings(lighting="physical", phase="hg", haze=0.0, resolve=False),
+        # No air: Mitsuba's scene has none (aerial perspective and aureole off).
+        settings=cu.RenderSettings(
+            lighting="physical", phase="hg", haze=0.0, resolve=False, air_extinction=0.0
+        ),
     )
     camera = cu.Camera(position=(0.0, 2.0, -45.0), target=(0.0, 1.0, 0.0), fov=38.0)
     return scene, camera

@@ -18,7 +18,12 @@ from cumuli.testing import assert_image_close, only
 F = np.float32
 SUN = cu.Sun(direction=(0.8, 0.45, -0.3), colour=(1.0, 0.9, 0.8), intensity=5.0)
 PHYS = cu.RenderSettings(
-    lighting="physical", physical_resolution=16, exact_noise=True, haze=0.0, resolve=False
+    lighting="physical",
+    physical_resolution=16,
+    exact_noise=True,
+    haze=0.0,
+    resolve=False,
+    air_extinction=0.0,
 )
 
 

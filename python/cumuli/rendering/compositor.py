@@ -107,7 +107,7 @@ def compose(
     if impostors is None and single_pass(scene):
         kind, indices = calls[0]
         image = painter.layer(lit, kind, indices, camera, width, height, True)
-        return add_air(resolve(image, scene), scene, camera)
+        return resolve(add_air(image, scene, camera, lit.shadow), scene)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
     else:
@@ -125,7 +125,7 @@ def compose(
         solid,
         ground_args(scene.ground, scene.sky, lit.shadow),
     )  # fmt: skip
-    return add_air(resolve(image, scene), scene, camera)
+    return resolve(add_air(image, scene, camera, lit.shadow), scene)
 
 
 def _lit(scene: Any) -> tuple[LitScene | None, Scene]:
