@@ -46,11 +46,13 @@ from cumuli.gl.sprites import (
     camera_dict,
     draw_sprites_cpu,
 )
+from cumuli.light import sprite_physical
 from cumuli.light.billboards import BillboardLighting
+from cumuli.light.caf import default_max_distance
 from cumuli.light.prepare import LitScene
 from cumuli.model.atlas import SpriteAtlas
 from cumuli.model.billboard_field import BillboardField
-from cumuli.model.billboards import BillboardCloud
+from cumuli.model.billboards import BillboardCloud, rotate_y
 from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
 from cumuli.sky import sky_args
 
@@ -232,20 +234,92 @@ def billboard_frame(
     shade["light_dirs"] = np.array([s.direction for s in suns], np.float32).reshape(-1, 3)
     shade["light_radiance"] = np.array([s.radiance for s in suns], np.float32).reshape(-1, 3)
     cam = camera_dict(camera, width, height, shading.near)
-    out = _core.billboard_sprites(
-        variants, cat["variant"].astype(np.int32), cat["off"].reshape(-1, 3).astype(np.float32),
-        cat["yaw"].astype(np.float32), alpha, cat["first"].astype(np.int64),
-        np.ascontiguousarray(caf, np.float32), shade, cam, shading.draw_dict(), threads,
-    )  # fmt: skip
+    physical = lit.scene.settings.physical
+    draw = shading.draw_dict()
+    if physical:  # the physical mode shades the corners (below)
+        draw["fragment"] = False
+    args = (variants, cat["variant"].astype(np.int32),
+            cat["off"].reshape(-1, 3).astype(np.float32), cat["yaw"].astype(np.float32), alpha,
+            cat["first"].astype(np.int64), np.ascontiguousarray(caf, np.float32))  # fmt: skip
+    out = _core.billboard_sprites(*args, shade, cam, draw, threads)
+    if physical:
+        out["colours"] = _physical_colours(lit, parts, args, shade, cam, draw, out, camera,
+                                           threads)  # fmt: skip
     if out["centres"].shape[0] > MAX_SPRITES:
         raise ValueError(f"the pass draws {out['centres'].shape[0]} billboards (> {MAX_SPRITES})")
     sprites = Sprites(out["centres"], out["half_sizes"], out["colours"], out["alpha"],
                       out["rotation"], out["texture"])  # fmt: skip
     fragment = None
-    if shading.shading == "fragment":
+    if shading.shading == "fragment" and not physical:
         fragment = FragmentShading(out["frame"], out["yrange"], out["caf"], shade["light_dirs"],
                                    shade["light_radiance"], shade)  # fmt: skip
     return BillboardFrame(sprites, image, grid, fragment, out["instance"], out["billboard"])
+
+
+def _physical_colours(
+    lit: LitScene, parts: list, args: tuple, shade: dict, cam: dict, draw: dict, out: dict,
+    camera: Camera, threads: int,
+) -> np.ndarray:  # fmt: skip
+    """The physical mode's corner colours of a pass
+    (:func:`cumuli.light.sprite_physical.billboard_colours`): the sun's ``H·CAF·D`` at each
+    corner from the paper's vertex shading with one light per colour channel, no ambient."""
+    n_lights = shade["light_dirs"].shape[0]
+    n = out["centres"].shape[0]
+    trans = np.zeros((n, 4, n_lights), np.float32)
+    for first in range(0, n_lights, 3):
+        rows = list(range(first, min(first + 3, n_lights)))
+        one = dict(shade, ambient=(0.0, 0.0, 0.0), k_amb=0.0)
+        one["light_dirs"] = shade["light_dirs"][rows]
+        one["light_radiance"] = np.eye(3, dtype=np.float32)[: len(rows)]
+        caf = np.ascontiguousarray(args[6][rows], np.float32)
+        got = _core.billboard_sprites(*args[:6], caf, one, cam, draw, threads)
+        trans[:, :, rows] = np.asarray(got["colours"], np.float32).reshape(n, 4, 3)[
+            ..., : len(rows)
+        ]
+    scene = lit.scene
+    quad = sprite_physical.sky_quadrature(scene)
+    grids = _instance_grids(lit, parts)
+    centres = np.asarray(out["centres"], np.float64)
+    instance = np.asarray(out["instance"], np.int64)
+    local = centres.copy()
+    for k in np.unique(instance):  # into each instance's variant frame
+        rows = instance == k
+        off, c, sn = grids[k][1]
+        local[rows] = rotate_y(centres[rows] - off, c, -sn)
+    sky = np.zeros((n, 3))
+    for k in np.unique(instance):
+        rows = instance == k
+        sky[rows] = sprite_physical.sky_at(local[rows], grids[k][0], quad)
+    return sprite_physical.billboard_colours(scene, trans, centres, sky, camera.position)
+
+
+def _instance_grids(lit: LitScene, parts: list) -> list[tuple[tuple, tuple]]:
+    """Per cloud of the pass (:func:`cloud_spheres` order): its variant's sky-visibility grid
+    (memoised per variant and ``max_distance``) and the instance's placement ``(offset, cos
+    yaw, sin yaw)``."""
+    md = lit.scene.billboard_shading.max_distance
+    out = []
+    for d, _ in parts:
+        if isinstance(d, BillboardCloud):
+            out.append((_variant_grid(d, md), (np.zeros(3), 1.0, 0.0)))
+            continue
+        for i in range(d.n):
+            v = d.variants[int(d.variant[i])]
+            yaw = float(d.yaw[i])
+            place = (np.asarray(d.offsets[i], np.float64), math.cos(yaw), math.sin(yaw))
+            out.append((_variant_grid(v, md), place))
+    return out
+
+
+_grids: weakref.WeakKeyDictionary[BillboardCloud, dict] = weakref.WeakKeyDictionary()
+
+
+def _variant_grid(v: BillboardCloud, max_distance: float | None) -> tuple:
+    known = _grids.setdefault(v, {})
+    if max_distance not in known:
+        dist = default_max_distance(v) if max_distance is None else max_distance
+        known[max_distance] = sprite_physical.billboard_grid(v.boxes, dist)
+    return known[max_distance]
 
 
 #: The box `finish` composites a pass's layer with: every ray enters it.
