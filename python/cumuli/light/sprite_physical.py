@@ -1,121 +1,79 @@
 """The physical mode's light for sprites: particle clouds (Harris 2002) and billboard clouds
-(Torchelsen & Musse 2005) lit like the marched media (RENDER_CONTRACT "Sprites", "One light").
+(Torchelsen & Musse 2005) lit by the media's own light step (RENDER_CONTRACT "Sprites", "One
+light").
 
-The media's source term is ``J = ϖ·(E_sun·(Σ_n w_n·e^{−k_n τ} + F/4π) + S/4π)``. A sprite has no
-light lattice; it takes the same terms from what its own light pass knows:
+A sprite cloud becomes a *proxy medium*: its extinction on a lattice of :data:`GRID` cells on
+the longest edge (a particle a ball of extinction ``τ_k/(2 r_k)``; a billboard cloud's boxes
+:data:`LINEAR_CAF_K`/``max_distance``), drawn as a `VolumeCloud` by nobody but lit by
+:func:`cumuli.light.physical.physical_pass` like any medium — the sun's optical depth ``τ_sun``,
+the diffuse sunlight ``F`` and the sky light ``S`` (SH visibility and diffusion, with the
+media's gains). Each sprite then takes the marcher's source term at its own points,
 
-- the sun: ``T`` the sun's transmittance to the sprite — Harris's light ``i_k`` (clipped to
-  [0, 1]) for a particle, ``H·CAF·D`` for a billboard corner — as ``e^{−τ}`` in the octave
-  sum ``Σ_n aⁿ·p_{bⁿ}(cos θ)·T^{cⁿ}`` with the scene's phase (:func:`sun_octaves`): single
-  scattering plus the octaves' multiple scattering, no diffusion term ``F``;
-- the sky: ``S = SKY_GAIN·Σ_j L_j·Δω·e^{−σ̄·ℓ_j}``, the sky's radiance (:func:`light_sky`, the
-  ground's below the horizon) over :data:`SKY_DIRECTIONS` directions, each seen through the
-  cloud's bounding sphere with a mean extinction ``σ̄`` along the chord ``ℓ_j`` from the sprite
-  to the sphere's surface (:func:`sky_fluence`).
+    J = ϖ·( E_sun·B·( Σ_n aⁿ·p_{bⁿ}(cos θ)·e^{−cⁿ τ_sun} + F/4π ) + Σ_ℓ E_ℓ·p(cos θ_ℓ)·T_ℓ + S/4π )
 
-Every function is numpy on the sprite lists both backends draw, so GL and CPU get the same
-colours.
+with the scene's phase ``p`` and albedo ``ϖ``; ``B`` the shadow of the scene's other drawables
+that the light step put on the sprite's own light (``ParticleLight.unshadowed``,
+``BillboardLighting.unshadowed``); the extra lights ``ℓ`` (``Scene.lights``, which the media
+do not take) single-scattered with their own pass's transmittance ``T_ℓ``. All of it is numpy
+and C++ on the sprite lists both backends draw, so GL and CPU get the same colours.
 """
 
 from __future__ import annotations
 
 import math
+import threading
+from collections import OrderedDict
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 
-from cumuli.light.physical import (
-    OCTAVE_A,
-    OCTAVE_B,
-    OCTAVE_C,
-    OCTAVES,
-    SKY_GAIN,
-    SUN_GAIN,
-    light_sky,
-    phase_values,
-)
+from cumuli import _core
+from cumuli.light.particles import particles_digest
+from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, phase_values, physical_pass
+from cumuli.model.volume import VolumeCloud
 
-#: Directions of the sky quadrature (a Fibonacci sphere, equal solid angles).
-SKY_DIRECTIONS = 64
-
-
-def sky_directions(n: int = SKY_DIRECTIONS) -> np.ndarray:
-    """``(n, 3)`` float64 unit vectors spread evenly over the sphere (Fibonacci lattice)."""
-    k = np.arange(n, dtype=np.float64) + 0.5
-    y = 1.0 - 2.0 * k / n
-    r = np.sqrt(np.maximum(0.0, 1.0 - y * y))
-    phi = k * math.pi * (3.0 - math.sqrt(5.0))
-    return np.stack([r * np.cos(phi), y, r * np.sin(phi)], axis=1)
-
-
-def sky_quadrature(scene: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The sky the media are lit by as ``(directions (M, 3), L·Δω (M, 3))``: its radiance
-    towards each direction times the direction's solid angle ``4π/M``."""
-    dirs = sky_directions()
-    radiance = light_sky(scene).radiance(dirs.astype(np.float32)).astype(np.float64)
-    return dirs, radiance * (4.0 * math.pi / len(dirs))
-
-
-#: Cells on the longest edge of a sprite cloud's extinction grid (the sky's visibility).
-GRID = 16
+#: Cells on the longest edge of a sprite cloud's proxy lattice.
+GRID = 24
 #: The mean of ``1 − d/D`` over ``[0, D]`` equals that of ``e^{−k d/D}`` for this ``k``: a
-#: billboard cloud's box extinction ``k/D`` with ``D`` its CAF's ``max_distance``.
+#: billboard cloud's box extinction is ``k/D``, ``D`` its CAF's ``max_distance``.
 LINEAR_CAF_K = 1.5936
+#: Particle clouds' proxy lattices kept (least recently used dropped first).
+MEMO_SIZE = 256
+_memo: OrderedDict[tuple, tuple] = OrderedDict()
+_lock = threading.Lock()
 
 
+# --- proxy lattices -----------------------------------------------------------------------------
 def grid_box(lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int]]:
-    """The extinction grid over the box ``lo``–``hi`` (padded by one cell): its corners and
-    shape, :data:`GRID` cells on the longest edge, cubic cells."""
+    """A lattice over the box ``lo``–``hi`` padded by one cell: its corners and ``(D, H, W)``,
+    :data:`GRID` cubic cells on the longest edge."""
     lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
     h = max(float((hi - lo).max()), 1e-6) / (GRID - 2)
-    shape = tuple(int(v) for v in np.maximum(np.ceil((hi - lo) / h), 1) + 2)
-    lo = (lo + hi) / 2 - np.asarray(shape[::-1]) * h / 2
-    return lo, lo + np.asarray(shape[::-1]) * h, shape  # type: ignore[return-value]
+    size = np.maximum(np.ceil((hi - lo) / h), 1) + 2  # (x, y, z)
+    lo = (lo + hi) / 2 - size * h / 2
+    return lo, lo + size * h, (int(size[2]), int(size[1]), int(size[0]))
 
 
 def cell_centres(lo: np.ndarray, hi: np.ndarray, shape: tuple[int, int, int]) -> np.ndarray:
-    """``(D·H·W, 3)`` world centres of a grid's cells (x fastest)."""
+    """``(D·H·W, 3)`` world centres of a lattice's cells (x fastest)."""
     d, h, w = shape
     z, y, x = np.meshgrid(*((np.arange(n) + 0.5) / n for n in (d, h, w)), indexing="ij")
-    f = np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1)
-    return lo + f * (hi - lo)
+    return lo + np.stack([x.ravel(), y.ravel(), z.ravel()], axis=1) * (hi - lo)
 
 
-def visibility(sigma: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """``(cells, M)``: the transmittance ``e^{−∫σ}`` from every cell centre of the extinction
-    grid ``sigma`` ``(D, H, W)`` towards every :func:`sky_directions` direction, marched in
-    steps of one cell from one cell out (a sprite's own cell does not hide its sky; nearest
-    cell, sampled at the step's midpoint) until it leaves the grid."""
-    shape = sigma.shape
-    h = float((hi - lo)[0]) / shape[2]
-    dirs = sky_directions()
-    start = cell_centres(lo, hi, shape)
-    n_steps = int(math.ceil(math.sqrt(sum(v * v for v in shape)))) + 1
-    tau = np.zeros((len(start), len(dirs)))
-    for k in range(1, n_steps):  # from the cell's face: a cell does not shade itself
-        p = start[:, None, :] + ((k + 0.5) * h) * dirs[None, :, :]
-        idx = np.floor((p - lo) / h).astype(np.int64)  # (x, y, z)
-        inside = np.all((idx >= 0) & (idx < np.asarray(shape[::-1])), axis=2)
-        if not inside.any():
-            break
-        i = np.where(inside[..., None], idx, 0)
-        tau += np.where(inside, sigma[i[..., 2], i[..., 1], i[..., 0]], 0.0) * h
-    return np.exp(-tau)
-
-
-def sky_at(points: np.ndarray, grid: tuple, quadrature: tuple) -> np.ndarray:
-    """``(N, 3)``: the visible sky's fluence ``Σ_j L_j·Δω·V_j`` at ``points``, ``V`` the
-    :func:`visibility` of ``grid = (lo, hi, V)``, trilinear between cell centres (clamped)."""
-    lo, hi, vis = grid
-    d, h, w = vis.shape[:3]
-    cells = vis.reshape(-1, vis.shape[-1]) @ quadrature[1]
-    cells = cells.reshape(d, h, w, 3)
-    f = (np.asarray(points, np.float64) - lo) / (hi - lo) * np.array([w, h, d]) - 0.5
-    f = np.clip(f, 0.0, np.array([w, h, d]) - 1.0)
+def _splat(lo: np.ndarray, hi: np.ndarray, shape: tuple, points: np.ndarray,
+           amount: np.ndarray) -> np.ndarray:  # fmt: skip
+    """Each point's ``amount`` (extinction × volume) spread trilinearly over the 8 cells around
+    it, divided by the cell volume: a ``(D, H, W)`` extinction lattice."""
+    d, h, w = shape
+    cell = float((hi - lo)[0]) / w
+    f = (np.asarray(points, np.float64) - lo) / cell - 0.5
+    f = np.clip(f, 0.0, np.array([w, h, d], np.float64) - 1.0)
     i0 = np.floor(f).astype(np.int64)
     i1 = np.minimum(i0 + 1, np.array([w, h, d]) - 1)
     t = f - i0
-    out = np.zeros((len(f), 3))
+    grid = np.zeros(shape)
     for cz in (0, 1):
         for cy in (0, 1):
             for cx in (0, 1):
@@ -124,123 +82,240 @@ def sky_at(points: np.ndarray, grid: tuple, quadrature: tuple) -> np.ndarray:
                 x = np.where(cx, i1[:, 0], i0[:, 0])
                 y = np.where(cy, i1[:, 1], i0[:, 1])
                 z = np.where(cz, i1[:, 2], i0[:, 2])
-                out += wgt[:, None] * cells[z, y, x]
-    return out
+                np.add.at(grid, (z, y, x), wgt * amount)
+    return grid / cell**3
 
 
-def _splat(lo: np.ndarray, hi: np.ndarray, shape: tuple, points: np.ndarray,
-           amount: np.ndarray) -> np.ndarray:  # fmt: skip
-    """``amount`` (extinction × volume) of each point added to its cell, divided by the cell's
-    volume: a ``(D, H, W)`` extinction grid."""
-    h = float((hi - lo)[0]) / shape[2]
-    idx = np.clip(np.floor((points - lo) / h).astype(np.int64), 0, np.asarray(shape[::-1]) - 1)
-    grid = np.zeros(shape)
-    np.add.at(grid, (idx[:, 2], idx[:, 1], idx[:, 0]), amount)
-    return grid / h**3
-
-
-def particle_grid(cloud: Any) -> tuple:
-    """``(lo, hi, V)`` of a particle cloud: every particle a ball of radius ``r_k`` and
-    extinction ``τ_k/(2 r_k)`` (``τ_k`` its optical depth through the centre), summed into the
-    cell of its centre; ``V`` the :func:`visibility` ``(D, H, W, M)``."""
-    c = np.asarray(cloud.centres, np.float64)
-    r = np.asarray(cloud.radii, np.float64)
-    lo, hi, shape = grid_box((c - r[:, None]).min(0), (c + r[:, None]).max(0))
+def passed(cloud: Any, settings: Any) -> np.ndarray:
+    """``(n,)``: the fraction of the light a particle passes on in its own light pass (Harris
+    2002's recurrence with ``settings``, a `SpriteSettings`): ``e^{−τ_k}`` plus what it
+    scatters forward, ``g_k = a_k τ_k p_fwd γ/4π`` (0 with ``forward=False``), at most 1."""
     tau = np.asarray(cloud.tau, np.float64)
-    sigma = _splat(lo, hi, shape, c, tau / (2 * r) * (4.0 / 3.0) * math.pi * r**3)
-    return lo, hi, visibility(sigma, lo, hi).reshape(*shape, -1)
+    keep = np.exp(-tau)
+    if not settings.forward:
+        return keep
+    fwd = float(_core.phase_4pi(settings.phase, settings.hg_g, np.ones(1, np.float32))[0])
+    g = np.asarray(cloud.albedo, np.float64) * tau * fwd * settings.solid_angle / (4 * math.pi)
+    return np.minimum(keep + g, 1.0)
 
 
-def billboard_grid(boxes: np.ndarray, max_distance: float) -> tuple:
-    """``(lo, hi, V)`` of a billboard cloud: extinction :data:`LINEAR_CAF_K`/``max_distance``
-    inside its boxes ``(M, 2, 3)`` (0 with no absorption), the cells whose centre lies in a
-    box."""
+def particle_extinction(cloud: Any, settings: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(lo, hi, σ)`` the proxy lattice of a particle cloud, its bounding sphere's centre moved
+    to the origin (a medium alone is lit the same wherever it is: the light of a moved cloud
+    is found again): every particle a ball of radius
+    ``r_k`` and extinction ``τ_k/(2 r_k)`` (``τ_k`` its optical depth through the centre),
+    spread over the cells around its centre, ``τ_k`` the optical depth its own light pass sees
+    (``−ln`` :func:`passed`: Harris's particles scatter most of what they stop forward, on
+    along the light). It depends on the shape only up to translation and scale: memoised by
+    :func:`cumuli.light.particles.particles_digest` and the light pass's settings, kept
+    relative to the bounding sphere."""
+    centre, radius = cloud.sphere
+    c0, r0 = np.asarray(centre, np.float64), max(float(radius), 1e-30)
+    key = (particles_digest(cloud), settings.forward, settings.phase, settings.hg_g,
+           settings.solid_angle)  # fmt: skip
+    with _lock:
+        known = _memo.get(key)
+        if known is not None:
+            _memo.move_to_end(key)
+    if known is None:
+        c = np.asarray(cloud.centres, np.float64)
+        r = np.asarray(cloud.radii, np.float64)
+        lo, hi, shape = grid_box((c - r[:, None]).min(0), (c + r[:, None]).max(0))
+        tau = -np.log(np.maximum(passed(cloud, settings), 1e-12))
+        sigma = _splat(lo, hi, shape, c, tau / (2 * r) * (4.0 / 3.0) * math.pi * r**3)
+        sigma = (sigma * r0).astype(np.float32)  # σ·R: the same for a scaled cloud
+        sigma.setflags(write=False)
+        known = ((lo - c0) / r0, (hi - c0) / r0, sigma)
+        with _lock:
+            _memo[key] = known
+            while len(_memo) > MEMO_SIZE:
+                _memo.popitem(last=False)
+    lo_rel, hi_rel, sigma_r = known
+    return lo_rel * r0, hi_rel * r0, sigma_r / np.float32(r0)
+
+
+def _turn(points: np.ndarray, yaw: float) -> np.ndarray:
+    """``R_y(yaw)·p``: ``(x, y, z) → (c·x + s·z, y, −s·x + c·z)`` (a field instance's turn)."""
+    c, s = math.cos(yaw), math.sin(yaw)
+    p = np.asarray(points, np.float64)
+    return np.stack([c * p[..., 0] + s * p[..., 2], p[..., 1], -s * p[..., 0] + c * p[..., 2]], -1)
+
+
+def box_extinction(boxes: np.ndarray, max_distance: float, yaw: float = 0.0) -> tuple:
+    """``(lo, hi, σ)`` the proxy lattice of a billboard cloud turned by ``yaw`` about +y (a
+    field instance's turn, radians): :data:`LINEAR_CAF_K`/``max_distance`` (0 with no
+    absorption) times the fraction of each cell inside its boxes ``(M, 2, 3)`` (2³ points a
+    cell)."""
     b = np.asarray(boxes, np.float64)
-    lo, hi, shape = grid_box(b[:, 0].min(0), b[:, 1].max(0))
+    grid = np.array(np.meshgrid(*([(0, 1)] * 3), indexing="ij")).reshape(3, -1).T
+    corners = _turn(np.where(grid[None, :, :] == 1, b[:, 1, None, :], b[:, 0, None, :]), yaw)
+    lo, hi, shape = grid_box(corners.reshape(-1, 3).min(0), corners.reshape(-1, 3).max(0))
+    cell = float((hi - lo)[0]) / shape[2]
     centres = cell_centres(lo, hi, shape)
-    inside = np.zeros(len(centres), bool)
-    for box in b:
-        inside |= np.all((centres >= box[0]) & (centres <= box[1]), axis=1)
+    inside = np.zeros(len(centres))
+    for o in np.array(np.meshgrid(*([(-0.25, 0.25)] * 3), indexing="ij")).reshape(3, -1).T:
+        p = _turn(centres + o * cell, -yaw)
+        hit = np.zeros(len(p), bool)
+        for box in b:
+            hit |= np.all((p >= box[0]) & (p <= box[1]), axis=1)
+        inside += hit / 8.0
     k = 0.0 if math.isinf(max_distance) else LINEAR_CAF_K / max_distance
-    sigma = np.where(inside, k, 0.0).reshape(shape)
-    return lo, hi, visibility(sigma, lo, hi).reshape(*shape, -1)
+    return lo, hi, (k * inside).reshape(shape).astype(np.float32)
 
 
-def sun_octaves(settings: Any, transmittance: np.ndarray, cos_theta: np.ndarray) -> np.ndarray:
-    """``Σ_n aⁿ·p_{bⁿ}(cos θ)·T^{cⁿ}`` (the media's octaves, one without multiple
-    scattering) for arrays of the same shape."""
-    t = np.clip(np.asarray(transmittance, np.float64), 0.0, 1.0)
+def proxy_light(lattice: tuple, scene: Any, threads: int = 0) -> Any:
+    """The :class:`cumuli.PhysicalLight` of the proxy medium ``(lo, hi, σ)`` under the scene's
+    sun, sky and ground, alone (the other drawables' shadows come through the sprite's own
+    light); memoised by content (:func:`cumuli.light.physical.physical_pass`)."""
+    lo, hi, sigma = lattice
+    volume = VolumeCloud(density=sigma, box=(tuple(lo), tuple(hi)), sigma_t=1.0)
+    alone = replace(scene, clouds=[volume], lights=(), solids=())
+    return physical_pass(volume, alone, None, threads)
+
+
+def sample(light: Any, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``(τ_sun (N,), F (N,), S (N, 3))`` of a physical light at world ``points``: the sun
+    lattice as the marcher reads it, the world lattice trilinear between texel centres
+    (clamped), as "Light grids"."""
+    pts = np.asarray(points, np.float64).reshape(-1, 3)
+    tau = np.asarray(light.sample_depth(pts), np.float64)
+    grid = np.asarray(light.grid, np.float64)
+    d, h, w = grid.shape[:3]
+    lo, hi = (np.asarray(v, np.float64) for v in light.box)
+    size = np.array([w, h, d], np.float64)
+    f = np.clip((pts - lo) / (hi - lo) * size - 0.5, 0.0, size - 1.0)
+    i0 = np.floor(f).astype(np.int64)
+    i1 = np.minimum(i0 + 1, size.astype(np.int64) - 1)
+    t = f - i0
+    out = np.zeros((len(pts), 4))
+    for cz in (0, 1):
+        for cy in (0, 1):
+            for cx in (0, 1):
+                wgt = (np.where(cx, t[:, 0], 1 - t[:, 0]) * np.where(cy, t[:, 1], 1 - t[:, 1])
+                       * np.where(cz, t[:, 2], 1 - t[:, 2]))  # fmt: skip
+                x = np.where(cx, i1[:, 0], i0[:, 0])
+                y = np.where(cy, i1[:, 1], i0[:, 1])
+                z = np.where(cz, i1[:, 2], i0[:, 2])
+                out += wgt[:, None] * grid[z, y, x]
+    return tau, out[:, 0], out[:, 1:]
+
+
+# --- the source term ----------------------------------------------------------------------------
+def sun_octaves(settings: Any, tau: np.ndarray, cos_theta: np.ndarray, octaves: int) -> np.ndarray:
+    """``Σ_{n<octaves} aⁿ·p_{bⁿ}(cos θ)·e^{−cⁿ τ}`` (the marcher's octave terms)."""
+    t = np.maximum(np.asarray(tau, np.float64), 0.0)
     c = np.clip(np.asarray(cos_theta, np.float64), -1.0, 1.0)
-    octaves = OCTAVES if settings.multiple_scattering else 1
     out = np.zeros(np.broadcast_shapes(t.shape, c.shape))
     for n in range(octaves):
-        out += OCTAVE_A**n * phase_values(settings, c, OCTAVE_B**n) * t ** (OCTAVE_C**n)
+        out += OCTAVE_A**n * phase_values(settings, c, OCTAVE_B**n) * np.exp(-(OCTAVE_C**n) * t)
     return out
-
-
-def diffuse(settings: Any, transmittance: np.ndarray) -> np.ndarray:
-    """The sun's diffuse fluence per unit irradiance at a sprite the sun reaches with
-    ``T = e^{−τ}`` (the media's ``φ_sun``): ``T^c``, 1 at the lit surface, falling like the
-    first octave (``c`` = ``OCTAVE_C``). A deep uniform half-space's diffusion would fall as
-    ``e^{−κτ}``, ``κ = √(3(1 − ϖ)(1 − ϖḡ)) ≈ 0.06``, but a finite cloud loses its diffuse light
-    through its sides: with that ``κ`` a particle cloud's shadow side is as bright as its lit
-    side."""
-    t = np.clip(np.asarray(transmittance, np.float64), 1e-30, 1.0)
-    return t**OCTAVE_C
 
 
 def source(
-    settings: Any,
-    transmittance: np.ndarray,
-    cos_theta: np.ndarray,
-    radiance: np.ndarray,
-    sky: np.ndarray | None,
+    scene: Any,
+    light: Any,
+    points: np.ndarray,
+    view: np.ndarray,
+    shadow: np.ndarray,
+    extra: np.ndarray | None,
 ) -> np.ndarray:
-    """``J = ϖ·(Σ_ℓ E_ℓ·octaves_ℓ + S/4π)`` ``(N, 3)`` float64: ``transmittance`` and
-    ``cos_theta`` ``(N, L)``, ``radiance`` ``(L, 3)`` (colour·intensity of each light), ``sky``
-    ``(N, 3)`` the visible sky's fluence (None or ``settings.sky_light`` off: no sky term)."""
-    sun = sun_octaves(settings, transmittance, cos_theta)
-    if settings.multiple_scattering:
-        sun = sun + SUN_GAIN * diffuse(settings, transmittance) / (4.0 * math.pi)
-    j = sun @ np.asarray(radiance, np.float64)
-    if sky is not None and settings.sky_light:
-        j = j + SKY_GAIN * np.asarray(sky, np.float64) / (4.0 * math.pi)
-    return float(settings.albedo) * j
+    """``J`` ``(N, 3)`` float64 (the module doc) at world ``points`` seen along the unit
+    ``view`` directions ``(N, 3)``: ``light`` the proxy's physical light, ``shadow`` ``(N,)``
+    the factor ``B`` on the sun, ``extra`` ``(N, L − 1)`` the extra lights' transmittances
+    (None without extra lights)."""
+    s = scene.settings
+    tau, diffuse, sky = sample(light, points)
+    sun = np.asarray(scene.sun.direction, np.float64)
+    per_sun = sun_octaves(s, tau, view @ sun, light.octaves) + diffuse / (4.0 * math.pi)
+    j = (np.asarray(shadow, np.float64) * per_sun)[:, None] * np.asarray(scene.sun.radiance)
+    j = j + sky / (4.0 * math.pi)
+    for i, other in enumerate(scene.lights):
+        cos = view @ np.asarray(other.direction, np.float64)
+        t = np.clip(np.asarray(extra, np.float64)[:, i], 0.0, 1.0)
+        j = j + (phase_values(s, cos) * t)[:, None] * np.asarray(other.radiance)
+    return float(s.albedo) * j
+
+
+def shadow_factor(shaded: np.ndarray, own: np.ndarray | None) -> np.ndarray:
+    """``B``: a sprite's light through the scene over its own light (1 where it has none or
+    no own light is kept), clipped to [0, 1]."""
+    a = np.asarray(shaded, np.float64)
+    if own is None:
+        return np.ones_like(a)
+    b = np.asarray(own, np.float64)
+    return np.clip(np.where(b > 0.0, a / np.where(b > 0.0, b, 1.0), 1.0), 0.0, 1.0)
 
 
 def particle_colours(
-    scene: Any, cloud: Any, light: np.ndarray, index: np.ndarray, eye: Any, quadrature: tuple
+    scene: Any, cloud: Any, light: Any, index: np.ndarray, eye: Any, threads: int = 0
 ) -> np.ndarray:
     """``(M, 3)`` float32 premultiplied colours ``J·(1 − e^{−τ_k})`` of the particles ``index``
-    of ``cloud`` (their rows of the light pass's ``light``, ``(n, L)``) seen from ``eye``."""
-    lights = (scene.sun, *scene.lights)
-    centres = np.asarray(cloud.centres, np.float64)[index]
+    of ``cloud`` (``light`` its :class:`~cumuli.light.particles.ParticleLight`) seen from
+    ``eye``. ``J`` is taken where a ball of optical depth ``τ_k`` emits on average along the
+    view ray through its centre: ``r_k − (1/σ − 2r_k e^{−τ_k}/(1 − e^{−τ_k}))`` before the
+    centre, ``σ = τ_k/(2r_k)``."""
+    idx = np.asarray(index, np.int64)
+    centres = np.asarray(cloud.centres, np.float64)[idx]
+    r = np.asarray(cloud.radii, np.float64)[idx]
+    tau = np.maximum(np.asarray(cloud.tau, np.float64)[idx], 1e-6)
     view = centres - np.asarray(eye, np.float64)
     view /= np.maximum(np.linalg.norm(view, axis=1, keepdims=True), 1e-30)
-    dirs = np.array([s.direction for s in lights], np.float64).reshape(-1, 3)
-    radiance = np.array([s.radiance for s in lights], np.float64).reshape(-1, 3)
-    trans = np.asarray(light, np.float64).reshape(cloud.n, -1)[index]
-    sky = sky_at(centres, particle_grid(cloud), quadrature)
-    j = source(scene.settings, trans, view @ dirs.T, radiance, sky)
-    alpha = 1.0 - np.exp(-np.asarray(cloud.tau, np.float64)[index])
-    return (j * alpha[:, None]).astype(np.float32)
+    keep = np.exp(-tau)
+    depth = 2.0 * r / tau - 2.0 * r * keep / (1.0 - keep)  # the mean emission depth
+    points = centres - view * (r - depth)[:, None]
+    rows = np.asarray(light.light, np.float64).reshape(cloud.n, -1)[idx]
+    own = light.unshadowed
+    own_rows = None if own is None else np.asarray(own.light, np.float64).reshape(cloud.n, -1)
+    shadow = shadow_factor(rows[:, 0], None if own_rows is None else own_rows[idx, 0])
+    proxy = proxy_light(particle_extinction(cloud, scene.sprite_settings), scene, threads)
+    c0 = np.asarray(cloud.sphere[0], np.float64)
+    j = source(scene, proxy, points - c0, view, shadow, rows[:, 1:] if scene.lights else None)
+    return (j * (1.0 - keep)[:, None]).astype(np.float32)
+
+
+def corners(centres: np.ndarray, half_sizes: np.ndarray, rotation: np.ndarray | None,
+            camera: Any) -> np.ndarray:  # fmt: skip
+    """``(N, 4, 3)`` world corners of view-plane-parallel sprites, in the vertex order
+    ``(s, t) = (−1,−1), (1,−1), (1,1), (−1,1)`` (RENDER_CONTRACT "Sprites": the inverse of its
+    pixel → ``(s, t)`` map)."""
+    _, r, u = (np.asarray(v, np.float64) for v in camera.basis())
+    n = len(centres)
+    psi = np.radians(np.zeros(n) if rotation is None else np.asarray(rotation, np.float64))
+    hs = np.asarray(half_sizes, np.float64).reshape(n, -1)
+    hx, hy = hs[:, 0], hs[:, -1]
+    st = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    a = st[None, :, 0] * hx[:, None]
+    b = st[None, :, 1] * hy[:, None]
+    c, s = np.cos(psi)[:, None], np.sin(psi)[:, None]
+    x = c * a - s * b
+    y = s * a + c * b
+    return np.asarray(centres, np.float64)[:, None, :] + x[..., None] * r + y[..., None] * u
 
 
 def billboard_colours(
-    scene: Any, transmittance: np.ndarray, centres: np.ndarray, sky: np.ndarray, eye: Any
+    scene: Any,
+    lights: list[tuple[Any, np.ndarray]],
+    instance: np.ndarray,
+    points: np.ndarray,
+    shadow: np.ndarray,
+    extra: np.ndarray | None,
+    eye: Any,
 ) -> np.ndarray:
-    """``(N, 4, 3)`` float32 corner colours ``J`` of ``N`` billboards: ``transmittance``
-    ``(N, 4, L)`` the sun's ``H·CAF·D`` at each corner, ``centres`` ``(N, 3)`` the billboards'
-    world centres (the phase angle is taken there), ``sky`` ``(N, 3)`` the visible sky's
-    fluence there (:func:`sky_at`)."""
-    lights = (scene.sun, *scene.lights)
-    n = len(centres)
-    c = np.asarray(centres, np.float64).reshape(n, 3)
-    view = c - np.asarray(eye, np.float64)
-    view /= np.maximum(np.linalg.norm(view, axis=1, keepdims=True), 1e-30)
-    dirs = np.array([s.direction for s in lights], np.float64).reshape(-1, 3)
-    radiance = np.array([s.radiance for s in lights], np.float64).reshape(-1, 3)
-    cos = np.repeat((view @ dirs.T)[:, None, :], 4, axis=1)
-    t = np.asarray(transmittance, np.float64).reshape(n * 4, -1)
-    j = source(scene.settings, t, cos.reshape(n * 4, -1), radiance, np.repeat(sky, 4, axis=0))
-    return j.reshape(n, 4, 3).astype(np.float32)
+    """``(N, 4, 3)`` float32 corner colours ``J`` of ``N`` billboards at their world corners
+    ``points`` ``(N, 4, 3)`` seen from ``eye``: ``lights[k] = (proxy light, offset)`` of cloud
+    ``k`` of the pass (its proxy lattice built about ``offset``), ``instance`` ``(N,)`` each
+    billboard's cloud, ``shadow`` ``(N, 4)`` the factor ``B``, ``extra`` ``(N, 4, L − 1)`` the
+    extra lights' ``H·CAF·D`` (None without extra lights)."""
+    n = len(instance)
+    out = np.zeros((n, 4, 3))
+    world = np.asarray(points, np.float64).reshape(n, 4, 3)
+    for k in np.unique(instance):
+        rows = np.flatnonzero(instance == k)
+        p = world[rows].reshape(-1, 3)
+        view = p - np.asarray(eye, np.float64)
+        view /= np.maximum(np.linalg.norm(view, axis=1, keepdims=True), 1e-30)
+        more = None if extra is None else np.asarray(extra)[rows].reshape(len(p), -1)
+        light, offset = lights[int(k)]
+        j = source(scene, light, p - offset, view, np.asarray(shadow)[rows].reshape(-1), more)
+        out[rows] = j.reshape(len(rows), 4, 3)
+    return out.astype(np.float32)

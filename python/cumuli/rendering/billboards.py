@@ -52,7 +52,7 @@ from cumuli.light.caf import default_max_distance
 from cumuli.light.prepare import LitScene
 from cumuli.model.atlas import SpriteAtlas
 from cumuli.model.billboard_field import BillboardField
-from cumuli.model.billboards import BillboardCloud, rotate_y
+from cumuli.model.billboards import BillboardCloud
 from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
 from cumuli.sky import sky_args
 
@@ -261,65 +261,80 @@ def _physical_colours(
     camera: Camera, threads: int,
 ) -> np.ndarray:  # fmt: skip
     """The physical mode's corner colours of a pass
-    (:func:`cumuli.light.sprite_physical.billboard_colours`): the sun's ``H·CAF·D`` at each
-    corner from the paper's vertex shading with one light per colour channel, no ambient."""
-    n_lights = shade["light_dirs"].shape[0]
+    (:func:`cumuli.light.sprite_physical.billboard_colours`): each cloud's proxy light at the
+    corners; the shadow of the scene on the sun (the CAF through the scene over the cloud's
+    own) and the extra lights' ``H·CAF·D`` from the paper's vertex shading with one light per
+    colour channel and no ambient."""
+    scene = lit.scene
     n = out["centres"].shape[0]
-    trans = np.zeros((n, 4, n_lights), np.float32)
+    n_lights = shade["light_dirs"].shape[0]
+    shadow = np.ones((n, 4))
+    extra = None
+    shaded = any(light.unshadowed is not None for _, light in parts)
+    if n and (shaded or n_lights > 1):
+        trans = _corner_light(args, args[6], shade, cam, draw, threads, n)
+        if shaded:
+            own = np.concatenate([(light.unshadowed or light).caf for _, light in parts], axis=1)
+            mine = _corner_light(args, own.astype(np.float32), shade, cam, draw, threads, n)
+            shadow = sprite_physical.shadow_factor(trans[..., 0], mine[..., 0])
+        extra = trans[..., 1:] if n_lights > 1 else None
+    sprites = Sprites(out["centres"], out["half_sizes"], out["colours"], out["alpha"],
+                      out["rotation"], out["texture"])  # fmt: skip
+    points = sprite_physical.corners(sprites.centres, sprites.half_sizes, sprites.rotation, camera)
+    lights = _proxy_lights(lit, parts, threads)
+    return sprite_physical.billboard_colours(
+        scene, lights, np.asarray(out["instance"], np.int64), points, shadow, extra,
+        camera.position,
+    )  # fmt: skip
+
+
+def _corner_light(args: tuple, caf: np.ndarray, shade: dict, cam: dict, draw: dict,
+                  threads: int, n: int) -> np.ndarray:  # fmt: skip
+    """``(N, 4, L)``: each light's ``H·CAF·D`` at every corner, by the C++ vertex shading with
+    three lights at a time, one per colour channel, no ambient."""
+    n_lights = shade["light_dirs"].shape[0]
+    out = np.zeros((n, 4, n_lights), np.float32)
     for first in range(0, n_lights, 3):
         rows = list(range(first, min(first + 3, n_lights)))
         one = dict(shade, ambient=(0.0, 0.0, 0.0), k_amb=0.0)
         one["light_dirs"] = shade["light_dirs"][rows]
         one["light_radiance"] = np.eye(3, dtype=np.float32)[: len(rows)]
-        caf = np.ascontiguousarray(args[6][rows], np.float32)
-        got = _core.billboard_sprites(*args[:6], caf, one, cam, draw, threads)
-        trans[:, :, rows] = np.asarray(got["colours"], np.float32).reshape(n, 4, 3)[
-            ..., : len(rows)
-        ]
-    scene = lit.scene
-    quad = sprite_physical.sky_quadrature(scene)
-    grids = _instance_grids(lit, parts)
-    centres = np.asarray(out["centres"], np.float64)
-    instance = np.asarray(out["instance"], np.int64)
-    local = centres.copy()
-    for k in np.unique(instance):  # into each instance's variant frame
-        rows = instance == k
-        off, c, sn = grids[k][1]
-        local[rows] = rotate_y(centres[rows] - off, c, -sn)
-    sky = np.zeros((n, 3))
-    for k in np.unique(instance):
-        rows = instance == k
-        sky[rows] = sprite_physical.sky_at(local[rows], grids[k][0], quad)
-    return sprite_physical.billboard_colours(scene, trans, centres, sky, camera.position)
-
-
-def _instance_grids(lit: LitScene, parts: list) -> list[tuple[tuple, tuple]]:
-    """Per cloud of the pass (:func:`cloud_spheres` order): its variant's sky-visibility grid
-    (memoised per variant and ``max_distance``) and the instance's placement ``(offset, cos
-    yaw, sin yaw)``."""
-    md = lit.scene.billboard_shading.max_distance
-    out = []
-    for d, _ in parts:
-        if isinstance(d, BillboardCloud):
-            out.append((_variant_grid(d, md), (np.zeros(3), 1.0, 0.0)))
-            continue
-        for i in range(d.n):
-            v = d.variants[int(d.variant[i])]
-            yaw = float(d.yaw[i])
-            place = (np.asarray(d.offsets[i], np.float64), math.cos(yaw), math.sin(yaw))
-            out.append((_variant_grid(v, md), place))
+        got = _core.billboard_sprites(*args[:6], np.ascontiguousarray(caf[rows]), one, cam,
+                                      draw, threads)  # fmt: skip
+        colours = np.asarray(got["colours"], np.float32).reshape(n, 4, 3)
+        out[:, :, rows] = colours[..., : len(rows)]
     return out
 
 
-_grids: weakref.WeakKeyDictionary[BillboardCloud, dict] = weakref.WeakKeyDictionary()
+def _proxy_lights(lit: LitScene, parts: list, threads: int) -> list[tuple[Any, np.ndarray]]:
+    """Per cloud of the pass (:func:`cloud_spheres` order): the physical light of its proxy
+    medium (its variant turned by the instance's yaw, about the origin) and its offset."""
+    scene = lit.scene
+    md = scene.billboard_shading.max_distance
+    out = []
+    for d, _ in parts:
+        if isinstance(d, BillboardCloud):
+            placed = [(d, 0.0, np.zeros(3))]
+        else:
+            placed = [(d.variants[int(d.variant[i])], math.radians(float(d.yaw[i])),
+                       np.asarray(d.offsets[i], np.float64)) for i in range(d.n)]  # fmt: skip
+        for v, yaw, offset in placed:
+            dist = default_max_distance(v) if md is None else md
+            lattice = _lattice(v, dist, yaw)
+            out.append((sprite_physical.proxy_light(lattice, scene, threads), offset))
+    return out
 
 
-def _variant_grid(v: BillboardCloud, max_distance: float | None) -> tuple:
-    known = _grids.setdefault(v, {})
-    if max_distance not in known:
-        dist = default_max_distance(v) if max_distance is None else max_distance
-        known[max_distance] = sprite_physical.billboard_grid(v.boxes, dist)
-    return known[max_distance]
+_lattices: weakref.WeakKeyDictionary[BillboardCloud, dict] = weakref.WeakKeyDictionary()
+
+
+def _lattice(v: BillboardCloud, max_distance: float, yaw: float) -> tuple:
+    """A variant's proxy lattice for ``max_distance`` and ``yaw`` (remembered per variant)."""
+    known = _lattices.setdefault(v, {})
+    key = (max_distance, yaw)
+    if key not in known:
+        known[key] = sprite_physical.box_extinction(v.boxes, max_distance, yaw)
+    return known[key]
 
 
 #: The box `finish` composites a pass's layer with: every ray enters it.

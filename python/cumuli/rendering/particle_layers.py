@@ -81,7 +81,6 @@ def _physical_sprites(
     dirs = light_directions(lights)
     radiance = np.array([x.radiance for x in lights], dtype=np.float32).reshape(-1, 3)
     cam = camera_dict(camera, width, height, s.near)
-    quad = sprite_physical.sky_quadrature(scene)
     parts, sort_keys = [], []
     for k in indices:
         cloud, light = scene.clouds[k], lit.lights[k]
@@ -94,9 +93,7 @@ def _physical_sprites(
             ),
         )  # fmt: skip
         index = np.asarray(index, np.int64)
-        colour = sprite_physical.particle_colours(
-            scene, cloud, light.light, index, camera.position, quad
-        )
+        colour = sprite_physical.particle_colours(scene, cloud, light, index, camera.position)
         parts.append(Sprites(centres=cloud.centres[index], half_sizes=cloud.radii[index],
                              colours=colour, alpha=alpha))  # fmt: skip
         sort_keys.append(np.asarray(key))
