@@ -1,21 +1,24 @@
 """The physical mode's light for sprites: particle clouds (Harris 2002) and billboard clouds
-(Torchelsen & Musse 2005) lit by the media's own light step (RENDER_CONTRACT "Sprites", "One
-light").
+(Torchelsen & Musse 2005) lit with the media's terms (RENDER_CONTRACT "Sprites", "One light").
 
-A sprite cloud becomes a *proxy medium*: its extinction on a lattice of :data:`GRID` cells on
-the longest edge (a particle a ball of extinction ``τ_k/(2 r_k)``; a billboard cloud's boxes
-:data:`LINEAR_CAF_K`/``max_distance``), drawn as a `VolumeCloud` by nobody but lit by
-:func:`cumuli.light.physical.physical_pass` like any medium — the sun's optical depth ``τ_sun``,
-the diffuse sunlight ``F`` and the sky light ``S`` (SH visibility and diffusion, with the
-media's gains). Each sprite then takes the marcher's source term at its own points,
+The sun's direct light comes from the sprite's own light pass, which knows where the sun
+reaches it at the sprite's own scale: ``T`` = Harris's light ``i_k`` (particles) or ``H·CAF·D``
+at a corner (billboards), the scene's shadows on the cloud included, used as ``e^{−τ_sun}`` in the
+marcher's octave sum with the scene's phase. The diffuse sunlight ``F`` and the sky light ``S``
+come from the media's own light step: the cloud becomes a *proxy medium* — the extinction its own
+light pass sees, on a lattice of :data:`GRID` cells on its longest edge (a particle a ball of
+optical depth ``−ln`` of what it passes on, :func:`passed`; a billboard cloud's boxes
+:data:`LINEAR_CAF_K`/``max_distance``, the CAF's absorption) — lit alone by
+:func:`cumuli.light.physical.physical_pass` (SH sky visibility, diffusion, the media's gains).
+Each sprite then takes the marcher's source term at its own points,
 
-    J = ϖ·( E_sun·B·( Σ_n aⁿ·p_{bⁿ}(cos θ)·e^{−cⁿ τ_sun} + F/4π ) + Σ_ℓ E_ℓ·p(cos θ_ℓ)·T_ℓ + S/4π )
+    J = ϖ·( E_sun·( Σ_n aⁿ·p_{bⁿ}(cos θ)·T^{cⁿ} + B·F/4π ) + Σ_ℓ E_ℓ·p(cos θ_ℓ)·T_ℓ + S/4π )
 
-with the scene's phase ``p`` and albedo ``ϖ``; ``B`` the shadow of the scene's other drawables
-that the light step put on the sprite's own light (``ParticleLight.unshadowed``,
-``BillboardLighting.unshadowed``); the extra lights ``ℓ`` (``Scene.lights``, which the media
-do not take) single-scattered with their own pass's transmittance ``T_ℓ``. All of it is numpy
-and C++ on the sprite lists both backends draw, so GL and CPU get the same colours.
+with the scene's albedo ``ϖ``; ``B`` the scene's shadow on the cloud (its light through the
+scene over its own, ``ParticleLight.unshadowed``, ``BillboardLighting.unshadowed``); the extra
+lights ``ℓ`` (``Scene.lights``, which the media do not take) single-scattered with their own
+pass's ``T_ℓ``. All of it is numpy and C++ on the sprite lists both backends draw, so GL and
+CPU get the same colours.
 """
 
 from __future__ import annotations
@@ -29,27 +32,42 @@ from typing import Any
 import numpy as np
 
 from cumuli import _core
+from cumuli.light.memo import content_digest
 from cumuli.light.particles import particles_digest
-from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, phase_values, physical_pass
+from cumuli.light.physical import (
+    OCTAVE_A,
+    OCTAVE_B,
+    OCTAVE_C,
+    light_sky,
+    phase_values,
+    physical_light,
+)
 from cumuli.model.volume import VolumeCloud
 
-#: Cells on the longest edge of a sprite cloud's proxy lattice.
+#: Cells on the longest edge of a sprite cloud's proxy lattice, and of a field variant's (a
+#: field has many).
 GRID = 24
+FIELD_GRID = 12
 #: The mean of ``1 − d/D`` over ``[0, D]`` equals that of ``e^{−k d/D}`` for this ``k``: a
 #: billboard cloud's box extinction is ``k/D``, ``D`` its CAF's ``max_distance``.
 LINEAR_CAF_K = 1.5936
 #: Particle clouds' proxy lattices kept (least recently used dropped first).
 MEMO_SIZE = 256
 _memo: OrderedDict[tuple, tuple] = OrderedDict()
+#: Proxy lights kept (least recently used dropped first).
+LIGHT_MEMO_SIZE = 1024
+_lights: OrderedDict[tuple, Any] = OrderedDict()
 _lock = threading.Lock()
 
 
 # --- proxy lattices -----------------------------------------------------------------------------
-def grid_box(lo: Any, hi: Any) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int]]:
+def grid_box(
+    lo: Any, hi: Any, cells: int = GRID
+) -> tuple[np.ndarray, np.ndarray, tuple[int, int, int]]:
     """A lattice over the box ``lo``–``hi`` padded by one cell: its corners and ``(D, H, W)``,
-    :data:`GRID` cubic cells on the longest edge."""
+    ``cells`` cubic cells on the longest edge."""
     lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
-    h = max(float((hi - lo).max()), 1e-6) / (GRID - 2)
+    h = max(float((hi - lo).max()), 1e-6) / (cells - 2)
     size = np.maximum(np.ceil((hi - lo) / h), 1) + 2  # (x, y, z)
     lo = (lo + hi) / 2 - size * h / 2
     return lo, lo + size * h, (int(size[2]), int(size[1]), int(size[0]))
@@ -134,43 +152,49 @@ def particle_extinction(cloud: Any, settings: Any) -> tuple[np.ndarray, np.ndarr
     return lo_rel * r0, hi_rel * r0, sigma_r / np.float32(r0)
 
 
-def _turn(points: np.ndarray, yaw: float) -> np.ndarray:
-    """``R_y(yaw)·p``: ``(x, y, z) → (c·x + s·z, y, −s·x + c·z)`` (a field instance's turn)."""
-    c, s = math.cos(yaw), math.sin(yaw)
-    p = np.asarray(points, np.float64)
-    return np.stack([c * p[..., 0] + s * p[..., 2], p[..., 1], -s * p[..., 0] + c * p[..., 2]], -1)
-
-
-def box_extinction(boxes: np.ndarray, max_distance: float, yaw: float = 0.0) -> tuple:
-    """``(lo, hi, σ)`` the proxy lattice of a billboard cloud turned by ``yaw`` about +y (a
-    field instance's turn, radians): :data:`LINEAR_CAF_K`/``max_distance`` (0 with no
-    absorption) times the fraction of each cell inside its boxes ``(M, 2, 3)`` (2³ points a
-    cell)."""
+def box_extinction(boxes: np.ndarray, max_distance: float, cells: int = GRID) -> tuple:
+    """``(lo, hi, σ)`` the proxy lattice (``cells`` on the longest edge) of a billboard cloud:
+    :data:`LINEAR_CAF_K`/``max_distance`` (0 with no absorption) times the fraction of each
+    cell inside its boxes ``(M, 2, 3)`` (2³ points a cell)."""
     b = np.asarray(boxes, np.float64)
-    grid = np.array(np.meshgrid(*([(0, 1)] * 3), indexing="ij")).reshape(3, -1).T
-    corners = _turn(np.where(grid[None, :, :] == 1, b[:, 1, None, :], b[:, 0, None, :]), yaw)
-    lo, hi, shape = grid_box(corners.reshape(-1, 3).min(0), corners.reshape(-1, 3).max(0))
-    cell = float((hi - lo)[0]) / shape[2]
-    centres = cell_centres(lo, hi, shape)
-    inside = np.zeros(len(centres))
-    for o in np.array(np.meshgrid(*([(-0.25, 0.25)] * 3), indexing="ij")).reshape(3, -1).T:
-        p = _turn(centres + o * cell, -yaw)
-        hit = np.zeros(len(p), bool)
-        for box in b:
-            hit |= np.all((p >= box[0]) & (p <= box[1]), axis=1)
-        inside += hit / 8.0
+    lo, hi, shape = grid_box(b[:, 0].min(0), b[:, 1].max(0), cells)
+    half = float((hi - lo)[0]) / shape[2] / 2.0  # 2³ points a cell: a lattice twice as fine
+    d, h, w = shape
+    fine = np.zeros((2 * d, 2 * h, 2 * w), bool)
+    first = np.ceil((b[:, 0] - lo) / half - 0.5).astype(np.int64)
+    last = np.floor((b[:, 1] - lo) / half - 0.5).astype(np.int64)
+    first, last = np.maximum(first, 0), np.minimum(last, np.array([2 * w, 2 * h, 2 * d]) - 1)
+    for (x0, y0, z0), (x1, y1, z1) in zip(first.tolist(), last.tolist(), strict=True):
+        fine[z0 : z1 + 1, y0 : y1 + 1, x0 : x1 + 1] = True
+    inside = fine.reshape(d, 2, h, 2, w, 2).mean(axis=(1, 3, 5))
     k = 0.0 if math.isinf(max_distance) else LINEAR_CAF_K / max_distance
-    return lo, hi, (k * inside).reshape(shape).astype(np.float32)
+    return lo, hi, (k * inside).astype(np.float32)
 
 
-def proxy_light(lattice: tuple, scene: Any, threads: int = 0) -> Any:
+def proxy_light(lattice: tuple, scene: Any) -> Any:
     """The :class:`cumuli.PhysicalLight` of the proxy medium ``(lo, hi, σ)`` under the scene's
     sun, sky and ground, alone (the other drawables' shadows come through the sprite's own
-    light); memoised by content (:func:`cumuli.light.physical.physical_pass`)."""
+    light), its sun lattice as fine as its own lattice; one thread (a proxy lattice is small:
+    threads cost more than they give), so the same whatever the thread count. Memoised by
+    content, apart from the light step's memo (a field has a proxy per variant)."""
     lo, hi, sigma = lattice
+    settings = replace(scene.settings, physical_resolution=max(sigma.shape))
+    sky = light_sky(scene)
+    key = (content_digest(sigma), tuple(np.asarray(lo).tolist()), tuple(np.asarray(hi).tolist()),
+           settings, scene.sun, sky)  # fmt: skip
+    with _lock:
+        known = _lights.get(key)
+        if known is not None:
+            _lights.move_to_end(key)
+            return known
     volume = VolumeCloud(density=sigma, box=(tuple(lo), tuple(hi)), sigma_t=1.0)
-    alone = replace(scene, clouds=[volume], lights=(), solids=())
-    return physical_pass(volume, alone, None, threads)
+    alone = replace(scene, clouds=[volume], lights=(), solids=(), settings=settings, sky=sky)
+    light = physical_light(volume, alone, threads=1)
+    with _lock:
+        _lights[key] = light
+        while len(_lights) > LIGHT_MEMO_SIZE:
+            _lights.popitem(last=False)
+    return light
 
 
 def sample(light: Any, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -216,19 +240,22 @@ def source(
     light: Any,
     points: np.ndarray,
     view: np.ndarray,
+    sun: np.ndarray,
     shadow: np.ndarray,
     extra: np.ndarray | None,
 ) -> np.ndarray:
-    """``J`` ``(N, 3)`` float64 (the module doc) at world ``points`` seen along the unit
-    ``view`` directions ``(N, 3)``: ``light`` the proxy's physical light, ``shadow`` ``(N,)``
-    the factor ``B`` on the sun, ``extra`` ``(N, L − 1)`` the extra lights' transmittances
-    (None without extra lights)."""
+    """``J`` ``(N, 3)`` float64 (the module doc) at world ``points`` (in the proxy's frame) seen
+    along the unit ``view`` directions ``(N, 3)``: ``light`` the proxy's physical light,
+    ``sun`` ``(N,)`` the sun's transmittance ``T`` from the sprite's own light (the scene's
+    shadows included), ``shadow`` ``(N,)`` the factor ``B`` on the diffuse sunlight, ``extra``
+    ``(N, L − 1)`` the extra lights' transmittances (None without extra lights)."""
     s = scene.settings
-    tau, diffuse, sky = sample(light, points)
-    sun = np.asarray(scene.sun.direction, np.float64)
-    per_sun = sun_octaves(s, tau, view @ sun, light.octaves) + diffuse / (4.0 * math.pi)
-    j = (np.asarray(shadow, np.float64) * per_sun)[:, None] * np.asarray(scene.sun.radiance)
-    j = j + sky / (4.0 * math.pi)
+    _, diffuse, sky = sample(light, points)
+    tau = -np.log(np.clip(np.asarray(sun, np.float64), 1e-30, 1.0))
+    to_sun = np.asarray(scene.sun.direction, np.float64)
+    per_sun = sun_octaves(s, tau, view @ to_sun, light.octaves)
+    per_sun = per_sun + np.asarray(shadow, np.float64) * diffuse / (4.0 * math.pi)
+    j = per_sun[:, None] * np.asarray(scene.sun.radiance) + sky / (4.0 * math.pi)
     for i, other in enumerate(scene.lights):
         cos = view @ np.asarray(other.direction, np.float64)
         t = np.clip(np.asarray(extra, np.float64)[:, i], 0.0, 1.0)
@@ -267,9 +294,10 @@ def particle_colours(
     own = light.unshadowed
     own_rows = None if own is None else np.asarray(own.light, np.float64).reshape(cloud.n, -1)
     shadow = shadow_factor(rows[:, 0], None if own_rows is None else own_rows[idx, 0])
-    proxy = proxy_light(particle_extinction(cloud, scene.sprite_settings), scene, threads)
+    proxy = proxy_light(particle_extinction(cloud, scene.sprite_settings), scene)
     c0 = np.asarray(cloud.sphere[0], np.float64)
-    j = source(scene, proxy, points - c0, view, shadow, rows[:, 1:] if scene.lights else None)
+    extra = rows[:, 1:] if scene.lights else None
+    j = source(scene, proxy, points - c0, view, rows[:, 0], shadow, extra)
     return (j * (1.0 - keep)[:, None]).astype(np.float32)
 
 
@@ -297,15 +325,15 @@ def billboard_colours(
     lights: list[tuple[Any, np.ndarray]],
     instance: np.ndarray,
     points: np.ndarray,
+    transmittance: np.ndarray,
     shadow: np.ndarray,
-    extra: np.ndarray | None,
     eye: Any,
 ) -> np.ndarray:
     """``(N, 4, 3)`` float32 corner colours ``J`` of ``N`` billboards at their world corners
     ``points`` ``(N, 4, 3)`` seen from ``eye``: ``lights[k] = (proxy light, offset)`` of cloud
     ``k`` of the pass (its proxy lattice built about ``offset``), ``instance`` ``(N,)`` each
-    billboard's cloud, ``shadow`` ``(N, 4)`` the factor ``B``, ``extra`` ``(N, 4, L − 1)`` the
-    extra lights' ``H·CAF·D`` (None without extra lights)."""
+    billboard's cloud, ``transmittance`` ``(N, 4, L)`` every light's ``H·CAF·D`` at the corners
+    (the CAF through the scene), ``shadow`` ``(N, 4)`` the factor ``B``."""
     n = len(instance)
     out = np.zeros((n, 4, 3))
     world = np.asarray(points, np.float64).reshape(n, 4, 3)
@@ -314,8 +342,10 @@ def billboard_colours(
         p = world[rows].reshape(-1, 3)
         view = p - np.asarray(eye, np.float64)
         view /= np.maximum(np.linalg.norm(view, axis=1, keepdims=True), 1e-30)
-        more = None if extra is None else np.asarray(extra)[rows].reshape(len(p), -1)
+        t = np.asarray(transmittance)[rows].reshape(len(p), -1)
+        more = t[:, 1:] if t.shape[1] > 1 else None
         light, offset = lights[int(k)]
-        j = source(scene, light, p - offset, view, np.asarray(shadow)[rows].reshape(-1), more)
+        b = np.asarray(shadow)[rows].reshape(-1)
+        j = source(scene, light, p - offset, view, t[:, 0], b, more)
         out[rows] = j.reshape(len(rows), 4, 3)
     return out.astype(np.float32)

@@ -262,28 +262,23 @@ def _physical_colours(
 ) -> np.ndarray:  # fmt: skip
     """The physical mode's corner colours of a pass
     (:func:`cumuli.light.sprite_physical.billboard_colours`): each cloud's proxy light at the
-    corners; the shadow of the scene on the sun (the CAF through the scene over the cloud's
-    own) and the extra lights' ``H·CAF·D`` from the paper's vertex shading with one light per
-    colour channel and no ambient."""
+    corners; every light's ``H·CAF·D`` there from the paper's vertex shading with one light
+    per colour channel and no ambient, and the scene's shadow on the cloud (the CAF through
+    the scene over the cloud's own)."""
     scene = lit.scene
     n = out["centres"].shape[0]
-    n_lights = shade["light_dirs"].shape[0]
+    trans = _corner_light(args, args[6], shade, cam, draw, threads, n)
     shadow = np.ones((n, 4))
-    extra = None
-    shaded = any(light.unshadowed is not None for _, light in parts)
-    if n and (shaded or n_lights > 1):
-        trans = _corner_light(args, args[6], shade, cam, draw, threads, n)
-        if shaded:
-            own = np.concatenate([(light.unshadowed or light).caf for _, light in parts], axis=1)
-            mine = _corner_light(args, own.astype(np.float32), shade, cam, draw, threads, n)
-            shadow = sprite_physical.shadow_factor(trans[..., 0], mine[..., 0])
-        extra = trans[..., 1:] if n_lights > 1 else None
+    if n and any(light.unshadowed is not None for _, light in parts):
+        own = np.concatenate([(light.unshadowed or light).caf for _, light in parts], axis=1)
+        mine = _corner_light(args, own.astype(np.float32), shade, cam, draw, threads, n)
+        shadow = sprite_physical.shadow_factor(trans[..., 0], mine[..., 0])
     sprites = Sprites(out["centres"], out["half_sizes"], out["colours"], out["alpha"],
                       out["rotation"], out["texture"])  # fmt: skip
     points = sprite_physical.corners(sprites.centres, sprites.half_sizes, sprites.rotation, camera)
     lights = _proxy_lights(lit, parts, threads)
     return sprite_physical.billboard_colours(
-        scene, lights, np.asarray(out["instance"], np.int64), points, shadow, extra,
+        scene, lights, np.asarray(out["instance"], np.int64), points, trans, shadow,
         camera.position,
     )  # fmt: skip
 
@@ -308,33 +303,29 @@ def _corner_light(args: tuple, caf: np.ndarray, shade: dict, cam: dict, draw: di
 
 def _proxy_lights(lit: LitScene, parts: list, threads: int) -> list[tuple[Any, np.ndarray]]:
     """Per cloud of the pass (:func:`cloud_spheres` order): the physical light of its proxy
-    medium (its variant turned by the instance's yaw, about the origin) and its offset."""
-    scene = lit.scene
-    md = scene.billboard_shading.max_distance
+    medium and the point its lattice is built about. A field instance reads its variant's
+    (``FIELD_GRID`` cells, not turned by its yaw: the light keeps its side towards the sun)."""
+    md = lit.scene.billboard_shading.max_distance
     out = []
     for d, _ in parts:
         if isinstance(d, BillboardCloud):
-            placed = [(d, 0.0, np.zeros(3))]
+            placed = [(d, sprite_physical.GRID, np.zeros(3))]
         else:
-            placed = [(d.variants[int(d.variant[i])], math.radians(float(d.yaw[i])),
-                       np.asarray(d.offsets[i], np.float64)) for i in range(d.n)]  # fmt: skip
-        for v, yaw, offset in placed:
+            cells = sprite_physical.FIELD_GRID
+            placed = [(d.variants[int(d.variant[i])], cells, np.asarray(d.offsets[i], np.float64))
+                      for i in range(d.n)]  # fmt: skip
+        for v, cells, offset in placed:
             dist = default_max_distance(v) if md is None else md
-            lattice = _lattice(v, dist, yaw)
-            out.append((sprite_physical.proxy_light(lattice, scene, threads), offset))
+            known = _lattices.setdefault(v, {})
+            if (dist, cells) not in known:
+                known[(dist, cells)] = sprite_physical.box_extinction(v.boxes, dist, cells)
+            light = sprite_physical.proxy_light(known[(dist, cells)], lit.scene)
+            out.append((light, offset))
     return out
 
 
+#: Each variant's proxy lattices by ``(max_distance, cells)``.
 _lattices: weakref.WeakKeyDictionary[BillboardCloud, dict] = weakref.WeakKeyDictionary()
-
-
-def _lattice(v: BillboardCloud, max_distance: float, yaw: float) -> tuple:
-    """A variant's proxy lattice for ``max_distance`` and ``yaw`` (remembered per variant)."""
-    known = _lattices.setdefault(v, {})
-    key = (max_distance, yaw)
-    if key not in known:
-        known[key] = sprite_physical.box_extinction(v.boxes, max_distance, yaw)
-    return known[key]
 
 
 #: The box `finish` composites a pass's layer with: every ray enters it.
