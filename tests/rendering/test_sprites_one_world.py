@@ -104,34 +104,90 @@ def test_the_paper_mode_keeps_harris_shading_bit_for_bit() -> None:
     assert not np.allclose(moved, own, atol=1e-3)
 
 
-def test_an_empty_grid_sees_the_whole_sky() -> None:
-    scene = _scene()
-    quad = sprite_physical.sky_quadrature(scene)
-    lo, hi, shape = sprite_physical.grid_box((0, 0, 0), (4, 2, 3))
-    vis = sprite_physical.visibility(np.zeros(shape), lo, hi).reshape(*shape, -1)
-    got = sprite_physical.sky_at(np.array([[1.0, 1.0, 1.0]]), (lo, hi, vis), quad)
-    np.testing.assert_allclose(got[0], quad[1].sum(axis=0), rtol=1e-9)
-    # A uniform sky of radiance L gives the fluence 4πL.
-    flat = cu.Sky(zenith=(0.5, 0.5, 0.5), horizon=(0.5, 0.5, 0.5), ground=(0.5, 0.5, 0.5))
-    _, weights = sprite_physical.sky_quadrature(scene.replace(sky=flat))
-    np.testing.assert_allclose(weights.sum(axis=0), 4 * math.pi * 0.5, rtol=1e-5)
-
-
-def test_a_box_hides_the_sky_behind_it() -> None:
-    boxes = np.array([[[0.0, 0.0, 0.0], [4.0, 4.0, 4.0]]])
-    lo, hi, vis = sprite_physical.billboard_grid(boxes, 1.0)
-    quad = sprite_physical.sky_quadrature(_scene())
-    inside = sprite_physical.sky_at(np.array([[2.0, 2.0, 2.0]]), (lo, hi, vis), quad)
-    assert (inside[0] < 0.05 * quad[1].sum(axis=0)).all()
-
-
-def test_the_octaves_are_the_media_phase_at_full_sun() -> None:
-    single = cu.RenderSettings(multiple_scattering=False)
+def test_the_octaves_are_the_media_phase_in_full_sun() -> None:
+    settings = cu.RenderSettings()
     cos = np.linspace(-1, 1, 9)
-    np.testing.assert_allclose(
-        sprite_physical.sun_octaves(single, np.ones_like(cos), cos), phase_values(single, cos)
+    zero = np.zeros_like(cos)
+    single = sprite_physical.sun_octaves(settings, zero, cos, 1)
+    np.testing.assert_allclose(single, phase_values(settings, cos))
+    full = sprite_physical.sun_octaves(settings, zero, cos, 4)
+    deep = sprite_physical.sun_octaves(settings, zero + 2.0, cos, 4)
+    assert (full > single).all() and (deep < full).all() and (deep > 0).all()
+
+
+def test_a_particle_proxy_holds_what_its_own_light_pass_sees() -> None:
+    cloud = cu.particle_cumulus((3.0, 1.0, -2.0), 300, seed=2, radius=(1.0, 2.0))
+    settings = cu.SpriteSettings()
+    passed = sprite_physical.passed(cloud, settings)
+    assert (passed <= 1.0).all() and (passed > np.exp(-cloud.tau)).all()  # forward scattering
+    off = sprite_physical.passed(cloud, cu.SpriteSettings(forward=False))
+    np.testing.assert_allclose(off, np.exp(-cloud.tau.astype(np.float64)))
+    lo, hi, sigma = sprite_physical.particle_extinction(cloud, settings)
+    cell = (hi - lo)[0] / sigma.shape[2]
+    r = cloud.radii.astype(np.float64)
+    want = np.sum(-np.log(passed) / (2 * r) * 4 / 3 * math.pi * r**3)
+    assert sigma.sum() * cell**3 == pytest.approx(want, rel=1e-4)  # the splat keeps it all
+    # Built about the bounding sphere's centre: a moved cloud has the same lattice.
+    moved = sprite_physical.particle_extinction(cloud.translated((10.0, 0.0, 5.0)), settings)
+    np.testing.assert_allclose(moved[0], lo, atol=1e-4)
+    np.testing.assert_allclose(moved[2], sigma, rtol=1e-3)
+
+
+def test_a_billboard_proxy_holds_its_boxes_absorption() -> None:
+    boxes = np.array([[[0.0, 0.0, 0.0], [4.0, 2.0, 3.0]], [[4.0, 0.0, 0.0], [6.0, 1.0, 1.0]]])
+    lo, hi, sigma = sprite_physical.box_extinction(boxes, 8.0, cells=16)
+    k = sprite_physical.LINEAR_CAF_K / 8.0
+    centres = sprite_physical.cell_centres(lo, hi, sigma.shape).reshape(*sigma.shape, 3)
+    inner = np.all((centres > 0.5) & (centres < [3.5, 1.5, 2.5]), axis=-1)
+    outer = np.any((centres < -0.5) | (centres > [6.5, 2.5, 3.5]), axis=-1)
+    assert np.allclose(sigma[inner], k) and np.all(sigma[outer] == 0)
+    cell = (hi - lo)[0] / sigma.shape[2]
+    assert sigma.sum() * cell**3 == pytest.approx(k * (24.0 + 2.0), rel=0.1)
+    assert not sprite_physical.box_extinction(boxes, math.inf)[2].any()
+    # The CAF's linear absorption and the proxy's extinction agree on average over [0, D].
+    x = np.linspace(0, 1, 100001)
+    assert np.exp(-sprite_physical.LINEAR_CAF_K * x).mean() == pytest.approx(0.5, abs=1e-4)
+
+
+def test_corners_are_where_the_rasteriser_puts_the_vertices() -> None:
+    camera = cu.Camera(position=(1.0, 2.0, -20.0), target=(0.0, 3.0, 0.0), fov=50.0)
+    w, h = 200, 120
+    centres = np.array([[0.5, 3.0, 1.0], [-2.0, 2.0, 4.0]])
+    half = np.array([[1.5, 0.8], [2.0, 2.0]])
+    rotation = np.array([30.0, -75.0])
+    pts = sprite_physical.corners(centres, half, rotation, camera)
+    f, r, u = (np.asarray(v, np.float64) for v in camera.basis())
+    th = math.tan(math.radians(camera.fov) / 2)
+    aspect = w / h
+    st = [(-1, -1), (1, -1), (1, 1), (-1, 1)]
+    for k in range(2):  # RENDER_CONTRACT "Sprites": pixel → (s, t), at each projected corner
+        v = centres[k] - np.asarray(camera.position)
+        z = v @ f
+        jc, ic = w / 2 * ((v @ r) / (z * th * aspect) + 1), h / 2 * (1 - (v @ u) / (z * th))
+        hx, hy = half[k] * (h / 2) / (z * th)
+        psi = math.radians(rotation[k])
+        for corner, (s0, t0) in zip(pts[k], st, strict=True):
+            q = corner - np.asarray(camera.position)
+            zq = q @ f  # the sprite lies in the view plane through its centre
+            assert zq == pytest.approx(z, rel=1e-6)
+            dx = w / 2 * ((q @ r) / (zq * th * aspect) + 1) - jc
+            dy = h / 2 * (1 - (q @ u) / (zq * th)) - ic
+            s = (dx * math.cos(psi) - dy * math.sin(psi)) / hx
+            t = (-dx * math.sin(psi) - dy * math.cos(psi)) / hy
+            assert (s, t) == pytest.approx((s0, t0), abs=1e-5)  # a float32 basis
+
+
+def test_the_scene_shadow_is_a_ratio_clipped_to_one() -> None:
+    got = sprite_physical.shadow_factor(
+        np.array([0.2, 0.5, 0.0, 0.3]), np.array([0.4, 0.4, 0.0, 0.6])
     )
-    many = cu.RenderSettings()
-    full = sprite_physical.sun_octaves(many, np.ones_like(cos), cos)
-    half = sprite_physical.sun_octaves(many, np.full_like(cos, 0.5), cos)
-    assert (half < full).all() and (full > phase_values(many, cos)).all()
+    np.testing.assert_allclose(got, [0.5, 1.0, 1.0, 0.5])
+    np.testing.assert_array_equal(sprite_physical.shadow_factor(np.array([0.3]), None), [1.0])
+
+
+def test_without_sky_light_the_shaded_side_loses_the_sky() -> None:
+    scene = _scene()
+    dark = _each(scene.replace(settings=cu.RenderSettings(sky_light=False)))
+    lit = _each(scene)
+    for (_, without), (_, with_sky) in zip(dark[1:], lit[1:], strict=True):
+        assert without < 0.8 * with_sky
