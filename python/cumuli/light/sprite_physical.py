@@ -118,15 +118,13 @@ def passed(cloud: Any, settings: Any) -> np.ndarray:
 
 
 def particle_extinction(cloud: Any, settings: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``(lo, hi, σ)`` the proxy lattice of a particle cloud, its bounding sphere's centre moved
-    to the origin (a medium alone is lit the same wherever it is: the light of a moved cloud
-    is found again): every particle a ball of radius
-    ``r_k`` and extinction ``τ_k/(2 r_k)`` (``τ_k`` its optical depth through the centre),
-    spread over the cells around its centre, ``τ_k`` the optical depth its own light pass sees
-    (``−ln`` :func:`passed`: Harris's particles scatter most of what they stop forward, on
-    along the light). It depends on the shape only up to translation and scale: memoised by
-    :func:`cumuli.light.particles.particles_digest` and the light pass's settings, kept
-    relative to the bounding sphere."""
+    """``(lo, hi, σ)`` the proxy lattice of a particle cloud: every particle a ball of radius
+    ``r_k`` whose optical depth through the centre is what its own light pass sees, ``−ln``
+    :func:`passed` (Harris's particles scatter most of what they stop forward, on along the
+    light), spread over the 8 cells around its centre. Built about the bounding sphere's
+    centre (a medium alone is lit the same wherever it is: a moved cloud finds its light
+    again); it depends on the shape only up to translation and scale, so it is memoised by
+    :func:`cumuli.light.particles.particles_digest` and the light pass's settings."""
     centre, radius = cloud.sphere
     c0, r0 = np.asarray(centre, np.float64), max(float(radius), 1e-30)
     key = (particles_digest(cloud), settings.forward, settings.phase, settings.hg_g,
@@ -273,9 +271,7 @@ def shadow_factor(shaded: np.ndarray, own: np.ndarray | None) -> np.ndarray:
     return np.clip(np.where(b > 0.0, a / np.where(b > 0.0, b, 1.0), 1.0), 0.0, 1.0)
 
 
-def particle_colours(
-    scene: Any, cloud: Any, light: Any, index: np.ndarray, eye: Any, threads: int = 0
-) -> np.ndarray:
+def particle_colours(scene: Any, cloud: Any, light: Any, index: np.ndarray, eye: Any) -> np.ndarray:
     """``(M, 3)`` float32 premultiplied colours ``J·(1 − e^{−τ_k})`` of the particles ``index``
     of ``cloud`` (``light`` its :class:`~cumuli.light.particles.ParticleLight`) seen from
     ``eye``. ``J`` is taken where a ball of optical depth ``τ_k`` emits on average along the
@@ -288,7 +284,9 @@ def particle_colours(
     view = centres - np.asarray(eye, np.float64)
     view /= np.maximum(np.linalg.norm(view, axis=1, keepdims=True), 1e-30)
     keep = np.exp(-tau)
-    depth = 2.0 * r / tau - 2.0 * r * keep / (1.0 - keep)  # the mean emission depth
+    thin = tau < 1e-3  # the mean emission depth; the centre as τ → 0
+    safe = np.where(thin, 1.0, tau)
+    depth = np.where(thin, r, 2.0 * r / safe - 2.0 * r * np.exp(-safe) / -np.expm1(-safe))
     points = centres - view * (r - depth)[:, None]
     rows = np.asarray(light.light, np.float64).reshape(cloud.n, -1)[idx]
     own = light.unshadowed
