@@ -8,7 +8,7 @@ marcher's octave sum with the scene's phase. The diffuse sunlight ``F`` and the 
 come from the media's own light step: the cloud becomes a *proxy medium* — the extinction its own
 light pass sees, on a lattice of :data:`GRID` cells on its longest edge (a particle a ball of
 optical depth ``−ln`` of what it passes on, :func:`passed`; a billboard cloud's boxes
-:data:`LINEAR_CAF_K`/``max_distance``, the CAF's absorption) — lit alone by
+:data:`CAF_RATE`/``max_distance``, the CAF's absorption) — lit alone by
 :func:`cumuli.light.physical.physical_pass` (SH sky visibility, diffusion, the media's gains).
 Each sprite then takes the marcher's source term at its own points,
 
@@ -48,9 +48,10 @@ from cumuli.model.volume import VolumeCloud
 #: field has many).
 GRID = 24
 FIELD_GRID = 12
-#: The mean of ``1 − d/D`` over ``[0, D]`` equals that of ``e^{−k d/D}`` for this ``k``: a
-#: billboard cloud's box extinction is ``k/D``, ``D`` its CAF's ``max_distance``.
-LINEAR_CAF_K = 1.5936
+#: A billboard cloud's box extinction is ``CAF_RATE/D``, ``D`` its CAF's ``max_distance``: the
+#: rate of the CAF's ``"exp"`` curve ``e^{−3L/D}`` (the ``"linear"`` curve ``1 − L/D`` is the
+#: same absorption made linear, gone at ``L = D``).
+CAF_RATE = 3.0
 #: Particle clouds' proxy lattices kept (least recently used dropped first).
 MEMO_SIZE = 256
 _memo: OrderedDict[tuple, tuple] = OrderedDict()
@@ -152,7 +153,7 @@ def particle_extinction(cloud: Any, settings: Any) -> tuple[np.ndarray, np.ndarr
 
 def box_extinction(boxes: np.ndarray, max_distance: float, cells: int = GRID) -> tuple:
     """``(lo, hi, σ)`` the proxy lattice (``cells`` on the longest edge) of a billboard cloud:
-    :data:`LINEAR_CAF_K`/``max_distance`` (0 with no absorption) times the fraction of each
+    :data:`CAF_RATE`/``max_distance`` (0 with no absorption) times the fraction of each
     cell inside its boxes ``(M, 2, 3)`` (2³ points a cell)."""
     b = np.asarray(boxes, np.float64)
     lo, hi, shape = grid_box(b[:, 0].min(0), b[:, 1].max(0), cells)
@@ -165,7 +166,7 @@ def box_extinction(boxes: np.ndarray, max_distance: float, cells: int = GRID) ->
     for (x0, y0, z0), (x1, y1, z1) in zip(first.tolist(), last.tolist(), strict=True):
         fine[z0 : z1 + 1, y0 : y1 + 1, x0 : x1 + 1] = True
     inside = fine.reshape(d, 2, h, 2, w, 2).mean(axis=(1, 3, 5))
-    k = 0.0 if math.isinf(max_distance) else LINEAR_CAF_K / max_distance
+    k = 0.0 if math.isinf(max_distance) else CAF_RATE / max_distance
     return lo, hi, (k * inside).astype(np.float32)
 
 
