@@ -12,7 +12,54 @@ namespace cumuli {
 
 namespace {
 constexpr float kInv4Pi = 0.0795774715459477f;
+
+// One axis of the B-spline: the two trilinear positions (texel-centre coordinates, texel i at
+// i + ½) and their weights.
+inline void bspline_axis(float u, float& h0, float& h1, float& g0, float& g1) {
+  const float x = u - 0.5f;
+  const float i = std::floor(x);
+  const float f = x - i;
+  const float f2 = f * f, f3 = f2 * f;
+  const float w0 = (1.0f - 3.0f * f + 3.0f * f2 - f3) / 6.0f;
+  const float w1 = (4.0f - 6.0f * f2 + 3.0f * f3) / 6.0f;
+  const float w2 = (1.0f + 3.0f * f + 3.0f * f2 - 3.0f * f3) / 6.0f;
+  const float w3 = f3 / 6.0f;
+  g0 = w0 + w1;
+  g1 = w2 + w3;
+  h0 = i - 1.0f + w1 / g0 + 0.5f;
+  h1 = i + 1.0f + w3 / g1 + 0.5f;
+}
 }  // namespace
+
+float sample_cubic_bspline(const float* vol, const VolumeGrid& g, glm::vec3 p) {
+  const glm::vec3 vs = g.voxel_size();
+  const glm::vec3 u = (p - g.box.lo) / vs;
+  float hx[2], hy[2], hz[2], gx[2], gy[2], gz[2];
+  bspline_axis(u.x, hx[0], hx[1], gx[0], gx[1]);
+  bspline_axis(u.y, hy[0], hy[1], gy[0], gy[1]);
+  bspline_axis(u.z, hz[0], hz[1], gz[0], gz[1]);
+  float sum = 0.0f;
+  for (int c = 0; c < 2; ++c)
+    for (int b = 0; b < 2; ++b)
+      for (int a = 0; a < 2; ++a) {
+        const glm::vec3 q = g.box.lo + glm::vec3(hx[a], hy[b], hz[c]) * vs;
+        sum += gx[a] * gy[b] * gz[c] * sample_trilinear(vol, g, q);
+      }
+  return sum;
+}
+
+float erode_density(float rho, glm::vec3 p, const VolumeRenderParams& params) {
+  if (!(params.detail > 0.0f) || params.noise == nullptr || !(rho > 0.0f)) return rho;
+  float top = 0.0f, a = 1.0f;
+  for (int i = 0; i < params.detail_fbm.octaves; ++i) {
+    a *= params.detail_fbm.gain;
+    top += a;
+  }
+  const float n = top > 0.0f ? params.noise->fbm(p, params.detail_fbm) / top : 0.0f;
+  const float e = params.detail * n;
+  const float rn = std::min(rho * params.detail_inv_max, 1.0f);
+  return std::max(rn - e, 0.0f) / (1.0f - e) / params.detail_inv_max;
+}
 
 std::vector<float> render_volume_cpu(const float* density, const float* light, const VolumeGrid& g,
                                      const VolumeCameraRays& cam, const VolumeRenderParams& p,
@@ -28,6 +75,14 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
     if (p.grids == nullptr)
       throw std::invalid_argument("the physical mode needs the physical light");
     p.grids->validate();
+    if (!(p.detail >= 0.0f && p.detail <= 0.95f))
+      throw std::invalid_argument("detail must be in [0, 0.95]");
+    if (!(p.detail_inv_max > 0.0f) || !std::isfinite(p.detail_inv_max))
+      throw std::invalid_argument("detail_inv_max must be finite and > 0");
+    if (p.detail > 0.0f) {
+      if (p.noise == nullptr) throw std::invalid_argument("detail needs the noise");
+      p.detail_fbm.validate();
+    }
   }
   const std::size_t npix = static_cast<std::size_t>(p.width) * p.height;
   std::vector<float> img(npix * 4);
@@ -53,7 +108,10 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
         const float xi = jitter(row, col, p.phys.jitter_seed);
         for (int k = 0; k < n && T >= p.phys.min_transmittance; ++k) {
           const glm::vec3 x = cam.position + (t0 + (static_cast<float>(k) + xi) * h) * d;
-          const float rho = sample_trilinear(density, g, x);
+          float rho =
+              p.cubic ? sample_cubic_bspline(density, g, x) : sample_trilinear(density, g, x);
+          if (!(rho > 0.0f)) continue;
+          rho = erode_density(rho, x, p);
           if (!(rho > 0.0f)) continue;
           const float dtau = std::exp(-p.sigma_t * rho * h);
           colour += T * (1.0f - dtau) * p.grids->source(x, terms, p.sun.radiance, p.phys.albedo);
