@@ -383,13 +383,13 @@ void bind_volume_march(py::module_& m) {
       "render_volume_cpu",
       [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi,
          const VolumeCameraRays& camera, const VolumeRenderParams& params, int threads,
-         const py::object& solids, const py::object& physical_light, const Noise* noise) {
+         const py::object& solids, const py::object& physical_light, const py::object& noise) {
         const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
         const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
         if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
           throw py::value_error("light must have shape (D, H, W, 4) matching the volume");
         VolumeRenderParams p = params;
-        p.noise = noise;
+        p.noise = noise.is_none() ? nullptr : noise.cast<const Noise*>();
         p.solids = solid_spheres(solids);
         PhysicalGrids grids;
         p.grids = nullptr;

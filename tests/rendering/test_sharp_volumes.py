@@ -122,7 +122,7 @@ def test_the_detail_carves_the_edges_not_the_core() -> None:
     dens = frame(32)
     cam = side_camera(CUBE)
     smooth = render(cu.VolumeCloud(density=dens, box=CUBE, detail=0.0), cam, 96, 54)
-    carved = render(cu.VolumeCloud(density=dens, box=CUBE, detail=0.6), cam, 96, 54)
+    carved = render(cu.VolumeCloud(density=dens, box=CUBE), cam, 96, 54)  # detail 0.5
     a0, a1 = smooth[..., 3], carved[..., 3]
     core = a0 > 0.999
     edge = (a0 > 0.02) & (a0 < 0.5)
@@ -130,8 +130,10 @@ def test_the_detail_carves_the_edges_not_the_core() -> None:
     # Erosion only removes density, most where it is low: thin edges lose coverage, the core
     # stays opaque.
     assert (a1 <= a0 + 1e-4).all()  # (up to where the rays stop, T < min_transmittance)
-    assert np.abs(a1 - a0)[core].mean() < 0.01
-    assert np.abs(a1 - a0)[edge].mean() > 0.05
+    change_core, change_edge = np.abs(a1 - a0)[core].mean(), np.abs(a1 - a0)[edge].mean()
+    print(f"mean |Δalpha|: core {change_core:.4f}, thin edges {change_edge:.4f}")
+    assert change_core < 0.02
+    assert change_edge > 0.1
 
 
 def voxel_band_energy(img: np.ndarray, period: float) -> float:

@@ -565,8 +565,7 @@ def render_volume(
     (``σt = sigma_t·volume``; ``light`` may be None, the light step computes its own).
     ``sigma_t=None`` is the mode's extinction per unit density: 1 in the paper mode,
     ``settings.extinction_scale`` in the physical mode (the volume then reads like a 2018 cloud
-    of the same density; see :meth:`cumuli.VolumeCloud.extinction_per_density`). ``detail`` and
-    ``reconstruction`` are the physical mode's sharp-volume reading (:class:`cumuli.VolumeCloud`).
+    of the same density); ``detail``, ``reconstruction``: its sharp reading (`VolumeCloud`'s).
     ``settings`` left None is the paper mode when a ``light`` is given (the volume's own light
     model draws it) and the physical mode (the default) when it is None.
     A thin wrapper: a scene holding one :class:`cumuli.VolumeCloud` through :func:`render`.

@@ -31,7 +31,7 @@ from cumuli.noise import Noise
 #: octave, at ``lacunarity`` × that, then has about one texel per voxel).
 DETAIL_TEXELS_PER_VOXEL = 0.5
 #: The optical depth across one voxel from which its density counts as core (not eroded).
-CORE_VOXEL_DEPTH = 6.0
+CORE_VOXEL_DEPTH = 8.0
 
 
 @dataclass(frozen=True)
