@@ -196,3 +196,17 @@ def test_gl_matches_cpu_with_detail(gl_context) -> None:
     plain_cloud = cu.VolumeCloud(density=dens, box=CUBE, detail=0.0)
     plain = cu.render_cpu(scene.replace(clouds=[plain_cloud]), cam, 64, 36)
     assert np.abs(plain - cpu)[..., 3].mean() > 1e-3
+
+
+def test_a_frame_of_an_animation_takes_the_modes_extinction() -> None:
+    cloud = cu.gaussian_cumulus(centre=(0, 0, 0), seed=1)
+    db = cu.evolving_cloud_volumes(cloud, None, 2, 6, constant=1.0)
+    lighting = cu.VolumeLighting(db, SUN, cu.Sky(), sh_samples=4, ms_points=4)
+    v = cu.VolumeCloud.from_frame(lighting, 0, detail=0.2)
+    # The lighting's default σt = 1 is the paper mode's (its light was made with it) and the
+    # physical mode's extinction_scale.
+    assert v.sigma_t is None and v.detail == 0.2
+    assert v.extinction_per_density(cu.RenderSettings(lighting="paper")) == lighting.sigma_t
+    assert v.extinction_per_density(cu.RenderSettings()) == cu.RenderSettings().extinction_scale
+    thick = cu.VolumeLighting(db, SUN, cu.Sky(), sigma_t=2.0, sh_samples=4, ms_points=4)
+    assert cu.VolumeCloud.from_frame(thick, 1).sigma_t == 2.0

@@ -379,7 +379,10 @@ class VolumeCloud:
         database index) with its light from ``lighting`` (a :class:`cumuli.VolumeLighting` of the
         same database): blended density and blended optical depths, as the paper does.
 
-        ``render`` sets ``g`` and ``step``; ``sigma_t`` and ``albedo`` are the lighting's.
+        ``render`` sets ``g``, ``step`` and the sharp-volume fields (``detail``, ...);
+        ``sigma_t`` and ``albedo`` are the lighting's, its default ``sigma_t`` of 1 kept as None:
+        the mode's extinction, 1 in the paper mode (the same light) and ``extinction_scale`` in
+        the physical mode, which lights the frame anew as thick as the cloud it came from.
         """
         if not all(callable(getattr(lighting, k, None)) for k in ("density", "light")):
             raise TypeError(
@@ -392,7 +395,7 @@ class VolumeCloud:
         return cls(
             density=density,
             box=lighting.database.box,
-            sigma_t=lighting.sigma_t,
+            sigma_t=None if lighting.sigma_t == 1.0 else lighting.sigma_t,
             albedo=lighting.albedo,
             light=lighting.light(frame),
             light_sun=lighting.sun,
