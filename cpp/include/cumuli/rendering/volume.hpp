@@ -61,9 +61,9 @@ struct VolumeRenderParams {
   const Noise* noise = nullptr;  // needed when detail > 0
 };
 
-// The tricubic B-spline of a [z][y][x] volume at p (clamp to edge, GL texel centres), as the
-// sum of eight trilinear lookups at shifted points (Sigg & Hadwiger, GPU Gems 2, ch. 20):
-// exactly the 64-tap B-spline, which shaders/volume/ repeats with the same lookups.
+// The tricubic B-spline of a [z][y][x] volume at p (clamp to edge, GL texel centres): its 64
+// taps summed separably; the GLSL gets the same sum as eight trilinear lookups at shifted points
+// (Sigg & Hadwiger, GPU Gems 2, ch. 20).
 float sample_cubic_bspline(const float* vol, const VolumeGrid& g, glm::vec3 p);
 
 // The eroded density of `rho` at p (the `detail` rule above); rho unchanged when detail is 0.
