@@ -210,3 +210,10 @@ def test_a_frame_of_an_animation_takes_the_modes_extinction() -> None:
     assert v.extinction_per_density(cu.RenderSettings()) == cu.RenderSettings().extinction_scale
     thick = cu.VolumeLighting(db, SUN, cu.Sky(), sigma_t=2.0, sh_samples=4, ms_points=4)
     assert cu.VolumeCloud.from_frame(thick, 1).sigma_t == 2.0
+
+
+def test_sigma_t_none_is_checked_at_the_largest_extinction_scale() -> None:
+    dens = np.full((2, 2, 2), 2e6, np.float32)
+    with pytest.raises(ValueError, match="1e\\+06 × 2e\\+06"):
+        cu.VolumeCloud(density=dens, box=((0, 0, 0), (1, 1, 1)))
+    cu.VolumeCloud(density=dens, box=((0, 0, 0), (1, 1, 1)), sigma_t=1.0)

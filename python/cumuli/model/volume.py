@@ -331,11 +331,11 @@ class VolumeCloud:
         if self.sigma_t is not None:
             s(self, "sigma_t", check.real(self.sigma_t, "sigma_t", 0.0, MAX_SIGMA_T))
         biggest = float(dens.max()) if dens.size else 0.0
-        if (self.sigma_t if self.sigma_t is not None else MAX_EXTINCTION_SCALE) * biggest > (
-            MAX_EXTINCTION
-        ):
+        # sigma_t None stands for extinction_scale, which may be up to MAX_EXTINCTION_SCALE.
+        worst = self.sigma_t if self.sigma_t is not None else MAX_EXTINCTION_SCALE
+        if worst * biggest > MAX_EXTINCTION:
             raise ValueError(
-                f"sigma_t × the largest density ({self.sigma_t:g} × {biggest:g}) must be at most "
+                f"sigma_t × the largest density ({worst:g} × {biggest:g}) must be at most "
                 f"{MAX_EXTINCTION:g} (MAX_EXTINCTION: beyond it the marchers' optical depths "
                 "overflow float32)"
             )
