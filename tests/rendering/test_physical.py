@@ -386,7 +386,9 @@ def test_volume_renderer_draws_the_same_medium(gl_context) -> None:
     scene = small_scene()
     cam = camera_for(scene)
     field = cu.density_volume(scene.clouds[0], scene.noise, scene.settings, 96)
-    vc = cu.VolumeCloud(density=field.values, box=field.box, sigma_t=1.0, step=0.1)
+    # The field's values are σt already; read trilinearly and not eroded, it is the same medium.
+    vc = cu.VolumeCloud(density=field.values, box=field.box, sigma_t=1.0, step=0.1, detail=0.0,
+                        reconstruction="linear")  # fmt: skip
     vscene = scene.replace(clouds=[vc])
     lit = cu.prepare_light(vscene)
     cpu = cu.render_cpu(lit, cam, 48, 36)
@@ -410,8 +412,11 @@ def test_volume_renderer_draws_the_same_medium(gl_context) -> None:
         scene.sun,
         scene.sky,
         backend="cpu",
+        sigma_t=1.0,
         step=0.1,
         settings=scene.settings,
+        detail=0.0,
+        reconstruction="linear",
     )
     np.testing.assert_allclose(img, cpu, atol=1e-5)
 
@@ -444,7 +449,7 @@ def test_render_volume_bad_input() -> None:
         cu.render_volume(dens, None, box, cam, 8, 6, settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(TypeError, match="settings"):
         cu.render_volume(dens, None, box, cam, 8, 6, settings="physical")
-    img = cu.render_volume(dens, None, box, cam, 8, 6, settings=PHYS)
+    img = cu.render_volume(dens, None, box, cam, 8, 6, settings=PHYS, sigma_t=1.0)
     # σt = sigma_t·density = 1 through the 2-unit cube: alpha = 1 − e^{−2} at the centre.
     assert img.shape == (6, 8, 4) and img[3, 4, 3] == pytest.approx(1 - math.exp(-2), rel=0.01)
 
