@@ -15,6 +15,8 @@ namespace cumuli {
 namespace {
 
 constexpr int kMaxCandidates = 256;
+// The sky's march stops once τ > kSkyDepthCut: the visibility left, e^−6 ≈ 0.25 %, is dropped.
+constexpr double kSkyDepthCut = 6.0;
 
 // Calls visit(s, σt, ℓ) for the segments of o + t·d, t in [t0, t1], inside the union of the
 // cloud's candidate intervals: segments of at most `step` from each union interval's start (the
@@ -69,19 +71,27 @@ void split(float u, int n, int& i0, int& i1, float& f) {
 // Fixed blocks for reductions: sums do not depend on the thread count.
 constexpr std::size_t kBlock = 4096;
 
-template <class F>
-double block_sum(std::size_t n, int threads, F&& term) {
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<double> part(blocks, 0.0);
-  parallel_for(blocks, threads, [&](std::size_t b) {
-    double s = 0.0;
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i) s += term(i);
-    part[b] = s;
-  });
-  double total = 0.0;
-  for (double s : part) total += s;
-  return total;
+// Trilinear value of a single-channel [z][y][x] lattice at voxel coordinates u (texel centres at
+// integer + ½, clamped to the edges): sample_trilinear without the world-to-voxel division.
+inline float trilinear_voxel(const float* vol, int w, int h, int d, glm::vec3 u) {
+  const float sx = u.x - 0.5f, sy = u.y - 0.5f, sz = u.z - 0.5f;
+  const float flx = std::floor(sx), fly = std::floor(sy), flz = std::floor(sz);
+  const float fx = sx - flx, fy = sy - fly, fz = sz - flz;
+  const int ix = static_cast<int>(flx), iy = static_cast<int>(fly), iz = static_cast<int>(flz);
+  const int x0 = std::clamp(ix, 0, w - 1), x1 = std::clamp(ix + 1, 0, w - 1);
+  const int y0 = std::clamp(iy, 0, h - 1), y1 = std::clamp(iy + 1, 0, h - 1);
+  const int z0 = std::clamp(iz, 0, d - 1), z1 = std::clamp(iz + 1, 0, d - 1);
+  const std::size_t W = static_cast<std::size_t>(w), WH = W * static_cast<std::size_t>(h);
+  const float* a = vol + z0 * WH;
+  const float* b = vol + z1 * WH;
+  const std::size_t r0 = y0 * W, r1 = y1 * W;
+  const float c00 = a[r0 + x0] + fx * (a[r0 + x1] - a[r0 + x0]);
+  const float c10 = a[r1 + x0] + fx * (a[r1 + x1] - a[r1 + x0]);
+  const float c01 = b[r0 + x0] + fx * (b[r0 + x1] - b[r0 + x0]);
+  const float c11 = b[r1 + x0] + fx * (b[r1 + x1] - b[r1 + x0]);
+  const float c0 = c00 + fy * (c10 - c00);
+  const float c1 = c01 + fy * (c11 - c01);
+  return c0 + fz * (c1 - c0);
 }
 
 }  // namespace
@@ -234,6 +244,7 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
   const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
   const std::size_t nv = g.voxels();
   std::vector<float> out(nv * 3);
+  const glm::vec3 inv_vs = 1.0f / vs;
   // Voxels with no medium within one voxel are never read where light scatters: they get the
   // unoccluded sky (V = 1: V_0 = √4π, the other coefficients 0).
   const float open = 3.5449077018110318f;  // √(4π)
@@ -263,8 +274,13 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
         const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
         const float h = len / static_cast<float>(n);
         const float t0 = std::max(span.t_in, 0.0f);
-        for (int i = 0; i < n && tau <= 12.0; ++i)
-          tau += static_cast<double>(sample_trilinear(ext, g, p + (t0 + (i + 0.5f) * h) * d)) * h;
+        // Samples at the segments' midpoints, stepped in voxel coordinates.
+        const glm::vec3 u0 = (p + (t0 + 0.5f * h) * d - g.box.lo) * inv_vs;
+        const glm::vec3 du = (h * d) * inv_vs;
+        for (int i = 0; i < n && tau <= kSkyDepthCut; ++i)
+          tau += static_cast<double>(
+                     trilinear_voxel(ext, g.w, g.h, g.d, u0 + static_cast<float>(i) * du)) *
+                 h;
       }
       const double vw = std::exp(-tau) * quad.weights[k];
       for (int c = 0; c < nc; ++c) vis[c] += vw * basis[k * nc + c];
@@ -364,55 +380,100 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
       diag[i] += minus ? cond[3 * (i - stride[a]) + a] : leak(D[i], h[a]);
     }
   }
-  auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
-    parallel_for(n, threads, [&](std::size_t i) {
-      if (!medium[i]) {
-        y[i] = 0.0;
-        return;
-      }
-      double s = static_cast<double>(diag[i]) * x[i];
-      for (int a = 0; a < 3; ++a) {
-        if (cond[3 * i + a] > 0.0f) s -= static_cast<double>(cond[3 * i + a]) * x[i + stride[a]];
-        if (coord(i, a) > 0 && medium[i - stride[a]])
-          s -= static_cast<double>(cond[3 * (i - stride[a]) + a]) * x[i - stride[a]];
-      }
-      y[i] = s;
-    });
+  // y = A·x at cell i (0 outside the medium).
+  auto apply_at = [&](const std::vector<double>& x, std::size_t i) {
+    if (!medium[i]) return 0.0;
+    double s = static_cast<double>(diag[i]) * x[i];
+    for (int a = 0; a < 3; ++a) {
+      if (cond[3 * i + a] > 0.0f) s -= static_cast<double>(cond[3 * i + a]) * x[i + stride[a]];
+      if (coord(i, a) > 0 && medium[i - stride[a]])
+        s -= static_cast<double>(cond[3 * (i - stride[a]) + a]) * x[i - stride[a]];
+    }
+    return s;
+  };
+  // Preconditioned conjugate gradients with each iteration's element-wise updates and dot
+  // products fused into two passes over fixed blocks (sums per block, added in block order:
+  // the result does not depend on the thread count).
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  std::vector<std::array<double, 2>> part(blocks);
+  auto sums = [&](auto&& body) {  // body(begin, end) → {Σ, Σ} over its block
+    parallel_for(blocks, threads,
+                 [&](std::size_t b) { part[b] = body(b * kBlock, std::min(n, (b + 1) * kBlock)); });
+    std::array<double, 2> total{0.0, 0.0};
+    for (const auto& t : part) {
+      total[0] += t[0];
+      total[1] += t[1];
+    }
+    return total;
   };
   std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
-  std::vector<double> x(n), r(n), z(n), q(n), Ap(n);
+  std::vector<double> x(n, 0.0), r(n), z(n), q(n), Ap(n), prev(n, 0.0);
+  double prev_bb = 0.0;
   for (int c = 0; c < channels; ++c) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const double b = medium[i] ? source[i * channels + c] : 0.0;
-      x[i] = 0.0;
-      r[i] = b;
-      z[i] = r[i] / diag[i];
-      q[i] = z[i];
-    }
-    const double bnorm =
-        std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
-    if (!(bnorm > 0.0)) continue;
-    double rz = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
-    for (int it = 0; it < p.max_iterations; ++it) {
-      apply(q, Ap);
-      const double qAq = block_sum(n, threads, [&](std::size_t i) { return q[i] * Ap[i]; });
-      if (!(qAq > 0.0)) break;
-      const double alpha = rz / qAq;
-      parallel_for(n, threads, [&](std::size_t i) {
-        x[i] += alpha * q[i];
-        r[i] -= alpha * Ap[i];
+    // The sky's colour channels differ mostly by a factor: a channel after the sky's first
+    // starts from the previous one's solution scaled by the ratio of their sources, fitted in
+    // the least-squares sense (the conjugate gradients then only correct the difference).
+    auto b_at = [&](std::size_t i) {
+      return medium[i] ? static_cast<double>(source[i * channels + c]) : 0.0;
+    };
+    double scale = 0.0;
+    if (c >= 2 && prev_bb > 0.0) {
+      const auto bp = sums([&](std::size_t i0, std::size_t i1) {
+        std::array<double, 2> t{0.0, 0.0};
+        for (std::size_t i = i0; i < i1; ++i)
+          t[0] += b_at(i) * (medium[i] ? static_cast<double>(source[i * channels + c - 1]) : 0.0);
+        return t;
       });
-      const double rn =
-          std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
-      if (rn <= p.tolerance * bnorm) break;
-      parallel_for(n, threads, [&](std::size_t i) { z[i] = r[i] / diag[i]; });
-      const double rz2 = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
-      const double beta = rz2 / rz;
-      rz = rz2;
-      parallel_for(n, threads, [&](std::size_t i) { q[i] = z[i] + beta * q[i]; });
+      scale = bp[0] / prev_bb;
+    }
+    parallel_for(n, threads, [&](std::size_t i) { x[i] = scale * prev[i]; });
+    const auto init = sums([&](std::size_t i0, std::size_t i1) {
+      std::array<double, 2> t{0.0, 0.0};
+      for (std::size_t i = i0; i < i1; ++i) {
+        const double b = b_at(i);
+        r[i] = b - (scale != 0.0 ? apply_at(x, i) : 0.0);
+        z[i] = r[i] / diag[i];
+        q[i] = z[i];
+        t[0] += r[i] * z[i];
+        t[1] += b * b;
+      }
+      return t;
+    });
+    double rz = init[0];
+    const double bnorm = std::sqrt(init[1]);
+    prev_bb = init[1];
+    if (bnorm > 0.0) {
+      for (int it = 0; it < p.max_iterations; ++it) {
+        const double qAq = sums([&](std::size_t i0, std::size_t i1) {
+          std::array<double, 2> t{0.0, 0.0};
+          for (std::size_t i = i0; i < i1; ++i) {
+            Ap[i] = apply_at(q, i);
+            t[0] += q[i] * Ap[i];
+          }
+          return t;
+        })[0];
+        if (!(qAq > 0.0)) break;
+        const double alpha = rz / qAq;
+        const auto rr = sums([&](std::size_t i0, std::size_t i1) {
+          std::array<double, 2> t{0.0, 0.0};
+          for (std::size_t i = i0; i < i1; ++i) {
+            x[i] += alpha * q[i];
+            r[i] -= alpha * Ap[i];
+            z[i] = r[i] / diag[i];
+            t[0] += r[i] * r[i];
+            t[1] += r[i] * z[i];
+          }
+          return t;
+        });
+        if (std::sqrt(rr[0]) <= p.tolerance * bnorm) break;
+        const double beta = rr[1] / rz;
+        rz = rr[1];
+        parallel_for(n, threads, [&](std::size_t i) { q[i] = z[i] + beta * q[i]; });
+      }
     }
     for (std::size_t i = 0; i < n; ++i)
       out[i * channels + c] = medium[i] ? static_cast<float>(std::max(0.0, x[i])) : 0.0f;
+    prev.swap(x);
   }
   // Empty cells next to the medium: the mean boundary value φ·4D/(h + 4D) of their medium
   // neighbours, so that lookups between a surface cell and an empty one see the surface value.
