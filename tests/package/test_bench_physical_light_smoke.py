@@ -42,4 +42,10 @@ def test_bench_physical_light_quick_writes_json_and_plot(
         t = data["targets"][name]
         assert t["met"] is None and t["reached"] is None  # --quick measures no target
         assert t["limit"] > 0
+    # The error against Mitsuba 3 beside the times, within the reference test's limits.
+    err = data["mitsuba"]
+    assert err["blocks"] > 200
+    assert 0 < err["block_rel_median"] <= err["block_rel_p90"] <= 0.40
+    assert abs(err["mean_ratio_minus_one"]) <= 0.10 and err["transmittance_mean_abs"] <= 0.01
+    assert "against Mitsuba 3" in stdout
     assert "growth exponent" in stdout and "target per_default_cloud_ms" in stdout
