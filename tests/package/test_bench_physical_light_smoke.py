@@ -37,6 +37,7 @@ def test_bench_physical_light_quick_writes_json_and_plot(
         assert rows["1"]["stages_s"]["upstream"] == 0.0
         growth = data["growth"][series]
         assert growth["exponent"] is not None and growth["last_over_one"] > 0
+        assert growth["last_over_one_cpu"] > 0
         assert set(growth["stage_exponents"]) == set(STAGES)
     for name in ("per_default_cloud_ms", "sixteen_over_one_copies", "sixteen_over_one_seeds"):
         t = data["targets"][name]

@@ -201,8 +201,10 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
     const int i = static_cast<int>(col % nu), j = static_cast<int>(col / nu);
     const glm::vec3 n0 = f.node(i, j, 0);
     const glm::vec3 origin = n0 - (0.5f * dw) * f.w;  // on the sun-side face
-    // Segments of every drawable, merged in order of t (drawables may overlap).
-    std::vector<std::array<float, 3>> segs;
+    // Segments of every drawable, merged in order of t (drawables may overlap); the buffer is
+    // the thread's, reused from column to column.
+    thread_local std::vector<std::array<float, 3>> segs;
+    segs.clear();
     auto keep = [&](float s, float sigma, float len) {
       if (sigma > 0.0f) segs.push_back({s - 0.5f * len, s + 0.5f * len, sigma});
     };
@@ -212,7 +214,9 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
       march_volume(v, origin, f.w, 0.0f, length, step, keep);
     if (segs.empty()) return;
     // τ(t) = Σ over segments of σ·|[a, b] ∩ [0, t]|, at the nodes t_k = (k + ½)·dw.
-    std::sort(segs.begin(), segs.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
+    auto earlier = [](const auto& a, const auto& b) { return a[0] < b[0]; };
+    if (!std::is_sorted(segs.begin(), segs.end(), earlier))  // one drawable's come in order
+      std::sort(segs.begin(), segs.end(), earlier);
     double done = 0.0;  // τ of the segments wholly before the current node
     std::size_t next = 0;
     for (std::size_t k = 0; k < nw; ++k) {
