@@ -396,45 +396,48 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
     return s;
   };
   // Preconditioned conjugate gradients with each iteration's element-wise updates and dot
-  // products fused into two passes over fixed blocks (sums per block, added in block order:
-  // the result does not depend on the thread count).
+  // products fused into two passes over fixed blocks (sums per block, added in block order: the
+  // result does not depend on the thread count). One channel's solve, on `inner` threads, into
+  // x; `from` (optional) the solution of channel `from_c` to start from, scaled by the
+  // least-squares ratio of the two channels' sources.
   const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<std::array<double, 2>> part(blocks);
-  auto sums = [&](auto&& body) {  // body(begin, end) → {Σ, Σ} over its block
-    parallel_for(blocks, threads,
-                 [&](std::size_t b) { part[b] = body(b * kBlock, std::min(n, (b + 1) * kBlock)); });
-    std::array<double, 2> total{0.0, 0.0};
-    for (const auto& t : part) {
-      total[0] += t[0];
-      total[1] += t[1];
-    }
-    return total;
+  auto b_of = [&](std::size_t i, int c) {
+    return medium[i] ? static_cast<double>(source[i * channels + c]) : 0.0;
   };
-  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
-  std::vector<double> x(n, 0.0), r(n), z(n), q(n), Ap(n), prev(n, 0.0);
-  double prev_bb = 0.0;
-  for (int c = 0; c < channels; ++c) {
-    // The sky's colour channels differ mostly by a factor: a channel after the sky's first
-    // starts from the previous one's solution scaled by the ratio of their sources, fitted in
-    // the least-squares sense (the conjugate gradients then only correct the difference).
-    auto b_at = [&](std::size_t i) {
-      return medium[i] ? static_cast<double>(source[i * channels + c]) : 0.0;
+  auto solve = [&](int c, const std::vector<double>* from, int from_c, std::vector<double>& x,
+                   int inner) {
+    std::vector<std::array<double, 2>> part(blocks);
+    auto sums = [&](auto&& body) {  // body(begin, end) → {Σ, Σ} over its block
+      parallel_for(blocks, inner, [&](std::size_t b) {
+        part[b] = body(b * kBlock, std::min(n, (b + 1) * kBlock));
+      });
+      std::array<double, 2> total{0.0, 0.0};
+      for (const auto& t : part) {
+        total[0] += t[0];
+        total[1] += t[1];
+      }
+      return total;
     };
+    std::vector<double> r(n), z(n), q(n), Ap(n);
+    x.assign(n, 0.0);
     double scale = 0.0;
-    if (c >= 2 && prev_bb > 0.0) {
-      const auto bp = sums([&](std::size_t i0, std::size_t i1) {
+    if (from != nullptr) {
+      const auto bb = sums([&](std::size_t i0, std::size_t i1) {
         std::array<double, 2> t{0.0, 0.0};
-        for (std::size_t i = i0; i < i1; ++i)
-          t[0] += b_at(i) * (medium[i] ? static_cast<double>(source[i * channels + c - 1]) : 0.0);
+        for (std::size_t i = i0; i < i1; ++i) {
+          const double bf = b_of(i, from_c);
+          t[0] += b_of(i, c) * bf;
+          t[1] += bf * bf;
+        }
         return t;
       });
-      scale = bp[0] / prev_bb;
+      if (bb[1] > 0.0) scale = bb[0] / bb[1];
+      if (scale != 0.0) parallel_for(n, inner, [&](std::size_t i) { x[i] = scale * (*from)[i]; });
     }
-    parallel_for(n, threads, [&](std::size_t i) { x[i] = scale * prev[i]; });
     const auto init = sums([&](std::size_t i0, std::size_t i1) {
       std::array<double, 2> t{0.0, 0.0};
       for (std::size_t i = i0; i < i1; ++i) {
-        const double b = b_at(i);
+        const double b = b_of(i, c);
         r[i] = b - (scale != 0.0 ? apply_at(x, i) : 0.0);
         z[i] = r[i] / diag[i];
         q[i] = z[i];
@@ -445,40 +448,62 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
     });
     double rz = init[0];
     const double bnorm = std::sqrt(init[1]);
-    prev_bb = init[1];
-    if (bnorm > 0.0) {
-      for (int it = 0; it < p.max_iterations; ++it) {
-        const double qAq = sums([&](std::size_t i0, std::size_t i1) {
-          std::array<double, 2> t{0.0, 0.0};
-          for (std::size_t i = i0; i < i1; ++i) {
-            Ap[i] = apply_at(q, i);
-            t[0] += q[i] * Ap[i];
-          }
-          return t;
-        })[0];
-        if (!(qAq > 0.0)) break;
-        const double alpha = rz / qAq;
-        const auto rr = sums([&](std::size_t i0, std::size_t i1) {
-          std::array<double, 2> t{0.0, 0.0};
-          for (std::size_t i = i0; i < i1; ++i) {
-            x[i] += alpha * q[i];
-            r[i] -= alpha * Ap[i];
-            z[i] = r[i] / diag[i];
-            t[0] += r[i] * r[i];
-            t[1] += r[i] * z[i];
-          }
-          return t;
-        });
-        if (std::sqrt(rr[0]) <= p.tolerance * bnorm) break;
-        const double beta = rr[1] / rz;
-        rz = rr[1];
-        parallel_for(n, threads, [&](std::size_t i) { q[i] = z[i] + beta * q[i]; });
-      }
+    if (!(bnorm > 0.0)) return;
+    for (int it = 0; it < p.max_iterations; ++it) {
+      const double qAq = sums([&](std::size_t i0, std::size_t i1) {
+        std::array<double, 2> t{0.0, 0.0};
+        for (std::size_t i = i0; i < i1; ++i) {
+          Ap[i] = apply_at(q, i);
+          t[0] += q[i] * Ap[i];
+        }
+        return t;
+      })[0];
+      if (!(qAq > 0.0)) break;
+      const double alpha = rz / qAq;
+      const auto rr = sums([&](std::size_t i0, std::size_t i1) {
+        std::array<double, 2> t{0.0, 0.0};
+        for (std::size_t i = i0; i < i1; ++i) {
+          x[i] += alpha * q[i];
+          r[i] -= alpha * Ap[i];
+          z[i] = r[i] / diag[i];
+          t[0] += r[i] * r[i];
+          t[1] += r[i] * z[i];
+        }
+        return t;
+      });
+      if (std::sqrt(rr[0]) <= p.tolerance * bnorm) break;
+      const double beta = rr[1] / rz;
+      rz = rr[1];
+      parallel_for(n, inner, [&](std::size_t i) { q[i] = z[i] + beta * q[i]; });
     }
-    for (std::size_t i = 0; i < n; ++i)
-      out[i * channels + c] = medium[i] ? static_cast<float>(std::max(0.0, x[i])) : 0.0f;
-    prev.swap(x);
+  };
+  // The channels' solves: the sun's and the sky's first (red) together, one thread each, then
+  // the sky's green and blue, both started from the red solution (the sky's colour channels
+  // differ mostly by a factor: the conjugate gradients then only correct the difference). A
+  // solve on one thread saves each iteration's hand-offs between threads on a lattice this
+  // small; the results are the same on any number of threads.
+  std::vector<std::vector<double>> xs(static_cast<std::size_t>(channels));
+  auto round = [&](const std::vector<int>& cs, const std::vector<double>* from, int from_c) {
+    const bool apart = cs.size() > 1 && resolve_threads(threads, cs.size()) > 1;
+    if (apart) {
+      parallel_for(cs.size(), threads,
+                   [&](std::size_t k) { solve(cs[k], from, from_c, xs[cs[k]], 1); });
+    } else {
+      for (int c : cs) solve(c, from, from_c, xs[c], threads);
+    }
+  };
+  if (channels >= 2) {
+    round({0, 1}, nullptr, 0);
+    std::vector<int> rest;
+    for (int c = 2; c < channels; ++c) rest.push_back(c);
+    if (!rest.empty()) round(rest, &xs[1], 1);
+  } else {
+    round({0}, nullptr, 0);
   }
+  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
+  for (int c = 0; c < channels; ++c)
+    for (std::size_t i = 0; i < n; ++i)
+      out[i * channels + c] = medium[i] ? static_cast<float>(std::max(0.0, xs[c][i])) : 0.0f;
   // Empty cells next to the medium: the mean boundary value φ·4D/(h + 4D) of their medium
   // neighbours, so that lookups between a surface cell and an empty one see the surface value.
   std::vector<float> fill(n * static_cast<std::size_t>(channels), 0.0f);
