@@ -52,7 +52,8 @@ def blender_scene(tmp_path_factory: pytest.TempPathFactory) -> dict:
         clouds=[vol],
         sun=cu.Sun(direction=(math.cos(el), math.sin(el), 0.0)),
         sky=cu.Sky(),
-        settings=cu.RenderSettings(lighting="physical"),
+        # the air (aureole, aerial perspective) is cumuli's pass on the image, not exported
+        settings=cu.RenderSettings(lighting="physical", haze=0.0, air_extinction=0.0),
     )
     camera = cu.Camera(position=(0.0, 2.0, -45.0), target=(0.0, 1.0, 0.0), fov=38.0)
     blend = cu.to_blender(scene, camera, tmp / "scene.blend", W, H, python=PYTHON,

@@ -128,11 +128,18 @@ def read_volume(
     albedo: float | None = None,
     g: float | None = None,
     step: float | None = None,
+    detail: float = 0.0,
+    reconstruction: str = "linear",
 ) -> VolumeCloud:
     """Read a volume file (``.vdb``, ``.vol``, ``.nc``, ``.zarr``) as a ``VolumeCloud``: its
     density is the stored extinction (``sigma_t = 1``); ``albedo`` and ``g`` default to the
     file's attributes, else 1 and 0.2 (the ``VolumeCloud`` defaults). ``ValueError`` for an
-    unknown extension or a malformed file, ``OSError`` for a missing one."""
+    unknown extension or a malformed file, ``OSError`` for a missing one.
+
+    A file is read as the medium it stores: trilinear between its voxels and no fBm erosion
+    (``detail=0``), so that cumuli renders what Blender or Mitsuba render from the same file.
+    Pass ``detail=0.5, reconstruction="cubic"`` for the physical mode's sharp-volume reading of
+    a coarse grid (:class:`~cumuli.VolumeCloud`)."""
     data = files.read(path)
     values = data.values
     if not np.isfinite(values).all() or (values < 0).any():
@@ -142,4 +149,5 @@ def read_volume(
     params = {"source": str(path), "format": files.format_of(path).name}
     params |= {k: v for k, v in data.attrs.items() if isinstance(v, (str, int, float))}
     return VolumeCloud(density=values, box=data.box, sigma_t=1.0, albedo=float(a), g=float(gg),
-                       step=step, params=params)  # fmt: skip
+                       step=step, params=params, detail=detail,
+                       reconstruction=reconstruction)  # fmt: skip
