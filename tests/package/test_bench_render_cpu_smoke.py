@@ -45,6 +45,6 @@ def test_bench_render_cpu_quick_writes_json_and_plot(tmp_path: Path) -> None:
     assert hd["image"] == [480, 270] and hd["threads"] == 2
     for version in ("1", "2"):
         v = hd["versions"][version]
-        assert v["wall_s"]["median"] > 0 and v["fbm_evaluations"] > 0 and v["fbm_share"] > 0
+        assert v["wall_s"]["median"] > 0 and v["fbm_evaluations"] > 0 and v["fbm_bulk_share"] > 0
     target = data["targets"]["hd_1080p_2_threads_s"]
     assert target["limit"] == 0.6 and target["reached"] is None and target["met"] is None

@@ -92,6 +92,8 @@ class Noise {
   void split(float x, int& index, float& weight) const;
   // Trilinear blend of the 2×2×2 texels whose lower corner is (ix, iy, iz) (already wrapped).
   float blend(int ix, int iy, int iz, float wx, float wy, float wz) const;
+  // lattice_at's body, inlined into fbm().
+  float lookup(glm::vec3 u) const;
 
   std::uint64_t seed_;
   int version_;
