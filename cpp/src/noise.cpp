@@ -811,7 +811,8 @@ struct HashAvx512 {
 // HashOctaveAvx2 for 16 points, with octave_avx512's round-down conversion for the floor.
 struct HashOctaveAvx512 {
   __m512 half;
-  __m512i mask, one_i, key;
+  __m512i mask, key;
+  __m512i y_step, y_mask, z_step, z_mask;  // 1 << s, mask << s; 1 << 2s, mask << 2s
   __m128i shift, shift2;
   HashAvx512 hash;
   __attribute__((target("avx512f,avx512bw"), always_inline)) __m512 operator()(__m512 px, __m512 py,
@@ -827,19 +828,20 @@ struct HashOctaveAvx512 {
     const __m512 wx = _mm512_sub_ps(x, _mm512_cvtepi32_ps(jx));
     const __m512 wy = _mm512_sub_ps(y, _mm512_cvtepi32_ps(jy));
     const __m512 wz = _mm512_sub_ps(z, _mm512_cvtepi32_ps(jz));
+    // The upper neighbours wrap within their bit fields: y1 = (y0 + 1) mod size, shifted, etc.
     const __m512i x0 = _mm512_and_si512(jx, mask);
-    const __m512i x1 = _mm512_and_si512(_mm512_add_epi32(jx, one_i), mask);
     const __m512i y0 = _mm512_sll_epi32(_mm512_and_si512(jy, mask), shift);
-    const __m512i y1 = _mm512_sll_epi32(_mm512_and_si512(_mm512_add_epi32(jy, one_i), mask), shift);
-    const __m512i z0 = _mm512_add_epi32(_mm512_sll_epi32(_mm512_and_si512(jz, mask), shift2), key);
-    const __m512i z1 = _mm512_add_epi32(
-        _mm512_sll_epi32(_mm512_and_si512(_mm512_add_epi32(jz, one_i), mask), shift2), key);
+    const __m512i y1 = _mm512_and_si512(_mm512_add_epi32(y0, y_step), y_mask);
+    const __m512i z0s = _mm512_sll_epi32(_mm512_and_si512(jz, mask), shift2);
+    const __m512i z1s = _mm512_and_si512(_mm512_add_epi32(z0s, z_step), z_mask);
+    const __m512i z0 = _mm512_add_epi32(z0s, key), z1 = _mm512_add_epi32(z1s, key);
     // Row index + key (the bit fields of z, y and x do not overlap: | is +).
     const __m512i row[4] = {_mm512_add_epi32(z0, y0), _mm512_add_epi32(z0, y1),
                             _mm512_add_epi32(z1, y0), _mm512_add_epi32(z1, y1)};
-    // (i + key)·m1 = (row + key)·m1 + x·m1 (mod 2³²): four row products and two x products, not
-    // eight.
-    const __m512i xm0 = _mm512_mullo_epi32(x0, hash.m1), xm1 = _mm512_mullo_epi32(x1, hash.m1);
+    // (i + key)·m1 = (row + key)·m1 + x·m1 (mod 2³²): four row products and one x product, not
+    // eight; x1·m1 = x0·m1 + m1, or 0 where x0 = size − 1 wraps to x1 = 0.
+    const __m512i xm0 = _mm512_mullo_epi32(x0, hash.m1);
+    const __m512i xm1 = _mm512_maskz_add_epi32(_mm512_cmpneq_epi32_mask(x0, mask), xm0, hash.m1);
     __m512 c[4];
     for (int r = 0; r < 4; ++r) {
       const __m512i rm = _mm512_mullo_epi32(row[r], hash.m1);
@@ -859,8 +861,11 @@ __attribute__((target("avx512f,avx512bw"))) void kernel_hash_avx512(const Lattic
                                                                     std::size_t count, float* out) {
   const HashOctaveAvx512 octave{_mm512_set1_ps(0.5f),
                                 _mm512_set1_epi32(lat.mask),
-                                _mm512_set1_epi32(1),
                                 _mm512_set1_epi32(static_cast<int>(lat.key)),
+                                _mm512_set1_epi32(1 << lat.shift),
+                                _mm512_set1_epi32(lat.mask << lat.shift),
+                                _mm512_set1_epi32(1 << (2 * lat.shift)),
+                                _mm512_set1_epi32(lat.mask << (2 * lat.shift)),
                                 _mm_cvtsi32_si128(lat.shift),
                                 _mm_cvtsi32_si128(2 * lat.shift),
                                 {_mm512_set1_epi32(0x21f0aaad), _mm512_set1_epi32(0x735a2d97),
