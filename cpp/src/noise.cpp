@@ -798,23 +798,35 @@ __attribute__((target("avx512f,avx512bw"))) void kernel_avx512(const Lattice& la
 }
 
 // HashAvx2 for 16 texels.
+// With Shrd (CPUs with AVX512-VBMI2), (h >> 9) | exponent is one double shift, VPSHRDD, of the
+// pair (h, 0x7f) right by 9: written as inline assembly, so that the kernel's target stays
+// "avx512f,avx512bw" and no other instruction of VBMI2 can appear in it.
+template <bool Shrd>
 struct HashAvx512 {
   __m512i m1, m2, exponent;
   __m512 one;
+  __m512i exponent_high;  // 0x7f: the exponent bits, 23 places below their place in the float
   __attribute__((target("avx512f,avx512bw"), always_inline)) __m512 operator()(__m512i h) const {
     h = _mm512_xor_si512(h, _mm512_srli_epi32(h, 16));
     h = _mm512_mullo_epi32(h, m2);
+    if (Shrd) {
+      __m512i bits;
+      // AT&T order: imm, high half, low half, destination; each dword is (0x7f:h) >> 9.
+      asm("vpshrdd $9, %2, %1, %0" : "=v"(bits) : "v"(h), "v"(exponent_high));
+      return _mm512_castsi512_ps(bits);
+    }
     return _mm512_castsi512_ps(_mm512_or_si512(_mm512_srli_epi32(h, 9), exponent));
   }
 };
 
 // HashOctaveAvx2 for 16 points, with octave_avx512's round-down conversion for the floor.
+template <bool Shrd>
 struct HashOctaveAvx512 {
   __m512 half;
   __m512i mask, key;
   __m512i y_step, y_mask, z_step, z_mask;  // 1 << s, mask << s; 1 << 2s, mask << 2s
   __m128i shift, shift2;
-  HashAvx512 hash;
+  HashAvx512<Shrd> hash;
   __attribute__((target("avx512f,avx512bw"), always_inline)) __m512 operator()(__m512 px, __m512 py,
                                                                                __m512 pz,
                                                                                __m512 sc) const {
@@ -855,21 +867,23 @@ struct HashOctaveAvx512 {
   }
 };
 
+template <bool Shrd>
 __attribute__((target("avx512f,avx512bw"))) void kernel_hash_avx512(const Lattice& lat,
                                                                     const FbmTables& t,
                                                                     const float* points,
                                                                     std::size_t count, float* out) {
-  const HashOctaveAvx512 octave{_mm512_set1_ps(0.5f),
-                                _mm512_set1_epi32(lat.mask),
-                                _mm512_set1_epi32(static_cast<int>(lat.key)),
-                                _mm512_set1_epi32(1 << lat.shift),
-                                _mm512_set1_epi32(lat.mask << lat.shift),
-                                _mm512_set1_epi32(1 << (2 * lat.shift)),
-                                _mm512_set1_epi32(lat.mask << (2 * lat.shift)),
-                                _mm_cvtsi32_si128(lat.shift),
-                                _mm_cvtsi32_si128(2 * lat.shift),
-                                {_mm512_set1_epi32(0x21f0aaad), _mm512_set1_epi32(0x735a2d97),
-                                 _mm512_set1_epi32(0x3f800000), _mm512_set1_ps(1.0f)}};
+  const HashOctaveAvx512<Shrd> octave{
+      _mm512_set1_ps(0.5f),
+      _mm512_set1_epi32(lat.mask),
+      _mm512_set1_epi32(static_cast<int>(lat.key)),
+      _mm512_set1_epi32(1 << lat.shift),
+      _mm512_set1_epi32(lat.mask << lat.shift),
+      _mm512_set1_epi32(1 << (2 * lat.shift)),
+      _mm512_set1_epi32(lat.mask << (2 * lat.shift)),
+      _mm_cvtsi32_si128(lat.shift),
+      _mm_cvtsi32_si128(2 * lat.shift),
+      {_mm512_set1_epi32(0x21f0aaad), _mm512_set1_epi32(0x735a2d97), _mm512_set1_epi32(0x3f800000),
+       _mm512_set1_ps(1.0f), _mm512_set1_epi32(0x7f)}};
   blocks_avx512(octave, t, points, count, out);
 }
 
@@ -913,7 +927,9 @@ MaxAbsBits max_abs_bits_for(SimdLevel level) {
 Kernel kernel_for(SimdLevel level, SimdFetch fetch, int size, bool has_cells, bool hash) {
 #ifdef CUMULI_X86_KERNELS
   // The hash version's wide kernels compute the corners (no fetch to choose).
-  if (hash && level == SimdLevel::Avx512) return kernel_hash_avx512;
+  if (hash && level == SimdLevel::Avx512)
+    return __builtin_cpu_supports("avx512vbmi2") ? kernel_hash_avx512<true>
+                                                 : kernel_hash_avx512<false>;
   if (hash && level == SimdLevel::Avx2) return kernel_hash_avx2;
   const bool madd = size <= kMaxMaddSize;
   if (fetch == SimdFetch::Cells && !has_cells) fetch = SimdFetch::Loads;
