@@ -197,3 +197,16 @@ def test_hash_version_glsl_matches_cpp(gl_context: cgl.GLContext, size: int, par
     # Not the table's values: the shader did switch versions.
     table = cgl.fbm(cu.Noise(seed=23, size=size), pts, exact=True, context=gl_context, **params)
     assert np.abs(table - exact).max() > 1e-2
+
+
+def test_hash_version_glsl_computes_its_values(gl_context: cgl.GLContext) -> None:
+    """The exact lookup of version 2 hashes its corners in the shader: with the uploaded lattice
+    texture zeroed it still returns the C++ values, while texture() then reads zeros."""
+    noise = cu.Noise(seed=24, size=64, version=2)
+    pts = _points(5000, -30, 30, 5)
+    with cgl.FbmProgram(noise, gl_context) as program:
+        program.texture.write(np.zeros(64**3, dtype=np.float32).tobytes())
+        exact = program(pts, exact=True)
+        zeroed = program(pts, exact=False)
+    np.testing.assert_allclose(exact, noise.fbm(pts), rtol=0, atol=1e-6)
+    assert np.abs(zeroed).max() == 0.0
