@@ -256,7 +256,11 @@ void bind_render_params(py::module_& m) {
       .def_readwrite("g", &VolumeRenderParams::g)
       .def_readwrite("step", &VolumeRenderParams::step)
       .def_readwrite("physical", &VolumeRenderParams::physical)
-      .def_readwrite("phys", &VolumeRenderParams::phys);
+      .def_readwrite("phys", &VolumeRenderParams::phys)
+      .def_readwrite("cubic", &VolumeRenderParams::cubic)
+      .def_readwrite("detail", &VolumeRenderParams::detail)
+      .def_readwrite("detail_inv_max", &VolumeRenderParams::detail_inv_max)
+      .def_readwrite("detail_fbm", &VolumeRenderParams::detail_fbm);
 }
 
 // This stage's parameter structs as classes (module.cpp binds them before the functions that
@@ -379,12 +383,13 @@ void bind_volume_march(py::module_& m) {
       "render_volume_cpu",
       [](const FloatArray& density, const FloatArray& light, V3 lo, V3 hi,
          const VolumeCameraRays& camera, const VolumeRenderParams& params, int threads,
-         const py::object& solids, const py::object& physical_light) {
+         const py::object& solids, const py::object& physical_light, const py::object& noise) {
         const VolumeGrid grid = grid_of(density, 0, lo, hi, "volume");
         const VolumeGrid lg = grid_of(light, 0, lo, hi, "light", 1);
         if (lg.w != grid.w || lg.h != grid.h || lg.d != grid.d || light.shape(3) != 4)
           throw py::value_error("light must have shape (D, H, W, 4) matching the volume");
         VolumeRenderParams p = params;
+        p.noise = noise.is_none() ? nullptr : noise.cast<const Noise*>();
         p.solids = solid_spheres(solids);
         PhysicalGrids grids;
         p.grids = nullptr;
@@ -407,11 +412,11 @@ void bind_volume_march(py::module_& m) {
       },
       py::arg("density"), py::arg("light"), py::arg("lo"), py::arg("hi"), py::arg("camera"),
       py::arg("params"), py::arg("threads"), py::arg("solids") = py::none(),
-      py::arg("physical_light") = py::none(),
+      py::arg("physical_light") = py::none(), py::arg("noise") = py::none(),
       "CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top. "
       "camera: a VolumeCamera; params: VolumeRenderParams (image, sun, sky, medium; physical "
       "with its PhysicalParams and physical_light); solids (n, 4) stop every ray at the nearest "
-      "solid.");
+      "solid; noise: the fBm lattice of the physical mode's detail (params.detail > 0).");
 }
 
 void bind_composite(py::module_& m) {

@@ -647,6 +647,8 @@ class VolumeRenderParams:
     """
     The volume marcher's image, sun, sky and medium.
     """
+    cubic: bool
+    detail_fbm: FbmParams
     phys: PhysicalParams
     physical: bool
     sky: SkyParams
@@ -659,6 +661,18 @@ class VolumeRenderParams:
         ...
     @albedo.setter
     def albedo(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def detail(self) -> float:
+        ...
+    @detail.setter
+    def detail(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def detail_inv_max(self) -> float:
+        ...
+    @detail_inv_max.setter
+    def detail_inv_max(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def g(self) -> float:
@@ -1101,9 +1115,9 @@ def render_cpu(view: Viewport, clouds: list, sun: SunParams, sky: SkyParams, set
     """
     CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image of the Viewport, row 0 at the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light ([z, y, x]) and light_lo / light_hi (or physical). settings: a MarchSettings (density_constant >= 0 replaces fBm, for tests; physical selects the physical mode with its PhysicalParams). with_sky=False gives the premultiplied layer (colour, 1 − T); solids (n, 4) (centre, radius) stop every ray at the nearest solid; return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}).
     """
-def render_volume_cpu(density: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], light: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], lo: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], hi: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], camera: VolumeCamera, params: VolumeRenderParams, threads: typing.SupportsInt | typing.SupportsIndex, solids: typing.Any = None, physical_light: typing.Any = None) -> numpy.typing.NDArray[numpy.float32]:
+def render_volume_cpu(density: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], light: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], lo: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], hi: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], camera: VolumeCamera, params: VolumeRenderParams, threads: typing.SupportsInt | typing.SupportsIndex, solids: typing.Any = None, physical_light: typing.Any = None, noise: typing.Any = None) -> numpy.typing.NDArray[numpy.float32]:
     """
-    CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top. camera: a VolumeCamera; params: VolumeRenderParams (image, sun, sky, medium; physical with its PhysicalParams and physical_light); solids (n, 4) stop every ray at the nearest solid.
+    CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top. camera: a VolumeCamera; params: VolumeRenderParams (image, sun, sky, medium; physical with its PhysicalParams and physical_light); solids (n, 4) stop every ray at the nearest solid; noise: the fBm lattice of the physical mode's detail (params.detail > 0).
     """
 def sample_frame(arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg1: tuple, arg2: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> numpy.typing.NDArray[numpy.float32]:
     """

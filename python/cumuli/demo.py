@@ -127,7 +127,8 @@ def deck_scene(settings: RenderSettings | None = None, seed: int = 4) -> Scene:
         clouds=[deck],
         sun=Sun(direction=(0.35, 0.6, 0.7), colour=(1.0, 0.93, 0.85), intensity=9.0),
         sky=Sky(),
-        settings=settings or RenderSettings(lighting="physical"),
+        # Metres: air of about 40 km visibility in a boundary layer 1 km deep.
+        settings=settings or RenderSettings(air_extinction=1e-4, air_height=1000.0),
         camera=Camera(position=(0.0, 60.0, -3000.0), target=(0.0, 1100.0, 6000.0), fov=65.0),
         ground=Ground(height=0.0, albedo=(0.2, 0.22, 0.15)),
     )
@@ -223,7 +224,12 @@ def torchelsen_sequence(
     h //= rows
     weather = table1(seed=seed)
     end = weather.schedule.keys[-1][0]
-    base = Scene(sun=Sun(direction=(0.3, 0.6, 0.6), colour=(1.0, 0.97, 0.92), intensity=1.4))
+    # Clouds 0.4–3 thousand units away: air six times thinner per unit than the default, so the
+    # far ones fade towards the horizon without vanishing.
+    base = Scene(
+        sun=Sun(direction=(0.3, 0.6, 0.6), colour=(1.0, 0.97, 0.92), intensity=1.4),
+        settings=RenderSettings(air_extinction=0.0005),
+    )
     out = np.ones((rows * h, 2 * w, 4), np.float32)
     for k in range(panels):
         t = end * k / (panels - 1)

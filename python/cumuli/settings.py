@@ -114,8 +114,22 @@ class RenderSettings:
     air_extinction:
         Extinction of the air per world unit in the physical mode: the ground seen at distance
         ``t`` fades into the sky's horizon radiance by ``1 − exp(−air_extinction·t)``, so that
-        the ground meets the sky without a hard line (``0.003``: half faded at 230 units).
-        ``0`` turns it off; the paper mode has none. Clouds do not fade yet.
+        the ground meets the sky without a hard line (``0.003``: half faded at 230 units);
+        distant clouds fade the same way with their distance (aerial perspective,
+        ``cumuli.rendering.air``). ``0`` turns it off; the paper mode has none.
+    air_height:
+        Thickness (world units) of the hazy air above the camera in the physical mode: a view
+        ray into the sky at elevation ``e`` crosses ``air_height/sin e`` of it, so the sky
+        thickens into the horizon's colour towards the horizon as the ground does from below.
+    sun_angular_diameter:
+        The sun's angular diameter in degrees (``0.53``, as seen from the Earth) in the physical
+        mode: the ground's shadows get a penumbra as wide as the distance from the caster to the
+        ground times this angle (``0``: hard shadows).
+    diffuse_shadows:
+        The physical mode's ground under a cloud also receives the sunlight the cloud scatters
+        through (a two-stream estimate of the diffuse transmission, ``1/(1 + ¾(1 − ḡ)τ)``
+        beyond the direct ``exp(−τ)``), instead of the sky's light alone. ``False``: the direct
+        sunlight only.
     resolve:
         The physical mode's resolve pass: a 3×3 tent filter over the finished image
         (``cumuli.rendering.resolve``) that averages out the camera rays' jitter pattern and
@@ -193,6 +207,9 @@ class RenderSettings:
     droplet_diameter: float = 20.0
     haze: float = 0.05
     air_extinction: float = 0.003
+    air_height: float = 10.0
+    sun_angular_diameter: float = 0.53
+    diffuse_shadows: bool = True
     resolve: bool = True
     physical_resolution: int = 48
     multiple_scattering: bool = True
@@ -280,6 +297,10 @@ class RenderSettings:
         s(self, "haze", check.real(self.haze, "settings.haze", 0.0, 10.0))
         ext = check.real(self.air_extinction, "settings.air_extinction", 0.0, 10.0)
         s(self, "air_extinction", ext)
+        s(self, "air_height", check.real(self.air_height, "settings.air_height", 0.0, 1e6))
+        diameter = check.real(self.sun_angular_diameter, "settings.sun_angular_diameter", 0.0, 10.0)
+        s(self, "sun_angular_diameter", diameter)
+        s(self, "diffuse_shadows", check.flag(self.diffuse_shadows, "settings.diffuse_shadows"))
         s(self, "resolve", check.flag(self.resolve, "settings.resolve"))
         res = check.integer(self.physical_resolution, "settings.physical_resolution", 4, 256)
         s(self, "physical_resolution", res)

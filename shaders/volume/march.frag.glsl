@@ -4,7 +4,8 @@
 // (done by hand with texelFetch so the weights are full float, as in C++), same light:
 //   S = albedo·(sun·τ_sun·HG(g, d·sun) + E_sky/4π), colour += T·(1 − e^{−σ_t ρ h})·S, T *= e^{−σ_t ρ h}.
 // u_density: R32F [z][y][x]; u_light: RGBA32F (τ_sun, E_sky RGB). The sky (background) and the
-// phase function are the render pass's shared pieces.
+// phase function are the render pass's shared pieces. The physical mode may read the density
+// as a tricubic B-spline eroded by the scene's fBm (density_at, eroded below).
 
 #include "common/sky.glsl"
 #include "common/phase.glsl"
@@ -16,6 +17,13 @@
 #include "common/physical.glsl"
 layout(std430, binding = 2) readonly buffer Physical { PhysicalCloud phys[]; };
 uniform bool u_exact_light;
+// The sharp-volume reconstruction (C++: VolumeRenderParams cubic, detail): the tricubic
+// B-spline of the density, eroded by the scene's fBm (common/noise.glsl's u_lattice at
+// u_frequency = the detail frequency).
+#include "common/noise.glsl"
+uniform bool u_cubic;
+uniform float u_detail;
+uniform float u_detail_inv_max;
 #endif
 
 uniform sampler3D u_density;
@@ -48,6 +56,58 @@ vec4 trilinear(sampler3D tex, vec3 p) {
   vec3 u = (p - u_box_min) / ((u_box_max - u_box_min) / vec3(n)) - 0.5;
   return fetch_trilinear(tex, ivec3(0), n, u);
 }
+
+#ifdef PHYSICAL
+// The tricubic B-spline at p as eight trilinear lookups (C++: sample_cubic_bspline).
+void bspline_axis(float u, out float h0, out float h1, out float g0, out float g1) {
+  float x = u - 0.5;
+  float i = floor(x);
+  float f = x - i;
+  float f2 = f * f;
+  float f3 = f2 * f;
+  float w0 = (1.0 - 3.0 * f + 3.0 * f2 - f3) / 6.0;
+  float w1 = (4.0 - 6.0 * f2 + 3.0 * f3) / 6.0;
+  float w2 = (1.0 + 3.0 * f + 3.0 * f2 - 3.0 * f3) / 6.0;
+  float w3 = f3 / 6.0;
+  g0 = w0 + w1;
+  g1 = w2 + w3;
+  h0 = i - 1.0 + w1 / g0 + 0.5;
+  h1 = i + 1.0 + w3 / g1 + 0.5;
+}
+
+float density_at(vec3 p) {
+  if (!u_cubic) return trilinear(u_density, p).r;
+  vec3 vs = (u_box_max - u_box_min) / vec3(textureSize(u_density, 0));
+  vec3 u = (p - u_box_min) / vs;
+  vec2 hx, hy, hz, gx, gy, gz;
+  bspline_axis(u.x, hx.x, hx.y, gx.x, gx.y);
+  bspline_axis(u.y, hy.x, hy.y, gy.x, gy.y);
+  bspline_axis(u.z, hz.x, hz.y, gz.x, gz.y);
+  float sum = 0.0;
+  for (int c = 0; c < 2; ++c)
+    for (int b = 0; b < 2; ++b)
+      for (int a = 0; a < 2; ++a) {
+        vec3 q = u_box_min + vec3(hx[a], hy[b], hz[c]) * vs;
+        sum += gx[a] * gy[b] * gz[c] * trilinear(u_density, q).r;
+      }
+  return sum;
+}
+
+// The eroded density (C++: erode_density): ρ' = max(ρn − e, 0)/(1 − e)/inv_max.
+float eroded(float rho, vec3 p) {
+  if (!(u_detail > 0.0)) return rho;
+  float top = 0.0;
+  float a = 1.0;
+  for (int i = 0; i < u_octaves && i < 16; ++i) {
+    a *= u_gain;
+    top += a;
+  }
+  float n = top > 0.0 ? fbm(p, u_exact_light) / top : 0.0;
+  float e = u_detail * n;
+  float rn = min(rho * u_detail_inv_max, 1.0);
+  return max(rn - e, 0.0) / (1.0 - e) / u_detail_inv_max;
+}
+#endif
 
 void main() {
   float aspect = u_resolution.x / u_resolution.y;
@@ -82,8 +142,10 @@ void main() {
     float xi = phys_jitter(row, int(gl_FragCoord.x));
     for (int k = 0; k < n && T >= u_phys_min_t; ++k) {
       vec3 x = u_cam_pos + (t0 + (float(k) + xi) * h) * d;
-      float rho = trilinear(u_density, x).r;
-      if (rho <= 0.0) continue;
+      float rho = density_at(x);
+      if (!(rho > 0.0)) continue;
+      rho = eroded(rho, x);
+      if (!(rho > 0.0)) continue;
       float dtau = exp(-u_sigma_t * rho * h);
       colour += T * (1.0 - dtau) * phys_source(phys[0], x, ow, ok, no, u_sun_radiance, u_exact_light);
       T *= dtau;

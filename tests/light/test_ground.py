@@ -82,7 +82,9 @@ def brute_force_transmittance(s: cu.Scene, points: np.ndarray, step: float = 0.0
 
 @pytest.mark.parametrize("lighting", ["paper", "physical"])
 def test_shadow_map_matches_a_brute_force_march(lighting: str) -> None:
-    s = scene(cu.RenderSettings(lighting=lighting, light_step=0.05))
+    # The point sun's direct transmittance (the physical mode's soft shadows off).
+    s = scene(cu.RenderSettings(lighting=lighting, light_step=0.05, sun_angular_diameter=0.0,
+                                diffuse_shadows=False))  # fmt: skip
     extent = ((-12.0, -8.0), (12.0, 16.0))
     t = cu.shadow_map(s, extent, (24, 20))
     assert t.shape == (20, 24) and t.dtype == np.float32
@@ -221,6 +223,8 @@ def test_ground_radiance_lit_and_shadowed(lighting: str) -> None:
             haze=0.0,
             resolve=False,
             air_extinction=0.0,
+            sun_angular_diameter=0.0,
+            diffuse_shadows=False,
         )
     )
     lit = cu.prepare_light(s)

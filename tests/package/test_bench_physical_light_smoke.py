@@ -37,9 +37,16 @@ def test_bench_physical_light_quick_writes_json_and_plot(
         assert rows["1"]["stages_s"]["upstream"] == 0.0
         growth = data["growth"][series]
         assert growth["exponent"] is not None and growth["last_over_one"] > 0
+        assert growth["last_over_one_cpu"] > 0
         assert set(growth["stage_exponents"]) == set(STAGES)
     for name in ("per_default_cloud_ms", "sixteen_over_one_copies", "sixteen_over_one_seeds"):
         t = data["targets"][name]
         assert t["met"] is None and t["reached"] is None  # --quick measures no target
         assert t["limit"] > 0
+    # The error against Mitsuba 3 beside the times, within the reference test's limits.
+    err = data["mitsuba"]
+    assert err["blocks"] > 200
+    assert 0 < err["block_rel_median"] <= err["block_rel_p90"] <= 0.40
+    assert abs(err["mean_ratio_minus_one"]) <= 0.10 and err["transmittance_mean_abs"] <= 0.01
+    assert "against Mitsuba 3" in stdout
     assert "growth exponent" in stdout and "target per_default_cloud_ms" in stdout

@@ -67,7 +67,10 @@ def reference_scene() -> tuple[cu.Scene, cu.Camera]:
         sky=cu.Sky(),
         # The references were rendered from the table noise: pinned, whatever the default.
         noise=cu.Noise(seed=7, version=1),
-        settings=cu.RenderSettings(lighting="physical", phase="hg", haze=0.0, resolve=False),
+        # No air: Mitsuba's scene has none (aerial perspective and aureole off).
+        settings=cu.RenderSettings(
+            lighting="physical", phase="hg", haze=0.0, resolve=False, air_extinction=0.0
+        ),
     )
     camera = cu.Camera(position=(0.0, 2.0, -45.0), target=(0.0, 1.0, 0.0), fov=38.0)
     return scene, camera

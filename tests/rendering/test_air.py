@@ -1,4 +1,5 @@
-"""The physical mode's air: the ground fades into the horizon's sky with its distance."""
+"""The physical mode's air: the ground and the sky fade into the horizon's colour, distant clouds
+fade into the sky with their distance (aerial perspective), and the paper mode has none."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.rendering.air import ground_haze
+from cumuli.rendering.air import air_fades, background, cloud_depth, ground_haze
 
 
 def ground_scene(**settings) -> tuple[cu.Scene, cu.Camera]:
@@ -20,7 +21,7 @@ def ground_scene(**settings) -> tuple[cu.Scene, cu.Camera]:
 
 
 @pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
-def test_the_ground_fades_into_the_horizon_with_distance(backend: str) -> None:
+def test_the_ground_and_the_sky_fade_into_the_horizon(backend: str) -> None:
     scene, cam = ground_scene(haze=0.0, resolve=False)
     img = cu.render(scene, cam, 40, 30, backend=backend)
     raw = cu.render(scene.replace(settings=scene.settings.replace(air_extinction=0.0)), cam, 40, 30,
@@ -33,11 +34,105 @@ def test_the_ground_fades_into_the_horizon_with_distance(backend: str) -> None:
     assert fade[far, 20] > 0.5 > fade[near, 20] > 0
     d_far = np.abs(img[far, 20, :3] - horizon).sum()
     assert d_far < 0.5 * np.abs(raw[far, 20, :3] - horizon).sum()  # far ground: nearly sky
-    # Exactly the stated blend, and nothing changes in the sky.
-    expected = raw[..., :3] + fade[..., None] * (horizon - raw[..., :3])
-    np.testing.assert_allclose(img[..., :3], expected, atol=1e-5)
-    t = 2.0 / -cam.ray_directions(40, 30)[near, 20, 1]
+    # The renderers' background is the numpy twin's, and the fade is exactly the stated blend:
+    # the ground by its distance, the sky by the hazy layer's path air_height/|d.y|.
+    np.testing.assert_allclose(raw[..., :3], background(scene, cam, 40, 30), atol=2e-5)
+    behind, front = air_fades(scene, cam, 40, 30)
+    assert not front.any()  # no cloud
+    np.testing.assert_allclose(behind[rows, 20], fade[rows, 20], rtol=1e-5)
+    expected = raw[..., :3] + behind[..., None] * (horizon - raw[..., :3])
+    np.testing.assert_allclose(img[..., :3], expected, atol=2e-5)
+    dy = cam.ray_directions(40, 30)[..., 1]
+    t = 2.0 / -dy[near, 20]
     assert fade[near, 20] == pytest.approx(1 - math.exp(-0.003 * t), rel=1e-4)
-    assert (
-        ground_haze(scene.replace(settings=cu.RenderSettings(lighting="paper")), cam, 4, 3) is None
-    )
+    top = 1 - math.exp(-0.003 * scene.settings.air_height / dy[0, 20])
+    assert behind[0, 20] == pytest.approx(top, rel=1e-4)
+    # The horizon is soft: the two rows around it differ less than without the air.
+    sky_row = far - 1
+    step = np.abs(img[sky_row, 20, :3] - img[far, 20, :3]).sum()
+    assert step < 0.5 * np.abs(raw[sky_row, 20, :3] - raw[far, 20, :3]).sum()
+    paper = scene.replace(settings=cu.RenderSettings(lighting="paper"))
+    assert ground_haze(paper, cam, 4, 3) is None and air_fades(paper, cam, 4, 3) is None
+
+
+def cloud_scene(**settings) -> cu.Scene:
+    return cu.Scene(
+        [cu.gaussian_cumulus(centre=(0, 0, 0), n=8, seed=4)],
+        sun=cu.Sun(direction=(0.4, 0.7, -0.5), intensity=6.0), noise=cu.Noise(seed=5, size=32),
+        settings=cu.RenderSettings(physical_resolution=16, haze=0.0, resolve=False, **settings),
+    )  # fmt: skip
+
+
+def camera_at(distance: float) -> cu.Camera:
+    """The cloud from ``distance`` along −z, framed alike (fov shrinking with the distance)."""
+    fov = math.degrees(2 * math.atan(12.0 / distance))
+    return cu.Camera(position=(0.0, 1.0, -distance), target=(0.0, 1.0, 0.0), fov=fov)
+
+
+def test_a_far_cloud_is_closer_to_the_sky_than_the_same_cloud_near() -> None:
+    scene = cloud_scene()
+    lit = cu.prepare_light(scene)
+    clear = cu.LitScene(scene.replace(settings=scene.settings.replace(air_extinction=0.0)),
+                        lit.lights, lit.shadow)  # fmt: skip
+    horizon = np.asarray(scene.sky.horizon)
+    kept = {}
+    for distance in (40.0, 400.0):
+        cam = camera_at(distance)
+        img = cu.render_cpu(lit, cam, 48, 36)
+        raw = cu.render_cpu(clear, cam, 48, 36)
+        body = raw[..., 3] > 0.99
+        assert body.sum() > 30
+        # The share of the cloud's own difference from the horizon's colour that is left.
+        kept[distance] = float(
+            np.abs(img[body, :3] - horizon).sum() / np.abs(raw[body, :3] - horizon).sum()
+        )
+        depth = cloud_depth(scene, cam, 48, 36)[body]
+        assert kept[distance] == pytest.approx(math.exp(-0.003 * depth.mean()), abs=0.03)
+        np.testing.assert_array_equal(img[..., 3], raw[..., 3])  # coverage unchanged
+    assert kept[400.0] < 0.4 < 0.8 < kept[40.0]
+
+
+def test_the_box_depth_is_the_chord_midpoint() -> None:
+    scene = cloud_scene()
+    cam = camera_at(40.0)
+    depth = cloud_depth(scene, cam, 9, 7)
+    lo, hi = scene.clouds[0].layer_box()
+    centre = depth[3, 4]  # the ray through the box's middle (the camera looks at it)
+    assert centre == pytest.approx(40.0 + 0.5 * (lo[2] + hi[2]), rel=1e-3)
+    assert np.isnan(cloud_depth(scene, cu.Camera((0, 50, 0), (0, 100, 1), fov=20), 4, 3)).all()
+
+
+@pytest.mark.gl
+def test_gl_and_cpu_agree_through_the_air(gl_context) -> None:
+    scene = cloud_scene(air_extinction=0.01).replace(ground=cu.Ground(height=-8.0))
+    scene = scene.replace(settings=scene.settings.replace(haze=0.05, exact_noise=True))
+    cam = cu.Camera(position=(0.0, 2.0, -60.0), target=(0.0, 0.0, 0.0), fov=40)
+    lit = cu.prepare_light(scene)
+    cpu = cu.render_cpu(lit, cam, 48, 36)
+    with cu.Renderer(context=gl_context) as r:
+        gl = r.render(lit, cam, 48, 36)
+    diff = np.abs(gl - cpu)
+    assert diff.mean(axis=(0, 1)).max() <= 1e-3
+
+
+def test_the_paper_mode_ignores_the_air_settings_bit_for_bit() -> None:
+    base = cloud_scene(lighting="paper").replace(ground=cu.Ground(height=-8.0))
+    cam = cu.Camera(position=(0.0, 2.0, -60.0), target=(0.0, 0.0, 0.0), fov=40)
+    changed = base.replace(settings=base.settings.replace(
+        air_extinction=0.05, air_height=100.0, sun_angular_diameter=5.0, diffuse_shadows=False,
+    ))  # fmt: skip
+    a = cu.render_cpu(base, cam, 32, 24)
+    b = cu.render_cpu(changed, cam, 32, 24)
+    np.testing.assert_array_equal(a, b)
+    la, lb = cu.prepare_light(base), cu.prepare_light(changed)
+    np.testing.assert_array_equal(la.shadow.values, lb.shadow.values)
+
+
+def test_the_air_settings_are_checked_and_saved(tmp_path) -> None:
+    for bad, error in (({"air_height": -1.0}, ValueError), ({"sun_angular_diameter": 20.0},
+                       ValueError), ({"diffuse_shadows": "yes"}, TypeError)):  # fmt: skip
+        with pytest.raises(error, match=next(iter(bad))):
+            cu.RenderSettings(**bad)
+    s = cloud_scene(air_height=30.0, sun_angular_diameter=1.0, diffuse_shadows=False)
+    back = cu.load_scene(s.save(tmp_path / "s.json"))
+    assert back.settings == s.settings

@@ -134,6 +134,9 @@ def test_gl_and_cpu_agree_with_the_mie_phase(gl_context) -> None:
 
 def test_the_haze_draws_an_aureole_around_the_hidden_sun() -> None:
     scene, cam = backlit_scene()
+    # The aureole alone (no aerial perspective, which lends it to the air before the cloud;
+    # no resolve pass, which filters it).
+    scene = scene.replace(settings=scene.settings.replace(air_extinction=0.0, resolve=False))
     clear = scene.replace(settings=scene.settings.replace(haze=0.0))
     img = cu.render_cpu(scene, cam, 80, 60)
     base = cu.render_cpu(clear, cam, 80, 60)

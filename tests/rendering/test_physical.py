@@ -13,12 +13,18 @@ import cumuli as cu
 from cumuli import _core
 from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, phase, physical_light
 from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
+from cumuli.sky import sky_args
 from cumuli.testing import assert_image_close, only
 
 F = np.float32
 SUN = cu.Sun(direction=(0.8, 0.45, -0.3), colour=(1.0, 0.9, 0.8), intensity=5.0)
 PHYS = cu.RenderSettings(
-    lighting="physical", physical_resolution=16, exact_noise=True, haze=0.0, resolve=False
+    lighting="physical",
+    physical_resolution=16,
+    exact_noise=True,
+    haze=0.0,
+    resolve=False,
+    air_extinction=0.0,
 )
 
 
@@ -194,6 +200,51 @@ def test_diffusion_matches_the_slab_solution() -> None:
     np.testing.assert_allclose(col, analytic, rtol=0.1)
     # Empty cells next to the medium carry the boundary value, below the surface cell's.
     assert 0 < phi[20, 32, 20, 0] < phi[20, 31, 20, 0]
+
+
+def test_diffusion_sky_channels_each_solve_their_own_source() -> None:
+    """The sky's colour channels share one solve's operator, each after the first started from
+    the previous solution: every channel still converges to its own source's fluence — a
+    channel whose source is a multiple of another's is that multiple of its fluence, and a
+    channel repeating an earlier source (after a different one) gives the same fluence."""
+    rng = np.random.default_rng(3)
+    ext = np.zeros((16, 16, 16), F)
+    ext[3:13, 2:12, 4:14] = rng.uniform(2.0, 6.0, (10, 10, 10)).astype(F)
+    lo, hi = (-2.0, -2.0, -2.0), (2.0, 2.0, 2.0)
+    sun_t = np.ones(ext.shape, F)
+    ys = np.linspace(0.2, 1.0, 16, dtype=F)[None, :, None] * np.ones(ext.shape, F)
+    xs = np.linspace(1.0, 0.3, 16, dtype=F)[None, None, :] * np.ones(ext.shape, F)
+    sky_a = np.stack([ys, 2.5 * ys, 0.5 * ys], -1).astype(F)
+    phi = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky_a, 0.99, 0.6, 5000, 1e-6)
+    inside = ext > 0.1
+    r = phi[..., 1][inside]
+    np.testing.assert_allclose(phi[..., 2][inside], 2.5 * r, rtol=1e-4)
+    np.testing.assert_allclose(phi[..., 3][inside], 0.5 * r, rtol=1e-4)
+    sky_b = np.stack([ys, xs, ys], -1).astype(F)
+    phi_b = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky_b, 0.99, 0.6, 5000, 1e-6)
+    np.testing.assert_allclose(phi_b[..., 3][inside], phi_b[..., 1][inside], rtol=1e-4)
+    np.testing.assert_allclose(phi_b[..., 1], phi[..., 1], rtol=1e-4, atol=1e-7)
+    assert not np.allclose(phi_b[..., 2][inside], phi_b[..., 1][inside], rtol=0.05)
+
+
+def test_sky_visibility_march_drops_only_what_is_past_six_optical_depths() -> None:
+    """The sky's visibility march stops once τ > 6: a lattice with no medium to speak of is the
+    open sky everywhere; at the centre of a dense cube (4 optical depths a voxel) every ray
+    stops after the sample that takes it past 6, so the irradiance there is between e⁻¹⁰ and
+    e⁻⁶ of the open sky (a march to τ > 12 would leave under e⁻¹²), and below its corner's."""
+    coeffs = _core.sky_sh(sky_args(cu.Sky()), 3, 3)
+    lo, hi = (-2.0, -2.0, -2.0), (2.0, 2.0, 2.0)
+    ext = np.zeros((16, 16, 16), F)
+    ext[3:13, 3:13, 3:13] = 1e-9
+    open_sky = _core.sky_irradiance(ext, lo, hi, coeffs, 3, 3, 1.0)
+    np.testing.assert_allclose(
+        open_sky, np.broadcast_to(open_sky[0, 0, 0], open_sky.shape), rtol=1e-5
+    )
+    ext[3:13, 3:13, 3:13] = 16.0  # voxels of 0.25: 4 optical depths each
+    e = _core.sky_irradiance(ext, lo, hi, coeffs, 3, 3, 1.0)
+    for ch in range(3):
+        corner, centre, sky = e[3, 3, 3, ch], e[8, 8, 8, ch], open_sky[0, 0, 0, ch]
+        assert math.exp(-10) * sky <= centre <= math.exp(-6) * sky < corner < sky
 
 
 # --- the C++ marcher against its numpy twin ----------------------------------------------
@@ -381,7 +432,9 @@ def test_volume_renderer_draws_the_same_medium(gl_context) -> None:
     scene = small_scene()
     cam = camera_for(scene)
     field = cu.density_volume(scene.clouds[0], scene.noise, scene.settings, 96)
-    vc = cu.VolumeCloud(density=field.values, box=field.box, sigma_t=1.0, step=0.1)
+    # The field's values are σt already; read trilinearly and not eroded, it is the same medium.
+    vc = cu.VolumeCloud(density=field.values, box=field.box, sigma_t=1.0, step=0.1, detail=0.0,
+                        reconstruction="linear")  # fmt: skip
     vscene = scene.replace(clouds=[vc])
     lit = cu.prepare_light(vscene)
     cpu = cu.render_cpu(lit, cam, 48, 36)
@@ -405,8 +458,11 @@ def test_volume_renderer_draws_the_same_medium(gl_context) -> None:
         scene.sun,
         scene.sky,
         backend="cpu",
+        sigma_t=1.0,
         step=0.1,
         settings=scene.settings,
+        detail=0.0,
+        reconstruction="linear",
     )
     np.testing.assert_allclose(img, cpu, atol=1e-5)
 
@@ -439,7 +495,7 @@ def test_render_volume_bad_input() -> None:
         cu.render_volume(dens, None, box, cam, 8, 6, settings=cu.RenderSettings(lighting="paper"))
     with pytest.raises(TypeError, match="settings"):
         cu.render_volume(dens, None, box, cam, 8, 6, settings="physical")
-    img = cu.render_volume(dens, None, box, cam, 8, 6, settings=PHYS)
+    img = cu.render_volume(dens, None, box, cam, 8, 6, settings=PHYS, sigma_t=1.0)
     # σt = sigma_t·density = 1 through the 2-unit cube: alpha = 1 − e^{−2} at the centre.
     assert img.shape == (6, 8, 4) and img[3, 4, 3] == pytest.approx(1 - math.exp(-2), rel=0.01)
 
@@ -491,3 +547,35 @@ def test_only_clouds_upstream_of_a_lattice_shade_it() -> None:
     assert cu.prepare_light(moved_beside).lights[0] is before
     moved_up = scene.replace(clouds=[first, upstream.translated((0.5, 0, 0)), downstream, beside])
     assert cu.prepare_light(moved_up).lights[0] is not before
+
+
+def test_other_clouds_shadow_is_marched_on_a_coarser_lattice_and_filled_bilinearly() -> None:
+    """The optical depth of the clouds upstream, marched on every second column of the sun's
+    lattice and bilinear in between, stays close to the march of every column (the shadow one
+    cloud casts on another is as soft as the world lattice it lights)."""
+    from cumuli.light import physical as ph
+
+    first = small_cloud()
+    lo, hi = first.layer_box()
+    sun = np.asarray(SUN.direction)
+    upstream = first.translated(tuple(float(v) for v in sun * 1.2 * float(np.max(hi - lo))))
+    scene = small_scene().replace(clouds=[first, upstream])
+    frame = physical_light(first, small_scene()).frame
+    step = scene.settings.light_step
+    coarse = ph._upstream_depth([upstream], scene, frame, step, 0)
+    u, v, w, flo, fhi, (nu, nv, _) = frame
+    fu = flo[0] + (np.arange(nu) + 0.5) * (fhi[0] - flo[0]) / nu
+    fv = flo[1] + (np.arange(nv) + 0.5) * (fhi[1] - flo[1]) / nv
+    gv, gu = np.meshgrid(fv, fu, indexing="ij")
+    pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
+           + flo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
+    full = ph.optical_depth([upstream], scene, pts, SUN.direction, step, 0).reshape(nv, nu)
+    assert coarse.shape == full.shape and full.max() > 5
+    assert np.abs(coarse - full).mean() < 0.03 * full.max()
+    assert coarse.sum() == pytest.approx(full.sum(), rel=0.03)
+    # The fill is bilinear between texel centres over the same extent: constants stay constant,
+    # and a lattice upsampled to its own shape is itself.
+    a = np.arange(12, dtype=np.float32).reshape(3, 4)
+    np.testing.assert_array_equal(ph._bilinear_upsample(a, (3, 4)), a)
+    np.testing.assert_allclose(ph._bilinear_upsample(np.full((3, 4), 2.5, np.float32), (7, 9)), 2.5)
+    assert ph._bilinear_upsample(a, (6, 8))[0, 1] == pytest.approx(0.25)

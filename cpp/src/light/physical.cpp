@@ -15,6 +15,8 @@ namespace cumuli {
 namespace {
 
 constexpr int kMaxCandidates = 256;
+// The sky's march stops once τ > kSkyDepthCut: the visibility left, e^−6 ≈ 0.25 %, is dropped.
+constexpr double kSkyDepthCut = 6.0;
 
 // Calls visit(s, σt, ℓ) for the segments of o + t·d, t in [t0, t1], inside the union of the
 // cloud's candidate intervals: segments of at most `step` from each union interval's start (the
@@ -69,19 +71,27 @@ void split(float u, int n, int& i0, int& i1, float& f) {
 // Fixed blocks for reductions: sums do not depend on the thread count.
 constexpr std::size_t kBlock = 4096;
 
-template <class F>
-double block_sum(std::size_t n, int threads, F&& term) {
-  const std::size_t blocks = (n + kBlock - 1) / kBlock;
-  std::vector<double> part(blocks, 0.0);
-  parallel_for(blocks, threads, [&](std::size_t b) {
-    double s = 0.0;
-    const std::size_t end = std::min(n, (b + 1) * kBlock);
-    for (std::size_t i = b * kBlock; i < end; ++i) s += term(i);
-    part[b] = s;
-  });
-  double total = 0.0;
-  for (double s : part) total += s;
-  return total;
+// Trilinear value of a single-channel [z][y][x] lattice at voxel coordinates u (texel centres at
+// integer + ½, clamped to the edges): sample_trilinear without the world-to-voxel division.
+inline float trilinear_voxel(const float* vol, int w, int h, int d, glm::vec3 u) {
+  const float sx = u.x - 0.5f, sy = u.y - 0.5f, sz = u.z - 0.5f;
+  const float flx = std::floor(sx), fly = std::floor(sy), flz = std::floor(sz);
+  const float fx = sx - flx, fy = sy - fly, fz = sz - flz;
+  const int ix = static_cast<int>(flx), iy = static_cast<int>(fly), iz = static_cast<int>(flz);
+  const int x0 = std::clamp(ix, 0, w - 1), x1 = std::clamp(ix + 1, 0, w - 1);
+  const int y0 = std::clamp(iy, 0, h - 1), y1 = std::clamp(iy + 1, 0, h - 1);
+  const int z0 = std::clamp(iz, 0, d - 1), z1 = std::clamp(iz + 1, 0, d - 1);
+  const std::size_t W = static_cast<std::size_t>(w), WH = W * static_cast<std::size_t>(h);
+  const float* a = vol + z0 * WH;
+  const float* b = vol + z1 * WH;
+  const std::size_t r0 = y0 * W, r1 = y1 * W;
+  const float c00 = a[r0 + x0] + fx * (a[r0 + x1] - a[r0 + x0]);
+  const float c10 = a[r1 + x0] + fx * (a[r1 + x1] - a[r1 + x0]);
+  const float c01 = b[r0 + x0] + fx * (b[r0 + x1] - b[r0 + x0]);
+  const float c11 = b[r1 + x0] + fx * (b[r1 + x1] - b[r1 + x0]);
+  const float c0 = c00 + fy * (c10 - c00);
+  const float c1 = c01 + fy * (c11 - c01);
+  return c0 + fz * (c1 - c0);
 }
 
 }  // namespace
@@ -191,8 +201,10 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
     const int i = static_cast<int>(col % nu), j = static_cast<int>(col / nu);
     const glm::vec3 n0 = f.node(i, j, 0);
     const glm::vec3 origin = n0 - (0.5f * dw) * f.w;  // on the sun-side face
-    // Segments of every drawable, merged in order of t (drawables may overlap).
-    std::vector<std::array<float, 3>> segs;
+    // Segments of every drawable, merged in order of t (drawables may overlap); the buffer is
+    // the thread's, reused from column to column.
+    thread_local std::vector<std::array<float, 3>> segs;
+    segs.clear();
     auto keep = [&](float s, float sigma, float len) {
       if (sigma > 0.0f) segs.push_back({s - 0.5f * len, s + 0.5f * len, sigma});
     };
@@ -202,7 +214,9 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
       march_volume(v, origin, f.w, 0.0f, length, step, keep);
     if (segs.empty()) return;
     // τ(t) = Σ over segments of σ·|[a, b] ∩ [0, t]|, at the nodes t_k = (k + ½)·dw.
-    std::sort(segs.begin(), segs.end(), [](const auto& a, const auto& b) { return a[0] < b[0]; });
+    auto earlier = [](const auto& a, const auto& b) { return a[0] < b[0]; };
+    if (!std::is_sorted(segs.begin(), segs.end(), earlier))  // one drawable's come in order
+      std::sort(segs.begin(), segs.end(), earlier);
     double done = 0.0;  // τ of the segments wholly before the current node
     std::size_t next = 0;
     for (std::size_t k = 0; k < nw; ++k) {
@@ -234,6 +248,7 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
   const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
   const std::size_t nv = g.voxels();
   std::vector<float> out(nv * 3);
+  const glm::vec3 inv_vs = 1.0f / vs;
   // Voxels with no medium within one voxel are never read where light scatters: they get the
   // unoccluded sky (V = 1: V_0 = √4π, the other coefficients 0).
   const float open = 3.5449077018110318f;  // √(4π)
@@ -263,8 +278,13 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
         const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
         const float h = len / static_cast<float>(n);
         const float t0 = std::max(span.t_in, 0.0f);
-        for (int i = 0; i < n && tau <= 12.0; ++i)
-          tau += static_cast<double>(sample_trilinear(ext, g, p + (t0 + (i + 0.5f) * h) * d)) * h;
+        // Samples at the segments' midpoints, stepped in voxel coordinates.
+        const glm::vec3 u0 = (p + (t0 + 0.5f * h) * d - g.box.lo) * inv_vs;
+        const glm::vec3 du = (h * d) * inv_vs;
+        for (int i = 0; i < n && tau <= kSkyDepthCut; ++i)
+          tau += static_cast<double>(
+                     trilinear_voxel(ext, g.w, g.h, g.d, u0 + static_cast<float>(i) * du)) *
+                 h;
       }
       const double vw = std::exp(-tau) * quad.weights[k];
       for (int c = 0; c < nc; ++c) vis[c] += vw * basis[k * nc + c];
@@ -364,56 +384,126 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
       diag[i] += minus ? cond[3 * (i - stride[a]) + a] : leak(D[i], h[a]);
     }
   }
-  auto apply = [&](const std::vector<double>& x, std::vector<double>& y) {
-    parallel_for(n, threads, [&](std::size_t i) {
-      if (!medium[i]) {
-        y[i] = 0.0;
-        return;
-      }
-      double s = static_cast<double>(diag[i]) * x[i];
-      for (int a = 0; a < 3; ++a) {
-        if (cond[3 * i + a] > 0.0f) s -= static_cast<double>(cond[3 * i + a]) * x[i + stride[a]];
-        if (coord(i, a) > 0 && medium[i - stride[a]])
-          s -= static_cast<double>(cond[3 * (i - stride[a]) + a]) * x[i - stride[a]];
-      }
-      y[i] = s;
-    });
-  };
-  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
-  std::vector<double> x(n), r(n), z(n), q(n), Ap(n);
-  for (int c = 0; c < channels; ++c) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const double b = medium[i] ? source[i * channels + c] : 0.0;
-      x[i] = 0.0;
-      r[i] = b;
-      z[i] = r[i] / diag[i];
-      q[i] = z[i];
+  // y = A·x at cell i (0 outside the medium).
+  auto apply_at = [&](const std::vector<double>& x, std::size_t i) {
+    if (!medium[i]) return 0.0;
+    double s = static_cast<double>(diag[i]) * x[i];
+    for (int a = 0; a < 3; ++a) {
+      if (cond[3 * i + a] > 0.0f) s -= static_cast<double>(cond[3 * i + a]) * x[i + stride[a]];
+      if (coord(i, a) > 0 && medium[i - stride[a]])
+        s -= static_cast<double>(cond[3 * (i - stride[a]) + a]) * x[i - stride[a]];
     }
-    const double bnorm =
-        std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
-    if (!(bnorm > 0.0)) continue;
-    double rz = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
+    return s;
+  };
+  // Preconditioned conjugate gradients with each iteration's element-wise updates and dot
+  // products fused into two passes over fixed blocks (sums per block, added in block order: the
+  // result does not depend on the thread count). One channel's solve, on `inner` threads, into
+  // x; `from` (optional) the solution of channel `from_c` to start from, scaled by the
+  // least-squares ratio of the two channels' sources.
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  auto b_of = [&](std::size_t i, int c) {
+    return medium[i] ? static_cast<double>(source[i * channels + c]) : 0.0;
+  };
+  auto solve = [&](int c, const std::vector<double>* from, int from_c, std::vector<double>& x,
+                   int inner) {
+    std::vector<std::array<double, 2>> part(blocks);
+    auto sums = [&](auto&& body) {  // body(begin, end) → {Σ, Σ} over its block
+      parallel_for(blocks, inner, [&](std::size_t b) {
+        part[b] = body(b * kBlock, std::min(n, (b + 1) * kBlock));
+      });
+      std::array<double, 2> total{0.0, 0.0};
+      for (const auto& t : part) {
+        total[0] += t[0];
+        total[1] += t[1];
+      }
+      return total;
+    };
+    std::vector<double> r(n), z(n), q(n), Ap(n);
+    x.assign(n, 0.0);
+    double scale = 0.0;
+    if (from != nullptr) {
+      const auto bb = sums([&](std::size_t i0, std::size_t i1) {
+        std::array<double, 2> t{0.0, 0.0};
+        for (std::size_t i = i0; i < i1; ++i) {
+          const double bf = b_of(i, from_c);
+          t[0] += b_of(i, c) * bf;
+          t[1] += bf * bf;
+        }
+        return t;
+      });
+      if (bb[1] > 0.0) scale = bb[0] / bb[1];
+      if (scale != 0.0) parallel_for(n, inner, [&](std::size_t i) { x[i] = scale * (*from)[i]; });
+    }
+    const auto init = sums([&](std::size_t i0, std::size_t i1) {
+      std::array<double, 2> t{0.0, 0.0};
+      for (std::size_t i = i0; i < i1; ++i) {
+        const double b = b_of(i, c);
+        r[i] = b - (scale != 0.0 ? apply_at(x, i) : 0.0);
+        z[i] = r[i] / diag[i];
+        q[i] = z[i];
+        t[0] += r[i] * z[i];
+        t[1] += b * b;
+      }
+      return t;
+    });
+    double rz = init[0];
+    const double bnorm = std::sqrt(init[1]);
+    if (!(bnorm > 0.0)) return;
     for (int it = 0; it < p.max_iterations; ++it) {
-      apply(q, Ap);
-      const double qAq = block_sum(n, threads, [&](std::size_t i) { return q[i] * Ap[i]; });
+      const double qAq = sums([&](std::size_t i0, std::size_t i1) {
+        std::array<double, 2> t{0.0, 0.0};
+        for (std::size_t i = i0; i < i1; ++i) {
+          Ap[i] = apply_at(q, i);
+          t[0] += q[i] * Ap[i];
+        }
+        return t;
+      })[0];
       if (!(qAq > 0.0)) break;
       const double alpha = rz / qAq;
-      parallel_for(n, threads, [&](std::size_t i) {
-        x[i] += alpha * q[i];
-        r[i] -= alpha * Ap[i];
+      const auto rr = sums([&](std::size_t i0, std::size_t i1) {
+        std::array<double, 2> t{0.0, 0.0};
+        for (std::size_t i = i0; i < i1; ++i) {
+          x[i] += alpha * q[i];
+          r[i] -= alpha * Ap[i];
+          z[i] = r[i] / diag[i];
+          t[0] += r[i] * r[i];
+          t[1] += r[i] * z[i];
+        }
+        return t;
       });
-      const double rn =
-          std::sqrt(block_sum(n, threads, [&](std::size_t i) { return r[i] * r[i]; }));
-      if (rn <= p.tolerance * bnorm) break;
-      parallel_for(n, threads, [&](std::size_t i) { z[i] = r[i] / diag[i]; });
-      const double rz2 = block_sum(n, threads, [&](std::size_t i) { return r[i] * z[i]; });
-      const double beta = rz2 / rz;
-      rz = rz2;
-      parallel_for(n, threads, [&](std::size_t i) { q[i] = z[i] + beta * q[i]; });
+      if (std::sqrt(rr[0]) <= p.tolerance * bnorm) break;
+      const double beta = rr[1] / rz;
+      rz = rr[1];
+      parallel_for(n, inner, [&](std::size_t i) { q[i] = z[i] + beta * q[i]; });
     }
-    for (std::size_t i = 0; i < n; ++i)
-      out[i * channels + c] = medium[i] ? static_cast<float>(std::max(0.0, x[i])) : 0.0f;
+  };
+  // The channels' solves: the sun's and the sky's first (red) together, one thread each, then
+  // the sky's green and blue, both started from the red solution (the sky's colour channels
+  // differ mostly by a factor: the conjugate gradients then only correct the difference). A
+  // solve on one thread saves each iteration's hand-offs between threads on a lattice this
+  // small; the results are the same on any number of threads.
+  std::vector<std::vector<double>> xs(static_cast<std::size_t>(channels));
+  auto round = [&](const std::vector<int>& cs, const std::vector<double>* from, int from_c) {
+    const bool apart = cs.size() > 1 && resolve_threads(threads, cs.size()) > 1;
+    if (apart) {
+      parallel_for(cs.size(), threads,
+                   [&](std::size_t k) { solve(cs[k], from, from_c, xs[cs[k]], 1); });
+    } else {
+      for (int c : cs) solve(c, from, from_c, xs[c], threads);
+    }
+  };
+  if (channels >= 2) {
+    round({0, 1}, nullptr, 0);
+    std::vector<int> rest;
+    for (int c = 2; c < channels; ++c) rest.push_back(c);
+    if (!rest.empty()) round(rest, &xs[1], 1);
+  } else {
+    round({0}, nullptr, 0);
   }
+  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
+  for (int c = 0; c < channels; ++c)
+    for (std::size_t i = 0; i < n; ++i)
+      out[i * channels + c] = medium[i] ? static_cast<float>(std::max(0.0, xs[c][i])) : 0.0f;
   // Empty cells next to the medium: the mean boundary value φ·4D/(h + 4D) of their medium
   // neighbours, so that lookups between a surface cell and an empty one see the surface value.
   std::vector<float> fill(n * static_cast<std::size_t>(channels), 0.0f);

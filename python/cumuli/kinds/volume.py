@@ -13,14 +13,25 @@ from cumuli.rendering.volume import VolumeGL, draw_volume_cpu
 
 
 def digest(volume: VolumeCloud) -> tuple:
-    """What a volume's light depends on: its density, box and extinction."""
-    return ("volume", content_digest(volume.density), volume.box, volume.sigma_t)
+    """What a volume's light depends on: its density, box, extinction and reconstruction (its
+    physical light's lattice)."""
+    return (
+        "volume", content_digest(volume.density), volume.box, volume.sigma_t,
+        volume.reconstruction,
+    )  # fmt: skip
+
+
+def own_lattice(volume: VolumeCloud) -> tuple[int, int, int] | None:
+    """A trilinear volume's own lattice (its light is no finer); None for a cubic one, whose
+    density is smooth between the voxels: its physical light takes the settings'
+    ``physical_resolution`` however coarse the voxels are."""
+    return tuple(volume.shape[::-1]) if volume.reconstruction == "linear" else None
 
 
 MEDIUM = registry.Medium(
     core_args=volume_core_args,
     extinction=volume_extinction,
-    own_lattice=lambda v: tuple(v.shape[::-1]),
+    own_lattice=own_lattice,
     light_box=lambda v: v.box,
 )
 
@@ -46,4 +57,4 @@ KIND = registry.register(
     )
 )
 
-__all__ = ["KIND", "MEDIUM", "digest"]
+__all__ = ["KIND", "MEDIUM", "digest", "own_lattice"]

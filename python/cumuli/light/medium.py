@@ -3,7 +3,8 @@
 
 For a 2018 `Cloud` ``σt(x) = settings.extinction_scale · ρ(x)`` with ``ρ`` the cloud's density
 field (eq. 2 attributed to the primitive ``x`` is deepest inside, the union march's rule; eqs.
-19–21 for metaballs); for a `VolumeCloud` ``σt(x) = sigma_t · density(x)`` (trilinear).
+19–21 for metaballs); for a `VolumeCloud` ``σt(x) = sigma_t · density(x)`` (trilinear; its
+``extinction_per_density``, the physical mode's ``extinction_scale`` when ``sigma_t`` is None).
 :func:`density_volume` samples it on a texel-centre lattice over the drawable's box, so that the
 same medium can be handed to another renderer (``tests/references`` gives it to Mitsuba 3);
 :func:`extinction_grid` is the light step's cell-averaged version.
@@ -97,11 +98,11 @@ def _cloud_grid(
 
 
 def _volume_grid(
-    volume: VolumeCloud, shape: tuple[int, int, int] | None, supersample: int
+    volume: VolumeCloud, shape: tuple[int, int, int] | None, supersample: int, sigma_t: float
 ) -> np.ndarray:
     dens = volume.density
     if shape is None or tuple(shape) == tuple(dens.shape[::-1]):
-        return (dens * np.float32(volume.sigma_t)).astype(np.float32)
+        return (dens * np.float32(sigma_t)).astype(np.float32)
     lo, hi = (np.asarray(b, np.float64) for b in volume.box)
     w, h, d = shape
     acc = np.zeros((d, h, w), np.float64)
@@ -117,7 +118,7 @@ def _volume_grid(
                 acc += _core.sample_volume(dens, volume.box[0], volume.box[1], pts, 0).reshape(
                     acc.shape
                 )
-    return (acc / supersample**3 * volume.sigma_t).astype(np.float32)
+    return (acc / supersample**3 * sigma_t).astype(np.float32)
 
 
 def cloud_extinction(
@@ -149,7 +150,8 @@ def volume_extinction(
     shape = None if resolution is None else lattice_shape(box, resolution)
     if shape is not None and tuple(shape) != tuple(volume.density.shape[::-1]):
         check_lattice("a volume's resampled field", shape, supersample, VOLUME_BYTES_PER_VOXEL)
-    return ExtinctionField(_volume_grid(volume, shape, supersample), box)
+    sigma_t = volume.extinction_per_density(settings)
+    return ExtinctionField(_volume_grid(volume, shape, supersample, sigma_t), box)
 
 
 def cloud_core_args(cloud: Cloud, settings: Any) -> tuple[list, list]:
@@ -163,8 +165,10 @@ def cloud_core_args(cloud: Cloud, settings: Any) -> tuple[list, list]:
 
 
 def volume_core_args(volume: VolumeCloud, settings: Any) -> tuple[list, list]:
-    """A volume's entry of the core's medium lists: ``(density, lo, hi, σt)``."""
-    return [], [(volume.density, volume.box[0], volume.box[1], float(volume.sigma_t))]
+    """A volume's entry of the core's medium lists: ``(density, lo, hi, σt)`` (σt per unit
+    density, :meth:`cumuli.VolumeCloud.extinction_per_density`)."""
+    sigma_t = volume.extinction_per_density(settings)
+    return [], [(volume.density, volume.box[0], volume.box[1], sigma_t)]
 
 
 def cloud_extinction_scale(settings: Any) -> float:

@@ -255,17 +255,43 @@ def upstream_of(frame: tuple, drawables: Any) -> list[Any]:
     return out
 
 
+#: The other drawables' optical depth is marched on every UPSTREAM_COARSEN-th column of the
+#: sun's lattice (each way across the light) and bilinearly filled in between: their shadow on
+#: this drawable is already as soft as the world lattice it lights, and marching it through
+#: every column was the part of the light step that grew with the square of the clouds.
+UPSTREAM_COARSEN = 2
+
+
 def _upstream_depth(others: Any, scene: Any, frame: tuple, step: float, threads: int) -> np.ndarray:
     """``(nv, nu)``: the optical depth of ``others`` towards the sun from the sun-side face of
-    every column of ``frame``."""
+    every column of ``frame``, marched on a lattice :data:`UPSTREAM_COARSEN` × coarser across
+    the light (over the same face) and bilinear in between (texel centres, clamped)."""
     u, v, w, lo, hi, (nu, nv, nw) = frame
-    fu = lo[0] + (np.arange(nu) + 0.5) * (hi[0] - lo[0]) / nu
-    fv = lo[1] + (np.arange(nv) + 0.5) * (hi[1] - lo[1]) / nv
+    cu_, cv_ = max(2, -(-nu // UPSTREAM_COARSEN)), max(2, -(-nv // UPSTREAM_COARSEN))
+    fu = lo[0] + (np.arange(cu_) + 0.5) * (hi[0] - lo[0]) / cu_
+    fv = lo[1] + (np.arange(cv_) + 0.5) * (hi[1] - lo[1]) / cv_
     gv, gu = np.meshgrid(fv, fu, indexing="ij")
     pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
            + lo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
     tau = optical_depth(others, scene, pts, scene.sun.direction, step, threads)
-    return np.zeros((nv, nu), np.float32) if tau is None else tau.reshape(nv, nu)
+    if tau is None:
+        return np.zeros((nv, nu), np.float32)
+    return _bilinear_upsample(tau.reshape(cv_, cu_), (nv, nu))
+
+
+def _bilinear_upsample(a: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """``a`` ``(m, n)`` resampled to ``shape`` over the same extent: bilinear between texel
+    centres, clamped at the edges."""
+    out = a.astype(np.float64)
+    for axis, size in enumerate(shape):
+        src = out.shape[axis]
+        x = np.clip((np.arange(size) + 0.5) * src / size - 0.5, 0.0, src - 1.0)
+        i0 = np.minimum(np.floor(x).astype(np.int64), src - 2) if src > 1 else np.zeros(size, int)
+        f = x - i0
+        lo_, hi_ = np.take(out, i0, axis=axis), np.take(out, np.minimum(i0 + 1, src - 1), axis=axis)
+        f = f.reshape((-1, 1) if axis == 0 else (1, -1))
+        out = lo_ + f * (hi_ - lo_)
+    return out.astype(np.float32)
 
 
 def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarray:

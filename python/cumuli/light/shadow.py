@@ -12,6 +12,7 @@ the scene's ``sprite_settings``) — and of every billboard cloud or field — t
 billboards would get at the ground point (:func:`cumuli.light.caf.ground_caf` with the scene's
 ``billboard_shading``; beyond Torchelsen & Musse 2005). The light step makes one for a scene
 with a ground (:func:`scene_shadow`), over the ground the clouds' boxes can shade.
+In the physical mode the map is softened (:mod:`cumuli.light.soft_shadow`).
 """
 
 from __future__ import annotations
@@ -27,6 +28,12 @@ from cumuli import registry
 from cumuli._util import validate as check
 from cumuli.light.footprint import box_corners, footprint
 from cumuli.light.physical import optical_depth
+from cumuli.light.soft_shadow import (
+    caster_distance,
+    chord_midpoints,
+    diffuse_transmittance,
+    penumbra,
+)
 
 #: Largest shadow-map edge.
 MAX_RESOLUTION = 4096
@@ -206,15 +213,68 @@ def compute_shadow(
     zz, xx = np.meshgrid(zs, xs, indexing="ij")
     pts = np.stack([xx, np.full_like(xx, height), zz], -1).reshape(-1, 3).astype(np.float32)
     values = np.ones((nz, nx), np.float32)
-    if scene.sun.direction[1] > 0:
+    if scene.sun.direction[1] > 0 and soft_shadows(scene.settings):
+        values = _soft_values(scene, pts, threads, lights, (x0, z0, x1, z1), (nz, nx))
+    elif scene.sun.direction[1] > 0:
         t = media_transmittance(scene, pts, scene.sun.direction, threads)
         if t is not None:
             values = t.reshape(nz, nx)
-    own = caster_transmittance(scene, pts, threads, lights) if scene.sun.direction[1] > 0 else None
-    if own is not None:
-        values = values * own.astype(np.float32).reshape(nz, nx)
+        own = caster_transmittance(scene, pts, threads, lights)
+        if own is not None:
+            values = values * own.astype(np.float32).reshape(nz, nx)
     values.setflags(write=False)
     return ShadowMap(values, (float(x0), float(z0), float(x1), float(z1)), float(height))
+
+
+def soft_shadows(settings: Any) -> bool:
+    """Whether ``settings`` soften the ground's shadows (the physical mode with a penumbra or
+    the diffuse transmission; :mod:`cumuli.light.soft_shadow`)."""
+    return bool(
+        settings.physical and (settings.diffuse_shadows or settings.sun_angular_diameter > 0)
+    )
+
+
+def _soft_values(
+    scene: Any, pts: np.ndarray, threads: int, lights: Sequence[Any] | None,
+    extent: tuple[float, float, float, float], shape: tuple[int, int],
+) -> np.ndarray:  # fmt: skip
+    """The physical mode's shadow map: every medium's optical depth on its own (for the caster
+    distance), the diffuse transmission, the casters' own transmittance, then the penumbra."""
+    s = scene.settings
+    sun = scene.sun.direction
+    taus: list[np.ndarray] = []
+    mids: list[np.ndarray] = []
+    tau_media = np.zeros(len(pts))
+    for d in scene.clouds:
+        if registry.of(d).medium is None:
+            continue
+        tau = optical_depth([d], scene, pts, sun, s.light_step, threads)
+        if tau is None:
+            continue
+        tau = tau.astype(np.float64)
+        taus.append(tau)
+        mids.append(chord_midpoints(d.layer_box(), pts, sun))
+        tau_media += tau
+    if s.diffuse_shadows:
+        values = diffuse_transmittance(tau_media, s.mean_cosine, s.albedo)
+    else:
+        values = np.exp(-tau_media)
+    for k, d in enumerate(scene.clouds):
+        if registry.of(d).caster is None:
+            continue
+        own = caster_transmittance(scene, pts, threads, lights, among=[k])
+        if own is None:
+            continue
+        own = own.astype(np.float64)
+        values = values * own
+        taus.append(-np.log(np.maximum(own, 1e-6)))
+        mids.append(chord_midpoints(d.layer_box(), pts, sun))
+    values = values.reshape(shape)
+    if not taus or s.sun_angular_diameter <= 0:
+        return values.astype(np.float32)
+    distance = caster_distance(taus, mids).reshape(shape)
+    weight = np.sum(taus, axis=0).reshape(shape)
+    return penumbra(values, distance, weight, sun, s.sun_angular_diameter, extent)
 
 
 def shadow_map(
@@ -230,7 +290,10 @@ def shadow_map(
     ``(j, i)`` is the ray from ``(x0 + (i + ½)(x1 − x0)/nx, height, z0 + (j + ½)(z1 − z0)/nz)``
     towards the sun. ``resolution`` is one int or ``(nx, nz)``. A sun at or below the horizon
     gives ones (no direct sunlight is shaded). For terrain and solar-irradiance work: multiply
-    by ``E_sun·max(sun.y, 0)`` for the direct irradiance.
+    by ``E_sun·max(sun.y, 0)`` for the sun's irradiance. In the physical mode the map is soft
+    (:mod:`cumuli.light.soft_shadow`): the sun disc's penumbra (``sun_angular_diameter``) and
+    the light the clouds scatter through (``diffuse_shadows``); turn both off for the direct
+    transmittance of a point sun.
     """
     from cumuli.scene import Scene
 

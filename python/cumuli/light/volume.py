@@ -400,7 +400,7 @@ def volume_light(
         "volume",
         content_digest(volume.density),
         volume.box,
-        volume.sigma_t,
+        volume.extinction_per_density(scene.settings),
         volume.albedo,
         tuple(sorted(volume.lighting.items())),
         scene.sun,
@@ -410,7 +410,8 @@ def volume_light(
     def make() -> np.ndarray:
         database = VolumeDatabase(volume.density[None], *volume.box)
         lighting = VolumeLighting(
-            database, scene.sun, scene.sky, sigma_t=volume.sigma_t, albedo=volume.albedo,
+            database, scene.sun, scene.sky, sigma_t=volume.extinction_per_density(scene.settings),
+            albedo=volume.albedo,
             threads=threads, **volume.lighting,
         )  # fmt: skip
         light = lighting.light(0, threads=threads)

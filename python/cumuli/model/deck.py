@@ -380,13 +380,17 @@ class CloudDeck:
 
     def to_volume(self, threads: int = 0) -> VolumeCloud:
         """The baked deck: a :class:`VolumeCloud` of :meth:`density_lattice` over the slab with
-        this deck's ``sigma_t`` (made once per deck: every stage reads the deck through it)."""
+        this deck's ``sigma_t``, read trilinearly without the volumes' detail (made once per
+        deck: every stage reads the deck through it)."""
         if "volume" not in self._cache:
             self._cache["volume"] = VolumeCloud(
                 density=self.density_lattice(threads),
                 box=self.box,
                 sigma_t=self.sigma_t,
                 params={"deck": self.cloud_type, "time": self.time},
+                # Baked from the deck's own fBm at its own resolution: read as it is.
+                detail=0.0,
+                reconstruction="linear",
             )
         return self._cache["volume"]
 

@@ -33,6 +33,13 @@ MAX_VOLUMES = 1 << 16
 MAX_SIMILARITY_VOLUMES = 1 << 13
 #: Largest extinction coefficient of a volume (per world unit).
 MAX_SIGMA_T = 1e12
+#: The physical mode's sharp-volume reading of a VolumeCloud (cumuli.rendering.volume_detail):
+#: the default erosion strength, its largest value, and the density reconstructions.
+DEFAULT_DETAIL = 0.5
+MAX_DETAIL = 0.95
+RECONSTRUCTIONS = ("cubic", "linear")
+#: The largest ``settings.extinction_scale`` (what ``sigma_t=None`` may stand for).
+MAX_EXTINCTION_SCALE = 1e6
 #: Largest ``sigma_t × density``: an optical depth over a path of MAX_COORD world units then
 #: stays below 1e27, far inside float32 (3.4e38), on both backends.
 MAX_EXTINCTION = 1e12
@@ -282,6 +289,15 @@ class VolumeCloud:
     for: the light stage uses it while the scene's sun and sky are those, and otherwise computes
     the light itself with :class:`cumuli.VolumeLighting` and the ``lighting`` keywords
     (``sh_order``, ``sh_samples``, ``step``, ``ms_points``, ...). Arrays are copied and read-only.
+
+    ``sigma_t`` None (the default) is the mode's extinction per unit density
+    (:meth:`extinction_per_density`): ``settings.extinction_scale`` in the physical mode, as for
+    a 2018 cloud of the same density, and 1 in the paper mode. ``detail``, ``detail_frequency``
+    and ``reconstruction`` are the physical mode's sharp-volume reading of the density
+    (:mod:`cumuli.rendering.volume_detail`): the tricubic B-spline of the voxels
+    (``"cubic"``, or ``"linear"``: trilinear) eroded at its edges by the scene's fBm with
+    strength ``detail`` in ``[0, 0.95]`` (0: none) at ``detail_frequency`` lattice texels per
+    world unit (None: half a texel per voxel). The paper mode reads neither.
     """
 
     #: Scene-file tag of this kind of drawable.
@@ -289,7 +305,7 @@ class VolumeCloud:
 
     density: np.ndarray
     box: tuple[Sequence[float], Sequence[float]]  # (lo, hi), kept as float tuples
-    sigma_t: float = 1.0
+    sigma_t: float | None = None
     albedo: float = 1.0
     g: float = 0.2
     step: float | None = None
@@ -298,6 +314,9 @@ class VolumeCloud:
     light_sky: Sky | None = None
     lighting: dict[str, Any] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
+    detail: float = DEFAULT_DETAIL
+    detail_frequency: float | None = None
+    reconstruction: str = "cubic"
 
     def __post_init__(self) -> None:
         s = object.__setattr__
@@ -309,16 +328,27 @@ class VolumeCloud:
         if not isinstance(self.box, Sequence) or len(self.box) != 2:
             raise TypeError(f"box must be (box_min, box_max), got {self.box!r}")
         s(self, "box", _box(self.box[0], self.box[1]))
-        s(self, "sigma_t", check.real(self.sigma_t, "sigma_t", 0.0, MAX_SIGMA_T))
+        if self.sigma_t is not None:
+            s(self, "sigma_t", check.real(self.sigma_t, "sigma_t", 0.0, MAX_SIGMA_T))
         biggest = float(dens.max()) if dens.size else 0.0
-        if self.sigma_t * biggest > MAX_EXTINCTION:
+        # sigma_t None stands for extinction_scale, which may be up to MAX_EXTINCTION_SCALE.
+        worst = self.sigma_t if self.sigma_t is not None else MAX_EXTINCTION_SCALE
+        if worst * biggest > MAX_EXTINCTION:
             raise ValueError(
-                f"sigma_t × the largest density ({self.sigma_t:g} × {biggest:g}) must be at most "
+                f"sigma_t × the largest density ({worst:g} × {biggest:g}) must be at most "
                 f"{MAX_EXTINCTION:g} (MAX_EXTINCTION: beyond it the marchers' optical depths "
                 "overflow float32)"
             )
         s(self, "albedo", check.real(self.albedo, "albedo", 0.0, 1.0))
         s(self, "g", check.real(self.g, "g", -1.0, 1.0, lo_open=True, hi_open=True))
+        s(self, "detail", check.real(self.detail, "detail", 0.0, MAX_DETAIL))
+        if self.detail_frequency is not None:
+            s(self, "detail_frequency", check.real(
+                self.detail_frequency, "detail_frequency", 0.0, 1e6, lo_open=True))  # fmt: skip
+        if self.reconstruction not in RECONSTRUCTIONS:
+            raise ValueError(
+                f"reconstruction must be one of {RECONSTRUCTIONS}, got {self.reconstruction!r}"
+            )
         if self.step is not None:
             s(self, "step", check.real(self.step, "step", 0.0, lo_open=True))
         if self.light is not None:
@@ -349,7 +379,10 @@ class VolumeCloud:
         database index) with its light from ``lighting`` (a :class:`cumuli.VolumeLighting` of the
         same database): blended density and blended optical depths, as the paper does.
 
-        ``render`` sets ``g`` and ``step``; ``sigma_t`` and ``albedo`` are the lighting's.
+        ``render`` sets ``g``, ``step`` and the sharp-volume fields (``detail``, ...);
+        ``sigma_t`` and ``albedo`` are the lighting's, its default ``sigma_t`` of 1 kept as None:
+        the mode's extinction, 1 in the paper mode (the same light) and ``extinction_scale`` in
+        the physical mode, which lights the frame anew as thick as the cloud it came from.
         """
         if not all(callable(getattr(lighting, k, None)) for k in ("density", "light")):
             raise TypeError(
@@ -362,7 +395,7 @@ class VolumeCloud:
         return cls(
             density=density,
             box=lighting.database.box,
-            sigma_t=lighting.sigma_t,
+            sigma_t=None if lighting.sigma_t == 1.0 else lighting.sigma_t,
             albedo=lighting.albedo,
             light=lighting.light(frame),
             light_sun=lighting.sun,
@@ -370,6 +403,13 @@ class VolumeCloud:
             params={"frame": index},
             **render,
         )
+
+    def extinction_per_density(self, settings: Any) -> float:
+        """σt per unit density under ``settings`` (a :class:`cumuli.RenderSettings`): ``sigma_t``
+        when given, else the physical mode's ``extinction_scale`` (1 in the paper mode)."""
+        if self.sigma_t is not None:
+            return float(self.sigma_t)
+        return float(settings.extinction_scale) if settings.physical else 1.0
 
     @property
     def shape(self) -> tuple[int, int, int]:
@@ -411,6 +451,9 @@ class VolumeCloud:
             "light_sky": None if self.light_sky is None else jsonable(asdict(self.light_sky)),
             "lighting": jsonable(self.lighting),
             "params": jsonable(self.params),
+            "detail": self.detail,
+            "detail_frequency": self.detail_frequency,
+            "reconstruction": self.reconstruction,
         }
 
     @classmethod
@@ -440,6 +483,9 @@ class VolumeCloud:
                 light_sky=None if sky is None else Sky(**sky),
                 lighting=data.get("lighting") or {},
                 params=data.get("params") or {},
+                detail=data.get("detail", DEFAULT_DETAIL),
+                detail_frequency=data.get("detail_frequency"),
+                reconstruction=data.get("reconstruction", "cubic"),
             )
         except (TypeError, ValueError) as exc:
             raise type(exc)(f"{where}: {exc}") from None

@@ -46,7 +46,9 @@ from cumuli.gl.sprites import (
     camera_dict,
     draw_sprites_cpu,
 )
+from cumuli.light import sprite_physical
 from cumuli.light.billboards import BillboardLighting
+from cumuli.light.caf import default_max_distance
 from cumuli.light.prepare import LitScene
 from cumuli.model.atlas import SpriteAtlas
 from cumuli.model.billboard_field import BillboardField
@@ -232,20 +234,98 @@ def billboard_frame(
     shade["light_dirs"] = np.array([s.direction for s in suns], np.float32).reshape(-1, 3)
     shade["light_radiance"] = np.array([s.radiance for s in suns], np.float32).reshape(-1, 3)
     cam = camera_dict(camera, width, height, shading.near)
-    out = _core.billboard_sprites(
-        variants, cat["variant"].astype(np.int32), cat["off"].reshape(-1, 3).astype(np.float32),
-        cat["yaw"].astype(np.float32), alpha, cat["first"].astype(np.int64),
-        np.ascontiguousarray(caf, np.float32), shade, cam, shading.draw_dict(), threads,
-    )  # fmt: skip
+    physical = lit.scene.settings.physical
+    draw = shading.draw_dict()
+    if physical:  # the physical mode shades the corners (below)
+        draw["fragment"] = False
+    args = (variants, cat["variant"].astype(np.int32),
+            cat["off"].reshape(-1, 3).astype(np.float32), cat["yaw"].astype(np.float32), alpha,
+            cat["first"].astype(np.int64), np.ascontiguousarray(caf, np.float32))  # fmt: skip
+    out = _core.billboard_sprites(*args, shade, cam, draw, threads)
+    if physical:
+        out["colours"] = _physical_colours(lit, parts, args, shade, cam, draw, out, camera,
+                                           threads)  # fmt: skip
     if out["centres"].shape[0] > MAX_SPRITES:
         raise ValueError(f"the pass draws {out['centres'].shape[0]} billboards (> {MAX_SPRITES})")
     sprites = Sprites(out["centres"], out["half_sizes"], out["colours"], out["alpha"],
                       out["rotation"], out["texture"])  # fmt: skip
     fragment = None
-    if shading.shading == "fragment":
+    if shading.shading == "fragment" and not physical:
         fragment = FragmentShading(out["frame"], out["yrange"], out["caf"], shade["light_dirs"],
                                    shade["light_radiance"], shade)  # fmt: skip
     return BillboardFrame(sprites, image, grid, fragment, out["instance"], out["billboard"])
+
+
+def _physical_colours(
+    lit: LitScene, parts: list, args: tuple, shade: dict, cam: dict, draw: dict, out: dict,
+    camera: Camera, threads: int,
+) -> np.ndarray:  # fmt: skip
+    """The physical mode's corner colours of a pass
+    (:func:`cumuli.light.sprite_physical.billboard_colours`): each cloud's proxy light at the
+    corners; every light's ``H·CAF·D`` there from the paper's vertex shading with one light
+    per colour channel and no ambient, and the scene's shadow on the cloud (the CAF through
+    the scene over the cloud's own)."""
+    scene = lit.scene
+    n = out["centres"].shape[0]
+    trans = _corner_light(args, args[6], shade, cam, draw, threads, n)
+    shadow = np.ones((n, 4))
+    if n and any(light.unshadowed is not None for _, light in parts):
+        own = np.concatenate([(light.unshadowed or light).caf for _, light in parts], axis=1)
+        mine = _corner_light(args, own.astype(np.float32), shade, cam, draw, threads, n)
+        shadow = sprite_physical.shadow_factor(trans[..., 0], mine[..., 0])
+    sprites = Sprites(out["centres"], out["half_sizes"], out["colours"], out["alpha"],
+                      out["rotation"], out["texture"])  # fmt: skip
+    points = sprite_physical.corners(sprites.centres, sprites.half_sizes, sprites.rotation, camera)
+    lights = _proxy_lights(lit, parts, threads)
+    return sprite_physical.billboard_colours(
+        scene, lights, np.asarray(out["instance"], np.int64), points, trans, shadow,
+        camera.position,
+    )  # fmt: skip
+
+
+def _corner_light(args: tuple, caf: np.ndarray, shade: dict, cam: dict, draw: dict,
+                  threads: int, n: int) -> np.ndarray:  # fmt: skip
+    """``(N, 4, L)``: each light's ``H·CAF·D`` at every corner, by the C++ vertex shading with
+    three lights at a time, one per colour channel, no ambient."""
+    n_lights = shade["light_dirs"].shape[0]
+    out = np.zeros((n, 4, n_lights), np.float32)
+    for first in range(0, n_lights, 3):
+        rows = list(range(first, min(first + 3, n_lights)))
+        one = dict(shade, ambient=(0.0, 0.0, 0.0), k_amb=0.0)
+        one["light_dirs"] = shade["light_dirs"][rows]
+        one["light_radiance"] = np.eye(3, dtype=np.float32)[: len(rows)]
+        got = _core.billboard_sprites(*args[:6], np.ascontiguousarray(caf[rows]), one, cam,
+                                      draw, threads)  # fmt: skip
+        colours = np.asarray(got["colours"], np.float32).reshape(n, 4, 3)
+        out[:, :, rows] = colours[..., : len(rows)]
+    return out
+
+
+def _proxy_lights(lit: LitScene, parts: list, threads: int) -> list[tuple[Any, np.ndarray]]:
+    """Per cloud of the pass (:func:`cloud_spheres` order): the physical light of its proxy
+    medium and the point its lattice is built about. A field instance reads its variant's
+    (``FIELD_GRID`` cells, not turned by its yaw: the light keeps its side towards the sun)."""
+    md = lit.scene.billboard_shading.max_distance
+    out = []
+    for d, _ in parts:
+        if isinstance(d, BillboardCloud):
+            placed = [(d, sprite_physical.GRID, np.zeros(3))]
+        else:
+            cells = sprite_physical.FIELD_GRID
+            placed = [(d.variants[int(d.variant[i])], cells, np.asarray(d.offsets[i], np.float64))
+                      for i in range(d.n)]  # fmt: skip
+        for v, cells, offset in placed:
+            dist = default_max_distance(v) if md is None else md
+            known = _lattices.setdefault(v, {})
+            if (dist, cells) not in known:
+                known[(dist, cells)] = sprite_physical.box_extinction(v.boxes, dist, cells)
+            light = sprite_physical.proxy_light(known[(dist, cells)], lit.scene)
+            out.append((light, offset))
+    return out
+
+
+#: Each variant's proxy lattices by ``(max_distance, cells)``.
+_lattices: weakref.WeakKeyDictionary[BillboardCloud, dict] = weakref.WeakKeyDictionary()
 
 
 #: The box `finish` composites a pass's layer with: every ray enters it.

@@ -29,7 +29,7 @@ from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _thread_default, check_context, default_context
 from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
-from cumuli.model.volume import VolumeCloud
+from cumuli.model.volume import DEFAULT_DETAIL, VolumeCloud
 from cumuli.rendering.air import add_air
 from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
 from cumuli.rendering.painters import CPUPainter, GLPainter
@@ -107,7 +107,7 @@ def compose(
     if impostors is None and single_pass(scene):
         kind, indices = calls[0]
         image = painter.layer(lit, kind, indices, camera, width, height, True)
-        return add_air(resolve(image, scene), scene, camera)
+        return resolve(add_air(image, scene, camera, lit.shadow), scene)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
     else:
@@ -125,7 +125,7 @@ def compose(
         solid,
         ground_args(scene.ground, scene.sky, lit.shadow),
     )  # fmt: skip
-    return add_air(resolve(image, scene), scene, camera)
+    return resolve(add_air(image, scene, camera, lit.shadow), scene)
 
 
 def _lit(scene: Any) -> tuple[LitScene | None, Scene]:
@@ -546,13 +546,15 @@ def render_volume(
     sky: Any = None,
     backend: str = "cpu",
     *,
-    sigma_t: float = 1.0,
+    sigma_t: float | None = None,
     albedo: float = 1.0,
     g: float = 0.2,
     step: float | None = None,
     threads: int = 0,
     context: GLContext | None = None,
     settings: RenderSettings | None = None,
+    detail: float = DEFAULT_DETAIL,
+    reconstruction: str = "cubic",
 ) -> np.ndarray:
     """Render one lit density volume: ``(height, width, 4)`` float32 linear RGBA, row 0 on top.
 
@@ -561,6 +563,9 @@ def render_volume(
     to half the smallest voxel edge. ``g`` is the Henyey–Greenstein asymmetry of sun scattering.
     With ``settings=RenderSettings(lighting="physical")`` the physical mode lights the volume
     (``σt = sigma_t·volume``; ``light`` may be None, the light step computes its own).
+    ``sigma_t=None`` is the mode's extinction per unit density: 1 in the paper mode,
+    ``settings.extinction_scale`` in the physical mode (the volume then reads like a 2018 cloud
+    of the same density); ``detail``, ``reconstruction``: its sharp reading (`VolumeCloud`'s).
     ``settings`` left None is the paper mode when a ``light`` is given (the volume's own light
     model draws it) and the physical mode (the default) when it is None.
     A thin wrapper: a scene holding one :class:`cumuli.VolumeCloud` through :func:`render`.
@@ -583,7 +588,8 @@ def render_volume(
     check_context(context)  # on the CPU backend too
     lit = {} if light is None else {"light": light, "light_sun": sun, "light_sky": sky}
     vc = VolumeCloud(
-        density=volume, box=box, sigma_t=sigma_t, albedo=albedo, g=g, step=step, **lit
+        density=volume, box=box, sigma_t=sigma_t, albedo=albedo, g=g, step=step, detail=detail,
+        reconstruction=reconstruction, **lit,
     )  # fmt: skip
     scene = Scene([vc], sun=sun, sky=sky, settings=settings)
     if backend == "cpu":

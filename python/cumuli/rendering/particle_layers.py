@@ -35,6 +35,7 @@ from cumuli.gl.sprites import (
     camera_dict,
     draw_sprites_cpu,
 )
+from cumuli.light import sprite_physical
 from cumuli.light.particles import light_directions
 from cumuli.light.prepare import LitScene
 from cumuli.rendering.particles import _check_light as check_light
@@ -59,10 +60,45 @@ def _cloud_sprites(
     lit: LitScene, k: int, camera: Camera, width: int, height: int, keys: bool = False
 ) -> Any:
     scene = lit.scene
+    if scene.settings.physical:
+        return _physical_sprites(lit, [k], camera, width, height, keys)
     return particle_sprites(
         scene.clouds[k], lit.lights[k], (scene.sun, *scene.lights), camera, width, height,
         scene.sprite_settings, return_keys=keys,
     )  # fmt: skip
+
+
+def _physical_sprites(
+    lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
+    keys: bool = False,
+) -> Any:  # fmt: skip
+    """The sprites of the clouds ``indices`` (in that order) with the physical mode's colours
+    (:func:`cumuli.light.sprite_physical.particle_colours`): Harris's light as the sun's
+    transmittance, the scene's phase, octaves and sky."""
+    scene = lit.scene
+    s = scene.sprite_settings
+    lights = (scene.sun, *scene.lights)
+    dirs = light_directions(lights)
+    radiance = np.array([x.radiance for x in lights], dtype=np.float32).reshape(-1, 3)
+    cam = camera_dict(camera, width, height, s.near)
+    parts, sort_keys = [], []
+    for k in indices:
+        cloud, light = scene.clouds[k], lit.lights[k]
+        check_light(cloud, light, lights)
+        index, _, alpha, key = _core.particle_sprites(
+            *cloud.core_args(), light.light, dirs, radiance, cam,
+            core_struct(
+                _core.ParticleSpriteSettings, solid_angle=s.solid_angle, phase=s.phase,
+                hg_g=s.hg_g, ambient=s.ambient, sort=s.sort, cull=True,
+            ),
+        )  # fmt: skip
+        index = np.asarray(index, np.int64)
+        colour = sprite_physical.particle_colours(scene, cloud, light, index, camera.position)
+        parts.append(Sprites(centres=cloud.centres[index], half_sizes=cloud.radii[index],
+                             colours=colour, alpha=alpha))  # fmt: skip
+        sort_keys.append(np.asarray(key))
+    sprites = _concat(parts)
+    return (sprites, np.concatenate(sort_keys) if sort_keys else np.zeros(0)) if keys else sprites
 
 
 def _concat(parts: Sequence[Sprites]) -> Sprites:
@@ -83,6 +119,8 @@ def scene_sprites(
     :func:`~cumuli.rendering.particles.particle_sprites` per cloud with the camera, lights and
     settings prepared once (a field has thousands of clouds)."""
     scene = lit.scene
+    if scene.settings.physical:
+        return _physical_sprites(lit, cloud_order(lit, indices, camera), camera, width, height)
     s = scene.sprite_settings
     lights = (scene.sun, *scene.lights)
     dirs = light_directions(lights)

@@ -39,12 +39,16 @@ from cumuli.rendering.marcher_cpu import physical_core_tuple
 from cumuli.rendering.params import physical_params, sky_params, sky_uniforms, sun_params
 from cumuli.rendering.physical_gl import bind_physical
 from cumuli.rendering.solids import set_solid_uniforms
+from cumuli.rendering.volume_detail import VolumeDetail, volume_detail
 from cumuli.sky import Sun, as_sky
 
 #: Most steps a ray may take (the shader's loop bound).
 MAX_STEPS = 1 << 16
 #: Largest image edge.
 MAX_IMAGE = 1 << 14
+#: The texture unit of the detail noise's lattice (0, 1: density and light; 2, 3: the physical
+#: light's atlases).
+NOISE_UNIT = 4
 #: Largest image in pixels (the compositor's limit: 2²⁶ RGBA32F pixels = 1 GiB).
 MAX_PIXELS = 1 << 26
 
@@ -133,6 +137,7 @@ class VolumeRenderer:
             self.context.timer_query()
         self.gpu_time_ns: int | None = None
         self._physical: tuple[Any, Any] | None = None  # the PHYSICAL variant, made on first use
+        self._noise: tuple[tuple[int, int], Any] | None = None  # the detail noise's texture
 
     def _physical_program(self) -> tuple[Any, Any]:
         if self._physical is None:
@@ -160,24 +165,43 @@ class VolumeRenderer:
         with_sky: bool = True,
         solids: Sequence[Solid] = (),
         physical: Any = None,
+        detail: VolumeDetail | None = None,
     ) -> np.ndarray:
         """As :func:`cumuli.render_volume` with ``backend="gl"``; ``camera`` may also be the dict
         of :func:`camera_rays`. ``with_sky=False`` gives the premultiplied layer
         ``(colour, 1 − T)`` the compositor combines; each ray stops at the nearest of the opaque
         ``solids``. ``physical`` ``(settings, PhysicalLight)`` selects the physical mode
-        (``light`` is then not read)."""
+        (``light`` is then not read), where ``detail`` (a
+        :class:`~cumuli.rendering.volume_detail.VolumeDetail`) reads the density as a sharp
+        volume (None: trilinear, not eroded)."""
         if self.program is None or self.context.closed:
             raise ValueError("this VolumeRenderer has been released")
         with self.context.activate("this VolumeRenderer's GL context"):
             return self._render(
                 volume, light, box, camera, width, height, sun, sky, sigma_t, albedo, g, step,
-                with_sky, solids, physical,
+                with_sky, solids, physical, detail,
             )  # fmt: skip
+
+    def _noise_texture(self, noise: Any) -> Any:
+        """The detail noise's lattice as a LINEAR / REPEAT R32F 3D texture (kept across
+        renders of the same lattice)."""
+        key = (noise.seed, noise.size)
+        cached = self._noise
+        if cached is not None and cached[0] == key:
+            return cached[1]
+        if cached is not None:
+            cached[1].release()
+        n = noise.size
+        tex = self.context.ctx.texture3d((n, n, n), 1, noise.lattice.tobytes(), dtype="f4")
+        tex.filter = (moderngl.LINEAR, moderngl.LINEAR)
+        tex.repeat_x = tex.repeat_y = tex.repeat_z = True
+        self._noise = (key, tex)
+        return tex
 
     def _render(
         self, volume: Any, light: Any, box: Any, camera: Any, width: int, height: int, sun: Any,
         sky: Any, sigma_t: float, albedo: float, g: float, step: float | None, with_sky: bool,
-        solids: Sequence[Solid], physical: Any,
+        solids: Sequence[Solid], physical: Any, detail: VolumeDetail | None,
     ) -> np.ndarray:  # fmt: skip
         sun = Sun() if sun is None else sun
         if not isinstance(sun, Sun):
@@ -215,6 +239,9 @@ class VolumeRenderer:
 
                 made += bind_physical(ctx, set_, settings, [plight], limit)
                 set_("u_exact_light", bool(settings.exact_noise))
+                _set_detail(set_, detail)
+                if detail is not None and detail.strength > 0.0:
+                    self._noise_texture(detail.noise).use(location=NOISE_UNIT)
             values = {
                 "u_density": 0,
                 "u_light": 1,
@@ -262,8 +289,11 @@ class VolumeRenderer:
                 if self._physical is not None:
                     self._physical[1].release()
                     self._physical[0].release()
+                if self._noise is not None:
+                    self._noise[1].release()
         self.program = None
         self._physical = None
+        self._noise = None
 
     def __enter__(self) -> VolumeRenderer:
         return self
@@ -290,6 +320,7 @@ def render_volume_cpu(
     with_sky: bool = True,
     solids: Sequence[Solid] = (),
     physical: Any = None,
+    detail: VolumeDetail | None = None,
 ) -> np.ndarray:
     """The C++ twin of :meth:`VolumeRenderer.render` (``_core.render_volume_cpu``)."""
     solids = as_solids(solids)
@@ -312,8 +343,13 @@ def render_volume_cpu(
         settings, plight = physical
         p.physical, p.phys = True, physical_params(settings, plight.octaves)
         plight = physical_core_tuple(plight)
+    noise = None
+    if physical is not None and detail is not None:
+        p.cubic, p.detail, p.detail_inv_max = detail.cubic, detail.strength, detail.inv_max
+        p.detail_fbm = _core.FbmParams(*detail.fbm)
+        noise = detail.noise._core if detail.strength > 0.0 else None
     return _core.render_volume_cpu(
-        vol, lig, lo, hi, rays, p, check.threads(threads), spheres, plight
+        vol, lig, lo, hi, rays, p, check.threads(threads), spheres, plight, noise
     )  # fmt: skip
 
 
@@ -328,6 +364,32 @@ def _volume_args(lit: LitScene, k: int) -> tuple[Any, ...]:
 def _physical(lit: LitScene, k: int) -> Any:
     light = lit.lights[k]
     return (lit.scene.settings, light) if isinstance(light, PhysicalLight) else None
+
+
+def _medium(lit: LitScene, k: int) -> dict[str, Any]:
+    """The marcher's keywords for volume ``k`` of ``lit``: its medium and sharp-volume detail."""
+    v = lit.scene.clouds[k]
+    detail = volume_detail(v, lit.scene) if _physical(lit, k) is not None else None
+    return {
+        "sigma_t": v.extinction_per_density(lit.scene.settings), "albedo": v.albedo, "g": v.g,
+        "step": v.step, "solids": lit.scene.solids, "physical": _physical(lit, k),
+        "detail": detail,
+    }  # fmt: skip
+
+
+def _set_detail(set_: Any, detail: VolumeDetail | None) -> None:
+    """The physical variant's sharp-volume uniforms (trilinear, no erosion for None)."""
+    set_("u_cubic", bool(detail is not None and detail.cubic))
+    strength = 0.0 if detail is None else detail.strength
+    set_("u_detail", strength)
+    set_("u_detail_inv_max", 1.0 if detail is None else detail.inv_max)
+    if detail is not None and strength > 0.0:
+        octaves, gain, lacunarity, frequency = detail.fbm
+        set_("u_lattice", NOISE_UNIT)
+        set_("u_octaves", octaves)
+        set_("u_gain", gain)
+        set_("u_lacunarity", lacunarity)
+        set_("u_frequency", frequency)
 
 
 class VolumeGL:
@@ -360,11 +422,9 @@ class VolumeGL:
         with_sky: bool,
     ) -> np.ndarray:
         (k,) = indices
-        v = lit.scene.clouds[k]
         return self.renderer.render(
             *_volume_args(lit, k), camera, width, height, lit.scene.sun, lit.scene.sky,
-            sigma_t=v.sigma_t, albedo=v.albedo, g=v.g, step=v.step, with_sky=with_sky,
-            solids=lit.scene.solids, physical=_physical(lit, k),
+            with_sky=with_sky, **_medium(lit, k),
         )  # fmt: skip
 
     def release(self) -> None:
@@ -382,9 +442,7 @@ def draw_volume_cpu(
 ) -> np.ndarray:
     """The CPU twin of :meth:`VolumeGL.draw`."""
     (k,) = indices
-    v = lit.scene.clouds[k]
     return render_volume_cpu(
         *_volume_args(lit, k), camera, width, height, lit.scene.sun, lit.scene.sky,
-        sigma_t=v.sigma_t, albedo=v.albedo, g=v.g, step=v.step, threads=threads,
-        with_sky=with_sky, solids=lit.scene.solids, physical=_physical(lit, k),
+        threads=threads, with_sky=with_sky, **_medium(lit, k),
     )  # fmt: skip

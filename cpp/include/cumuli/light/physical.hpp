@@ -83,7 +83,8 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& frame
 
 // E_sky (RGB, interleaved) at every voxel centre of the extinction lattice `ext` (σt, [z][y][x]
 // over g): Σ_m L_m V_m with V the SH projection (order², n_theta quadrature) of exp(−τ(x, ω)),
-// τ marched through `ext` with steps of step_voxels voxels, stopped once τ > 12.
+// τ marched through `ext` with steps of step_voxels voxels, stopped once τ > 6 (the e^−6 of
+// visibility left is dropped); voxels with no medium within one voxel get the open sky.
 std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
                                   int order, int n_theta, float step_voxels, int threads);
 

@@ -16,6 +16,7 @@
 #include <glm/vec3.hpp>
 
 #include "cumuli/light/volume.hpp"
+#include "cumuli/noise.hpp"
 #include "cumuli/phase.hpp"
 #include "cumuli/rendering/physical.hpp"
 #include "cumuli/rendering/solids.hpp"
@@ -46,7 +47,27 @@ struct VolumeRenderParams {
   bool physical = false;
   PhysicalParams phys;
   const PhysicalGrids* grids = nullptr;
+  // Physical mode only, the sharp-volume reconstruction (the paper mode reads neither):
+  // `cubic`: the density is the tricubic B-spline of the voxels (C² across cell faces, so no
+  // cell edges show), else trilinear. `detail` > 0 erodes it with the fBm `noise` at
+  // `detail_fbm` (Schneider's Nubis clouds, 2015/2017): with ρn = min(ρ·detail_inv_max, 1) and
+  // e = detail·n(x), n the fBm over its largest value Σwⁱ, ρ' = max(ρn − e, 0)/(1 − e)/inv_max.
+  // The remap only removes density and removes more of it where ρn is low: the edges are
+  // carved, the core (ρn → 1) is kept.
+  bool cubic = false;
+  float detail = 0.0f;
+  float detail_inv_max = 1.0f;
+  FbmParams detail_fbm;
+  const Noise* noise = nullptr;  // needed when detail > 0
 };
+
+// The tricubic B-spline of a [z][y][x] volume at p (clamp to edge, GL texel centres): its 64
+// taps summed separably; the GLSL gets the same sum as eight trilinear lookups at shifted points
+// (Sigg & Hadwiger, GPU Gems 2, ch. 20).
+float sample_cubic_bspline(const float* vol, const VolumeGrid& g, glm::vec3 p);
+
+// The eroded density of `rho` at p (the `detail` rule above); rho unchanged when detail is 0.
+float erode_density(float rho, glm::vec3 p, const VolumeRenderParams& params);
 
 constexpr float kVolumeMinTransmittance = 1e-4f;
 
