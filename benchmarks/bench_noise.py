@@ -28,6 +28,9 @@ method before the hand-written SIMD paths), the others give bit-identical values
 Targets, each ``{limit, comparison, reached, met}`` with today's scalar path as ``baseline``
 (value and ratio): ≥ 100 M samples/s per thread, ≥ 7× pyfastnoiselite per thread (CPU time),
 ≥ 1.0× pyfastnoisesimd's value fBm per thread (CPU time, the default kernel),
+≥ 1.0× pyfastnoisesimd's value fBm per thread for the hash kernel (noise version 2: the widest
+level's ``cpp_1_thread_<level>_hash``, which computes the lattice values from a hash of the seed
+and the texel instead of reading them; timed interleaved with the others),
 ≥ 1.8× from 1 to 2 threads (only meaningful when two cores are free; the load average is
 recorded). The thread counts are interleaved with each timed call after an untimed one of its own
 (the pool's helper thread awake, as in a run of calls); the "cold" ratio beside it times each
@@ -112,22 +115,27 @@ def bench_simd(
     pts: np.ndarray,
     repeats: int,
     others: dict[str, Callable[[], Any]] | None = None,
+    hashed: cu.Noise | None = None,
 ) -> dict[str, dict[str, Any]]:
     """The C++ fBm on 1 thread with every kernel this CPU runs, repeats interleaved across them
     and with ``others`` (single-threaded methods to compare with, e.g. pyfastnoiselite), so that
     a shared machine's drift touches all alike.
 
     Keys: ``scalar``, and ``<level>_<fetch>`` for each wide level and lattice fetch
-    (``avx2_gather``, ..., ``avx512_cells``), then the keys of ``others``.
+    (``avx2_gather``, ..., ``avx512_cells``), with ``hashed`` (a version-2 noise) its kernel on
+    each wide level (``avx2_hash``, ``avx512_hash``), then the keys of ``others``.
     """
     from cumuli.noise import set_simd_fetch, set_simd_level, simd_levels
 
     def at(level: str, fetch: str) -> Any:
+        source = hashed if fetch == "hash" else noise
+        assert source is not None
+
         def run() -> np.ndarray:
             set_simd_level(level)
-            set_simd_fetch(fetch)
+            set_simd_fetch("auto" if fetch == "hash" else fetch)
             try:
-                return noise.fbm(pts, octaves=OCTAVES, threads=1)
+                return source.fbm(pts, octaves=OCTAVES, threads=1)
             finally:
                 set_simd_level("auto")
                 set_simd_fetch("auto")
@@ -138,7 +146,7 @@ def bench_simd(
         f"{lvl}_{fetch}": (lvl, fetch)
         for lvl in simd_levels()
         if lvl != "scalar"
-        for fetch in SIMD_FETCHES
+        for fetch in (*SIMD_FETCHES, *(("hash",) if hashed is not None else ()))
     }
     # One untimed call before each timed one: the cells fetch reads a 4.4 MB table of the cells,
     # the others the 1.1 MB lattice, and each would otherwise start from the other's caches.
@@ -369,7 +377,8 @@ def main(argv: list[str] | None = None) -> int:
             hint = f"; it builds with `{FASTNOISESIMD_HINT}`" if name == "pyfastnoisesimd" else ""
             skipped[name] = f"not installed ({exc}){hint}"
             common.log(f"{name}: {skipped[name]}")
-    simd = bench_simd(noise, pts, repeats, others)
+    hashed = cu.Noise(seed=7, version=2)
+    simd = bench_simd(noise, pts, repeats, others, hashed)
     for name, m in simd.items():
         if name in others:
             methods[name] = m | {"noise": LIBRARIES[name][0]}
@@ -491,6 +500,26 @@ def main(argv: list[str] | None = None) -> int:
                 "ratio": best["samples_per_cpu_s"] / scalar["samples_per_cpu_s"],
             },
         )
+    hash_key = f"cpp_1_thread_{widest}_hash"
+    if hash_key in methods:
+        hash_cpu = methods[hash_key]["samples_per_cpu_s"]
+        ratios["hash_over_default_kernel_cpu_time"] = hash_cpu / best["samples_per_cpu_s"]
+        if "pyfastnoisesimd" in methods:
+            simd_cpu = methods["pyfastnoisesimd"]["samples_per_cpu_s"]
+            targets["hash_per_thread_vs_fastnoisesimd"] = common.target(
+                TARGET_VS_FASTNOISESIMD,
+                hash_cpu / simd_cpu,
+                ">=",
+                measure=f"samples per CPU-second, 1 thread each, noise version 2 (hash) on "
+                f"{widest} over FastNoiseSIMD's value fBm, interleaved",
+                baseline={
+                    "method": f"{kernel} (version 1, the table)",
+                    "reached": best["samples_per_cpu_s"] / simd_cpu,
+                    "ratio": hash_cpu / best["samples_per_cpu_s"],
+                },
+                reached_median=methods[hash_key]["samples_per_cpu_s_median"]
+                / methods["pyfastnoisesimd"]["samples_per_cpu_s_median"],
+            )
     targets["cpp_2_threads_over_1"] = common.target(
         TARGET_2_THREADS,
         ratios["cpp_2_threads_over_1"],

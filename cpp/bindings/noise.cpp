@@ -101,8 +101,11 @@ void bind_noise(py::module_& m) {
       },
       py::arg("fetch"), "Use this lattice fetch ('auto': back to CUMULI_SIMD_FETCH or the CPU's).");
   py::class_<Noise>(m, "Noise")
-      .def(py::init<std::uint64_t, int>(), py::arg("seed"), py::arg("size") = 64)
+      .def(py::init<std::uint64_t, int, int>(), py::arg("seed"), py::arg("size") = 64,
+           py::arg("version") = static_cast<int>(Noise::kVersionTable))
       .def_property_readonly("size", &Noise::size)
+      .def_property_readonly("version", &Noise::version)
+      .def_property_readonly("key", &Noise::key, "Version 2's 32-bit hash key of the seed.")
       .def_property_readonly("has_cells", &Noise::has_cells)
       .def_property_readonly("seed", &Noise::seed)
       .def_property_readonly(

@@ -84,25 +84,44 @@ void FbmParams::validate() const {
     throw std::invalid_argument("frequency must be a finite positive number");
 }
 
-Noise::Noise(std::uint64_t seed, int size) : seed_(seed), size_(size), mask_(-1) {
+std::uint32_t Noise::hash_key(std::uint64_t seed) {
+  return static_cast<std::uint32_t>(Rng(seed).next_u64() >> 32);
+}
+
+Noise::Noise(std::uint64_t seed, int size, int version)
+    : seed_(seed),
+      version_(version),
+      key_(hash_key(seed)),
+      size_(size),
+      mask_(-1),
+      bias_(version == kVersionHash ? 1.0f : 0.0f) {
+  if (version != kVersionTable && version != kVersionHash)
+    throw std::invalid_argument("noise version must be 1 (table) or 2 (hash), got " +
+                                std::to_string(version));
   if (size < 2 || size > kMaxSize)
     throw std::invalid_argument("size must be in [2, " + std::to_string(kMaxSize) + "], got " +
                                 std::to_string(size));
   if ((size & (size - 1)) == 0) mask_ = size - 1;
   const std::size_t s = static_cast<std::size_t>(size);
   lattice_.resize(s * s * s);
-  Rng rng(seed);
-  for (auto& v : lattice_) v = rng.uniform();
+  if (version == kVersionTable) {
+    Rng rng(seed);
+    for (auto& v : lattice_) v = rng.uniform();
+  } else {
+    for (std::size_t i = 0; i < lattice_.size(); ++i)
+      lattice_[i] = hash_biased(key_, static_cast<std::uint32_t>(i)) - 1.0f;  // exact
+  }
 
   const std::size_t p = s + 1;
   padded_.resize(p * p * p);
   for (std::size_t z = 0; z < p; ++z)
     for (std::size_t y = 0; y < p; ++y)
       for (std::size_t x = 0; x < p; ++x)
-        padded_[(z * p + y) * p + x] = lattice_[((z % s) * s + (y % s)) * s + (x % s)];
+        padded_[(z * p + y) * p + x] = lattice_[((z % s) * s + (y % s)) * s + (x % s)] + bias_;
   // 4.4 MB at the default size 64; larger lattices (and sizes that are not powers of two, which
-  // never reach the SIMD kernels) go without, and their Cells fetch reads the rows (Loads).
-  if (mask_ < 0 || size > kMaxCellsSize) return;
+  // never reach the SIMD kernels) go without, and their Cells fetch reads the rows (Loads). The
+  // hash version's wide kernels read no table.
+  if (mask_ < 0 || size > kMaxCellsSize || version == kVersionHash) return;
   const std::size_t pp = p * p;
   cells_.assign(4 * pp * p, 0.0f);
   for (std::size_t z = 0; z < s; ++z)
@@ -116,14 +135,10 @@ Noise::Noise(std::uint64_t seed, int size) : seed_(seed), size_(size), mask_(-1)
       }
 }
 
-void Noise::split(float x, int& index, float& weight) const {
-  if (std::fabs(x) < kFastLimit) {
-    const float f = floor_small(x);
-    weight = x - f;
-    const int i = static_cast<int>(f);
-    index = mask_ >= 0 ? (i & mask_) : wrap_mod(i, size_);
-    return;
-  }
+namespace {
+
+// Noise::split beyond the fast range: |x| ≥ 2²² or not finite (out of line: rare).
+__attribute__((noinline)) void split_far(float x, int size, int& index, float& weight) {
   if (!std::isfinite(x)) {  // NaN in, NaN out (through the weight), without undefined casts
     index = 0;
     weight = x - x;
@@ -133,12 +148,28 @@ void Noise::split(float x, int& index, float& weight) const {
   // is exact (fmod is exact and every such float is an integer).
   const double f = std::floor(static_cast<double>(x));
   weight = x - static_cast<float>(f);
-  double r = std::fmod(f, static_cast<double>(size_));
-  if (r < 0.0) r += size_;
+  double r = std::fmod(f, static_cast<double>(size));
+  if (r < 0.0) r += size;
   index = static_cast<int>(r);
 }
 
-float Noise::blend(int ix, int iy, int iz, float wx, float wy, float wz) const {
+}  // namespace
+
+// split, blend and lattice_at are inlined into fbm(), the per-sample path of the marchers and the
+// light passes (a call per octave and axis cost about a third of its time).
+__attribute__((always_inline)) inline void Noise::split(float x, int& index, float& weight) const {
+  if (std::fabs(x) < kFastLimit) {
+    const float f = floor_small(x);
+    weight = x - f;
+    const int i = static_cast<int>(f);
+    index = mask_ >= 0 ? (i & mask_) : wrap_mod(i, size_);
+    return;
+  }
+  split_far(x, size_, index, weight);
+}
+
+__attribute__((always_inline)) inline float Noise::blend(int ix, int iy, int iz, float wx, float wy,
+                                                         float wz) const {
   const std::size_t p = static_cast<std::size_t>(size_) + 1;
   const std::size_t pp = p * p;
   const float* c = padded_.data() + (static_cast<std::size_t>(iz) * p + iy) * p + ix;
@@ -149,10 +180,10 @@ float Noise::blend(int ix, int iy, int iz, float wx, float wy, float wz) const {
   const float c11 = c[pp + p] + wx * (c[pp + p + 1] - c[pp + p]);
   const float c0 = c00 + wy * (c10 - c00);
   const float c1 = c01 + wy * (c11 - c01);
-  return c0 + wz * (c1 - c0);
+  return (c0 + wz * (c1 - c0)) - bias_;  // x − 0 is x: version 1 unchanged
 }
 
-float Noise::lattice_at(glm::vec3 u) const {
+__attribute__((always_inline)) inline float Noise::lookup(glm::vec3 u) const {
   const glm::vec3 x = u - 0.5f;
   int ix, iy, iz;
   float wx, wy, wz;
@@ -162,6 +193,8 @@ float Noise::lattice_at(glm::vec3 u) const {
   return blend(ix, iy, iz, wx, wy, wz);
 }
 
+float Noise::lattice_at(glm::vec3 u) const { return lookup(u); }
+
 float Noise::fbm(glm::vec3 p, const FbmParams& params) const {
   float sum = 0.0f;
   float amplitude = 1.0f;
@@ -169,7 +202,7 @@ float Noise::fbm(glm::vec3 p, const FbmParams& params) const {
   for (int i = 1; i <= params.octaves; ++i) {
     amplitude *= params.gain;
     scale *= params.lacunarity;
-    sum += amplitude * lattice_at(p * scale);
+    sum += amplitude * lookup(p * scale);
   }
   return sum;
 }
@@ -204,6 +237,9 @@ struct Lattice {
   const float* cells;  // Noise::cells_
   int p;               // size + 1
   int mask;            // size − 1 (power-of-two sizes only reach the kernels)
+  std::uint32_t key;   // Noise::key() (the hash kernels)
+  int shift;           // log2(size): texel index (z·size + y)·size + x = z << 2·shift | ...
+  float bias;          // Noise::bias_, taken off each blend
 };
 
 // The portable kernel: octave-major loops over arrays that the compiler vectorises for the
@@ -255,7 +291,7 @@ void kernel_scalar(const Lattice& lat, const FbmTables& t, const float* points, 
       const float c11 = k011[i] + wx[i] * (k111[i] - k011[i]);
       const float c0 = c00 + wy[i] * (c10 - c00);
       const float c1 = c01 + wy[i] * (c11 - c01);
-      sum[i] += amp * (c0 + wz[i] * (c1 - c0));
+      sum[i] += amp * ((c0 + wz[i] * (c1 - c0)) - lat.bias);
     }
   }
   std::copy(sum, sum + count, out);
@@ -406,10 +442,11 @@ __attribute__((target("avx2"), always_inline)) inline void deinterleave8(const f
 
 // Points [first, first + 8·Groups) of a block (those past `count` are computed from zeros and
 // not stored), Groups registers in flight to overlap the lattice reads' latency.
-template <bool Madd, SimdFetch Fetch, int Groups>
+// `octave(px, py, pz, scale)` is one octave's lattice value of 8 points (a table or hash octave).
+template <class Octave, int Groups>
 __attribute__((target("avx2"), always_inline)) inline void groups_avx2(
-    const Avx2Consts& k, const double* lattice, const FbmTables& t, const float* points,
-    std::size_t first, std::size_t count, float* out) {
+    const Octave& octave, const FbmTables& t, const float* points, std::size_t first,
+    std::size_t count, float* out) {
   __m256 px[Groups], py[Groups], pz[Groups], sum[Groups];
   for (int g = 0; g < Groups; ++g) {
     const std::size_t at = first + 8 * static_cast<std::size_t>(g);
@@ -421,8 +458,7 @@ __attribute__((target("avx2"), always_inline)) inline void groups_avx2(
     const __m256 sc = _mm256_set1_ps(t.scale[o]);
     const __m256 amp = _mm256_set1_ps(t.amplitude[o]);
     for (int g = 0; g < Groups; ++g)
-      sum[g] = _mm256_add_ps(sum[g], _mm256_mul_ps(amp, octave_avx2<Madd, Fetch>(
-                                                            k, lattice, px[g], py[g], pz[g], sc)));
+      sum[g] = _mm256_add_ps(sum[g], _mm256_mul_ps(amp, octave(px[g], py[g], pz[g], sc)));
   }
   for (int g = 0; g < Groups; ++g) {
     const std::size_t at = first + 8 * static_cast<std::size_t>(g);
@@ -438,6 +474,29 @@ __attribute__((target("avx2"), always_inline)) inline void groups_avx2(
   }
 }
 
+// The table octave of octave_avx2 as groups_avx2's `octave`.
+template <bool Madd, SimdFetch Fetch>
+struct TableOctaveAvx2 {
+  const Avx2Consts& k;
+  const double* lattice;
+  __attribute__((target("avx2"), always_inline)) __m256 operator()(__m256 px, __m256 py, __m256 pz,
+                                                                   __m256 sc) const {
+    return octave_avx2<Madd, Fetch>(k, lattice, px, py, pz, sc);
+  }
+};
+
+// Two registers (16 points) at a time; a tail of at most 8 points takes one, not two.
+template <class Octave>
+__attribute__((target("avx2"), always_inline)) inline void blocks_avx2(
+    const Octave& octave, const FbmTables& t, const float* points, std::size_t count, float* out) {
+  for (std::size_t first = 0; first < count; first += 16) {
+    if (count - first > 8)
+      groups_avx2<Octave, 2>(octave, t, points, first, count, out);
+    else
+      groups_avx2<Octave, 1>(octave, t, points, first, count, out);
+  }
+}
+
 template <bool Madd, SimdFetch Fetch>
 __attribute__((target("avx2"))) void kernel_avx2(const Lattice& lat, const FbmTables& t,
                                                  const float* points, std::size_t count,
@@ -447,13 +506,74 @@ __attribute__((target("avx2"))) void kernel_avx2(const Lattice& lat, const FbmTa
                      _mm256_set1_epi32(lat.p),   _mm256_set1_epi32((pp << 16) | lat.p),
                      {0, lat.p, pp, pp + lat.p}, lat.cells};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
-  // Two registers (16 points) at a time; a tail of at most 8 points takes one, not two.
-  for (std::size_t first = 0; first < count; first += 16) {
-    if (count - first > 8)
-      groups_avx2<Madd, Fetch, 2>(k, lattice, t, points, first, count, out);
-    else
-      groups_avx2<Madd, Fetch, 1>(k, lattice, t, points, first, count, out);
+  blocks_avx2(TableOctaveAvx2<Madd, Fetch>{k, lattice}, t, points, count, out);
+}
+
+// Version 2's biased lattice values (Noise::hash_biased) of 8 texels from their (index + key)·m1.
+struct HashAvx2 {
+  __m256i m1, m2, exponent;
+  __m256 one;
+  __attribute__((target("avx2"), always_inline)) __m256 operator()(__m256i h) const {
+    h = _mm256_xor_si256(h, _mm256_srli_epi32(h, 16));
+    h = _mm256_mullo_epi32(h, m2);
+    return _mm256_castsi256_ps(_mm256_or_si256(_mm256_srli_epi32(h, 9), exponent));
   }
+};
+
+// One octave of 8 points whose cell corners are hashed, not read: kernel_scalar's arithmetic on
+// the same biased corner values (texel (x, y, z) is index z << 2s | y << s | x, s = log2 size).
+struct HashOctaveAvx2 {
+  __m256 half;
+  __m256i mask, one_i, key;
+  __m128i shift, shift2;
+  HashAvx2 hash;
+  __attribute__((target("avx2"), always_inline)) __m256 operator()(__m256 px, __m256 py, __m256 pz,
+                                                                   __m256 sc) const {
+    const __m256 x = _mm256_sub_ps(_mm256_mul_ps(px, sc), half);
+    const __m256 y = _mm256_sub_ps(_mm256_mul_ps(py, sc), half);
+    const __m256 z = _mm256_sub_ps(_mm256_mul_ps(pz, sc), half);
+    const __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y), fz = _mm256_floor_ps(z);
+    const __m256 wx = _mm256_sub_ps(x, fx), wy = _mm256_sub_ps(y, fy), wz = _mm256_sub_ps(z, fz);
+    const __m256i jx = _mm256_cvttps_epi32(fx), jy = _mm256_cvttps_epi32(fy);
+    const __m256i jz = _mm256_cvttps_epi32(fz);
+    const __m256i x0 = _mm256_and_si256(jx, mask);
+    const __m256i x1 = _mm256_and_si256(_mm256_add_epi32(jx, one_i), mask);
+    const __m256i y0 = _mm256_sll_epi32(_mm256_and_si256(jy, mask), shift);
+    const __m256i y1 = _mm256_sll_epi32(_mm256_and_si256(_mm256_add_epi32(jy, one_i), mask), shift);
+    const __m256i z0 = _mm256_add_epi32(_mm256_sll_epi32(_mm256_and_si256(jz, mask), shift2), key);
+    const __m256i z1 = _mm256_add_epi32(
+        _mm256_sll_epi32(_mm256_and_si256(_mm256_add_epi32(jz, one_i), mask), shift2), key);
+    // Row index + key (the bit fields of z, y and x do not overlap: | is +).
+    const __m256i row[4] = {_mm256_add_epi32(z0, y0), _mm256_add_epi32(z0, y1),
+                            _mm256_add_epi32(z1, y0), _mm256_add_epi32(z1, y1)};
+    // (i + key)·m1 = (row + key)·m1 + x·m1 (mod 2³²): four row products and two x products, not
+    // eight.
+    const __m256i xm0 = _mm256_mullo_epi32(x0, hash.m1), xm1 = _mm256_mullo_epi32(x1, hash.m1);
+    __m256 c[4];
+    for (int r = 0; r < 4; ++r) {
+      const __m256i rm = _mm256_mullo_epi32(row[r], hash.m1);
+      const __m256 k0 = hash(_mm256_add_epi32(rm, xm0));
+      const __m256 k1 = hash(_mm256_add_epi32(rm, xm1));
+      c[r] = _mm256_add_ps(k0, _mm256_mul_ps(wx, _mm256_sub_ps(k1, k0)));
+    }
+    const __m256 c0 = _mm256_add_ps(c[0], _mm256_mul_ps(wy, _mm256_sub_ps(c[1], c[0])));
+    const __m256 c1 = _mm256_add_ps(c[2], _mm256_mul_ps(wy, _mm256_sub_ps(c[3], c[2])));
+    return _mm256_sub_ps(_mm256_add_ps(c0, _mm256_mul_ps(wz, _mm256_sub_ps(c1, c0))), hash.one);
+  }
+};
+
+__attribute__((target("avx2"))) void kernel_hash_avx2(const Lattice& lat, const FbmTables& t,
+                                                      const float* points, std::size_t count,
+                                                      float* out) {
+  const HashOctaveAvx2 octave{_mm256_set1_ps(0.5f),
+                              _mm256_set1_epi32(lat.mask),
+                              _mm256_set1_epi32(1),
+                              _mm256_set1_epi32(static_cast<int>(lat.key)),
+                              _mm_cvtsi32_si128(lat.shift),
+                              _mm_cvtsi32_si128(2 * lat.shift),
+                              {_mm256_set1_epi32(0x21f0aaad), _mm256_set1_epi32(0x735a2d97),
+                               _mm256_set1_epi32(0x3f800000), _mm256_set1_ps(1.0f)}};
+  blocks_avx2(octave, t, points, count, out);
 }
 
 // --- AVX-512: 16 points per register, two registers (32 points) in flight ---------------------
@@ -608,10 +728,10 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline void deinterle
 
 // Points [first, first + 16·Groups) of a block (those past `count` are computed from zeros and
 // not stored), Groups registers in flight to overlap the gathers' latency.
-template <bool Madd, SimdFetch Fetch, int Groups>
+template <class Octave, int Groups>
 __attribute__((target("avx512f,avx512bw"), always_inline)) inline void groups_avx512(
-    const Avx512Consts& k, const double* lattice, const FbmTables& t, const float* points,
-    std::size_t first, std::size_t count, float* out) {
+    const Octave& octave, const FbmTables& t, const float* points, std::size_t first,
+    std::size_t count, float* out) {
   __m512 px[Groups], py[Groups], pz[Groups], sum[Groups];
   for (int g = 0; g < Groups; ++g) {
     const std::size_t at = first + 16 * static_cast<std::size_t>(g);
@@ -623,8 +743,7 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline void groups_av
     const __m512 sc = _mm512_set1_ps(t.scale[o]);
     const __m512 amp = _mm512_set1_ps(t.amplitude[o]);
     for (int g = 0; g < Groups; ++g)
-      sum[g] = _mm512_add_ps(sum[g], _mm512_mul_ps(amp, octave_avx512<Madd, Fetch>(
-                                                            k, lattice, px[g], py[g], pz[g], sc)));
+      sum[g] = _mm512_add_ps(sum[g], _mm512_mul_ps(amp, octave(px[g], py[g], pz[g], sc)));
   }
   for (int g = 0; g < Groups; ++g) {
     const std::size_t at = first + 16 * static_cast<std::size_t>(g);
@@ -632,6 +751,29 @@ __attribute__((target("avx512f,avx512bw"), always_inline)) inline void groups_av
     const std::size_t n = std::min<std::size_t>(16, count - at);
     _mm512_mask_storeu_ps(out + at, static_cast<__mmask16>(n >= 16 ? 0xFFFFu : (1u << n) - 1u),
                           sum[g]);
+  }
+}
+
+template <bool Madd, SimdFetch Fetch>
+struct TableOctaveAvx512 {
+  const Avx512Consts& k;
+  const double* lattice;
+  __attribute__((target("avx512f,avx512bw"), always_inline)) __m512 operator()(__m512 px, __m512 py,
+                                                                               __m512 pz,
+                                                                               __m512 sc) const {
+    return octave_avx512<Madd, Fetch>(k, lattice, px, py, pz, sc);
+  }
+};
+
+// Two registers (32 points) at a time; a tail of at most 16 points takes one, not two.
+template <class Octave>
+__attribute__((target("avx512f,avx512bw"), always_inline)) inline void blocks_avx512(
+    const Octave& octave, const FbmTables& t, const float* points, std::size_t count, float* out) {
+  for (std::size_t first = 0; first < count; first += 32) {
+    if (count - first > 16)
+      groups_avx512<Octave, 2>(octave, t, points, first, count, out);
+    else
+      groups_avx512<Octave, 1>(octave, t, points, first, count, out);
   }
 }
 
@@ -652,13 +794,97 @@ __attribute__((target("avx512f,avx512bw"))) void kernel_avx512(const Lattice& la
       {0, lat.p, pp, pp + lat.p},
       lat.cells};
   const double* lattice = reinterpret_cast<const double*>(lat.padded);
-  // Two registers (32 points) at a time; a tail of at most 16 points takes one, not two.
-  for (std::size_t first = 0; first < count; first += 32) {
-    if (count - first > 16)
-      groups_avx512<Madd, Fetch, 2>(k, lattice, t, points, first, count, out);
-    else
-      groups_avx512<Madd, Fetch, 1>(k, lattice, t, points, first, count, out);
+  blocks_avx512(TableOctaveAvx512<Madd, Fetch>{k, lattice}, t, points, count, out);
+}
+
+// HashAvx2 for 16 texels.
+// With Shrd (CPUs with AVX512-VBMI2), (h >> 9) | exponent is one double shift, VPSHRDD, of the
+// pair (h, 0x7f) right by 9: written as inline assembly, so that the kernel's target stays
+// "avx512f,avx512bw" and no other instruction of VBMI2 can appear in it.
+template <bool Shrd>
+struct HashAvx512 {
+  __m512i m1, m2, exponent;
+  __m512 one;
+  __m512i exponent_high;  // 0x7f: the exponent bits, 23 places below their place in the float
+  __attribute__((target("avx512f,avx512bw"), always_inline)) __m512 operator()(__m512i h) const {
+    h = _mm512_xor_si512(h, _mm512_srli_epi32(h, 16));
+    h = _mm512_mullo_epi32(h, m2);
+    if (Shrd) {
+      __m512i bits;
+      // AT&T order: imm, high half, low half, destination; each dword is (0x7f:h) >> 9.
+      asm("vpshrdd $9, %2, %1, %0" : "=v"(bits) : "v"(h), "v"(exponent_high));
+      return _mm512_castsi512_ps(bits);
+    }
+    return _mm512_castsi512_ps(_mm512_or_si512(_mm512_srli_epi32(h, 9), exponent));
   }
+};
+
+// HashOctaveAvx2 for 16 points, with octave_avx512's round-down conversion for the floor.
+template <bool Shrd>
+struct HashOctaveAvx512 {
+  __m512 half;
+  __m512i mask, key;
+  __m512i y_step, y_mask, z_step, z_mask;  // 1 << s, mask << s; 1 << 2s, mask << 2s
+  __m128i shift, shift2;
+  HashAvx512<Shrd> hash;
+  __attribute__((target("avx512f,avx512bw"), always_inline)) __m512 operator()(__m512 px, __m512 py,
+                                                                               __m512 pz,
+                                                                               __m512 sc) const {
+    const __m512 x = _mm512_sub_ps(_mm512_mul_ps(px, sc), half);
+    const __m512 y = _mm512_sub_ps(_mm512_mul_ps(py, sc), half);
+    const __m512 z = _mm512_sub_ps(_mm512_mul_ps(pz, sc), half);
+    constexpr int kDown = _MM_FROUND_TO_NEG_INF | _MM_FROUND_NO_EXC;
+    const __m512i jx = _mm512_cvt_roundps_epi32(x, kDown);
+    const __m512i jy = _mm512_cvt_roundps_epi32(y, kDown);
+    const __m512i jz = _mm512_cvt_roundps_epi32(z, kDown);
+    const __m512 wx = _mm512_sub_ps(x, _mm512_cvtepi32_ps(jx));
+    const __m512 wy = _mm512_sub_ps(y, _mm512_cvtepi32_ps(jy));
+    const __m512 wz = _mm512_sub_ps(z, _mm512_cvtepi32_ps(jz));
+    // The upper neighbours wrap within their bit fields: y1 = (y0 + 1) mod size, shifted, etc.
+    const __m512i x0 = _mm512_and_si512(jx, mask);
+    const __m512i y0 = _mm512_sll_epi32(_mm512_and_si512(jy, mask), shift);
+    const __m512i y1 = _mm512_and_si512(_mm512_add_epi32(y0, y_step), y_mask);
+    const __m512i z0s = _mm512_sll_epi32(_mm512_and_si512(jz, mask), shift2);
+    const __m512i z1s = _mm512_and_si512(_mm512_add_epi32(z0s, z_step), z_mask);
+    const __m512i z0 = _mm512_add_epi32(z0s, key), z1 = _mm512_add_epi32(z1s, key);
+    // Row index + key (the bit fields of z, y and x do not overlap: | is +).
+    const __m512i row[4] = {_mm512_add_epi32(z0, y0), _mm512_add_epi32(z0, y1),
+                            _mm512_add_epi32(z1, y0), _mm512_add_epi32(z1, y1)};
+    // (i + key)·m1 = (row + key)·m1 + x·m1 (mod 2³²): four row products and one x product, not
+    // eight; x1·m1 = x0·m1 + m1, or 0 where x0 = size − 1 wraps to x1 = 0.
+    const __m512i xm0 = _mm512_mullo_epi32(x0, hash.m1);
+    const __m512i xm1 = _mm512_maskz_add_epi32(_mm512_cmpneq_epi32_mask(x0, mask), xm0, hash.m1);
+    __m512 c[4];
+    for (int r = 0; r < 4; ++r) {
+      const __m512i rm = _mm512_mullo_epi32(row[r], hash.m1);
+      const __m512 k0 = hash(_mm512_add_epi32(rm, xm0));
+      const __m512 k1 = hash(_mm512_add_epi32(rm, xm1));
+      c[r] = _mm512_add_ps(k0, _mm512_mul_ps(wx, _mm512_sub_ps(k1, k0)));
+    }
+    const __m512 c0 = _mm512_add_ps(c[0], _mm512_mul_ps(wy, _mm512_sub_ps(c[1], c[0])));
+    const __m512 c1 = _mm512_add_ps(c[2], _mm512_mul_ps(wy, _mm512_sub_ps(c[3], c[2])));
+    return _mm512_sub_ps(_mm512_add_ps(c0, _mm512_mul_ps(wz, _mm512_sub_ps(c1, c0))), hash.one);
+  }
+};
+
+template <bool Shrd>
+__attribute__((target("avx512f,avx512bw"))) void kernel_hash_avx512(const Lattice& lat,
+                                                                    const FbmTables& t,
+                                                                    const float* points,
+                                                                    std::size_t count, float* out) {
+  const HashOctaveAvx512<Shrd> octave{
+      _mm512_set1_ps(0.5f),
+      _mm512_set1_epi32(lat.mask),
+      _mm512_set1_epi32(static_cast<int>(lat.key)),
+      _mm512_set1_epi32(1 << lat.shift),
+      _mm512_set1_epi32(lat.mask << lat.shift),
+      _mm512_set1_epi32(1 << (2 * lat.shift)),
+      _mm512_set1_epi32(lat.mask << (2 * lat.shift)),
+      _mm_cvtsi32_si128(lat.shift),
+      _mm_cvtsi32_si128(2 * lat.shift),
+      {_mm512_set1_epi32(0x21f0aaad), _mm512_set1_epi32(0x735a2d97), _mm512_set1_epi32(0x3f800000),
+       _mm512_set1_ps(1.0f), _mm512_set1_epi32(0x7f)}};
+  blocks_avx512(octave, t, points, count, out);
 }
 
 #endif  // CUMULI_X86_KERNELS
@@ -698,8 +924,13 @@ MaxAbsBits max_abs_bits_for(SimdLevel level) {
   return max_abs_bits_baseline;
 }
 
-Kernel kernel_for(SimdLevel level, SimdFetch fetch, int size, bool has_cells) {
+Kernel kernel_for(SimdLevel level, SimdFetch fetch, int size, bool has_cells, bool hash) {
 #ifdef CUMULI_X86_KERNELS
+  // The hash version's wide kernels compute the corners (no fetch to choose).
+  if (hash && level == SimdLevel::Avx512)
+    return __builtin_cpu_supports("avx512vbmi2") ? kernel_hash_avx512<true>
+                                                 : kernel_hash_avx512<false>;
+  if (hash && level == SimdLevel::Avx2) return kernel_hash_avx2;
   const bool madd = size <= kMaxMaddSize;
   if (fetch == SimdFetch::Cells && !has_cells) fetch = SimdFetch::Loads;
   // The kernels of one level: [fetch][madd].
@@ -721,6 +952,7 @@ Kernel kernel_for(SimdLevel level, SimdFetch fetch, int size, bool has_cells) {
   (void)fetch;
   (void)size;
   (void)has_cells;
+  (void)hash;
   return kernel_scalar;
 }
 
@@ -730,8 +962,11 @@ void Noise::fbm_many(const float* points, std::size_t count, float* out, const F
                      int threads, PointScan* scan) const {
   params.validate();
   const FbmTables tables = make_tables(params);
-  const Kernel kernel = kernel_for(simd_level(), simd_fetch(), size_, !cells_.empty());
-  const Lattice lat{padded_.data(), cells_.data(), size_ + 1, mask_};
+  const Kernel kernel =
+      kernel_for(simd_level(), simd_fetch(), size_, !cells_.empty(), version_ == kVersionHash);
+  int shift = 0;
+  while ((1 << shift) < size_) ++shift;
+  const Lattice lat{padded_.data(), cells_.data(), size_ + 1, mask_, key_, shift, bias_};
   const MaxAbsBits scan_block = max_abs_bits_for(simd_level());
   // Threads take whole blocks: the loop hands out up to 32 chunks per thread, which on a short
   // call (a light ray's 64 queued samples) would otherwise be a kernel call per two points.

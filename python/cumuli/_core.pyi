@@ -745,7 +745,7 @@ class SpriteRasterSettings:
     def peak(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
 class Noise:
-    def __init__(self, seed: typing.SupportsInt | typing.SupportsIndex, size: typing.SupportsInt | typing.SupportsIndex = 64) -> None:
+    def __init__(self, seed: typing.SupportsInt | typing.SupportsIndex, size: typing.SupportsInt | typing.SupportsIndex = 64, version: typing.SupportsInt | typing.SupportsIndex = 1) -> None:
         ...
     def fbm(self, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], octaves: typing.SupportsInt | typing.SupportsIndex = 5, gain: typing.SupportsFloat | typing.SupportsIndex = 0.5, lacunarity: typing.SupportsFloat | typing.SupportsIndex = 2.0, frequency: typing.SupportsFloat | typing.SupportsIndex = 1.0, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> numpy.typing.NDArray[numpy.float32]:
         ...
@@ -761,6 +761,11 @@ class Noise:
     def has_cells(self) -> bool:
         ...
     @property
+    def key(self) -> int:
+        """
+        Version 2's 32-bit hash key of the seed.
+        """
+    @property
     def lattice(self) -> numpy.typing.NDArray[numpy.float32]:
         """
         The size³ uniform lattice, [z, y, x], read-only view.
@@ -770,6 +775,9 @@ class Noise:
         ...
     @property
     def size(self) -> int:
+        ...
+    @property
+    def version(self) -> int:
         ...
 class DeckShape:
     """

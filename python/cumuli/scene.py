@@ -227,7 +227,11 @@ class Scene:
             "clouds": [c.to_dict() for c in self.clouds],
             "sun": _sun_dict(self.sun),
             "sky": self.sky.to_dict(),
-            "noise": {"seed": self.noise.seed, "size": self.noise.size},
+            "noise": {
+                "seed": self.noise.seed,
+                "size": self.noise.size,
+                "version": self.noise.version,
+            },
             "settings": self.settings.to_dict(),
             "camera": None if self.camera is None else self.camera.to_dict(),
             "lights": [_sun_dict(x) for x in self.lights],
@@ -269,10 +273,15 @@ class Scene:
         _require(data["sky"], (), "scene.sky")
         sky = Sky(**_known(Sky, data["sky"], "scene.sky"))
         _require(data["noise"], ("seed",), "scene.noise")
-        unknown = sorted(set(data["noise"]) - {"seed", "size"})
+        unknown = sorted(set(data["noise"]) - {"seed", "size", "version"})
         if unknown:
             raise ValueError(f"scene.noise has unknown field(s): {', '.join(unknown)}")
-        noise = Noise(seed=data["noise"]["seed"], size=data["noise"].get("size", 64))
+        # Files written before noise versions existed hold version 1 noise (the table).
+        noise = Noise(
+            seed=data["noise"]["seed"],
+            size=data["noise"].get("size", 64),
+            version=data["noise"].get("version", 1),
+        )
         _require(data["settings"], (), "scene.settings")
         settings = RenderSettings(**_known(RenderSettings, data["settings"], "scene.settings"))
         cam = data.get("camera")

@@ -14,6 +14,12 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 
 
+def simd_level_now() -> str:
+    from cumuli.noise import simd_level
+
+    return simd_level()
+
+
 def _env() -> dict[str, str]:
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in sys.path if p)
@@ -79,6 +85,15 @@ def test_bench_noise_quick_writes_json_and_plot(
             methods["cpp_1_thread_" + _default_kernel(methods)]["samples_per_cpu_s"]
             / methods["pyfastnoisesimd"]["samples_per_cpu_s"]
         )
+        # The hash kernel (noise version 2) on the widest level, against the same library.
+        widest = simd_level_now()
+        if widest != "scalar":
+            h = data["targets"]["hash_per_thread_vs_fastnoisesimd"]
+            assert h["limit"] == 1.0 and h["met"] == (h["reached"] >= 1.0)
+            assert h["reached"] == pytest.approx(
+                methods[f"cpp_1_thread_{widest}_hash"]["samples_per_cpu_s"]
+                / methods["pyfastnoisesimd"]["samples_per_cpu_s"]
+            )
     else:  # it builds only without pip's build isolation: the output says so
         assert "pyfastnoisesimd" in data["skipped"]
         assert "no-build-isolation" in data["skipped"]["pyfastnoisesimd"]
@@ -97,6 +112,7 @@ def test_bench_noise_quick_writes_json_and_plot(
     for level in simd_levels()[1:]:
         for fetch in SIMD_FETCHES:
             assert methods[f"cpp_1_thread_{level}_{fetch}"]["simd_fetch"] == fetch
+        assert methods[f"cpp_1_thread_{level}_hash"]["samples_per_s"]["median"] > 0
     assert "target" in stdout and "noise.json" in stdout
 
 

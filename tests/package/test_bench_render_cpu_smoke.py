@@ -40,3 +40,11 @@ def test_bench_render_cpu_quick_writes_json_and_plot(tmp_path: Path) -> None:
     for shape in shapes:  # the physical mode against the paper mode, per scene
         t = data["lighting"][shape]["cpu_physical_over_paper"]
         assert t["limit"] == 1.5 and t["reached"] > 0 and t["met"] == (t["reached"] <= 1.5)
+    # The 1080p frame on 2 threads, per noise version (quick: a smaller frame, no verdict).
+    hd = data["hd"]
+    assert hd["image"] == [480, 270] and hd["threads"] == 2
+    for version in ("1", "2"):
+        v = hd["versions"][version]
+        assert v["wall_s"]["median"] > 0 and v["fbm_evaluations"] > 0 and v["fbm_bulk_share"] > 0
+    target = data["targets"]["hd_1080p_2_threads_s"]
+    assert target["limit"] == 0.6 and target["reached"] is None and target["met"] is None

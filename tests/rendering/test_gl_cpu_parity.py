@@ -124,3 +124,28 @@ def test_gl_matches_cpu_with_the_camera_inside_a_cloud(renderer):
     centre = cloud.centre
     camera = cu.Camera(position=tuple(centre), target=tuple(centre + np.array([0.0, 0.2, 5.0])))
     compare(renderer, scene, camera, min_cover=0.5)
+
+
+@pytest.mark.parametrize("lighting", ["paper", "physical"])
+def test_gl_matches_cpu_with_the_hash_noise(renderer, lighting, monkeypatch):
+    """Noise version 2 end to end: the GLSL marcher hashes its lattice corners (exact lookup)
+    as the C++ does, and the image differs from version 1's. Its lattice texture is zeroed, so
+    the GL image matches only if the shader computes the values."""
+    from cumuli.rendering.marcher import MarcherGL
+
+    upload = MarcherGL._noise_texture
+
+    def zeroed(self, scene):
+        tex = upload(self, scene)
+        tex.write(np.zeros(scene.noise.size**3, dtype=np.float32).tobytes())
+        return tex
+
+    monkeypatch.setattr(MarcherGL, "_noise_texture", zeroed)
+    settings = cu.RenderSettings(exact_noise=True, lighting=lighting)
+    scene = cu.Scene(
+        clouds=[cu.gaussian_cumulus(seed=1)], settings=settings, noise=cu.Noise(7, version=2)
+    )
+    camera = scene.default_camera()
+    compare(renderer, scene, camera)
+    table = cu.render_cpu(scene.replace(noise=cu.Noise(7, version=1)), camera, W, H)
+    assert np.abs(table - cu.render_cpu(scene, camera, W, H)).max() > 1e-2

@@ -178,3 +178,35 @@ def test_context_create_close_does_not_leak_file_descriptors() -> None:
         cgl.fbm(cu.Noise(seed=2, size=4), np.zeros((3, 3)), context=ctx)
         ctx.close()
     assert open_fds() == before
+
+
+@pytest.mark.parametrize("size", [64, 17])
+@pytest.mark.parametrize("params", PARAMS)
+def test_hash_version_glsl_matches_cpp(gl_context: cgl.GLContext, size: int, params: dict) -> None:
+    """Noise version 2: the exact lookup hashes its corners in GLSL as the C++ kernels do in
+    registers; the hardware lookup filters the uploaded lattice, which holds the same values."""
+    noise = cu.Noise(seed=23, size=size, version=2)
+    pts = np.concatenate([_points(20000, -50, 50, 3), _points(2000, -1.5, 1.5, 4)])
+    cpu = noise.fbm(pts, **params)
+    exact = cgl.fbm(noise, pts, exact=True, context=gl_context, **params)
+    np.testing.assert_allclose(exact, cpu, rtol=0, atol=1e-6)
+    if size == 64:  # texture() takes u/size, inexact for other sizes (see above)
+        hw = cgl.fbm(noise, pts, exact=False, context=gl_context, **params)
+        tol = _hardware_tolerance(gl_context.renderer)
+        np.testing.assert_allclose(hw, cpu, rtol=0, atol=tol)
+    # Not the table's values: the shader did switch versions.
+    table = cgl.fbm(cu.Noise(seed=23, size=size), pts, exact=True, context=gl_context, **params)
+    assert np.abs(table - exact).max() > 1e-2
+
+
+def test_hash_version_glsl_computes_its_values(gl_context: cgl.GLContext) -> None:
+    """The exact lookup of version 2 hashes its corners in the shader: with the uploaded lattice
+    texture zeroed it still returns the C++ values, while texture() then reads zeros."""
+    noise = cu.Noise(seed=24, size=64, version=2)
+    pts = _points(5000, -30, 30, 5)
+    with cgl.FbmProgram(noise, gl_context) as program:
+        program.texture.write(np.zeros(64**3, dtype=np.float32).tobytes())
+        exact = program(pts, exact=True)
+        zeroed = program(pts, exact=False)
+    np.testing.assert_allclose(exact, noise.fbm(pts), rtol=0, atol=1e-6)
+    assert np.abs(zeroed).max() == 0.0

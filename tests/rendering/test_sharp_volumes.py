@@ -217,3 +217,35 @@ def test_sigma_t_none_is_checked_at_the_largest_extinction_scale() -> None:
     with pytest.raises(ValueError, match="1e\\+06 × 2e\\+06"):
         cu.VolumeCloud(density=dens, box=((0, 0, 0), (1, 1, 1)))
     cu.VolumeCloud(density=dens, box=((0, 0, 0), (1, 1, 1)), sigma_t=1.0)
+
+
+def test_gl_matches_cpu_with_detail_of_the_hash_noise(gl_context, monkeypatch) -> None:
+    """Noise version 2 as the detail: the volume shader hashes the lattice corners (its lattice
+    texture zeroed here, so GL matches the C++ only if it computes them)."""
+    from cumuli.rendering import volume as volume_gl
+
+    owner = next(
+        c for c in vars(volume_gl).values() if isinstance(c, type) and "_noise_texture" in vars(c)
+    )
+    upload = owner._noise_texture
+
+    def zeroed(self, noise):
+        tex = upload(self, noise)
+        tex.write(np.zeros(noise.size**3, dtype=np.float32).tobytes())
+        return tex
+
+    monkeypatch.setattr(owner, "_noise_texture", zeroed)
+    dens = frame(16)
+    cam = side_camera(CUBE)
+    settings = cu.RenderSettings(exact_noise=True, resolve=False)
+    scene = cu.Scene([cu.VolumeCloud(density=dens, box=CUBE, detail=0.6)], sun=SUN,
+                     sky=cu.Sky(), settings=settings, noise=cu.Noise(7, version=2))  # fmt: skip
+    lit = cu.prepare_light(scene)
+    cpu = cu.render_cpu(lit, cam, 64, 36)
+    with cu.Renderer(context=gl_context) as r:
+        gl = r.render(lit, cam, 64, 36)
+    diff = np.abs(gl - cpu)
+    assert diff.mean(axis=(0, 1)).max() <= 1e-3, diff.mean(axis=(0, 1))
+    assert (diff.max(-1) > 5e-2).mean() <= 0.01
+    table = cu.render_cpu(cu.prepare_light(scene.replace(noise=cu.Noise(7))), cam, 64, 36)
+    assert np.abs(table - cpu)[..., 3].mean() > 1e-4

@@ -428,6 +428,8 @@ class FbmProgram:
         try:
             self.program = self.context.compute("noise/fbm_points.comp.glsl")
             self._objects.append(self.program)
+            # Version 2's exact lookup hashes its corners; the texture holds the same values.
+            self._hash, self._key = noise.version == 2, noise.key
             lattice = np.ascontiguousarray(noise.lattice, dtype=np.float32)
             self.texture = ctx.texture3d((size, size, size), 1, data=lattice.tobytes(), dtype="f4")
             self._objects.append(self.texture)
@@ -485,6 +487,9 @@ class FbmProgram:
         prog["u_frequency"].value = frequency
         prog["u_exact"].value = bool(exact)
         prog["u_lattice"].value = 0
+        for name, value in (("u_noise_hash", self._hash), ("u_noise_key", self._key)):
+            if name in prog:  # absent where the compiler dropped the exact lookup
+                prog[name].value = value
         batch = min(n, self._batch)
         made: list[Any] = []
         try:

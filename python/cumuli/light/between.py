@@ -122,8 +122,8 @@ def through_media(scene: Scene, lights: Sequence[Any], threads: int = 0) -> list
 
     t_media: dict[int, np.ndarray] = {}
     if media:
-        key = ("through media", media, places, dirs.tobytes(), scene.noise.seed,
-               scene.noise.size, scene.settings)  # fmt: skip
+        key = ("through media", media, places, dirs.tobytes(), scene.noise.identity,
+               scene.settings)  # fmt: skip
         t_media = remember(key, through_the_media)
     t_casters: dict[int, np.ndarray] = {}
     if mutual:

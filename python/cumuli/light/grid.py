@@ -132,7 +132,7 @@ class LightRecord:
     recomputes a grid whose record differs from the one its settings give."""
 
     params: LightParams
-    noise: tuple[int, int] | None
+    noise: tuple[int, ...] | None  # Noise.identity: (seed, size, version)
     model: str
     kappa: float | None
     phi: float | None
@@ -148,7 +148,7 @@ class LightRecord:
             # The κ the density sees is the record's own field (None for metaballs, where κ
             # plays no part), so an override only matters through it.
             params=params.replace(kappa=None),
-            noise=None if noise is None else (int(noise.seed), int(noise.size)),
+            noise=None if noise is None else noise.identity,
             model=cloud.model,
             kappa=kappa if spheroid else None,
             phi=None if spheroid else _f32(cloud.phi),
@@ -274,6 +274,8 @@ def load_light_grid(path: str | os.PathLike[str]) -> LightGrid:
         if rec is not None:
             params = LightParams(**rec.pop("params"))
             noise = rec.pop("noise")
+            if noise is not None and len(noise) == 2:  # written before noise versions: the table
+                noise = [*noise, 1]
             record = LightRecord(
                 params=params, noise=None if noise is None else tuple(noise), **rec
             )

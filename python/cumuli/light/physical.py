@@ -368,6 +368,6 @@ def physical_pass(drawable: Any, scene: Any, given: Any = None, threads: int = 0
     frame = sun_frame(lo, hi, scene.sun.direction, scene.settings.physical_resolution)
     upstream = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
     others = tuple(drawable_digest(d) for d in upstream)
-    key = ("physical", drawable_digest(drawable), others, scene.noise.seed, scene.noise.size,
+    key = ("physical", drawable_digest(drawable), others, scene.noise.identity,
            scene.settings, scene.sun, sky)  # fmt: skip
     return remember(key, lambda: physical_light(drawable, replace(scene, sky=sky), threads))

@@ -89,8 +89,8 @@ def scene_shadow(
     if extent is None:
         return None
     n = scene.settings.shadow_resolution
-    key = ("shadow", tuple(_shadow_digest(d) for d in scene.clouds), scene.noise.seed,
-           scene.noise.size, scene.settings, tuple(scene.sprite_settings.light_dict().items()),
+    key = ("shadow", tuple(_shadow_digest(d) for d in scene.clouds), scene.noise.identity,
+           scene.settings, tuple(scene.sprite_settings.light_dict().items()),
            scene.billboard_shading, scene.sun.direction, height)  # fmt: skip
     return _remember(key, lambda: compute_shadow(scene, extent, (n, n), height, threads, lights))
 

@@ -520,7 +520,9 @@ def particle_fill(
         "tau": tau,
         "albedo": albedo,
         "seed": seed,
-        "noise": None if noise is None else {"seed": noise.seed, "size": noise.size},
+        "noise": None
+        if noise is None
+        else {"seed": noise.seed, "size": noise.size, "version": noise.version},
         "fbm": {"octaves": octaves, "gain": gain, "lacunarity": lacunarity, "frequency": frequency},
         "cloud": {"primitives": cloud.n, "params": _json_ready(cloud.params, "cloud.params")},
     }

@@ -190,8 +190,8 @@ class ImpostorCache:
         scene = lit.scene
         s = scene.impostor_settings
         token = (
-            scene.sun, scene.lights, scene.settings, scene.sprite_settings, scene.noise.seed,
-            scene.noise.size, s,
+            scene.sun, scene.lights, scene.settings, scene.sprite_settings, scene.noise.identity,
+            s,
         )  # fmt: skip
         stale_token = token != self._token
         self._token = token

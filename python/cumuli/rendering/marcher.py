@@ -133,7 +133,7 @@ class MarcherGL:
         self.tiles = tiles
         self._variants: dict[str, tuple[Any, Any]] = {}
         self._noise_tex: Any = None
-        self._noise_key: tuple[int, int] | None = None
+        self._noise_key: tuple[int, int, int] | None = None
         self.program: Any = None
         self.vao: Any = None
         info = gl.ctx.info
@@ -162,7 +162,7 @@ class MarcherGL:
         self.program, self.vao = self._variants[key]
 
     def _noise_texture(self, scene: Scene) -> Any:
-        key = (scene.noise.seed, scene.noise.size)
+        key = scene.noise.identity
         if self._noise_key != key:
             if self._noise_tex is not None:
                 self._noise_tex.release()
@@ -253,6 +253,9 @@ class MarcherGL:
             cloud_buf.bind_to_storage_buffer(1)
             self._use_variant(scene.settings.candidate_sort, physical)
             self._noise_texture(scene).use(location=0)
+            # Version 2's exact lookup hashes its corners (shaders/common/noise.glsl).
+            self._set("u_noise_hash", scene.noise.version == 2)
+            self._set("u_noise_key", scene.noise.key)
             light_tex.use(location=1)
             if physical:
                 limit = self.max_3d_texture_size

@@ -185,7 +185,7 @@ class VolumeRenderer:
     def _noise_texture(self, noise: Any) -> Any:
         """The detail noise's lattice as a LINEAR / REPEAT R32F 3D texture (kept across
         renders of the same lattice)."""
-        key = (noise.seed, noise.size)
+        key = noise.identity
         cached = self._noise
         if cached is not None and cached[0] == key:
             return cached[1]
@@ -386,6 +386,9 @@ def _set_detail(set_: Any, detail: VolumeDetail | None) -> None:
     if detail is not None and strength > 0.0:
         octaves, gain, lacunarity, frequency = detail.fbm
         set_("u_lattice", NOISE_UNIT)
+        # Version 2's exact lookup hashes its corners (shaders/common/noise.glsl).
+        set_("u_noise_hash", detail.noise.version == 2)
+        set_("u_noise_key", detail.noise.key)
         set_("u_octaves", octaves)
         set_("u_gain", gain)
         set_("u_lacunarity", lacunarity)
