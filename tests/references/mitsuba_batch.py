@@ -39,6 +39,10 @@ def build(mi, spec, kind: str, spp: int) -> object:
     width, height = (int(v) for v in spec["size"])
     transmittance = kind == "T"
     phase = ",".join(f"{v:.8g}" for v in spec["phase"])
+    # The phase's forward cone goes straight on (δ-M): σt' = σt(1 − f·ϖ), ϖ' = ϖ(1 − f)/(1 − f·ϖ).
+    f, albedo = float(spec.get("peak_share", 0.0)), float(spec["albedo"])
+    scale = 1.0 if transmittance else 1.0 - f * albedo
+    albedo = 0.0 if transmittance else albedo * (1.0 - f) / (1.0 - f * albedo)
     grid = mi.VolumeGrid(np.ascontiguousarray(spec["sigma_t"][..., None], np.float32))
     scene = {
         "type": "scene",
@@ -50,7 +54,7 @@ def build(mi, spec, kind: str, spp: int) -> object:
             "to_world": mi.ScalarTransform4f().translate(centre.tolist()).scale(half.tolist()),
             "interior": {
                 "type": "heterogeneous",
-                "albedo": 0.0 if transmittance else float(spec["albedo"]),
+                "albedo": albedo,
                 "phase": {"type": "tabphase", "values": phase},
                 "sigma_t": {
                     "type": "gridvolume",
@@ -58,7 +62,7 @@ def build(mi, spec, kind: str, spp: int) -> object:
                     "to_world": mi.ScalarTransform4f().translate(lo.tolist())
                     .scale((hi - lo).tolist()),
                 },
-                "scale": 1.0,
+                "scale": scale,
             },
         },
         "sensor": {
