@@ -50,8 +50,9 @@ PEAK_COS = 0.999
 
 
 def settings() -> cu.RenderSettings:
-    """The compared settings: the physical default (Mie phase, resolve pass), no haze."""
-    return cu.RenderSettings(haze=0.0)
+    """The compared settings: the physical default (Mie phase, resolve pass), no haze, no air
+    (Mitsuba renders neither)."""
+    return cu.RenderSettings(haze=0.0, air_extinction=0.0)
 
 
 def _sun(elevation: float, azimuth: float, colour=(1.0, 0.97, 0.92), intensity=6.0) -> cu.Sun:
