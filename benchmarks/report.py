@@ -465,6 +465,10 @@ def section(name: str, data: dict[str, dict[str, Any]], folder: Path | None = No
         lines += work_lines(data["render_cpu"])
     if "cluster" in data:
         lines += cluster_lines(data["cluster"])
+    if folder is not None:
+        from _report_targets import targets_lines
+
+        lines += targets_lines(folder, FILES)
     return lines
 
 
@@ -500,6 +504,10 @@ def write_report(results: Path = RESULTS, output: Path = REPORT) -> Path:
         data = load(folder)
         if data:
             lines += section(folder.name, data, folder)
+        elif any(folder.glob("*.json")):  # only benchmarks without a section of their own
+            from _report_targets import targets_lines
+
+            lines += [f"## {folder.name}", ""] + targets_lines(folder, FILES)
     text = "\n".join(lines).rstrip() + "\n"
     output.parent.mkdir(parents=True, exist_ok=True)
     tmp = output.with_name(f".{output.name}.tmp")

@@ -116,3 +116,19 @@ def test_gpu_goals_are_judged_on_an_h200_only() -> None:
     sizes, note = common.render_sizes("llvmpipe (LLVM 15.0.6, 256 bits)", quick=False)
     assert sizes == [(160, 120), (200, 150), (480, 270)] and "divided by 4" in note
     assert common.gl_timer_reliable("NVIDIA H200") and not common.gl_timer_reliable("llvmpipe")
+
+
+def test_report_lists_targets_of_benchmarks_without_a_section(tmp_path: Path) -> None:
+    """A benchmark with no section of its own still has its targets in RESULTS.md, found at any
+    depth of its JSON; a JSON without targets adds nothing."""
+    folder = tmp_path / "results" / "llvmpipe"
+    folder.mkdir(parents=True)
+    target = {"limit": 1.5, "comparison": "<=", "reached": 2.25, "met": False}
+    (folder / "newbench.json").write_text(json.dumps({
+        "machine": {"gl_renderer": "llvmpipe (LLVM 15.0.6, 256 bits)", "date": "d"},
+        "cases": {"gl": {"targets": {"ratio": target}}},
+    }))  # fmt: skip
+    (folder / "plain.json").write_text(json.dumps({"machine": {}, "seconds": 1.0}))
+    text = report.write_report(tmp_path / "results", tmp_path / "R.md").read_text()
+    assert "### Targets of bench_newbench" in text and "bench_plain" not in text
+    assert "| cases.gl.ratio | <= 1.5 | 2.25 | **no** |" in text
