@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 import threading
 from collections import OrderedDict
+from collections.abc import Iterator
 from dataclasses import replace
 from typing import Any
 
@@ -88,11 +89,21 @@ def _splat(lo: np.ndarray, hi: np.ndarray, shape: tuple, points: np.ndarray,
     d, h, w = shape
     cell = float((hi - lo)[0]) / w
     f = (np.asarray(points, np.float64) - lo) / cell - 0.5
-    f = np.clip(f, 0.0, np.array([w, h, d], np.float64) - 1.0)
-    i0 = np.floor(f).astype(np.int64)
-    i1 = np.minimum(i0 + 1, np.array([w, h, d]) - 1)
-    t = f - i0
     grid = np.zeros(shape)
+    for wgt, index in _trilinear_corners(f, (w, h, d)):
+        np.add.at(grid, index, wgt * amount)
+    return grid / cell**3
+
+
+def _trilinear_corners(
+    f: np.ndarray, size: tuple[int, int, int]
+) -> Iterator[tuple[np.ndarray, tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    """The 8 ``(weight (N,), (z, y, x) indices)`` of trilinear interpolation at lattice
+    coordinates ``f`` (``(N, 3)``, texel centres at integers, clamped to the lattice)."""
+    f = np.clip(f, 0.0, np.asarray(size, np.float64) - 1.0)
+    i0 = np.floor(f).astype(np.int64)
+    i1 = np.minimum(i0 + 1, np.asarray(size, np.int64) - 1)
+    t = f - i0
     for cz in (0, 1):
         for cy in (0, 1):
             for cx in (0, 1):
@@ -101,8 +112,7 @@ def _splat(lo: np.ndarray, hi: np.ndarray, shape: tuple, points: np.ndarray,
                 x = np.where(cx, i1[:, 0], i0[:, 0])
                 y = np.where(cy, i1[:, 1], i0[:, 1])
                 z = np.where(cz, i1[:, 2], i0[:, 2])
-                np.add.at(grid, (z, y, x), wgt * amount)
-    return grid / cell**3
+                yield wgt, (z, y, x)
 
 
 def passed(cloud: Any, settings: Any) -> np.ndarray:
@@ -205,21 +215,10 @@ def sample(light: Any, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
     grid = np.asarray(light.grid, np.float64)
     d, h, w = grid.shape[:3]
     lo, hi = (np.asarray(v, np.float64) for v in light.box)
-    size = np.array([w, h, d], np.float64)
-    f = np.clip((pts - lo) / (hi - lo) * size - 0.5, 0.0, size - 1.0)
-    i0 = np.floor(f).astype(np.int64)
-    i1 = np.minimum(i0 + 1, size.astype(np.int64) - 1)
-    t = f - i0
+    f = (pts - lo) / (hi - lo) * np.array([w, h, d], np.float64) - 0.5
     out = np.zeros((len(pts), 4))
-    for cz in (0, 1):
-        for cy in (0, 1):
-            for cx in (0, 1):
-                wgt = (np.where(cx, t[:, 0], 1 - t[:, 0]) * np.where(cy, t[:, 1], 1 - t[:, 1])
-                       * np.where(cz, t[:, 2], 1 - t[:, 2]))  # fmt: skip
-                x = np.where(cx, i1[:, 0], i0[:, 0])
-                y = np.where(cy, i1[:, 1], i0[:, 1])
-                z = np.where(cz, i1[:, 2], i0[:, 2])
-                out += wgt[:, None] * grid[z, y, x]
+    for wgt, index in _trilinear_corners(f, (w, h, d)):
+        out += wgt[:, None] * grid[index]
     return tau, out[:, 0], out[:, 1:]
 
 
