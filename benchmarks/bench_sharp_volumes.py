@@ -24,6 +24,7 @@ import _common as common  # noqa: E402
 import numpy as np  # noqa: E402
 
 import cumuli as cu  # noqa: E402
+from cumuli.testing import cell_pattern_energy  # noqa: E402
 
 READS = {
     "linear": {"detail": 0.0, "reconstruction": "linear"},
@@ -50,21 +51,6 @@ def side_camera(box: tuple) -> cu.Camera:
     return cu.Camera(
         position=(c[0], c[1] + 2, c[2] + 1.3 * (hi - lo).max()), target=tuple(c), fov=40
     )
-
-
-def voxel_band_energy(img: np.ndarray, period: float) -> float:
-    """Share of the horizontal luminance gradient's energy at the voxel period (±12 %) and its
-    second harmonic, over the image rows the cloud covers."""
-    lum = img[..., :3] @ LUMA
-    rows = img[..., 3].max(axis=1) > 0.5
-    grad = np.diff(lum[rows], axis=1)
-    grad = grad - grad.mean(axis=1, keepdims=True)
-    power = (np.abs(np.fft.rfft(grad * np.hanning(grad.shape[1]), axis=1)) ** 2).sum(axis=0)
-    f = np.fft.rfftfreq(grad.shape[1])
-    band = np.zeros_like(f, dtype=bool)
-    for k in (1, 2):
-        band |= np.abs(f - k / period) < 0.12 * k / period
-    return float(power[band].sum() / power[1:].sum())
 
 
 def spread(img: np.ndarray) -> float:
@@ -119,7 +105,8 @@ def main(argv: list[str] | None = None) -> int:
     energy = {}
     for read in ("linear", "cubic"):
         scene = cu.Scene([cu.VolumeCloud(density=dens, box=CUBE, **READS[read])], sun=SUN)
-        energy[read] = voxel_band_energy(cu.render_cpu(scene, cam, qw, qh, progress=False), qh / 36)
+        image = cu.render_cpu(scene, cam, qw, qh, progress=False)
+        energy[read] = cell_pattern_energy(image, qh / 36)
     common.log(f"voxel-period gradient energy: {energy}")
     targets = {
         "cell_edges_cubic_over_linear": common.target(

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
+import cumuli.testing as cu_testing
 from cumuli.testing import assert_image_close, compare_images, heat_map
 from cumuli.testing.goldens import Settings
 
@@ -171,3 +172,23 @@ def test_gl_tests_skip_with_the_reason_where_there_is_no_gl(
     assert done.returncode == 0, done.stdout
     assert "1 passed, 1 skipped" in done.stdout
     assert "no headless OpenGL here: no EGL display (test)" in done.stdout
+
+
+def test_cell_pattern_energy_sees_a_lattice_period() -> None:
+    """A cloud stepped at every 8-pixel cell edge scores far above the same cloud smooth; a
+    period of 2 pixels or less, or an image the cloud does not cover, is refused."""
+    x = np.arange(128)
+    smooth = np.exp(-(((x - 64) / 30.0) ** 2))
+    cells = smooth * (1.0 + 0.2 * (x % 8) / 8.0)  # a step at every 8-pixel cell edge
+    img = np.ones((16, 128, 4), np.float32)
+    striped = img.copy()
+    img[..., :3] = smooth[None, :, None]
+    striped[..., :3] = cells[None, :, None]
+    plain = cu_testing.cell_pattern_energy(img, 8.0)
+    assert cu_testing.cell_pattern_energy(striped, 8.0) > 0.1 > 10 * plain
+    with pytest.raises(ValueError, match="period"):
+        cu_testing.cell_pattern_energy(img, 2.0)
+    empty = img.copy()
+    empty[..., 3] = 0.0
+    with pytest.raises(ValueError, match="covers"):
+        cu_testing.cell_pattern_energy(empty, 8.0)

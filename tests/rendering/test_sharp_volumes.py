@@ -11,6 +11,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.rendering.volume_detail import detail_frequency, volume_detail
+from cumuli.testing import cell_pattern_energy
 
 SUN = cu.Sun(direction=(0.8, 0.6, 0.0), intensity=10.0)
 LUMA = np.array([0.2126, 0.7152, 0.0722])
@@ -136,21 +137,6 @@ def test_the_detail_carves_the_edges_not_the_core() -> None:
     assert change_edge > 0.1
 
 
-def voxel_band_energy(img: np.ndarray, period: float) -> float:
-    """The share of the horizontal luminance gradient's energy, over the cloud's rows, at the
-    voxel period (±12 %) and its second harmonic: what cell edges add."""
-    lum = img[..., :3] @ LUMA
-    rows = img[..., 3].max(axis=1) > 0.5
-    grad = np.diff(lum[rows], axis=1)
-    grad = grad - grad.mean(axis=1, keepdims=True)
-    power = (np.abs(np.fft.rfft(grad * np.hanning(grad.shape[1]), axis=1)) ** 2).sum(axis=0)
-    f = np.fft.rfftfreq(grad.shape[1])
-    band = np.zeros_like(f, dtype=bool)
-    for k in (1, 2):
-        band |= np.abs(f - k / period) < 0.12 * k / period
-    return float(power[band].sum() / power[1:].sum())
-
-
 def test_the_cubic_reconstruction_hides_the_cells() -> None:
     """A 32³ volume at 640×360, seen from far along z with a narrow field of view so that a
     voxel spans the same ~10 pixels everywhere: the trilinear read's kinks on the cell faces
@@ -163,7 +149,7 @@ def test_the_cubic_reconstruction_hides_the_cells() -> None:
     linear = render(cu.VolumeCloud(density=dens, box=CUBE, detail=0.0, reconstruction="linear"),
                     cam, width, height)  # fmt: skip
     cubic = render(cu.VolumeCloud(density=dens, box=CUBE, detail=0.0), cam, width, height)
-    e_lin, e_cub = voxel_band_energy(linear, period), voxel_band_energy(cubic, period)
+    e_lin, e_cub = cell_pattern_energy(linear, period), cell_pattern_energy(cubic, period)
     print(f"voxel-period gradient energy: linear {e_lin:.4f}, cubic {e_cub:.4f}")
     assert e_cub < 0.5 * e_lin, (e_lin, e_cub)
 

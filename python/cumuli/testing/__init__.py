@@ -14,7 +14,14 @@ Loaded by pytest automatically once cumuli is installed (a ``pytest11`` entry po
 
 from __future__ import annotations
 
-from cumuli.testing.compare import DEFAULTS, ImageComparison, compare_images, heat_map, only
+from cumuli.testing.compare import (
+    DEFAULTS,
+    ImageComparison,
+    cell_pattern_energy,
+    compare_images,
+    heat_map,
+    only,
+)
 from cumuli.testing.goldens import assert_image_close
 from cumuli.testing.plugin import (
     gl_context,
@@ -28,6 +35,7 @@ __all__ = [
     "DEFAULTS",
     "ImageComparison",
     "assert_image_close",
+    "cell_pattern_energy",
     "compare_images",
     "gl_context",
     "heat_map",
