@@ -68,6 +68,29 @@ def _cloud_sprites(
     )  # fmt: skip
 
 
+def _sprite_maker(scene: Any, camera: Camera, width: int, height: int) -> Any:
+    """``f(cloud, light) -> (index, colour, alpha, key)``: Harris's eye pass of one cloud
+    (``_core.particle_sprites``, culled) with the scene's lights, camera and sprite settings
+    prepared once for many clouds."""
+    s = scene.sprite_settings
+    lights = (scene.sun, *scene.lights)
+    dirs = light_directions(lights)
+    radiance = np.array([x.radiance for x in lights], dtype=np.float32).reshape(-1, 3)
+    cam = camera_dict(camera, width, height, s.near)
+    settings = core_struct(
+        _core.ParticleSpriteSettings, solid_angle=s.solid_angle, phase=s.phase, hg_g=s.hg_g,
+        ambient=s.ambient, sort=s.sort, cull=True,
+    )  # fmt: skip
+
+    def sprites_of(cloud: Any, light: Any) -> Any:
+        check_light(cloud, light, lights)
+        return _core.particle_sprites(
+            *cloud.core_args(), light.light, dirs, radiance, cam, settings
+        )
+
+    return sprites_of
+
+
 def _physical_sprites(
     lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
     keys: bool = False,
@@ -76,22 +99,11 @@ def _physical_sprites(
     (:func:`cumuli.light.sprite_physical.particle_colours`): Harris's light as the sun's
     transmittance, the scene's phase, octaves and sky."""
     scene = lit.scene
-    s = scene.sprite_settings
-    lights = (scene.sun, *scene.lights)
-    dirs = light_directions(lights)
-    radiance = np.array([x.radiance for x in lights], dtype=np.float32).reshape(-1, 3)
-    cam = camera_dict(camera, width, height, s.near)
+    sprites_of = _sprite_maker(scene, camera, width, height)
     parts, sort_keys = [], []
     for k in indices:
         cloud, light = scene.clouds[k], lit.lights[k]
-        check_light(cloud, light, lights)
-        index, _, alpha, key = _core.particle_sprites(
-            *cloud.core_args(), light.light, dirs, radiance, cam,
-            core_struct(
-                _core.ParticleSpriteSettings, solid_angle=s.solid_angle, phase=s.phase,
-                hg_g=s.hg_g, ambient=s.ambient, sort=s.sort, cull=True,
-            ),
-        )  # fmt: skip
+        index, _, alpha, key = sprites_of(cloud, light)
         index = np.asarray(index, np.int64)
         colour = sprite_physical.particle_colours(scene, cloud, light, index, camera.position)
         parts.append(Sprites(centres=cloud.centres[index], half_sizes=cloud.radii[index],
@@ -121,22 +133,11 @@ def scene_sprites(
     scene = lit.scene
     if scene.settings.physical:
         return _physical_sprites(lit, cloud_order(lit, indices, camera), camera, width, height)
-    s = scene.sprite_settings
-    lights = (scene.sun, *scene.lights)
-    dirs = light_directions(lights)
-    radiance = np.array([x.radiance for x in lights], dtype=np.float32).reshape(-1, 3)
-    cam = camera_dict(camera, width, height, s.near)
+    sprites_of = _sprite_maker(scene, camera, width, height)
     centres, radii, colours, alphas = [], [], [], []
     for k in cloud_order(lit, indices, camera):
         cloud, light = scene.clouds[k], lit.lights[k]
-        check_light(cloud, light, lights)
-        index, colour, alpha, _ = _core.particle_sprites(
-            *cloud.core_args(), light.light, dirs, radiance, cam,
-            core_struct(
-                _core.ParticleSpriteSettings, solid_angle=s.solid_angle, phase=s.phase,
-                hg_g=s.hg_g, ambient=s.ambient, sort=s.sort, cull=True,
-            ),
-        )  # fmt: skip
+        index, colour, alpha, _ = sprites_of(cloud, light)
         centres.append(cloud.centres[index])
         radii.append(cloud.radii[index])
         colours.append(colour)
