@@ -7,11 +7,11 @@ field on a texel-centre lattice of :func:`voxel` units, the sky as a lat-long ma
 the camera and the phase function tabulated from cumuli's own,
 ``cumuli.light.physical.phase_values``, its diffraction peak within 2.6° of straight on treated
 as unscattered: :func:`phase_table`) that ``mitsuba_batch.py`` renders with Mitsuba alone, on
-any machine. The committed result of a view
-is one RGBA EXR ``view_<name>.exr``: RGB the multiple-scattering image (sun and sky, every
-order), alpha the coverage ``1 − T`` (``T`` rendered with albedo 0 under a constant
-environment of radiance 1); ``views.json`` records the samples, the reference's own noise and
-Mitsuba's error at a ladder of sample counts.
+any machine. The committed result of a view is one RGBA EXR ``view_<name>.exr``: RGB the
+multiple-scattering image (sun and sky, every order), alpha the coverage ``1 − T`` (``T``
+rendered with albedo 0 under a constant environment of radiance 1); ``views.json`` records the
+samples, the reference's own noise, Mitsuba's error at a ladder of sample counts and the voxel
+edge of the field.
 
 Regenerate (any machine with Mitsuba; a GPU makes it minutes)::
 
