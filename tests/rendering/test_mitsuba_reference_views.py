@@ -76,6 +76,7 @@ def test_views_are_recorded_small_and_for_todays_medium() -> None:
         assert ref.shape == (mv.HEIGHT, mv.WIDTH, 4), name
         rec = RECORD[name]
         assert rec["noise_median_block"] < 0.05, name  # two independent halves
+        assert rec["voxel"] == mv.voxel(name), name  # the field's voxels as exported today
         # the reference is at least as good as Mitsuba's own 4-sample image
         assert rec["ladder"]["4"]["block_median"] > rec["noise_median_block"], name
         scene, camera = mv.VIEWS[name]()
