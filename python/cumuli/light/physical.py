@@ -9,23 +9,29 @@ maths):
   the light, :data:`ALONG` × finer than across it, marched through the drawable's own extinction
   (the procedural density of a 2018 cloud, not a voxelisation), plus the optical depth of the
   scene's other drawables upstream of each column (clouds shade each other). The drawers add
-  the first :data:`OCTAVES` scattering orders as Wrenninge, Kulla & Lundqvist's octaves ("Oz:
-  the great and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky,
-  atmosphere and cloud rendering in Frostbite"): order ``i`` scatters ``aⁱ`` of the light with
-  the phase function's ``g`` scaled by ``bⁱ`` and the sun's optical depth scaled by ``cⁱ``, with
-  their ``a = b = c = ½`` (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`); order 0 is exact
-  single scattering.
+  the first :data:`OCTAVES` scattering orders as octaves after Wrenninge, Kulla & Lundqvist
+  ("Oz: the great and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky,
+  atmosphere and cloud rendering in Frostbite"): order ``n`` scatters ``aⁿ`` of the light with
+  the phase function's ``g`` scaled by ``bⁿ``, its sun light weighted by the Poisson law of
+  ``n`` collisions on a path of optical depth ``β·τ``, ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}``
+  (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`, ``β`` = :data:`OCTAVE_POISSON`): thin
+  fringes draw little high-order light, the cloud's depths most of theirs, and order 0 is exact
+  single scattering (:func:`octave_sum`, the drawers' numpy reference).
 - **Multiple scattering through the cloud**: the diffusion approximation (Stam 1995) on the
   world lattice, fed by the sun's and the sky's first scattering, with Marshak's vacuum
   boundary: the light that reaches the shadowed side and the far side of the cloud. The camera
-  sees the first mean free path of the cloud while a lattice cell spans several, and the
-  diffuse light there is larger than its cell mean: the fluence is read with the gain
-  :data:`SUN_GAIN` = 1.5, calibrated once against Mitsuba 3 on the side-lit default cumulus
-  and checked front-, back- and top-lit (see docs/lighting.md for the errors).
+  sees the first mean free path of a cell that spans several, where the diffuse light is larger
+  than the cell's mean, and the whole of a cell thinner than one: the fluence is read with a
+  gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
+  ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`).
 - **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
   quadrature with 2·:data:`SKY_SAMPLES`² directions) times the sky's SH projection gives the
   sky irradiance reaching each voxel unscattered; with multiple scattering on, it and its
-  diffusion are read with the gain :data:`SKY_GAIN` = 2 (calibrated likewise).
+  diffusion are read with the gain of the same form up to :data:`SKY_GAIN`.
+
+The constants are fitted against Mitsuba 3 on the reference views of :data:`FIT_VIEWS` and
+tested on the others, :data:`HELD_OUT_VIEWS` (``tests/references/fit_physical.py`` reproduces
+the fit; docs/fidelity.md has the errors on every view).
 
 Everything is a value: :class:`PhysicalLight` holds the lattices and nothing is stored on the
 drawable. Computed by :func:`physical_light`, the light pass ``prepare_light`` runs for every
@@ -58,14 +64,14 @@ from cumuli.sky import sky_args
 OCTAVES = 2
 OCTAVE_A = 1.0
 OCTAVE_B = 0.8
-OCTAVE_C = 0.5
-OCTAVE_POISSON = 0.8
+OCTAVE_C = 0.45
+OCTAVE_POISSON = 0.9
 #: Gains on the lattice's diffuse light, reached in optically thick cells: the sun's multiple
 #: scattering, and the sky's light (:func:`lattice_gains`).
-SUN_GAIN = 1.75
+SUN_GAIN = 1.7
 SKY_GAIN = 3.0
 #: Optical thickness ``τg`` of a lattice cell over which the gains rise from 1 to their value.
-GAIN_DEPTH = 1.0
+GAIN_DEPTH = 1.1
 #: The views the constants above were fitted on (``benchmarks/fit_physical.py``); the other
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
@@ -370,7 +376,8 @@ def octave_sum(settings: Any, tau: Any, cos_theta: Any, octaves: int) -> np.ndar
 
 def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[float, float]]:
     """``(weight, c)`` of each drawn order for a ray whose direction makes ``cos_theta`` with the
-    sun: weight ``aⁱ·phase(bⁱ·g)``, optical-depth scale ``cⁱ`` (numpy reference of the drawers)."""
+    sun: weight ``aⁱ·phase(bⁱ·g)``, optical-depth scale ``cⁱ`` (the per-ray constants of the
+    drawers; the Poisson weights, which depend on ``τ``, are :func:`octave_sum`'s)."""
     out = []
     for i in range(octaves):
         p = phase(settings, cos_theta, OCTAVE_B**i)
