@@ -205,6 +205,20 @@ void bind_render_params(py::module_& m) {
       .def_readwrite("oct_a", &PhysicalParams::oct_a)
       .def_readwrite("oct_b", &PhysicalParams::oct_b)
       .def_readwrite("oct_c", &PhysicalParams::oct_c)
+      .def_readwrite("oct_poisson", &PhysicalParams::oct_poisson)
+      .def(
+          "octave_sum",
+          [](const PhysicalParams& p, float cos_theta, const FloatArray& tau) {
+            p.validate();
+            const OctaveTerms terms(p, cos_theta);
+            FloatArray out(tau.size());
+            for (py::ssize_t i = 0; i < tau.size(); ++i)
+              out.mutable_data()[i] = terms.sum(tau.data()[i]);
+            return out;
+          },
+          py::arg("cos_theta"), py::arg("tau"),
+          "The drawn orders' sum Σ aⁱ·phase(bⁱg, cos_theta)·Pᵢ(τ) at optical depths `tau` "
+          "(the marchers' per-sample octave term).")
       .def_readwrite("jitter_seed", &PhysicalParams::jitter_seed)
       .def_readwrite("min_transmittance", &PhysicalParams::min_transmittance)
       .def("validate", &PhysicalParams::validate);

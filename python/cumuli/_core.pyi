@@ -441,6 +441,10 @@ class PhysicalParams:
     mie: bool
     def __init__(self) -> None:
         ...
+    def octave_sum(self, cos_theta: typing.SupportsFloat | typing.SupportsIndex, tau: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> numpy.typing.NDArray[numpy.float32]:
+        """
+        The drawn orders' sum Σ aⁱ·phase(bⁱg, cos_theta)·Pᵢ(τ) at optical depths `tau` (the marchers' per-sample octave term).
+        """
     def phase(self, cos_theta: typing.SupportsFloat | typing.SupportsIndex, scale: typing.SupportsFloat | typing.SupportsIndex = 1.0) -> float:
         ...
     def validate(self) -> None:
@@ -513,6 +517,12 @@ class PhysicalParams:
         ...
     @oct_c.setter
     def oct_c(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def oct_poisson(self) -> float:
+        ...
+    @oct_poisson.setter
+    def oct_poisson(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def octaves(self) -> int:

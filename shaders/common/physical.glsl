@@ -16,6 +16,7 @@ uniform bool u_phys_mie;          // the approximate Mie phase instead
 uniform vec4 u_phys_mie_p;        // its g_HG, g_D, α, w_D
 uniform int u_phys_octaves;       // scattering orders drawn
 uniform vec3 u_phys_abc;          // octave constants a, b, c
+uniform float u_phys_poisson;     // β of the Poisson weights (0: plain octaves)
 uniform int u_phys_seed;          // jitter seed
 uniform float u_phys_min_t;       // the ray stops below this transmittance
 
@@ -41,6 +42,20 @@ int octave_terms(float c, out float w[MAX_OCTAVES], out float k[MAX_OCTAVES]) {
         s *= u_phys_abc.z;
     }
     return n;
+}
+
+// Σ wᵢ·Pᵢ(τ) of the drawn orders: Pᵢ = e^{−kᵢτ}, times (βτ)ⁱ/i! with the Poisson weights.
+float octave_sum(float w[MAX_OCTAVES], float k[MAX_OCTAVES], int n, float tau) {
+    bool poisson = u_phys_poisson > 0.0;
+    float x = u_phys_poisson * max(tau, 0.0);
+    float pw = 1.0;
+    float sum = 0.0;
+    for (int i = 0; i < MAX_OCTAVES; ++i) {
+        if (i >= n) break;
+        sum += w[i] * pw * exp(-k[i] * tau);
+        if (poisson) pw *= x / float(i + 1);
+    }
+    return sum;
 }
 
 // The camera ray's jitter of pixel (row, col).
@@ -86,11 +101,7 @@ vec3 phys_source(PhysicalCloud c, vec3 p, float w[MAX_OCTAVES], float k[MAX_OCTA
     float tau = atlas_lookup(u_depth_atlas, c.foff.xyz, c.fres.xyz, q, exact).r;
     vec3 g = (p - c.glo.xyz) / (c.ghi.xyz - c.glo.xyz) * vec3(c.gres.xyz);
     vec4 L = atlas_lookup(u_grid_atlas, c.goff.xyz, c.gres.xyz, g, exact);
-    float sun = 0.0;
-    for (int i = 0; i < MAX_OCTAVES; ++i) {
-        if (i >= n) break;
-        sun += w[i] * exp(-k[i] * tau);
-    }
+    float sun = octave_sum(w, k, n, tau);
     sun += L.x * INV_4PI;
     return u_phys_albedo * (sun_irradiance * sun + L.yzw * INV_4PI);
 }

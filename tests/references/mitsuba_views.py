@@ -3,14 +3,15 @@
 Each view (:data:`VIEWS`) is a cumuli scene and camera at 160×120 in the physical mode with its
 default phase function (the approximate Mie phase of 20 µm droplets) and no haze (Mitsuba has no
 air). :func:`export_spec` turns one into a self-contained Mitsuba description (the extinction
-field on a 0.1-unit texel-centre lattice, the sky as a lat-long map, the sun, the camera and
-the phase function tabulated from cumuli's own, ``cumuli.light.physical.phase_values``, its
-diffraction peak within 2.6° of straight on treated as unscattered: :func:`phase_table`) that
-``mitsuba_batch.py`` renders with Mitsuba alone, on any machine. The committed result of a view
-is one RGBA EXR ``view_<name>.exr``: RGB the multiple-scattering image (sun and sky, every
-order), alpha the coverage ``1 − T`` (``T`` rendered with albedo 0 under a constant
-environment of radiance 1); ``views.json`` records the samples, the reference's own noise and
-Mitsuba's error at a ladder of sample counts.
+field on a texel-centre lattice of :func:`voxel` units, the sky as a lat-long map, the sun,
+the camera and the phase function tabulated from cumuli's own,
+``cumuli.light.physical.phase_values``, its diffraction peak within 2.6° of straight on treated
+as unscattered: :func:`phase_table`) that ``mitsuba_batch.py`` renders with Mitsuba alone, on
+any machine. The committed result of a view is one RGBA EXR ``view_<name>.exr``: RGB the
+multiple-scattering image (sun and sky, every order), alpha the coverage ``1 − T`` (``T``
+rendered with albedo 0 under a constant environment of radiance 1); ``views.json`` records the
+samples, the reference's own noise, Mitsuba's error at a ladder of sample counts and the voxel
+edge of the field.
 
 Regenerate (any machine with Mitsuba; a GPU makes it minutes)::
 
@@ -39,6 +40,9 @@ HERE = Path(__file__).resolve().parent
 WIDTH, HEIGHT = 160, 120
 #: Voxel edge of the extinction field handed to Mitsuba (world units).
 VOXEL = 0.1
+#: Views whose field needs finer voxels than :data:`VOXEL`: the metaball cumulus's sharp edges
+#: and the L-system cloud's thin strands lose coverage (|ΔT|) on the 0.1-unit lattice.
+VOXELS: dict[str, float] = {"metaball": 0.05, "lsystem": 0.04}
 #: Blocks whose mean coverage reaches this are "cloud-covered" (the comparison's blocks).
 COVERED = 0.5
 BLOCK = 4
@@ -123,6 +127,11 @@ VIEWS: dict[str, Callable[[], tuple[cu.Scene, cu.Camera]]] = {
 EXTRA_VIEWS: dict[str, Callable[[], tuple[cu.Scene, cu.Camera]]] = {}
 
 
+def voxel(name: str) -> float:
+    """The voxel edge of view ``name``'s field in its Mitsuba description."""
+    return VOXELS.get(name, VOXEL)
+
+
 def view_file(name: str) -> Path:
     """The committed RGBA reference of a view (RGB radiance, alpha coverage ``1 − T``)."""
     return HERE / f"view_{name}.exr"
@@ -190,7 +199,7 @@ def export_spec(name: str, path: Path) -> None:
     scene, camera = (VIEWS | EXTRA_VIEWS)[name]()
     cloud = scene.clouds[0]
     lo, hi = cloud.layer_box()
-    edge = int(math.ceil(float(np.max(np.asarray(hi) - np.asarray(lo))) / VOXEL))
+    edge = int(math.ceil(float(np.max(np.asarray(hi) - np.asarray(lo))) / voxel(name)))
     field = cu.density_volume(cloud, scene.noise, scene.settings, edge)
     table, f = phase_table(scene)
     values = np.ascontiguousarray(field.values, np.float32)
@@ -238,6 +247,7 @@ def collect(renders: Path) -> dict:
             "seconds": float(r["seconds"]),
             "noise_median_block": float(r["noise"]),
             "transmittance_spp": int(r["t_spp"]),
+            "voxel": voxel(name),
             "ladder": ladder,
             "phase_peak": {"cos": PEAK_COS, "share": phase_table(scene)[1]},
             "sun": {

@@ -3,8 +3,10 @@
 The reference images were rendered by ``tests/references/mitsuba_reference.py`` (rerun it to
 reproduce them; ``physical_reference.json`` records the samples, the time and the reference's own
 noise). Compared on 4×4-pixel block averages of the cloud-covered blocks (mean alpha ≥ 0.5):
-mean cloud radiance within ±10 %, per-block relative error median ≤ 15 % and 90th percentile
-≤ 40 %, transmittance mean |ΔT| ≤ 0.01 — on both backends.
+mean cloud radiance within ±5 %, per-block relative error median ≤ 10 % and 90th percentile
+≤ 25 %, transmittance mean |ΔT| ≤ 0.01 — on both backends (the goal of every reference view;
+measured +2.8 %, 9.3 %, 23.7 % and 0.006 with the constants fitted on this view, the back-lit
+and the metaball ones).
 """
 
 from __future__ import annotations
@@ -36,9 +38,9 @@ def reference() -> dict[str, np.ndarray]:
 BLOCKS = {
     "block": ref.BLOCK,
     "block_alpha": ref.COVERED,
-    "block_mean_ratio": 0.10,
-    "block_rel_median": 0.15,
-    "block_rel_p90": 0.40,
+    "block_mean_ratio": 0.05,
+    "block_rel_median": 0.10,
+    "block_rel_p90": 0.25,
     **dict.fromkeys(
         ("covered_mean_abs", "background_max_abs", "outlier_abs", "max_abs", "mean_abs"), np.inf
     ),

@@ -11,7 +11,7 @@ import pytest
 
 import cumuli as cu
 from cumuli import _core
-from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C, phase, physical_light
+from cumuli.light.physical import OCTAVES, octave_sum, physical_light
 from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
 from cumuli.sky import sky_args
 from cumuli.testing import assert_image_close, only
@@ -135,7 +135,7 @@ def test_light_step_dispatches_on_lighting_and_memoises() -> None:
     scene = small_scene()
     lit = cu.prepare_light(scene)
     light = lit.lights[0]
-    assert isinstance(light, cu.PhysicalLight) and light.octaves == 4
+    assert isinstance(light, cu.PhysicalLight) and light.octaves == OCTAVES
     assert light.grid.shape[-1] == 4 and not light.grid.flags.writeable
     assert cu.prepare_light(scene).lights[0] is light  # memoised by content
     paper = cu.prepare_light(scene.replace(settings=cu.RenderSettings(lighting="paper")))
@@ -324,11 +324,7 @@ def numpy_physical(lit: cu.LitScene, cam: cu.Camera, w: int, h: int) -> np.ndarr
                     if hi_ > lo_:
                         cands.append((lo_, hi_))
                 cands.sort()
-                c_ = d @ sun
-                terms = [
-                    (OCTAVE_A**n * phase(s, float(c_), OCTAVE_B**n), OCTAVE_C**n)
-                    for n in range(light.octaves)
-                ]
+                c_ = float(d @ sun)
                 xi = float(_jitter(i, j, s.jitter_seed))
                 tu = -np.inf
                 done = False
@@ -343,9 +339,8 @@ def numpy_physical(lit: cu.LitScene, cam: cu.Camera, w: int, h: int) -> np.ndarr
                             at = math.exp(-s.extinction_scale * rho * step)
                             tau = light.sample_depth(p[None])[0]
                             g = _trilinear(light.grid, *light.box, p.astype(F))
-                            sun_part = sum(wt * math.exp(-cc * tau) for wt, cc in terms) + g[0] / (
-                                4 * math.pi
-                            )
+                            oct_ = float(octave_sum(s, tau, c_, light.octaves))
+                            sun_part = oct_ + g[0] / (4 * math.pi)
                             src = s.albedo * (e_sun * sun_part + g[1:] / (4 * math.pi))
                             colour += T * (1 - at) * src
                             T *= at

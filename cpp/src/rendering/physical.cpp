@@ -23,6 +23,8 @@ void PhysicalParams::validate() const {
   for (float c : {oct_a, oct_b, oct_c})
     if (!(c >= 0.0f && c <= 1.0f))
       throw std::invalid_argument("octave constants must be in [0, 1]");
+  if (!(oct_poisson >= 0.0f && oct_poisson <= 16.0f))
+    throw std::invalid_argument("oct_poisson must be in [0, 16]");
   if (jitter_seed < 0 || jitter_seed > 1023)
     throw std::invalid_argument("jitter_seed must be in [0, 1023]");
   if (!(min_transmittance >= 0.0f && min_transmittance < 1.0f))
@@ -36,7 +38,8 @@ float PhysicalParams::phase(float cos_theta, float scale) const {
   return (1.0f - blend) * p1 + blend * henyey_greenstein(g2 * scale, cos_theta);
 }
 
-OctaveTerms::OctaveTerms(const PhysicalParams& p, float cos_theta) : n(p.octaves) {
+OctaveTerms::OctaveTerms(const PhysicalParams& p, float cos_theta)
+    : n(p.octaves), poisson(p.oct_poisson) {
   float a = 1.0f, b = 1.0f, c = 1.0f;
   for (int i = 0; i < n; ++i) {
     weight[i] = a * p.phase(cos_theta, b);
@@ -49,7 +52,16 @@ OctaveTerms::OctaveTerms(const PhysicalParams& p, float cos_theta) : n(p.octaves
 
 float OctaveTerms::sum(float tau) const {
   float s = 0.0f;
-  for (int i = 0; i < n; ++i) s += weight[i] * std::exp(-scale[i] * tau);
+  if (!(poisson > 0.0f)) {
+    for (int i = 0; i < n; ++i) s += weight[i] * std::exp(-scale[i] * tau);
+    return s;
+  }
+  const float x = poisson * std::max(tau, 0.0f);
+  float pw = 1.0f;  // xⁱ/i!
+  for (int i = 0; i < n; ++i) {
+    s += weight[i] * pw * std::exp(-scale[i] * tau);
+    pw *= x / static_cast<float>(i + 1);
+  }
   return s;
 }
 

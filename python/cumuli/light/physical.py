@@ -9,23 +9,29 @@ maths):
   the light, :data:`ALONG` × finer than across it, marched through the drawable's own extinction
   (the procedural density of a 2018 cloud, not a voxelisation), plus the optical depth of the
   scene's other drawables upstream of each column (clouds shade each other). The drawers add
-  the first :data:`OCTAVES` scattering orders as Wrenninge, Kulla & Lundqvist's octaves ("Oz:
-  the great and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky,
-  atmosphere and cloud rendering in Frostbite"): order ``i`` scatters ``aⁱ`` of the light with
-  the phase function's ``g`` scaled by ``bⁱ`` and the sun's optical depth scaled by ``cⁱ``, with
-  their ``a = b = c = ½`` (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`); order 0 is exact
-  single scattering.
+  the first :data:`OCTAVES` scattering orders as octaves after Wrenninge, Kulla & Lundqvist
+  ("Oz: the great and volumetric", SIGGRAPH 2013 talks; Hillaire 2016, "Physically based sky,
+  atmosphere and cloud rendering in Frostbite"): order ``n`` scatters ``aⁿ`` of the light with
+  the phase function's ``g`` scaled by ``bⁿ``, its sun light weighted by the Poisson law of
+  ``n`` collisions on a path of optical depth ``β·τ``, ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}``
+  (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`, ``β`` = :data:`OCTAVE_POISSON`): thin
+  fringes draw little high-order light, the cloud's depths most of theirs, and order 0 is exact
+  single scattering (:func:`octave_sum`, the drawers' numpy reference).
 - **Multiple scattering through the cloud**: the diffusion approximation (Stam 1995) on the
   world lattice, fed by the sun's and the sky's first scattering, with Marshak's vacuum
   boundary: the light that reaches the shadowed side and the far side of the cloud. The camera
-  sees the first mean free path of the cloud while a lattice cell spans several, and the
-  diffuse light there is larger than its cell mean: the fluence is read with the gain
-  :data:`SUN_GAIN` = 1.5, calibrated once against Mitsuba 3 on the side-lit default cumulus
-  and checked front-, back- and top-lit (see docs/lighting.md for the errors).
+  sees the first mean free path of a cell that spans several, where the diffuse light is larger
+  than the cell's mean, and the whole of a cell thinner than one: the fluence is read with a
+  gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
+  ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`).
 - **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
   quadrature with 2·:data:`SKY_SAMPLES`² directions) times the sky's SH projection gives the
   sky irradiance reaching each voxel unscattered; with multiple scattering on, it and its
-  diffusion are read with the gain :data:`SKY_GAIN` = 2 (calibrated likewise).
+  diffusion are read with the gain of the same form up to :data:`SKY_GAIN`.
+
+The constants are fitted against Mitsuba 3 on the reference views of :data:`FIT_VIEWS` and
+tested on the others, :data:`HELD_OUT_VIEWS` (``tests/references/fit_physical.py`` reproduces
+the fit; docs/fidelity.md has the errors on every view).
 
 Everything is a value: :class:`PhysicalLight` holds the lattices and nothing is stored on the
 drawable. Computed by :func:`physical_light`, the light pass ``prepare_light`` runs for every
@@ -52,14 +58,24 @@ from cumuli.light.memo import remember
 from cumuli.settings import ACROSS, ALONG, SUPERSAMPLE
 from cumuli.sky import sky_args
 
-#: Scattering orders drawn as octaves (order 0 is single scattering), and their constants.
-OCTAVES = 4
-OCTAVE_A = 0.5
-OCTAVE_B = 0.5
-OCTAVE_C = 0.5
-#: Gains on the lattice's diffuse light: the sun's multiple scattering, and the sky's light.
-SUN_GAIN = 1.5
-SKY_GAIN = 2.0
+#: Scattering orders drawn as octaves (order 0 is single scattering), and their constants:
+#: order ``n`` scatters ``aⁿ`` of the light with the phase's g scaled by ``bⁿ``, weighted by
+#: ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}`` (``β`` = :data:`OCTAVE_POISSON`; 0 gives the plain ``e^{−cⁿ·τ}``).
+OCTAVES = 2
+OCTAVE_A = 1.0
+OCTAVE_B = 0.8
+OCTAVE_C = 0.45
+OCTAVE_POISSON = 0.9
+#: Gains on the lattice's diffuse light, reached in optically thick cells: the sun's multiple
+#: scattering, and the sky's light (:func:`lattice_gains`).
+SUN_GAIN = 1.7
+SKY_GAIN = 3.0
+#: Optical thickness ``τg`` of a lattice cell over which the gains rise from 1 to their value.
+GAIN_DEPTH = 1.1
+#: The views the constants above were fitted on (``benchmarks/fit_physical.py``); the other
+#: reference views (``tests/references``) are held out to test them.
+FIT_VIEWS = ("sidelit", "backlit", "metaball")
+HELD_OUT_VIEWS = ("toplit", "sunset", "lsystem")
 #: SH order and quadrature (n_theta) of the sky visibility.
 SKY_ORDER = 3
 SKY_SAMPLES = 3
@@ -168,15 +184,49 @@ def _stage(timings: dict[str, float] | None, name: str) -> Iterator[None]:
             timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
 
 
+def lattice_gains(
+    extinction: Any, lo: Any, hi: Any, gain: float, depth: float = GAIN_DEPTH
+) -> np.ndarray:
+    """The gain ``G(τc) = 1 + (G∞ − 1)(1 − e^{−τc/τg})`` of every cell of an extinction lattice
+    ``(D, H, W)`` over the box ``lo``–``hi``: ``τc = σt·h`` the cell's optical thickness (``h``
+    the geometric mean of its edges), ``G∞ = gain``, ``τg = depth`` (0: ``gain`` everywhere).
+
+    The camera sees the first mean free path of a thick cell, where the diffuse light is larger
+    than the cell's mean fluence that the diffusion solves for; it sees the whole of a thin cell
+    (a fringe, a strand), whose mean is what it sees: no gain there."""
+    ext = np.asarray(extinction, np.float64)
+    if ext.ndim != 3:
+        raise ValueError(f"extinction must be a (D, H, W) lattice, got shape {ext.shape}")
+    if not (math.isfinite(gain) and gain > 0.0):
+        raise ValueError(f"gain must be finite and > 0, got {gain}")
+    if not (math.isfinite(depth) and depth >= 0.0):
+        raise ValueError(f"gain_depth must be finite and >= 0, got {depth}")
+    if depth == 0.0:
+        return np.full(ext.shape, gain, np.float32)
+    d, h, w = ext.shape
+    edges = (np.asarray(hi, np.float64) - np.asarray(lo, np.float64)) / (w, h, d)
+    cell = float(np.prod(np.abs(edges)) ** (1.0 / 3.0))
+    rise = -np.expm1(-np.maximum(ext, 0.0) * cell / depth)
+    return (1.0 + (gain - 1.0) * rise).astype(np.float32)
+
+
 def physical_light(
-    drawable: Any, scene: Any, threads: int = 0, timings: dict[str, float] | None = None
+    drawable: Any,
+    scene: Any,
+    threads: int = 0,
+    timings: dict[str, float] | None = None,
+    gain_depth: float | None = None,
 ) -> PhysicalLight:
     """The :class:`PhysicalLight` of a drawable with a medium (a `Cloud`, a `VolumeCloud`, ...)
     under ``scene``'s sun and sky. ``timings``, a dict, receives the wall seconds of each of the
-    :data:`STAGES` (added to what it holds: the benchmarks profile the light step with it)."""
+    :data:`STAGES` (added to what it holds: the benchmarks profile the light step with it).
+    ``gain_depth``: the ``τg`` of :func:`lattice_gains` (None: :data:`GAIN_DEPTH`)."""
     medium = registry.of(drawable).medium
     if medium is None:
         raise TypeError(f"no physical light pass for {type(drawable).__name__}")
+    depth_g = GAIN_DEPTH if gain_depth is None else float(gain_depth)
+    if not (math.isfinite(depth_g) and depth_g >= 0.0):
+        raise ValueError(f"gain_depth must be finite and >= 0, got {gain_depth}")
     check_budget(scene)
     s = scene.settings
     n = s.physical_resolution
@@ -219,9 +269,10 @@ def physical_light(
             phi = _core.diffusion_light(
                 ext, lo, hi, sun_t, to_sun, sky_e, s.albedo, s.mean_cosine, 2000, 1e-3, threads
             )
-        grid[..., 0] = SUN_GAIN * phi[..., 0]
+        grid[..., 0] = lattice_gains(ext, lo, hi, SUN_GAIN, depth_g) * phi[..., 0]
         if sky_e is not None:
-            grid[..., 1:4] = SKY_GAIN * (sky_e + phi[..., 1:4])
+            sky_gain = lattice_gains(ext, lo, hi, SKY_GAIN, depth_g)
+            grid[..., 1:4] = sky_gain[..., None] * (sky_e + phi[..., 1:4])
     depth.setflags(write=False)
     grid.setflags(write=False)
     return PhysicalLight(frame, depth, grid, (lo, hi), octaves)
@@ -306,9 +357,27 @@ def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarra
     return np.ascontiguousarray(np.stack([xx, yy, zz], -1).reshape(-1, 3), dtype=np.float32)
 
 
+def octave_sum(settings: Any, tau: Any, cos_theta: Any, octaves: int) -> np.ndarray:
+    """``Σ_{n<octaves} aⁿ·phase(bⁿ·g, cos θ)·Pₙ(τ)`` (float64, ``tau`` and ``cos_theta``
+    broadcast): the drawers' per-sample octave term per unit sun irradiance, ``Pₙ(τ) =
+    (β·τ)ⁿ/n!·e^{−cⁿ·τ}`` with ``β`` = :data:`OCTAVE_POISSON` (``e^{−cⁿ·τ}`` when it is 0);
+    the numpy reference of ``PhysicalParams.octave_sum`` and the shaders."""
+    t = np.maximum(np.asarray(tau, np.float64), 0.0)
+    c = np.clip(np.asarray(cos_theta, np.float64), -1.0, 1.0)
+    out = np.zeros(np.broadcast_shapes(t.shape, c.shape))
+    weight = np.ones_like(t)
+    for n in range(octaves):
+        p = phase_values(settings, c, OCTAVE_B**n)
+        out += OCTAVE_A**n * p * weight * np.exp(-(OCTAVE_C**n) * t)
+        if OCTAVE_POISSON > 0.0:
+            weight = weight * (OCTAVE_POISSON * t) / (n + 1)
+    return out
+
+
 def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[float, float]]:
     """``(weight, c)`` of each drawn order for a ray whose direction makes ``cos_theta`` with the
-    sun: weight ``aⁱ·phase(bⁱ·g)``, optical-depth scale ``cⁱ`` (numpy reference of the drawers)."""
+    sun: weight ``aⁱ·phase(bⁱ·g)``, optical-depth scale ``cⁱ`` (the per-ray constants of the
+    drawers; the Poisson weights, which depend on ``τ``, are :func:`octave_sum`'s)."""
     out = []
     for i in range(octaves):
         p = phase(settings, cos_theta, OCTAVE_B**i)

@@ -12,13 +12,15 @@ optical depth ``−ln`` of what it passes on, :func:`passed`; a billboard cloud'
 :func:`cumuli.light.physical.physical_pass` (SH sky visibility, diffusion, the media's gains).
 Each sprite then takes the marcher's source term at its own points,
 
-    J = ϖ·( E_sun·( Σ_n aⁿ·p_{bⁿ}(cos θ)·T^{cⁿ} + B·F/4π ) + Σ_ℓ E_ℓ·p(cos θ_ℓ)·T_ℓ + S/4π )
+    J = ϖ·( E_sun·( Σ_n aⁿ·p_{bⁿ}(cos θ)·Pₙ(τ) + B·F/4π ) + Σ_ℓ E_ℓ·p(cos θ_ℓ)·T_ℓ + S/4π )
 
-with the scene's albedo ``ϖ``; ``B`` the scene's shadow on the cloud (its light through the
-scene over its own, ``ParticleLight.unshadowed``, ``BillboardLighting.unshadowed``); the extra
-lights ``ℓ`` (``Scene.lights``, which the media do not take) single-scattered with their own
-pass's ``T_ℓ``. All of it is numpy and C++ on the sprite lists both backends draw, so GL and
-CPU get the same colours.
+with the scene's albedo ``ϖ``; ``Pₙ(τ)`` the marcher's Poisson-weighted octaves at
+``τ = −ln T`` (``cumuli.light.physical.octave_sum``); the proxy's lattice gains reached within
+:data:`PROXY_GAIN_DEPTH` of optical thickness; ``B`` the scene's shadow on the cloud (its light
+through the scene over its own, ``ParticleLight.unshadowed``,
+``BillboardLighting.unshadowed``); the extra lights ``ℓ`` (``Scene.lights``, which the media do
+not take) single-scattered with their own pass's ``T_ℓ``. All of it is numpy and C++ on the
+sprite lists both backends draw, so GL and CPU get the same colours.
 """
 
 from __future__ import annotations
@@ -35,14 +37,7 @@ import numpy as np
 from cumuli import _core
 from cumuli.light.memo import content_digest
 from cumuli.light.particles import particles_digest
-from cumuli.light.physical import (
-    OCTAVE_A,
-    OCTAVE_B,
-    OCTAVE_C,
-    light_sky,
-    phase_values,
-    physical_light,
-)
+from cumuli.light.physical import light_sky, octave_sum, phase_values, physical_light
 from cumuli.model.volume import VolumeCloud
 
 #: Cells on the longest edge of a sprite cloud's proxy lattice, and of a field variant's (a
@@ -53,6 +48,10 @@ FIELD_GRID = 12
 #: rate of the CAF's ``"exp"`` curve ``e^{−3L/D}`` (the ``"linear"`` curve ``1 − L/D`` is the
 #: same absorption made linear, gone at ``L = D``).
 CAF_RATE = 3.0
+#: The ``gain_depth`` of a proxy's light (``cumuli.light.physical.lattice_gains``): a proxy's
+#: cells are few and thin (a sprite cloud's extinction is its light pass's, spread over cells
+#: 1/GRID of its size), and its sprites show their cell's surface like a medium's thick cell does.
+PROXY_GAIN_DEPTH = 0.1
 #: Particle clouds' proxy lattices kept (least recently used dropped first).
 MEMO_SIZE = 256
 _memo: OrderedDict[tuple, tuple] = OrderedDict()
@@ -198,7 +197,7 @@ def proxy_light(lattice: tuple, scene: Any) -> Any:
             return known
     volume = VolumeCloud(density=sigma, box=(tuple(lo), tuple(hi)), sigma_t=1.0)
     alone = replace(scene, clouds=[volume], lights=(), solids=(), settings=settings, sky=sky)
-    light = physical_light(volume, alone, threads=1)
+    light = physical_light(volume, alone, threads=1, gain_depth=PROXY_GAIN_DEPTH)
     with _lock:
         _lights[key] = light
         while len(_lights) > LIGHT_MEMO_SIZE:
@@ -224,13 +223,8 @@ def sample(light: Any, points: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.n
 
 # --- the source term ----------------------------------------------------------------------------
 def sun_octaves(settings: Any, tau: np.ndarray, cos_theta: np.ndarray, octaves: int) -> np.ndarray:
-    """``Σ_{n<octaves} aⁿ·p_{bⁿ}(cos θ)·e^{−cⁿ τ}`` (the marcher's octave terms)."""
-    t = np.maximum(np.asarray(tau, np.float64), 0.0)
-    c = np.clip(np.asarray(cos_theta, np.float64), -1.0, 1.0)
-    out = np.zeros(np.broadcast_shapes(t.shape, c.shape))
-    for n in range(octaves):
-        out += OCTAVE_A**n * phase_values(settings, c, OCTAVE_B**n) * np.exp(-(OCTAVE_C**n) * t)
-    return out
+    """The marcher's octave terms (``cumuli.light.physical.octave_sum``)."""
+    return octave_sum(settings, tau, cos_theta, octaves)
 
 
 def source(

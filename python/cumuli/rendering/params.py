@@ -15,7 +15,7 @@ from typing import Any
 
 from cumuli import _core
 from cumuli.camera import Camera
-from cumuli.light.physical import OCTAVE_A, OCTAVE_B, OCTAVE_C
+from cumuli.light import physical as _physical
 from cumuli.settings import MAX_CANDIDATES, RenderSettings
 from cumuli.sky import Sky, Sun, sky_args, sun_disc_edges
 
@@ -74,7 +74,9 @@ def physical_params(settings: RenderSettings, octaves: int) -> _core.PhysicalPar
     p.mie = settings.phase == "mie"
     p.droplet_diameter = float(settings.droplet_diameter)
     p.octaves = int(octaves)
-    p.oct_a, p.oct_b, p.oct_c = OCTAVE_A, OCTAVE_B, OCTAVE_C
+    # read at call time: the fitting script (benchmarks/fit_physical.py) varies them
+    p.oct_a, p.oct_b, p.oct_c = _physical.OCTAVE_A, _physical.OCTAVE_B, _physical.OCTAVE_C
+    p.oct_poisson = _physical.OCTAVE_POISSON
     p.jitter_seed = int(settings.jitter_seed)
     p.min_transmittance = MIN_TRANSMITTANCE
     return p
@@ -154,6 +156,7 @@ def physical_uniforms(params: _core.PhysicalParams) -> dict[str, Any]:
         "u_phys_mie_p": tuple(p.mie_params),
         "u_phys_octaves": p.octaves,
         "u_phys_abc": (p.oct_a, p.oct_b, p.oct_c),
+        "u_phys_poisson": p.oct_poisson,
         "u_phys_seed": p.jitter_seed,
         "u_phys_min_t": p.min_transmittance,
     }

@@ -13,6 +13,7 @@ import moderngl
 import numpy as np
 
 from cumuli._util import validate as check
+from cumuli.gl.context import _resolve_context
 from cumuli.ground import sky_irradiance
 from cumuli.light.physical import PhysicalLight
 from cumuli.rendering.params import physical_params, physical_uniforms
@@ -162,6 +163,43 @@ def set_physical_uniforms(
     octaves = max((light.octaves for light in lights), default=1)
     for name, value in physical_uniforms(physical_params(settings, octaves)).items():
         set_(name, value)
+
+
+def octave_sum_gl(
+    settings: Any, tau: Any, cos_theta: float, octaves: int, context: Any = None
+) -> np.ndarray:
+    """``octave_sum`` of ``shaders/common/physical.glsl`` (float32) at optical depths ``tau``
+    for one ``cos_theta``, on the GPU: the GLSL side of ``cumuli.light.physical.octave_sum``."""
+    ctx = _resolve_context(context)
+    flat = np.ascontiguousarray(tau, dtype=np.float32).ravel()
+    out = np.empty(flat.size, dtype=np.float32)
+    if flat.size == 0:
+        return out.reshape(np.shape(tau))
+    program = ctx.compute("common/octave_values.comp.glsl")
+    made: list[Any] = [program]
+    try:
+        src = ctx.ctx.buffer(flat.tobytes())
+        made.append(src)
+        dst = ctx.ctx.buffer(reserve=flat.size * 4)
+        made.append(dst)
+        src.bind_to_storage_buffer(0)
+        dst.bind_to_storage_buffer(1)
+
+        def set_(name: str, value: Any) -> None:
+            if name in program:
+                program[name].value = value
+
+        for name, value in physical_uniforms(physical_params(settings, octaves)).items():
+            set_(name, value)
+        set_("u_count", flat.size)
+        set_("u_cos", float(cos_theta))
+        program.run(-(-flat.size // 64), 1, 1)
+        ctx.ctx.memory_barrier()
+        out[:] = np.frombuffer(dst.read(), np.float32)
+    finally:
+        for obj in made:
+            obj.release()
+    return out.reshape(np.shape(tau))
 
 
 def bind_ground(ctx: Any, set_: Callable[[str, Any], None], lit: Any, location: int) -> list:

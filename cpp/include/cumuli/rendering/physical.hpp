@@ -4,9 +4,14 @@
 // A sample at p of extinction σ = extinction_scale·ρ, seen along the unit ray direction d,
 // with the light of light/physical.hpp (τ_sun on the sun's lattice, the world lattice's diffuse
 // sunlight F and sky light S, both fluences with their gain):
-//   S(p) = ϖ·( E_sun·( Σ_{i<octaves} aⁱ·phase(bⁱ·g, d·sun)·e^{−cⁱ·τ_sun(p)} + F(p)/4π ) + S(p)/4π )
+//   S(p) = ϖ·( E_sun·( Σ_{i<octaves} aⁱ·phase(bⁱ·g, d·sun)·Pᵢ(τ_sun(p)) + F(p)/4π ) + S(p)/4π )
+//   Pᵢ(τ) = e^{−cⁱ·τ}                       (poisson = 0: Wrenninge et al. 2013's octaves)
+//   Pᵢ(τ) = (β·τ)ⁱ/i! · e^{−cⁱ·τ}           (poisson = β > 0: Poisson-weighted octaves)
 //   colour += T·(1 − e^{−σΔ})·S(p),  T *= e^{−σΔ}
-// (order 0 is single scattering; octaves: Wrenninge et al. 2013). The first sample of every
+// (order 0 is single scattering). The Poisson weights give order i the share of light that
+// has scattered i times on its way in, after the number of collisions along a path of optical
+// depth β·τ: thin fringes draw little high-order light and the cloud's depths most of theirs.
+// The first sample of every
 // union interval sits at ξ·Δ from its start, ξ the interleaved gradient noise of the pixel
 // (Jimenez 2014): ξ = fract(52.9829189·fract(0.06711056·x + 0.00583715·y)) with
 // x = column + 5.588238·seed, y = row + 5.588238·seed.
@@ -35,6 +40,7 @@ struct PhysicalParams {
   ApproxMie mie_params = approx_mie_params(20.0f);
   int octaves = 4;  // scattering orders drawn (1: single scattering)
   float oct_a = 0.5f, oct_b = 0.5f, oct_c = 0.5f;
+  float oct_poisson = 0.0f;  // β of the Poisson weights, in [0, 16] (0: plain octaves)
   int jitter_seed = 0;
   float min_transmittance = 1e-4f;  // the ray stops below it
 
@@ -48,8 +54,9 @@ struct OctaveTerms {
   int n = 1;
   float weight[kMaxOctaves] = {};
   float scale[kMaxOctaves] = {};
+  float poisson = 0.0f;  // β
   OctaveTerms(const PhysicalParams& p, float cos_theta);
-  // Σ weight_i·e^{−scale_i·τ}
+  // Σ weight_i·Pᵢ(τ): Pᵢ = e^{−scale_i·τ}, times (β·τ)ⁱ/i! when β > 0.
   float sum(float tau) const;
 };
 
