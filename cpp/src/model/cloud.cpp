@@ -1,5 +1,6 @@
 #include "cumuli/model/cloud.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
@@ -62,28 +63,44 @@ void CloudShape::validate() const {
     throw std::invalid_argument("phi must be finite and positive");
 }
 
-DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
-                               const DensitySource& src) {
-  const float q = cloud.primitives[static_cast<std::size_t>(j)].normalised_distance(p);
-  if (q > 1.0f) return {};
-  const float rho = src(p);
-  const float kappa = cloud.density.kappa;
+void DensitySource::many(const float* points, std::size_t count, float* out) const {
+  if (count == 0) return;
+  if (constant >= 0.0f) {
+    std::fill(out, out + count, constant);
+    return;
+  }
+  if (evaluations != nullptr) *evaluations += count;
+  noise->fbm_many(points, count, out, fbm, 1);
+}
+
+DensitySample spheroid_density_given(float kappa, float q, float rho) {
   const float gamma = std::exp(-q / ((1.0f - kappa) + 2.0f * kappa * rho));
   if (!(rho < gamma)) return {0.0f, gamma};
   return {rho, gamma};
 }
 
-DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src) {
+DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
+                               const DensitySource& src) {
+  const float q = cloud.primitives[static_cast<std::size_t>(j)].normalised_distance(p);
+  if (q > 1.0f) return {};
+  return spheroid_density_given(cloud.density.kappa, q, src(p));
+}
+
+bool metaball_inside(const CloudShape& cloud, glm::vec3 p) {
   float field = 0.0f;
   for (const auto& e : cloud.primitives) {
     const glm::vec3 q = e.to_local(p);
     const float d2 = glm::dot(q, q);
-    if (d2 <= 1e-12f) return {src(p) * cloud.density.mean_r2 * cloud.density.phi, 1.0f};
+    if (d2 <= 1e-12f) return true;
     field += 1.0f / d2;
-    if (field >= 1.0f) break;
+    if (field >= 1.0f) return true;
   }
-  if (field < 1.0f) return {};
-  return {src(p) * cloud.density.mean_r2 * cloud.density.phi, 1.0f};
+  return !(field < 1.0f);  // (a NaN field counts as inside, as it always has)
+}
+
+DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src) {
+  if (!metaball_inside(cloud, p)) return {};
+  return {metaball_rho(cloud, src(p)), 1.0f};
 }
 
 DensitySample cloud_density(const CloudShape& cloud, int j, glm::vec3 p, const DensitySource& src) {
@@ -128,28 +145,33 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
     plo[k] -= pad;
     phi[k] += pad;
   }
+  // Per row: the samples that can hold density (inside their nearest primitive, or inside the
+  // metaball iso-surface) are gathered first, their fBm evaluated in one bulk call, then eq. (2)
+  // (or eq. 21) finishes each and the cells sum their samples in the same order as one
+  // field_density per sample would: the same values, with the SIMD fBm kernels.
+  const float kappa = cloud.density.kappa;
   parallel_for(nz * ny, threads, [&](std::size_t row) {
     const std::size_t z = row / ny, y = row % ny;
     const glm::vec3 row_lo =
         box.lo + glm::vec3(0.0f, static_cast<float>(y), static_cast<float>(z)) * cell;
     const glm::vec3 row_hi = row_lo + cell;
-    std::vector<int> in_row, in_cell;
-    in_row.reserve(np);
-    in_cell.reserve(np);
+    thread_local std::vector<int> in_row, in_cell, owner_cell;
+    thread_local std::vector<float> pts, qs, rho;
+    in_row.clear();
+    pts.clear();
+    qs.clear();
+    owner_cell.clear();
     for (std::size_t k = 0; k < np; ++k)
       if (plo[k].y <= row_hi.y && phi[k].y >= row_lo.y && plo[k].z <= row_hi.z &&
           phi[k].z >= row_lo.z)
         in_row.push_back(static_cast<int>(k));
+    if (spheroid && in_row.empty()) return;
     for (std::size_t x = 0; x < nx; ++x) {
       in_cell.clear();
       const float x0 = box.lo.x + static_cast<float>(x) * cell.x, x1 = x0 + cell.x;
       for (int k : in_row)
         if (plo[k].x <= x1 && phi[k].x >= x0) in_cell.push_back(k);
-      double sum = 0.0;
-      if (spheroid && in_cell.empty()) {
-        out[row * nx + x] = 0.0f;
-        continue;
-      }
+      if (spheroid && in_cell.empty()) continue;
       for (int c = 0; c < ss; ++c)
         for (int b = 0; b < ss; ++b)
           for (int a = 0; a < ss; ++a) {
@@ -157,22 +179,33 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
                               (static_cast<float>(y) + (static_cast<float>(b) + 0.5f) / ss),
                               (static_cast<float>(z) + (static_cast<float>(c) + 0.5f) / ss));
             const glm::vec3 p = box.lo + f * cell;
-            if (!spheroid) {
-              sum += field_density(cloud, p, src).rho;
+            float best_q = 0.0f;
+            if (spheroid) {
+              best_q = INFINITY;
+              for (int k : in_cell)
+                best_q = std::min(
+                    best_q, cloud.primitives[static_cast<std::size_t>(k)].normalised_distance(p));
+              if (!(best_q <= 1.0f)) continue;
+            } else if (!metaball_inside(cloud, p)) {
               continue;
             }
-            int best = -1;
-            float best_q = INFINITY;
-            for (int k : in_cell) {
-              const float q = cloud.primitives[static_cast<std::size_t>(k)].normalised_distance(p);
-              if (q < best_q) {
-                best_q = q;
-                best = k;
-              }
-            }
-            if (best_q <= 1.0f) sum += spheroid_density(cloud, best, p, src).rho;
+            pts.insert(pts.end(), {p.x, p.y, p.z});
+            qs.push_back(best_q);
+            owner_cell.push_back(static_cast<int>(x));
           }
-      out[row * nx + x] = ss == 1 ? static_cast<float>(sum) : static_cast<float>(sum) * inv_n;
+    }
+    const std::size_t n = qs.size();
+    rho.resize(n);
+    src.many(pts.data(), n, rho.data());
+    double sum = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      sum +=
+          spheroid ? spheroid_density_given(kappa, qs[i], rho[i]).rho : metaball_rho(cloud, rho[i]);
+      if (i + 1 == n || owner_cell[i + 1] != owner_cell[i]) {
+        out[row * nx + static_cast<std::size_t>(owner_cell[i])] =
+            ss == 1 ? static_cast<float>(sum) : static_cast<float>(sum) * inv_n;
+        sum = 0.0;
+      }
     }
   });
   return out;
