@@ -50,6 +50,11 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
   const bool attribute = shape.density.model == DensityModel::Spheroid;
   thread_local MarchSamples m;
   m.clear();
+  // union_owner's rule, kept incrementally (s only grows along the march): `active` holds the
+  // candidates that cover s, in candidate order; the owner is the one with the smallest |q|, the
+  // first on ties, and its |q| is the one eq. (2) needs.
+  int active[kMaxCandidates];
+  int n_active = 0, next = 0;
   float t = -INFINITY;
   for (int k = 0; k < n; ++k) {
     if (cand[k].t_out <= t) continue;
@@ -60,8 +65,23 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
       const glm::vec3 p = o + s * d;
       bool dense = false;
       if (attribute) {
-        const int j = union_owner(shape, cand, n, s, p, cand[k].primitive);
-        const float q = shape.primitives[static_cast<std::size_t>(j)].normalised_distance(p);
+        int kept = 0;
+        for (int a = 0; a < n_active; ++a)
+          if (!(s > cand[active[a]].t_out)) active[kept++] = active[a];
+        n_active = kept;
+        for (; next < n && cand[next].t_in <= s; ++next)
+          if (!(s > cand[next].t_out)) active[n_active++] = next;
+        const auto q_of = [&](int c) {
+          return shape.primitives[static_cast<std::size_t>(cand[c].primitive)].normalised_distance(
+              p);
+        };
+        float q = 0.0f;
+        if (n_active == 0) {
+          q = q_of(k);  // rounding left s just past every interval: the marched candidate
+        } else {
+          q = q_of(active[0]);
+          for (int a = 1; a < n_active; ++a) q = std::min(q, q_of(active[a]));
+        }
         dense = q <= 1.0f;
         if (dense) m.q.push_back(q);
       } else {
