@@ -181,10 +181,14 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
             const glm::vec3 p = box.lo + f * cell;
             float best_q = 0.0f;
             if (spheroid) {
-              best_q = INFINITY;
-              for (int k : in_cell)
-                best_q = std::min(
-                    best_q, cloud.primitives[static_cast<std::size_t>(k)].normalised_distance(p));
+              // The smallest |q|: the root of the smallest |q|² (sqrt is correctly rounded,
+              // hence monotonic), one root per sample.
+              float best_q2 = INFINITY;
+              for (int k : in_cell) {
+                const glm::vec3 l = cloud.primitives[static_cast<std::size_t>(k)].to_local(p);
+                best_q2 = std::min(best_q2, glm::dot(l, l));
+              }
+              best_q = std::sqrt(best_q2);
               if (!(best_q <= 1.0f)) continue;
             } else if (!metaball_inside(cloud, p)) {
               continue;
