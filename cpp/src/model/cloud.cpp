@@ -122,8 +122,44 @@ DensitySample field_density(const CloudShape& cloud, glm::vec3 p, const DensityS
   return spheroid_density(cloud, best, p, src);
 }
 
+namespace {
+
+constexpr int kMaxSamples = 8 * 8 * 8;  // ss³ for the largest supersampling
+
+// A row's buffers (one per thread, reused from row to row; taken once per row: each access to
+// a thread_local in a shared library can cost a call).
+struct GridRow {
+  std::vector<int> in_row, in_cell, owner_cell;
+  std::vector<float> pts, qs, rho;
+};
+GridRow& grid_row() {
+  thread_local GridRow row;
+  return row;
+}
+
+// q2[i] = min(q2[i], |q|²) of the points (x[i], y[i], z[i]) against e: Ellipsoid::to_local and
+// glm::dot written out in glm's order of operations, so that each point gets the same float
+// operations as dot(to_local(p), to_local(p)) while the loop vectorises across the points.
+void min_q2(const Ellipsoid& e, const float* x, const float* y, const float* z, int count,
+            float* q2) {
+  const glm::mat3& r = e.rotation;
+  const glm::vec3 c = e.centre, rad = e.radii;
+  for (int i = 0; i < count; ++i) {
+    const float vx = x[i] - c.x, vy = y[i] - c.y, vz = z[i] - c.z;
+    // (Rᵀ·v)_a = R[a][0]·v.x + R[a][1]·v.y + R[a][2]·v.z, left to right, then ÷ radii_a.
+    const float lx = (r[0][0] * vx + r[0][1] * vy + r[0][2] * vz) / rad.x;
+    const float ly = (r[1][0] * vx + r[1][1] * vy + r[1][2] * vz) / rad.y;
+    const float lz = (r[2][0] * vx + r[2][1] * vy + r[2][2] * vz) / rad.z;
+    const float d = lx * lx + ly * ly + lz * lz;
+    q2[i] = std::min(q2[i], d);
+  }
+}
+
+}  // namespace
+
 std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& src, const Box& box,
                                 const int res[3], int ss, int threads) {
+  if (ss < 1 || ss > 8) throw std::invalid_argument("supersample must be in [1, 8]");
   const std::size_t nx = static_cast<std::size_t>(res[0]), ny = static_cast<std::size_t>(res[1]),
                     nz = static_cast<std::size_t>(res[2]);
   std::vector<float> out(nx * ny * nz);
@@ -155,8 +191,9 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
     const glm::vec3 row_lo =
         box.lo + glm::vec3(0.0f, static_cast<float>(y), static_cast<float>(z)) * cell;
     const glm::vec3 row_hi = row_lo + cell;
-    thread_local std::vector<int> in_row, in_cell, owner_cell;
-    thread_local std::vector<float> pts, qs, rho;
+    GridRow& buf = grid_row();
+    std::vector<int>&in_row = buf.in_row, &in_cell = buf.in_cell, &owner_cell = buf.owner_cell;
+    std::vector<float>&pts = buf.pts, &qs = buf.qs;
     in_row.clear();
     pts.clear();
     qs.clear();
@@ -166,38 +203,47 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
           phi[k].z >= row_lo.z)
         in_row.push_back(static_cast<int>(k));
     if (spheroid && in_row.empty()) return;
+    // A cell's samples, and their smallest |q|² (the root of the smallest |q|² is the smallest
+    // |q|: sqrt is correctly rounded, hence monotonic; one root per sample).
+    float sx[kMaxSamples], sy[kMaxSamples], sz[kMaxSamples], q2[kMaxSamples];
+    const int m = ss * ss * ss;
     for (std::size_t x = 0; x < nx; ++x) {
       in_cell.clear();
       const float x0 = box.lo.x + static_cast<float>(x) * cell.x, x1 = x0 + cell.x;
       for (int k : in_row)
         if (plo[k].x <= x1 && phi[k].x >= x0) in_cell.push_back(k);
       if (spheroid && in_cell.empty()) continue;
+      int i = 0;
       for (int c = 0; c < ss; ++c)
         for (int b = 0; b < ss; ++b)
-          for (int a = 0; a < ss; ++a) {
+          for (int a = 0; a < ss; ++a, ++i) {
             const glm::vec3 f((static_cast<float>(x) + (static_cast<float>(a) + 0.5f) / ss),
                               (static_cast<float>(y) + (static_cast<float>(b) + 0.5f) / ss),
                               (static_cast<float>(z) + (static_cast<float>(c) + 0.5f) / ss));
             const glm::vec3 p = box.lo + f * cell;
-            float best_q = 0.0f;
-            if (spheroid) {
-              // The smallest |q|: the root of the smallest |q|² (sqrt is correctly rounded,
-              // hence monotonic), one root per sample.
-              float best_q2 = INFINITY;
-              for (int k : in_cell) {
-                const glm::vec3 l = cloud.primitives[static_cast<std::size_t>(k)].to_local(p);
-                best_q2 = std::min(best_q2, glm::dot(l, l));
-              }
-              best_q = std::sqrt(best_q2);
-              if (!(best_q <= 1.0f)) continue;
-            } else if (!metaball_inside(cloud, p)) {
-              continue;
-            }
-            pts.insert(pts.end(), {p.x, p.y, p.z});
-            qs.push_back(best_q);
-            owner_cell.push_back(static_cast<int>(x));
+            sx[i] = p.x;
+            sy[i] = p.y;
+            sz[i] = p.z;
+            q2[i] = INFINITY;
           }
+      if (spheroid)
+        for (int k : in_cell)
+          min_q2(cloud.primitives[static_cast<std::size_t>(k)], sx, sy, sz, m, q2);
+      for (i = 0; i < m; ++i) {
+        const glm::vec3 p(sx[i], sy[i], sz[i]);
+        float best_q = 0.0f;
+        if (spheroid) {
+          best_q = std::sqrt(q2[i]);
+          if (!(best_q <= 1.0f)) continue;
+        } else if (!metaball_inside(cloud, p)) {
+          continue;
+        }
+        pts.insert(pts.end(), {p.x, p.y, p.z});
+        qs.push_back(best_q);
+        owner_cell.push_back(static_cast<int>(x));
+      }
     }
+    std::vector<float>& rho = buf.rho;
     const std::size_t n = qs.size();
     rho.resize(n);
     src.many(pts.data(), n, rho.data());

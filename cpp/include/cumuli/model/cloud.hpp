@@ -85,7 +85,7 @@ DensitySample field_density(const CloudShape& cloud, glm::vec3 p, const DensityS
 // The density field on a res[0] × res[1] × res[2] (x, y, z) lattice over `box`, [z][y][x]:
 // each voxel the mean of field_density at ss³ points, (i + (a + ½)/ss)·(hi − lo)/res + lo for
 // a = 0..ss−1 on each axis (ss = 1: the texel centre). Threads over z-slices; the result does
-// not depend on the thread count.
+// not depend on the thread count. ss must be in [1, 8] (std::invalid_argument).
 std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& src, const Box& box,
                                 const int res[3], int ss, int threads);
 
