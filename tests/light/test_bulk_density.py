@@ -59,8 +59,17 @@ def _scalar_grid(cloud, noise, lo, hi, res, ss) -> np.ndarray:
 def _clouds() -> dict[str, cu.Cloud]:
     a = cu.gaussian_cumulus(centre=(0, 0, 0), n=12, seed=3)
     b = cu.gaussian_cumulus(centre=(2.5, 1.0, -1.5), n=9, seed=8)
+    rng = np.random.default_rng(12)
+    rotations = [np.linalg.qr(rng.normal(size=(3, 3)))[0] for _ in range(10)]
+    rotations = [q * np.sign(np.linalg.det(q)) for q in rotations]  # proper rotations
+    ellipsoids = cu.Cloud(
+        centres=rng.uniform(-3.0, 3.0, (10, 3)),
+        radii=rng.uniform(0.8, 2.5, (10, 3)),
+        rotations=np.array(rotations),
+    )
     return {
         "cumulus": a,
+        "rotated ellipsoids": ellipsoids,
         "metaballs": cu.gaussian_cumulus(centre=(0, 0, 0), n=7, seed=5).with_model("metaball"),
         "overlapping": cu.merge([a, b]),
     }
