@@ -12,8 +12,13 @@ interleaved; the process CPU time beside it, which other load on a shared machin
 inflate) and its breakdown into the stages of `cumuli.light.physical.physical_light`
 (``STAGES``: the extinction lattice, the cloud's own optical depth on the sun's lattice, the
 optical depth of the other clouds upstream of it, the sun's transmittance on the world lattice,
-the SH sky visibility, the diffusion solve), summed over the clouds, from one more pass. The
-growth exponent is the least-squares slope of log(time) over log(clouds).
+the SH sky visibility, the diffusion solve), summed over the clouds, the median of as many
+more passes as repeats (``stages_s``, and ``stages_share`` of their sum). The growth exponent is
+the least-squares slope of log(time) over log(clouds).
+
+``noise_versions``: the one-cloud scene with noise version 1 (the table) and 2 (the hash, whose
+wide fBm kernels compute the lattice in registers), timed alike (interleaved), each with its
+stage profile and the largest stage (``slowest_stage``): where the light step's time goes.
 
 Beside the times, ``mitsuba``: the error the light step gives against Mitsuba 3 — the CPU
 render of the reference scene of ``tests/references`` (side-lit default cumulus, 160×120)
@@ -77,12 +82,51 @@ def light_step(sc: cu.Scene) -> None:
     cu.prepare_light(sc, threads=THREADS, progress=False)
 
 
-def stages(sc: cu.Scene) -> dict[str, float]:
-    """Seconds per stage of the physical light of every cloud of ``sc``, summed."""
-    timings: dict[str, float] = {}
-    for cloud in sc.clouds:
-        physical_light(cloud, sc, THREADS, timings)
-    return {name: timings.get(name, 0.0) for name in STAGES}
+def stages(sc: cu.Scene, passes: int = 1) -> dict[str, float]:
+    """Seconds per stage of the physical light of every cloud of ``sc``, summed over the
+    clouds: the median of ``passes`` passes."""
+    runs: list[dict[str, float]] = []
+    for _ in range(passes):
+        timings: dict[str, float] = {}
+        for cloud in sc.clouds:
+            physical_light(cloud, sc, THREADS, timings)
+        runs.append(timings)
+    return {name: float(np.median([t.get(name, 0.0) for t in runs])) for name in STAGES}
+
+
+def profile(per_stage: dict[str, float]) -> dict[str, Any]:
+    """A stage profile: milliseconds per stage, their shares and the slowest stage."""
+    total = max(sum(per_stage.values()), 1e-12)
+    return {
+        "stages_ms": {k: 1e3 * v for k, v in per_stage.items()},
+        "stages_share": {k: v / total for k, v in per_stage.items()},
+        "slowest_stage": max(per_stage, key=lambda k: per_stage[k]),
+    }
+
+
+def noise_versions(resolution: int | None, repeats: int) -> dict[str, Any]:
+    """The one-cloud scene's light step with noise version 1 and 2 (see the docstring)."""
+    scenes = {
+        f"v{v}": scene("copies", 1, resolution).replace(noise=cu.Noise(seed=7, version=v))
+        for v in (1, 2)
+    }
+    fns = {name: (lambda sc=sc: light_step(sc)) for name, sc in scenes.items()}
+    timed = common.interleaved_repeats(fns, repeats, warmup=1)
+    out: dict[str, Any] = {}
+    for name, sc in scenes.items():
+        wall = common.spread(timed[name][0])
+        out[name] = {
+            "version": int(name[1:]),
+            "light_step_s": wall,
+            "light_step_cpu_s": common.spread(timed[name][1]),
+            **profile(stages(sc, repeats)),
+        }
+        common.log(
+            f"noise {name}: {1e3 * wall['median']:8.1f} ms  ("
+            + ", ".join(f"{k} {v:.1f}" for k, v in out[name]["stages_ms"].items())
+            + " ms)"
+        )
+    return out
 
 
 def mitsuba_error() -> dict[str, float]:
@@ -129,7 +173,7 @@ def main(argv: list[str] | None = None) -> int:
         for s, sc in scenes.items():
             wall = common.spread(timed[s][0])
             cpu = common.spread(timed[s][1])
-            per_stage = stages(sc)
+            per_stage = stages(sc, repeats)
             results[s][str(count)] = {
                 "clouds": count,
                 "light_step_s": wall,
@@ -171,6 +215,7 @@ def main(argv: list[str] | None = None) -> int:
         targets[f"sixteen_over_one_{s}"] = common.target(
             TARGET_GROWTH, growth[s]["last_over_one"] if full else None, "<="
         )
+    versions = noise_versions(resolution, repeats)
     error = mitsuba_error()
     common.log(
         "against Mitsuba 3: per-block error median {block_rel_median:.4f}, p90 "
@@ -190,6 +235,7 @@ def main(argv: list[str] | None = None) -> int:
         "stages": list(STAGES),
         "series": results,
         "growth": growth,
+        "noise_versions": versions,
         "mitsuba": error,
         "targets": targets,
     }

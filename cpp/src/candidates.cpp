@@ -25,11 +25,16 @@ Box candidate_bounds(const CloudShape& cloud) {
   return b;
 }
 
-int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir, float t_min,
-                       float t_max, Candidate* out, int capacity, bool sorted) {
+namespace {
+
+// collect_candidates over the primitives index(0), ..., index(n − 1).
+template <class Index>
+int collect(const CloudShape& cloud, Index index, int n, glm::vec3 origin, glm::vec3 dir,
+            float t_min, float t_max, Candidate* out, int capacity, bool sorted) {
   const float scale = candidate_scale(cloud);
   int count = 0;
-  for (std::size_t j = 0; j < cloud.primitives.size(); ++j) {
+  for (int i = 0; i < n; ++i) {
+    const std::size_t j = static_cast<std::size_t>(index(i));
     Ellipsoid e = cloud.primitives[j];
     e.radii *= scale;
     Interval iv;
@@ -56,6 +61,23 @@ int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir,
     out[pos] = Candidate{t0, t1, static_cast<int>(j)};
   }
   return count;
+}
+
+}  // namespace
+
+int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir, float t_min,
+                       float t_max, Candidate* out, int capacity, bool sorted) {
+  return collect(
+      cloud, [](int i) { return i; }, static_cast<int>(cloud.primitives.size()), origin, dir, t_min,
+      t_max, out, capacity, sorted);
+}
+
+int collect_candidates(const CloudShape& cloud, const int* subset, int count, glm::vec3 origin,
+                       glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
+                       bool sorted) {
+  return collect(
+      cloud, [subset](int i) { return subset[i]; }, count, origin, dir, t_min, t_max, out, capacity,
+      sorted);
 }
 
 int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,

@@ -8,8 +8,6 @@
 
 namespace cumuli {
 
-float Ellipsoid::normalised_distance(glm::vec3 p) const { return glm::length(to_local(p)); }
-
 void Ellipsoid::bounds(glm::vec3& lo, glm::vec3& hi) const {
   // Half-extent along world axis k: sqrt(Σ_j (R_kj · r_j)²).
   glm::vec3 half;

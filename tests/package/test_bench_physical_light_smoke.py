@@ -43,6 +43,17 @@ def test_bench_physical_light_quick_writes_json_and_plot(
         t = data["targets"][name]
         assert t["met"] is None and t["reached"] is None  # --quick measures no target
         assert t["limit"] > 0
+    # The one-cloud scene with either noise version, each with its stage profile.
+    versions = data["noise_versions"]
+    assert sorted(versions) == ["v1", "v2"]
+    for name, row in versions.items():
+        assert row["version"] == int(name[1:])
+        assert row["light_step_s"]["n"] == data["repeats"] and row["light_step_cpu_s"]["median"] > 0
+        assert set(row["stages_ms"]) == set(STAGES) and row["stages_ms"]["sun_depth"] > 0
+        assert sum(row["stages_share"].values()) == pytest.approx(1.0)
+        assert row["slowest_stage"] in STAGES
+        assert row["stages_ms"][row["slowest_stage"]] == max(row["stages_ms"].values())
+    assert "noise v2" in stdout
     # The error against Mitsuba 3 beside the times, within the reference test's limits.
     err = data["mitsuba"]
     assert err["blocks"] > 200

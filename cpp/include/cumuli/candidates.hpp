@@ -31,6 +31,11 @@ Box candidate_bounds(const CloudShape& cloud);
 // Returns the number written to `out`.
 int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir, float t_min,
                        float t_max, Candidate* out, int capacity, bool sorted = true);
+// The same, testing only the primitives listed in `subset` (`count` indices, increasing): the
+// same list whenever the others surely miss the ray (the light pass culls them per column).
+int collect_candidates(const CloudShape& cloud, const int* subset, int count, glm::vec3 origin,
+                       glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
+                       bool sorted = true);
 
 // The union-march attribution rule (RENDER_CONTRACT march="union", Algorithm 2's NDT): a sample
 // at ray parameter s, world point p, belongs to the covering candidate (t_in ≤ s ≤ t_out) whose

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
@@ -18,16 +19,52 @@ constexpr int kMaxCandidates = 256;
 // The sky's march stops once τ > kSkyDepthCut: the visibility left, e^−6 ≈ 0.25 %, is dropped.
 constexpr double kSkyDepthCut = 6.0;
 
+// A ray's samples through one cloud, gathered before their density is known (one buffer per
+// thread, reused from ray to ray): each sample's ray parameter s and length, and where it can
+// hold density (inside its owner primitive, or the metaball iso-surface), its point and |q|.
+struct MarchSamples {
+  std::vector<float> s, len;
+  std::vector<int> dense;  // index of the sample's point in pts / q / fbm, or −1 (no density)
+  std::vector<float> pts, q, fbm;
+  void clear() {
+    s.clear();
+    len.clear();
+    dense.clear();
+    pts.clear();
+    q.clear();
+  }
+};
+
+// The calling thread's buffer (taken once per march: each access to a thread_local in a shared
+// library can cost a call).
+MarchSamples& march_samples() {
+  thread_local MarchSamples m;
+  return m;
+}
+
 // Calls visit(s, σt, ℓ) for the segments of o + t·d, t in [t0, t1], inside the union of the
 // cloud's candidate intervals: segments of at most `step` from each union interval's start (the
-// last one cut at its end), σt at the midpoint s with the union attribution rule.
+// last one cut at its end), σt at the midpoint s with the union attribution rule. The samples
+// are laid out first and the fBm of those that can hold density evaluated in one bulk call
+// (the SIMD kernels): the same values as one cloud_density per sample, visited in order.
 template <class Visit>
 void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float t1, float step,
-                 Visit&& visit) {
+                 Visit&& visit, const std::vector<int>* subset = nullptr) {
   Candidate cand[kMaxCandidates];
   const CloudShape& shape = *c.shape;
-  const int n = collect_candidates(shape, o, d, t0, t1, cand, kMaxCandidates, true);
+  const int n = subset == nullptr
+                    ? collect_candidates(shape, o, d, t0, t1, cand, kMaxCandidates, true)
+                    : collect_candidates(shape, subset->data(), static_cast<int>(subset->size()), o,
+                                         d, t0, t1, cand, kMaxCandidates, true);
+  if (n == 0) return;
   const bool attribute = shape.density.model == DensityModel::Spheroid;
+  MarchSamples& m = march_samples();
+  m.clear();
+  // union_owner's rule, kept incrementally (s only grows along the march): `active` holds the
+  // candidates that cover s, in candidate order; the owner is the one with the smallest |q|, the
+  // first on ties, and its |q| is the one eq. (2) needs.
+  int active[kMaxCandidates];
+  int n_active = 0, next = 0;
   float t = -INFINITY;
   for (int k = 0; k < n; ++k) {
     if (cand[k].t_out <= t) continue;
@@ -36,12 +73,55 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
       const float end = std::min(t + step, cand[k].t_out);
       const float s = 0.5f * (t + end);
       const glm::vec3 p = o + s * d;
-      const int j =
-          attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive) : cand[k].primitive;
-      const float rho = cloud_density(shape, j, p, c.source).rho;
-      visit(s, c.scale * rho, end - t);
+      bool dense = false;
+      if (attribute) {
+        int kept = 0;
+        for (int a = 0; a < n_active; ++a)
+          if (!(s > cand[active[a]].t_out)) active[kept++] = active[a];
+        n_active = kept;
+        for (; next < n && cand[next].t_in <= s; ++next)
+          if (!(s > cand[next].t_out)) active[n_active++] = next;
+        // |q|² of a candidate's primitive: normalised_distance is its square root, and the
+        // square root of the smallest |q|² is the smallest |q| (sqrt is correctly rounded, so
+        // monotonic): one root per sample.
+        const auto q2_of = [&](int c) {
+          const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[c].primitive)];
+          const glm::vec3 l = e.to_local(p);
+          return glm::dot(l, l);
+        };
+        float q2 = 0.0f;
+        if (n_active == 0) {
+          q2 = q2_of(k);  // rounding left s just past every interval: the marched candidate
+        } else {
+          q2 = q2_of(active[0]);
+          for (int a = 1; a < n_active; ++a) q2 = std::min(q2, q2_of(active[a]));
+        }
+        const float q = std::sqrt(q2);
+        dense = q <= 1.0f;
+        if (dense) m.q.push_back(q);
+      } else {
+        dense = metaball_inside(shape, p);
+      }
+      m.dense.push_back(dense ? static_cast<int>(m.pts.size() / 3) : -1);
+      if (dense) m.pts.insert(m.pts.end(), {p.x, p.y, p.z});
+      m.s.push_back(s);
+      m.len.push_back(end - t);
       t = end;
     }
+  }
+  const std::size_t count = m.pts.size() / 3;
+  m.fbm.resize(count);
+  c.source.many(m.pts.data(), count, m.fbm.data());
+  const float kappa = shape.density.kappa;
+  for (std::size_t i = 0; i < m.s.size(); ++i) {
+    const int g = m.dense[i];
+    float rho = 0.0f;
+    if (g >= 0) {
+      const std::size_t gi = static_cast<std::size_t>(g);
+      rho = attribute ? spheroid_density_given(kappa, m.q[gi], m.fbm[gi]).rho
+                      : metaball_rho(shape, m.fbm[gi]);
+    }
+    visit(m.s[i], c.scale * rho, m.len[i]);
   }
 }
 
@@ -197,6 +277,27 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
   std::vector<float> out(nu * nv * nw, 0.0f);
   const float dw = (f.hi.z - f.lo.z) / static_cast<float>(nw);
   const float length = f.hi.z - f.lo.z;
+  // Every column runs along w: it can meet a primitive only where its (u, v) frame coordinates
+  // lie within the primitive's extent across the light (its support c·a ± |diag(r)·Rᵀa|, with
+  // the radii grown by candidate_scale, padded well beyond rounding). Each column tests only
+  // those primitives: the same candidates as testing all of them.
+  std::vector<std::vector<std::array<float, 4>>> across(medium.clouds.size());
+  for (std::size_t m = 0; m < medium.clouds.size(); ++m) {
+    const CloudShape& shape = *medium.clouds[m].shape;
+    const float scale = candidate_scale(shape);
+    for (const Ellipsoid& e : shape.primitives) {
+      std::array<float, 4> r{};
+      const glm::vec3 axes[2] = {f.u, f.v};
+      for (int a = 0; a < 2; ++a) {
+        const glm::vec3 local = glm::transpose(e.rotation) * axes[a] * (e.radii * scale);
+        const float half = glm::length(local), mid = glm::dot(e.centre, axes[a]);
+        const float pad = 1e-3f * half + 1e-4f * (1.0f + std::abs(mid) + length);
+        r[2 * a] = mid - half - pad;
+        r[2 * a + 1] = mid + half + pad;
+      }
+      across[m].push_back(r);
+    }
+  }
   parallel_for(nu * nv, threads, [&](std::size_t col) {
     const int i = static_cast<int>(col % nu), j = static_cast<int>(col / nu);
     const glm::vec3 n0 = f.node(i, j, 0);
@@ -204,12 +305,22 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
     // Segments of every drawable, merged in order of t (drawables may overlap); the buffer is
     // the thread's, reused from column to column.
     thread_local std::vector<std::array<float, 3>> segs;
+    thread_local std::vector<int> subset;
     segs.clear();
     auto keep = [&](float s, float sigma, float len) {
       if (sigma > 0.0f) segs.push_back({s - 0.5f * len, s + 0.5f * len, sigma});
     };
-    for (const CloudMedium& c : medium.clouds)
-      march_cloud(c, origin, f.w, 0.0f, length, step, keep);
+    const float ou = glm::dot(origin, f.u), ov = glm::dot(origin, f.v);
+    for (std::size_t m = 0; m < medium.clouds.size(); ++m) {
+      subset.clear();
+      for (std::size_t k = 0; k < across[m].size(); ++k) {
+        const std::array<float, 4>& r = across[m][k];
+        if (ou >= r[0] && ou <= r[1] && ov >= r[2] && ov <= r[3])
+          subset.push_back(static_cast<int>(k));
+      }
+      if (!subset.empty())
+        march_cloud(medium.clouds[m], origin, f.w, 0.0f, length, step, keep, &subset);
+    }
     for (const VolumeMedium& v : medium.volumes)
       march_volume(v, origin, f.w, 0.0f, length, step, keep);
     if (segs.empty()) return;

@@ -1,5 +1,6 @@
 #include "cumuli/model/cloud.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <stdexcept>
@@ -62,28 +63,44 @@ void CloudShape::validate() const {
     throw std::invalid_argument("phi must be finite and positive");
 }
 
-DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
-                               const DensitySource& src) {
-  const float q = cloud.primitives[static_cast<std::size_t>(j)].normalised_distance(p);
-  if (q > 1.0f) return {};
-  const float rho = src(p);
-  const float kappa = cloud.density.kappa;
+void DensitySource::many(const float* points, std::size_t count, float* out) const {
+  if (count == 0) return;
+  if (constant >= 0.0f) {
+    std::fill(out, out + count, constant);
+    return;
+  }
+  if (evaluations != nullptr) *evaluations += count;
+  noise->fbm_many(points, count, out, fbm, 1);
+}
+
+DensitySample spheroid_density_given(float kappa, float q, float rho) {
   const float gamma = std::exp(-q / ((1.0f - kappa) + 2.0f * kappa * rho));
   if (!(rho < gamma)) return {0.0f, gamma};
   return {rho, gamma};
 }
 
-DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src) {
+DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
+                               const DensitySource& src) {
+  const float q = cloud.primitives[static_cast<std::size_t>(j)].normalised_distance(p);
+  if (q > 1.0f) return {};
+  return spheroid_density_given(cloud.density.kappa, q, src(p));
+}
+
+bool metaball_inside(const CloudShape& cloud, glm::vec3 p) {
   float field = 0.0f;
   for (const auto& e : cloud.primitives) {
     const glm::vec3 q = e.to_local(p);
     const float d2 = glm::dot(q, q);
-    if (d2 <= 1e-12f) return {src(p) * cloud.density.mean_r2 * cloud.density.phi, 1.0f};
+    if (d2 <= 1e-12f) return true;
     field += 1.0f / d2;
-    if (field >= 1.0f) break;
+    if (field >= 1.0f) return true;
   }
-  if (field < 1.0f) return {};
-  return {src(p) * cloud.density.mean_r2 * cloud.density.phi, 1.0f};
+  return !(field < 1.0f);  // (a NaN field counts as inside, as it always has)
+}
+
+DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src) {
+  if (!metaball_inside(cloud, p)) return {};
+  return {metaball_rho(cloud, src(p)), 1.0f};
 }
 
 DensitySample cloud_density(const CloudShape& cloud, int j, glm::vec3 p, const DensitySource& src) {
@@ -105,8 +122,44 @@ DensitySample field_density(const CloudShape& cloud, glm::vec3 p, const DensityS
   return spheroid_density(cloud, best, p, src);
 }
 
+namespace {
+
+constexpr int kMaxSamples = 8 * 8 * 8;  // ss³ for the largest supersampling
+
+// A row's buffers (one per thread, reused from row to row; taken once per row: each access to
+// a thread_local in a shared library can cost a call).
+struct GridRow {
+  std::vector<int> in_row, in_cell, owner_cell;
+  std::vector<float> pts, qs, rho;
+};
+GridRow& grid_row() {
+  thread_local GridRow row;
+  return row;
+}
+
+// q2[i] = min(q2[i], |q|²) of the points (x[i], y[i], z[i]) against e: Ellipsoid::to_local and
+// glm::dot written out in glm's order of operations, so that each point gets the same float
+// operations as dot(to_local(p), to_local(p)) while the loop vectorises across the points.
+void min_q2(const Ellipsoid& e, const float* x, const float* y, const float* z, int count,
+            float* q2) {
+  const glm::mat3& r = e.rotation;
+  const glm::vec3 c = e.centre, rad = e.radii;
+  for (int i = 0; i < count; ++i) {
+    const float vx = x[i] - c.x, vy = y[i] - c.y, vz = z[i] - c.z;
+    // (Rᵀ·v)_a = R[a][0]·v.x + R[a][1]·v.y + R[a][2]·v.z, left to right, then ÷ radii_a.
+    const float lx = (r[0][0] * vx + r[0][1] * vy + r[0][2] * vz) / rad.x;
+    const float ly = (r[1][0] * vx + r[1][1] * vy + r[1][2] * vz) / rad.y;
+    const float lz = (r[2][0] * vx + r[2][1] * vy + r[2][2] * vz) / rad.z;
+    const float d = lx * lx + ly * ly + lz * lz;
+    q2[i] = std::min(q2[i], d);
+  }
+}
+
+}  // namespace
+
 std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& src, const Box& box,
                                 const int res[3], int ss, int threads) {
+  if (ss < 1 || ss > 8) throw std::invalid_argument("supersample must be in [1, 8]");
   const std::size_t nx = static_cast<std::size_t>(res[0]), ny = static_cast<std::size_t>(res[1]),
                     nz = static_cast<std::size_t>(res[2]);
   std::vector<float> out(nx * ny * nz);
@@ -128,51 +181,81 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
     plo[k] -= pad;
     phi[k] += pad;
   }
+  // Per row: the samples that can hold density (inside their nearest primitive, or inside the
+  // metaball iso-surface) are gathered first, their fBm evaluated in one bulk call, then eq. (2)
+  // (or eq. 21) finishes each and the cells sum their samples in the same order as one
+  // field_density per sample would: the same values, with the SIMD fBm kernels.
+  const float kappa = cloud.density.kappa;
   parallel_for(nz * ny, threads, [&](std::size_t row) {
     const std::size_t z = row / ny, y = row % ny;
     const glm::vec3 row_lo =
         box.lo + glm::vec3(0.0f, static_cast<float>(y), static_cast<float>(z)) * cell;
     const glm::vec3 row_hi = row_lo + cell;
-    std::vector<int> in_row, in_cell;
-    in_row.reserve(np);
-    in_cell.reserve(np);
+    GridRow& buf = grid_row();
+    std::vector<int>&in_row = buf.in_row, &in_cell = buf.in_cell, &owner_cell = buf.owner_cell;
+    std::vector<float>&pts = buf.pts, &qs = buf.qs;
+    in_row.clear();
+    pts.clear();
+    qs.clear();
+    owner_cell.clear();
     for (std::size_t k = 0; k < np; ++k)
       if (plo[k].y <= row_hi.y && phi[k].y >= row_lo.y && plo[k].z <= row_hi.z &&
           phi[k].z >= row_lo.z)
         in_row.push_back(static_cast<int>(k));
+    if (spheroid && in_row.empty()) return;
+    // A cell's samples, and their smallest |q|² (the root of the smallest |q|² is the smallest
+    // |q|: sqrt is correctly rounded, hence monotonic; one root per sample).
+    float sx[kMaxSamples], sy[kMaxSamples], sz[kMaxSamples], q2[kMaxSamples];
+    const int m = ss * ss * ss;
     for (std::size_t x = 0; x < nx; ++x) {
       in_cell.clear();
       const float x0 = box.lo.x + static_cast<float>(x) * cell.x, x1 = x0 + cell.x;
       for (int k : in_row)
         if (plo[k].x <= x1 && phi[k].x >= x0) in_cell.push_back(k);
-      double sum = 0.0;
-      if (spheroid && in_cell.empty()) {
-        out[row * nx + x] = 0.0f;
-        continue;
-      }
+      if (spheroid && in_cell.empty()) continue;
+      int i = 0;
       for (int c = 0; c < ss; ++c)
         for (int b = 0; b < ss; ++b)
-          for (int a = 0; a < ss; ++a) {
+          for (int a = 0; a < ss; ++a, ++i) {
             const glm::vec3 f((static_cast<float>(x) + (static_cast<float>(a) + 0.5f) / ss),
                               (static_cast<float>(y) + (static_cast<float>(b) + 0.5f) / ss),
                               (static_cast<float>(z) + (static_cast<float>(c) + 0.5f) / ss));
             const glm::vec3 p = box.lo + f * cell;
-            if (!spheroid) {
-              sum += field_density(cloud, p, src).rho;
-              continue;
-            }
-            int best = -1;
-            float best_q = INFINITY;
-            for (int k : in_cell) {
-              const float q = cloud.primitives[static_cast<std::size_t>(k)].normalised_distance(p);
-              if (q < best_q) {
-                best_q = q;
-                best = k;
-              }
-            }
-            if (best_q <= 1.0f) sum += spheroid_density(cloud, best, p, src).rho;
+            sx[i] = p.x;
+            sy[i] = p.y;
+            sz[i] = p.z;
+            q2[i] = INFINITY;
           }
-      out[row * nx + x] = ss == 1 ? static_cast<float>(sum) : static_cast<float>(sum) * inv_n;
+      if (spheroid)
+        for (int k : in_cell)
+          min_q2(cloud.primitives[static_cast<std::size_t>(k)], sx, sy, sz, m, q2);
+      for (i = 0; i < m; ++i) {
+        const glm::vec3 p(sx[i], sy[i], sz[i]);
+        float best_q = 0.0f;
+        if (spheroid) {
+          best_q = std::sqrt(q2[i]);
+          if (!(best_q <= 1.0f)) continue;
+        } else if (!metaball_inside(cloud, p)) {
+          continue;
+        }
+        pts.insert(pts.end(), {p.x, p.y, p.z});
+        qs.push_back(best_q);
+        owner_cell.push_back(static_cast<int>(x));
+      }
+    }
+    std::vector<float>& rho = buf.rho;
+    const std::size_t n = qs.size();
+    rho.resize(n);
+    src.many(pts.data(), n, rho.data());
+    double sum = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+      sum +=
+          spheroid ? spheroid_density_given(kappa, qs[i], rho[i]).rho : metaball_rho(cloud, rho[i]);
+      if (i + 1 == n || owner_cell[i + 1] != owner_cell[i]) {
+        out[row * nx + static_cast<std::size_t>(owner_cell[i])] =
+            ss == 1 ? static_cast<float>(sum) : static_cast<float>(sum) * inv_n;
+        sum = 0.0;
+      }
     }
   });
   return out;

@@ -6,6 +6,7 @@
 // density ρ = fbm(p) · r̄² · φ with r̄² the mean squared radius.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -46,6 +47,10 @@ struct DensitySource {
     if (evaluations != nullptr) ++*evaluations;
     return noise->fbm(p, fbm);
   }
+  // operator() at `count` points (xyz interleaved) into `out`, bit-identical to calling it on
+  // each: the noise's bulk (SIMD) fBm, on the calling thread (the callers thread over rows or
+  // columns already).
+  void many(const float* points, std::size_t count, float* out) const;
 };
 
 // One density sample. `gamma` is eq. (2)'s γ (1 for metaballs), used by the render pass.
@@ -53,6 +58,16 @@ struct DensitySample {
   float rho = 0.0f;
   float gamma = 0.0f;
 };
+
+// Eq. (2) at a sample whose normalised distance to its primitive is q ≤ 1 and whose fBm is rho:
+// spheroid_density once both are known (the bulk paths evaluate the fBm of many points at once).
+DensitySample spheroid_density_given(float kappa, float q, float rho);
+// Whether p lies inside the metaball iso-surface Σ 1/|q_i|² ≥ 1 (eq. 19).
+bool metaball_inside(const CloudShape& cloud, glm::vec3 p);
+// Eq. (20)–(21)'s density of a point inside the iso-surface whose fBm is `fbm`.
+inline float metaball_rho(const CloudShape& cloud, float fbm) {
+  return fbm * cloud.density.mean_r2 * cloud.density.phi;
+}
 
 // Pseudo-spheroid density at p attributed to primitive j (eq. 2); rho = 0 outside the cloud.
 DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
@@ -70,7 +85,7 @@ DensitySample field_density(const CloudShape& cloud, glm::vec3 p, const DensityS
 // The density field on a res[0] × res[1] × res[2] (x, y, z) lattice over `box`, [z][y][x]:
 // each voxel the mean of field_density at ss³ points, (i + (a + ½)/ss)·(hi − lo)/res + lo for
 // a = 0..ss−1 on each axis (ss = 1: the texel centre). Threads over z-slices; the result does
-// not depend on the thread count.
+// not depend on the thread count. ss must be in [1, 8] (std::invalid_argument).
 std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& src, const Box& box,
                                 const int res[3], int ss, int threads);
 
