@@ -2,7 +2,9 @@
 
 A ``size³`` lattice of uniform values in [0, 1) and its fractal Brownian motion,
 ``fbm(p) = Σ_{i=1..n} wⁱ · lattice(sⁱ · f · p)``, looked up with the GL texel-centre trilinear
-convention so that the GLSL twin in ``shaders/common/noise.glsl`` agrees.
+convention so that the GLSL twin in ``shaders/common/noise.glsl`` agrees. The lattice's values
+come from the seed in one of two ways (`NOISE_VERSIONS`): version 2, the hash, is the default;
+version 1, the table, is the paper's noise (`PAPER_VERSION`).
 """
 
 from __future__ import annotations
