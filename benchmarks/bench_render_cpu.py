@@ -12,10 +12,10 @@ pixel without and with empty-space skipping and the early exit, their ratio agai
 of 2, the image difference against 2e-3, CPU and GL frame-time ratios), and ``hd``: the default
 scene (``cumuli.demo.default_scene``, physical lighting, resolve on) at 1920×1080 on 2 threads,
 its light step done once outside the timing (a ``LitScene``), against the limit of 0.6 s, with
-each noise version (1, the table, which the scene uses; 2, the hash), the frame's fBm evaluations
-and what they would cost in the bulk SIMD kernel on 2 threads (``fbm_bulk_s``, ``fbm_bulk_share``
-of the frame: the marcher evaluates its samples one at a time through the scalar path, so this is
-what batching them would leave of the noise's part).
+each noise version (2, the hash, which the scene uses by default; 1, the table), the frame's fBm
+evaluations and what they would cost in the bulk SIMD kernel on 2 threads (``fbm_bulk_s``,
+``fbm_bulk_share`` of the frame: the marcher evaluates its samples one at a time through the
+scalar path, so this is what batching them would leave of the noise's part).
 Light grids are computed once, outside the timings. Writes ``render_cpu.json`` and
 ``render_cpu.png`` under ``benchmarks/out/`` (or ``--out``); ``--quick`` renders 96×72 with fewer
 repeats.
@@ -36,25 +36,22 @@ import cumuli as cu  # noqa: E402
 
 
 def scenes() -> dict[str, cu.Scene]:
-    """The paper's four cloud kinds, each alone in the default scene settings."""
+    """The paper's four cloud kinds, each alone in the default scene settings, with the paper's
+    noise (version 1, seed 0)."""
     rabbit = cu.mesh_cloud(cu.meshes.bunny_like(1), scale=1.2)
-    return {
-        "gaussian_cumulus": cu.Scene(
-            clouds=[cu.gaussian_cumulus(seed=1)], settings=cu.RenderSettings(lighting="paper")
-        ),
-        "metaball_cumulus": cu.Scene(
-            clouds=[cu.metaball_cumulus(seed=2)], settings=cu.RenderSettings(lighting="paper")
-        ),
-        "lsystem_cloud": cu.Scene(
-            clouds=[cu.lsystem_cloud(iterations=7, seed=2)],
-            settings=cu.RenderSettings(lighting="paper"),
-        ),
+    paper = cu.RenderSettings(lighting="paper")
+    scenes = {
+        "gaussian_cumulus": cu.Scene(clouds=[cu.gaussian_cumulus(seed=1)], settings=paper),
+        "metaball_cumulus": cu.Scene(clouds=[cu.metaball_cumulus(seed=2)], settings=paper),
+        "lsystem_cloud": cu.Scene(clouds=[cu.lsystem_cloud(iterations=7, seed=2)], settings=paper),
         # The paper marches its mesh clouds with a fixed step smaller than the ellipsoids.
         "mesh_cloud": cu.Scene(
             clouds=[rabbit],
             settings=cu.RenderSettings(fixed_step=0.03, absorption=3.0, lighting="paper"),
         ),
     }
+    noise = cu.Noise(seed=0, version=1)
+    return {name: scene.replace(noise=noise) for name, scene in scenes.items()}
 
 
 #: The 1080p frame: size, threads and the issue's limit (seconds, physical default, resolve on).
@@ -65,7 +62,7 @@ HD_LIMIT_S = 0.6
 
 def hd_frame(quick: bool, repeats: int) -> dict[str, Any]:
     """The default scene at 1920×1080 (480×270 with ``quick``) on `HD_THREADS` threads, per noise
-    version, interleaved; ``target`` judges the scene as it is (version 1)."""
+    version, interleaved; ``target`` judges the scene as it is (the default version, 2)."""
     import numpy as np
 
     from cumuli.demo import default_scene
@@ -99,13 +96,15 @@ def hd_frame(quick: bool, repeats: int) -> dict[str, Any]:
             "fbm_bulk_s": stats.fbm_evaluations * per_eval,
             "fbm_bulk_share": stats.fbm_evaluations * per_eval / frame["median"],
         }
-    reached = out["versions"]["1"]["wall_s"]["median"] if not quick else None
-    hashed = out["versions"]["2"]["wall_s"]["median"] if not quick else None
+    own = default_scene().noise.version  # the scene as it is
+    other = 3 - own
+    reached = out["versions"][str(own)]["wall_s"]["median"] if not quick else None
+    beside = out["versions"][str(other)]["wall_s"]["median"] if not quick else None
     out["target"] = common.target(
         HD_LIMIT_S, reached, "<=",
         measure=f"wall seconds of cumuli.render_cpu, {HD_SIZE[0]}x{HD_SIZE[1]}, "
-        f"{HD_THREADS} threads, default scene (noise version 1), light step excluded",
-        reached_noise_version_2=hashed,
+        f"{HD_THREADS} threads, default scene (noise version {own}), light step excluded",
+        **{f"reached_noise_version_{other}": beside},
     )  # fmt: skip
     return out
 

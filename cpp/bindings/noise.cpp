@@ -102,7 +102,7 @@ void bind_noise(py::module_& m) {
       py::arg("fetch"), "Use this lattice fetch ('auto': back to CUMULI_SIMD_FETCH or the CPU's).");
   py::class_<Noise>(m, "Noise")
       .def(py::init<std::uint64_t, int, int>(), py::arg("seed"), py::arg("size") = 64,
-           py::arg("version") = static_cast<int>(Noise::kVersionTable))
+           py::arg("version") = static_cast<int>(Noise::kDefaultVersion))
       .def_property_readonly("size", &Noise::size)
       .def_property_readonly("version", &Noise::version)
       .def_property_readonly("key", &Noise::key, "Version 2's 32-bit hash key of the seed.")

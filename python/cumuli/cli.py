@@ -80,12 +80,13 @@ def _cmd_info(args: argparse.Namespace) -> int:
 
 def _demo_noise(width: int, height: int, seed: int) -> np.ndarray:
     """The paper's Figures 2 and 3 side by side: a slice of the uniform lattice (left, nearest
-    texels) and the same slice of its 5-octave fBm (right). Returns (H, W, 4) linear RGBA.
+    texels) and the same slice of its 5-octave fBm (right), from the paper's noise (version 1).
+    Returns (H, W, 4) linear RGBA.
     """
     from cumuli.io.images import srgb_to_linear
-    from cumuli.noise import Noise
+    from cumuli.noise import PAPER_VERSION, Noise
 
-    noise = Noise(seed=seed)
+    noise = Noise(seed=seed, version=PAPER_VERSION)
     half = width // 2
     size = noise.size
     # Left: the z = 0 plane of the lattice, one texel per size/half pixels, aspect kept.

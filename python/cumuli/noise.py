@@ -2,7 +2,9 @@
 
 A ``size³`` lattice of uniform values in [0, 1) and its fractal Brownian motion,
 ``fbm(p) = Σ_{i=1..n} wⁱ · lattice(sⁱ · f · p)``, looked up with the GL texel-centre trilinear
-convention so that the GLSL twin in ``shaders/common/noise.glsl`` agrees.
+convention so that the GLSL twin in ``shaders/common/noise.glsl`` agrees. The lattice's values
+come from the seed in one of two ways (`NOISE_VERSIONS`): version 2, the hash, is the default;
+version 1, the table, is the paper's noise (`PAPER_VERSION`).
 """
 
 from __future__ import annotations
@@ -31,12 +33,16 @@ SIMD_LEVELS = ("scalar", "avx2", "avx512")
 #: How the wide kernels can read the lattice (see :func:`simd_fetch`).
 SIMD_FETCHES = ("gather", "loads", "cells")
 
-#: The noise versions (how the lattice's values are made from the seed; see docs/noise.md):
-#: 1 draws them from the seed's random stream and the fast kernels read them from a table; 2 hashes
-#: each texel's index with a key of the seed, which the fast kernels compute instead of reading.
+#: The noise versions (how the lattice's values are made from the seed; see docs/clouds-2018.md,
+#: "Noise versions"): 1 draws them from the seed's random stream and the fast kernels read them
+#: from a table (the paper's noise); 2 hashes each texel's index with a key of the seed, which the
+#: fast kernels compute instead of reading.
 NOISE_VERSIONS = {1: "table", 2: "hash"}
-#: The version `Noise` and scene files without one use (keeps earlier results bit for bit).
-DEFAULT_VERSION = 1
+#: The version `Noise` makes when none is given: 2, the hash (the faster fBm).
+DEFAULT_VERSION = 2
+#: The paper's noise, version 1 (the table): the paper's figures, benchmarks and reference images
+#: pin it, and scene and light-grid files written before noise versions existed hold it.
+PAPER_VERSION = 1
 
 #: Largest magnitude allowed for the lattice coordinates ``p · f · sⁱ`` and for the fBm sum: the
 #: core works in float32, where they overflow to inf (and the lookup gives NaN) at 3.4e38.
@@ -128,11 +134,12 @@ class Noise:
     size:
         Lattice edge in texels (the paper uses 64).
     version:
-        How the lattice values are made (`NOISE_VERSIONS`): 1, the table (drawn from the seed's
-        random stream; every earlier result and the paper's figures), or 2, the hash (each texel's
-        value hashed from the seed and its index: the same uniform distribution, different
-        values, and a faster fBm on AVX2 / AVX-512 CPUs). A version outside `NOISE_VERSIONS`
-        raises ``ValueError``.
+        How the lattice values are made (`NOISE_VERSIONS`): 2, the hash and the default (each
+        texel's value hashed from the seed and its index; the faster fBm on AVX2 / AVX-512 CPUs),
+        or 1, the table (drawn from the seed's random stream: the paper's noise, which its figures
+        and every result made before version 2 became the default use). Both are the same
+        uniform distribution with different values. A version outside `NOISE_VERSIONS` raises
+        ``ValueError``.
     """
 
     def __init__(self, seed: int = 0, size: int = 64, version: int = DEFAULT_VERSION) -> None:

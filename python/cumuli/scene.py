@@ -33,7 +33,7 @@ from cumuli.io.jsonable import loads as json_loads
 from cumuli.light.billboard_shading import BillboardShading
 from cumuli.light.sprite_settings import SpriteSettings
 from cumuli.model.solid import Solid, as_solids
-from cumuli.noise import Noise
+from cumuli.noise import PAPER_VERSION, Noise
 from cumuli.rendering.impostors import ImpostorSettings
 from cumuli.scene_cost import check_scene
 from cumuli.settings import RenderSettings
@@ -276,11 +276,12 @@ class Scene:
         unknown = sorted(set(data["noise"]) - {"seed", "size", "version"})
         if unknown:
             raise ValueError(f"scene.noise has unknown field(s): {', '.join(unknown)}")
-        # Files written before noise versions existed hold version 1 noise (the table).
+        # Files written before noise versions existed hold version 1 noise (the table), not the
+        # default: they reproduce bit for bit. Every file written since records its version.
         noise = Noise(
             seed=data["noise"]["seed"],
             size=data["noise"].get("size", 64),
-            version=data["noise"].get("version", 1),
+            version=data["noise"].get("version", PAPER_VERSION),
         )
         _require(data["settings"], (), "scene.settings")
         settings = RenderSettings(**_known(RenderSettings, data["settings"], "scene.settings"))

@@ -256,6 +256,20 @@ def test_copies_and_pickles_are_the_same_deck() -> None:
         np.testing.assert_array_equal(other.density_lattice(), lat)
 
 
+def test_the_noise_version_is_the_default_and_old_files_keep_the_table() -> None:
+    d = deck(seed=3)
+    assert d.noise_version == 2 and d.noise == cu.Noise(3, 64, 2)
+    assert d.to_dict()["noise_version"] == 2
+    old = d.to_dict()
+    del old["noise_version"]  # a deck saved before noise versions existed
+    back = cu.CloudDeck.from_dict(json.loads(json.dumps(old)))
+    assert back.noise_version == 1 and back.noise == cu.Noise(3, 64, 1)
+    table = deck(seed=3, noise_version=1)
+    np.testing.assert_array_equal(back.density_lattice(), table.density_lattice())
+    assert not np.array_equal(back.coverage_map(), d.coverage_map())  # the version matters
+    assert not np.array_equal(back.density_lattice(), d.density_lattice())
+
+
 def test_from_dict_refuses_unknown_fields() -> None:
     with pytest.raises(ValueError, match="clouds.0 has unknown field"):
         cu.CloudDeck.from_dict({"kind": "deck", "colour": 1}, "clouds.0")
@@ -318,6 +332,8 @@ def test_to_volume_and_boxes() -> None:
         ({"resolution": (8.0, 8, 8)}, TypeError, "resolution"),
         ({"map_size": 1}, ValueError, "map_size"),
         ({"octaves": 0}, ValueError, "octaves"),
+        ({"noise_version": 3}, ValueError, "noise_version"),
+        ({"noise_version": 1.0}, TypeError, "noise_version"),
     ],
 )
 def test_bad_input_names_the_parameter(kwargs: dict, error: type, name: str) -> None:

@@ -4,6 +4,8 @@ The AVX2 and AVX-512 kernels perform the scalar kernel's float32 operations in t
 (no FMA), so they must agree bit for bit on random points, on lattice boundaries, on negative
 and huge coordinates (which take the general per-point path), at every tail length and thread
 count, and for lattice sizes that take the 16-bit multiply-add index (≤ 180) or the 32-bit one.
+The lattice fetches (gather, loads, cells) read the table, so these tests pin version 1; the hash
+of version 2 is checked on every path in test_noise_versions.py.
 """
 
 from __future__ import annotations
@@ -83,7 +85,7 @@ def _huge_points() -> np.ndarray:
 
 def test_the_cell_table_exists_for_power_of_two_sizes_up_to_64() -> None:
     for size, has in ((64, True), (2, True), (32, True), (128, False), (256, False), (17, False)):
-        assert cu.Noise(seed=1, size=size).has_cells is has, size
+        assert cu.Noise(seed=1, size=size, version=1).has_cells is has, size
 
 
 def test_scalar_is_always_available_and_the_default_is_the_widest() -> None:
@@ -97,7 +99,7 @@ def test_scalar_is_always_available_and_the_default_is_the_widest() -> None:
 def test_wide_paths_equal_the_scalar_path(level: str, size: int) -> None:
     """Sizes ≤ 64 have the cell table, 128 and 256 read as "loads", 17 takes the general path;
     up to 180 the index is the 16-bit multiply-add."""
-    noise = cu.Noise(seed=21, size=size)
+    noise = cu.Noise(seed=21, size=size, version=1)
     rng = np.random.default_rng(size)
     pts = np.concatenate(
         [
@@ -117,7 +119,7 @@ def test_wide_paths_equal_the_scalar_path(level: str, size: int) -> None:
 @pytest.mark.parametrize("level", KERNELS)
 def test_every_tail_length_and_thread_count(level: str) -> None:
     """Counts that leave partial registers (1..40 points) and chunks split across threads."""
-    noise = cu.Noise(seed=5)
+    noise = cu.Noise(seed=5, version=1)
     pts = np.random.default_rng(9).uniform(-30, 30, (4099, 3)).astype(F32)
     ref = _at("scalar", lambda: noise.fbm(pts, threads=1))
     _use(level)
@@ -129,7 +131,7 @@ def test_every_tail_length_and_thread_count(level: str) -> None:
 
 @pytest.mark.parametrize("level", WIDE_KERNELS)
 def test_grid_and_light_pass_do_not_depend_on_the_level(level: str) -> None:
-    noise = cu.Noise(seed=7)
+    noise = cu.Noise(seed=7, version=1)
     grid = _at("scalar", lambda: noise.fbm_grid(24, (-5, -3, -7), (9, 4, 6)))
     np.testing.assert_array_equal(
         _at(level, lambda: noise.fbm_grid(24, (-5, -3, -7), (9, 4, 6))), grid

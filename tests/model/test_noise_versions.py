@@ -1,19 +1,30 @@
-"""Noise versions: version 1 (table) unchanged bit for bit, version 2 (hash) against a numpy
-reference of its hash, on every SIMD path and thread count, in scene files, and bad versions."""
+"""Noise versions: version 2 (hash) the default and checked against a numpy reference of its
+hash, version 1 (table, the paper's) unchanged bit for bit, on every SIMD path and thread count,
+in scene files (old files without a version read as 1), and bad versions."""
 
 from __future__ import annotations
 
 import hashlib
 import json
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli.noise import DEFAULT_VERSION, NOISE_VERSIONS, set_simd_level, simd_levels
+from cumuli.noise import (
+    DEFAULT_VERSION,
+    NOISE_VERSIONS,
+    PAPER_VERSION,
+    set_simd_level,
+    simd_levels,
+)
 
 F32 = np.float32
 U32 = np.uint32
+#: A scene file as cumuli wrote them before noise versions existed (scene-file version 1, clouds
+#: without a kind, ``"noise": {"seed", "size"}``).
+OLD_SCENE = Path(__file__).resolve().parents[1] / "data" / "scene_before_noise_versions.json"
 
 # Digests of the table version's values for seed 7 (lattice, and fBm at `_golden_points()` with
 # default and with octaves=8, gain=0.6, lacunarity=1.7, frequency=0.37), computed with the core
@@ -85,13 +96,22 @@ def ref_fbm_biased(biased: np.ndarray, pts: np.ndarray, octaves: int = 5) -> np.
 
 
 def test_version_1_is_the_old_table_bit_for_bit() -> None:
-    n = cu.Noise(seed=7, version=1)
-    assert n.version == 1 and DEFAULT_VERSION == 1 and cu.Noise(seed=7) == n
+    n = cu.Noise(seed=7, version=PAPER_VERSION)
+    assert n.version == PAPER_VERSION == 1 and cu.Noise(seed=7) != n
     assert _digest(n.lattice) == OLD_LATTICE
     pts = _golden_points()
     assert _digest(n.fbm(pts)) == OLD_FBM
     kw = {"octaves": 8, "gain": 0.6, "lacunarity": 1.7, "frequency": 0.37}
     assert _digest(n.fbm(pts, **kw)) == OLD_FBM8
+
+
+def test_the_default_is_the_hash_everywhere() -> None:
+    assert DEFAULT_VERSION == 2
+    hashed = cu.Noise(seed=7, version=2)
+    assert cu.Noise(seed=7) == hashed and cu.Noise(7, 32).version == 2
+    np.testing.assert_array_equal(cu.Noise(seed=7).lattice, hashed.lattice)
+    assert cu._core.Noise(7).version == 2  # the core's default agrees
+    assert cu.Scene().noise == cu.Noise(seed=0, version=2)
 
 
 def test_version_1_lattice_is_the_seed_stream() -> None:
@@ -186,3 +206,39 @@ def test_scene_files_keep_the_version_and_old_files_read_as_table() -> None:
     data["noise"]["version"] = 7
     with pytest.raises(ValueError, match="version"):
         cu.Scene.from_dict(data)
+
+
+def test_an_old_scene_file_reads_as_the_table_and_keeps_it() -> None:
+    raw = json.loads(OLD_SCENE.read_text(encoding="utf-8"))
+    assert "version" not in raw["noise"]  # the committed file predates noise versions
+    scene = cu.load_scene(OLD_SCENE)
+    assert scene.noise == cu.Noise(seed=7, size=64, version=1)
+    # Saved again, the file now says so: it does not turn into the default on the next load.
+    assert scene.to_dict()["noise"] == {"seed": 7, "size": 64, "version": 1}
+    camera = scene.camera
+    assert camera is not None
+    table = cu.render_cpu(scene, camera, 24, 16)
+    hashed = cu.render_cpu(scene.replace(noise=cu.Noise(seed=7, version=2)), camera, 24, 16)
+    assert table[..., 3].max() > 0.1
+    assert not np.array_equal(table, hashed)  # reading it as the default would change the image
+
+
+def test_a_fresh_scene_file_records_the_default_version(tmp_path: Path) -> None:
+    scene = cu.Scene([cu.gaussian_cumulus(n=6, seed=1)])
+    assert scene.noise.version == DEFAULT_VERSION == 2
+    path = scene.save(tmp_path / "fresh.json")
+    assert json.loads(path.read_text(encoding="utf-8"))["noise"]["version"] == 2
+    assert cu.load_scene(path).noise == cu.Noise(seed=0, version=2)
+
+
+def test_the_paper_figures_pin_the_paper_noise() -> None:
+    from cumuli.demo import benchmark_scenes, cumulus_scene, default_scene, sunset_scene
+
+    paper = cu.RenderSettings(lighting="paper")
+    assert cumulus_scene(settings=paper).noise == cu.Noise(seed=7, version=PAPER_VERSION)
+    assert default_scene(settings=paper).noise == cu.Noise(seed=7, version=PAPER_VERSION)
+    figures = benchmark_scenes(("cumulus", "metaball", "lsystem"))
+    assert {s.noise for s in figures.values()} == {cu.Noise(seed=7, version=PAPER_VERSION)}
+    # cumuli's own scenes, in the physical mode, take the default.
+    assert cumulus_scene().noise == default_scene().noise == cu.Noise(seed=7)
+    assert sunset_scene().noise.version == DEFAULT_VERSION

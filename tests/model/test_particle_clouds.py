@@ -151,7 +151,7 @@ def test_fill_with_noise_modulates_tau() -> None:
     assert pc.tau.mean() == pytest.approx(8.0, rel=1e-3)
     assert pc.tau.std() > 0.5 and pc.tau.min() > 0 and pc.tau.max() <= 100
     assert (pc.radii >= 0.5).all() and (pc.radii <= 0.8).all()
-    assert pc.params["noise"] == {"seed": 7, "size": 64, "version": 1}
+    assert pc.params["noise"] == {"seed": 7, "size": 64, "version": 2}  # the default, recorded
 
 
 def test_particle_cumulus() -> None:

@@ -76,6 +76,21 @@ def test_demo_image_matches_the_function_it_calls(tmp_path: Path) -> None:
     np.testing.assert_array_equal(cu.read_image(path), cli._demo_noise(32, 16, 3))
 
 
+def test_the_noise_figure_draws_the_papers_noise(monkeypatch: pytest.MonkeyPatch) -> None:
+    import cumuli.noise as cnoise
+
+    made: list[cu.Noise] = []
+
+    class Spy(cnoise.Noise):
+        def __init__(self, *args: object, **kwargs: object) -> None:
+            super().__init__(*args, **kwargs)  # type: ignore[arg-type]
+            made.append(self)
+
+    monkeypatch.setattr(cnoise, "Noise", Spy)
+    cli._demo_noise(32, 16, 3)
+    assert [n.identity for n in made] == [(3, 64, cnoise.PAPER_VERSION)]  # Figs. 2-3: the table
+
+
 @pytest.mark.parametrize(
     ("args", "code", "message"),
     [

@@ -82,7 +82,7 @@ def _cumulus_camera() -> cu.Camera:
 
 def _scene(cloud: cu.Cloud, sun: cu.Sun) -> cu.Scene:
     return cu.Scene(
-        clouds=[cloud], sun=sun, sky=cu.Sky(), noise=cu.Noise(seed=7), settings=settings()
+        clouds=[cloud], sun=sun, sky=cu.Sky(), noise=cu.Noise(7, version=1), settings=settings()
     )
 
 

@@ -104,11 +104,13 @@ def test_the_deck_shades_the_other_kinds(deck: cu.CloudDeck) -> None:
     under = cu.prepare_light(scene([cumulus, puff, deck], sun=overhead))
     # The particles' light is passed through the media in either mode.
     assert under.lights[1].light.mean() < 0.8 * alone.lights[1].light.mean()
-    # Media shade media in the physical mode: the cumulus' sun depth gains the deck's.
+    # Media shade media in the physical mode: the cumulus' sun depth gains the deck's. Under an
+    # overcast deck every point of it does, whatever the noise that erodes a broken one's gaps.
+    overcast = small_deck(coverage=1.0)
     alone = cu.prepare_light(scene([cumulus], "physical", sun=overhead))
-    under = cu.prepare_light(scene([cumulus, deck], "physical", sun=overhead))
+    under = cu.prepare_light(scene([cumulus, overcast], "physical", sun=overhead))
     extra = under.lights[0].sun_depth - alone.lights[0].sun_depth
-    assert extra.min() >= -1e-4 and extra.mean() > 1.0  # τ of the slab above it
+    assert extra.min() > 1.0  # τ of the slab above it
 
 
 def test_the_deck_mixes_with_every_kind(deck: cu.CloudDeck, tmp_path: Path) -> None:

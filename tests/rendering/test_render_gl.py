@@ -94,7 +94,7 @@ def golden_scenes() -> dict[str, tuple[cu.Scene, cu.Camera]]:
     mixed = cu.Scene(
         clouds=[ellipsoids, balls],
         sun=cu.Sun(direction=(-0.4, 0.8, -0.3)),
-        noise=cu.Noise(seed=5),
+        noise=cu.Noise(seed=5, version=1),  # the golden image's noise: the paper's
         settings=cu.RenderSettings(exact_noise=True, march="union", lighting="paper"),
     )
     return {
@@ -342,9 +342,11 @@ def test_each_cloud_uses_its_own_light_grid(hand_lit: HandLitRenderer) -> None:
         [2.5],
         light=np.linspace(0, 1, 8, dtype=np.float32)[None, None].repeat(8, 0).repeat(8, 1),
     )
+    # The paper's noise (version 1), which fills the two spheres alike enough for the 5 %.
     scene = cu.Scene(
-        clouds=[dim, bright], sky=BLACK_SKY, settings=cu.RenderSettings(hg_g=0.0, lighting="paper")
-    )
+        clouds=[dim, bright], sky=BLACK_SKY, noise=cu.Noise(seed=0, version=1),
+        settings=cu.RenderSettings(hg_g=0.0, lighting="paper"),
+    )  # fmt: skip
     img = hand_lit.render(scene, front_camera(), W, H)
     # Looking along +z, world +x is on the image's left (r = f × up = −x).
     left, right = img[:, : W // 2, :3].sum(), img[:, W // 2 :, :3].sum()

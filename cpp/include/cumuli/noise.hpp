@@ -32,13 +32,14 @@ struct FbmParams {
 
 class Noise {
  public:
-  static constexpr int kVersionTable = 1;   // values drawn from the seed's random stream
-  static constexpr int kVersionHash = 2;    // values hashed from (seed, texel index)
+  static constexpr int kVersionTable = 1;  // values drawn from the seed's random stream
+  static constexpr int kVersionHash = 2;   // values hashed from (seed, texel index)
+  static constexpr int kDefaultVersion = kVersionHash;  // the table is the paper's: ask for it
   static constexpr int kMaxSize = 512;      // 512³ floats = 512 MiB; anything larger is refused
   static constexpr int kMaxCellsSize = 64;  // largest lattice with a cell table (4.4 MB at 64)
 
   // Throws std::invalid_argument for a size outside [2, kMaxSize] or an unknown version.
-  Noise(std::uint64_t seed, int size = 64, int version = kVersionTable);
+  Noise(std::uint64_t seed, int size = 64, int version = kDefaultVersion);
 
   // Version 2's 32-bit key of a seed, and its value of texel index i plus one: an exact float in
   // [1, 2) (the lattice value is that minus 1). Version 2 blends these biased values and takes

@@ -64,7 +64,9 @@ SpriteAtlas sprite_atlas(AtlasStyle style, int n, int size, std::uint64_t seed, 
   const std::size_t height = static_cast<std::size_t>(atlas.ny) * size;
   atlas.rgba.assign(width * height * 4, 0.0f);
 
-  const Noise noise(seed, 64);
+  // The table (version 1), not the default: an atlas (and a file that names it by its seed) keeps
+  // the sprites it had before noise versions existed.
+  const Noise noise(seed, 64, Noise::kVersionTable);
   const FbmParams fbm{5, 0.5f, 2.0f, 1.0f};
   const StyleParams sp = style_params(style);
   struct Sprite {

@@ -26,7 +26,7 @@ from cumuli._util.atomic import atomic_target
 from cumuli.io.jsonable import loads as json_loads
 from cumuli.io.npz import check_path, check_readable, read_npz
 from cumuli.model.cloud import Cloud
-from cumuli.noise import Noise, _fbm_params
+from cumuli.noise import PAPER_VERSION, Noise, _fbm_params
 
 #: Largest grid edge along any axis.
 MAX_RESOLUTION: int = int(_core.LIGHT_MAX_RESOLUTION)
@@ -275,7 +275,7 @@ def load_light_grid(path: str | os.PathLike[str]) -> LightGrid:
             params = LightParams(**rec.pop("params"))
             noise = rec.pop("noise")
             if noise is not None and len(noise) == 2:  # written before noise versions: the table
-                noise = [*noise, 1]
+                noise = [*noise, PAPER_VERSION]
             record = LightRecord(
                 params=params, noise=None if noise is None else tuple(noise), **rec
             )

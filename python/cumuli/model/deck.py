@@ -51,7 +51,14 @@ from cumuli._util import budget
 from cumuli._util import validate as check
 from cumuli.io.jsonable import array_from_json, array_to_json
 from cumuli.model.volume import MAX_SIGMA_T, VolumeCloud
-from cumuli.noise import Noise, _fbm_params, check_fbm_reach
+from cumuli.noise import (
+    DEFAULT_VERSION,
+    NOISE_VERSIONS,
+    PAPER_VERSION,
+    Noise,
+    _fbm_params,
+    check_fbm_reach,
+)
 
 #: The cloud types a deck can be.
 CLOUD_TYPES = ("stratus", "stratocumulus", "altostratus")
@@ -73,9 +80,9 @@ DETAIL_LACUNARITY = 2.0
 
 
 @functools.lru_cache(maxsize=8)
-def _noise(seed: int) -> Noise:
-    """The 64³ lattice of ``seed`` (shared by the decks that use it)."""
-    return Noise(seed, 64)
+def _noise(seed: int, version: int) -> Noise:
+    """The 64³ lattice of ``seed`` and noise ``version`` (shared by the decks that use it)."""
+    return Noise(seed, 64, version)
 
 
 def _texel_centres(lo: float, hi: float, n: int) -> np.ndarray:
@@ -90,6 +97,7 @@ def fbm_weather_map(
     size: int = 128,
     scale: float = 2000.0,
     seed: int = 0,
+    noise_version: int = DEFAULT_VERSION,
 ) -> np.ndarray:
     """A ``(size, size)`` float32 ``[z, x]`` weather map over ``extent`` whose mean is
     ``coverage`` (to ~1e-6; exactly 0 or 1 at the ends).
@@ -97,7 +105,8 @@ def fbm_weather_map(
     The 2018 fBm ``f`` (:data:`MAP_FBM`, frequency ``1/(2·scale)``: its first octave's texels are
     ``scale`` world units apart) at the texel centres of the ground plane ``y = 0``, remapped as
     ``clamp((f − t)/σ + ½, 0, 1)`` with ``σ`` the standard deviation of ``f`` (soft cell edges) and
-    the threshold ``t`` found by bisection so that the map's mean is ``coverage``.
+    the threshold ``t`` found by bisection so that the map's mean is ``coverage``. The lattice is
+    ``seed``'s in noise version ``noise_version`` (:data:`cumuli.noise.NOISE_VERSIONS`).
     """
     coverage = check.real(coverage, "coverage", 0.0, 1.0)
     if coverage in (0.0, 1.0):
@@ -107,7 +116,11 @@ def fbm_weather_map(
     pts = np.zeros((size, size, 3), dtype=np.float32)
     pts[..., 0] = xs[None, :]
     pts[..., 2] = zs[:, None]
-    f = _noise(seed).fbm(pts.reshape(-1, 3), *MAP_FBM, 0.5 / scale).astype(np.float64)
+    f = (
+        _noise(seed, noise_version)
+        .fbm(pts.reshape(-1, 3), *MAP_FBM, 0.5 / scale)
+        .astype(np.float64)
+    )
     width = max(float(f.std()), 1e-6)
 
     def mean_at(t: float) -> float:
@@ -200,7 +213,9 @@ class CloudDeck:
     [0, 1] over ``extent``; ``cloud_type`` (one of :data:`CLOUD_TYPES`) picks the vertical
     profile; ``density`` is the peak density; ``detail`` in [0, 1] how much the fBm (``octaves``,
     first-octave features ``detail_scale`` apart, lattice from ``seed``) erodes; the map and the
-    fBm move by ``wind · time`` (``wind = (wx, wz)`` in world units per second). ``sigma_t`` is
+    fBm move by ``wind · time`` (``wind = (wx, wz)`` in world units per second); the lattice is
+    ``seed``'s in ``noise_version`` (:data:`cumuli.noise.NOISE_VERSIONS`: the default, 2, for a new
+    deck; scene files written before noise versions existed read as 1). ``sigma_t`` is
     the extinction per world unit at density 1, what the volume marcher multiplies the density
     by: the default 0.04 gives a full-coverage 700 m stratocumulus an optical depth of ~14 (a
     real overcast's 10–20). ``resolution = (nx, ny, nz)`` is the baked lattice's.
@@ -228,6 +243,7 @@ class CloudDeck:
     map_size: int = 128
     map_scale: float = 2000.0
     octaves: int = 5
+    noise_version: int = DEFAULT_VERSION
     _cache: dict[str, Any] = field(default_factory=dict, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -261,6 +277,8 @@ class CloudDeck:
         s(self, "map_size", check.integer(self.map_size, "map_size", 2, MAP_SIZE_MAX))
         s(self, "map_scale", check.real(self.map_scale, "map_scale", 0.0, lo_open=True))
         s(self, "octaves", check.integer(self.octaves, "octaves", 1, 16))
+        lo, hi = min(NOISE_VERSIONS), max(NOISE_VERSIONS)  # 1 and 2: every one between
+        s(self, "noise_version", check.integer(self.noise_version, "noise_version", lo, hi))
         ox, oz = self.offset
         if not (math.isfinite(ox) and math.isfinite(oz)) or max(abs(ox), abs(oz)) > check.MAX_COORD:
             raise ValueError(
@@ -291,8 +309,9 @@ class CloudDeck:
 
     @property
     def noise(self) -> Noise:
-        """The 64³ lattice of ``seed`` the detail (and an fBm-made map) come from."""
-        return _noise(self.seed)
+        """The 64³ lattice of ``seed`` (in ``noise_version``) the detail (and an fBm-made map)
+        come from."""
+        return _noise(self.seed, self.noise_version)
 
     def coverage_map(self) -> np.ndarray:
         """The read-only float32 ``[z, x]`` weather map the density uses (before the wind)."""
@@ -306,6 +325,7 @@ class CloudDeck:
                     size=self.map_size,
                     scale=self.map_scale,
                     seed=self.seed,
+                    noise_version=self.noise_version,
                 )
                 m.setflags(write=False)
             self._cache["map"] = m
@@ -424,12 +444,14 @@ class CloudDeck:
             "map_size": self.map_size,
             "map_scale": self.map_scale,
             "octaves": self.octaves,
+            "noise_version": self.noise_version,
         }
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "deck") -> CloudDeck:
         """Inverse of :meth:`to_dict`; unknown fields raise ValueError naming them (missing ones
-        take their defaults)."""
+        take their defaults, but a deck without ``noise_version``, written before noise versions
+        existed, reads as version 1 and so keeps its lattice)."""
         if not isinstance(data, Mapping):
             raise ValueError(f"{where} must be a JSON object, got {type(data).__name__}")
         known = {f.name for f in dataclasses.fields(cls) if f.init} | {"kind"}
@@ -439,6 +461,7 @@ class CloudDeck:
         if data.get("kind", cls.kind) != cls.kind:
             raise ValueError(f"{where}.kind must be {cls.kind!r}, got {data['kind']!r}")
         args = {k: v for k, v in data.items() if k != "kind"}
+        args.setdefault("noise_version", PAPER_VERSION)
         cov = args.get("coverage")
         if isinstance(cov, (Mapping, list)):
             args["coverage"] = array_from_json(cov, f"{where}.coverage")

@@ -36,7 +36,7 @@ from cumuli.light.volume import VolumeLighting
 from cumuli.model.cloud import Cloud
 from cumuli.model.particles import ParticleCloud
 from cumuli.model.volume import VolumeCloud, VolumeDatabase
-from cumuli.noise import Noise
+from cumuli.noise import PAPER_VERSION, Noise
 from cumuli.scene import Scene
 from cumuli.settings import RenderSettings
 from cumuli.sky import Sky, Sun
@@ -114,7 +114,8 @@ def image_fidelity(
     errors = {"splat_vs_volume": _relative(splat, vol, vol[..., 3] > 0.05)}
     if shape is not None:
         marched = render(
-            Scene([shape], sun=sun, sky=BLACK_SKY, noise=Noise(seed=7, size=32),
+            Scene([shape], sun=sun, sky=BLACK_SKY,
+                  noise=Noise(seed=7, size=32, version=PAPER_VERSION),  # the paper mode's noise
                   settings=RenderSettings(hg_g=0.0, lighting="paper")),
             camera, width, height, backend=backend,
         )  # fmt: skip
