@@ -407,6 +407,23 @@ def test_the_sun_lights_the_side_facing_it() -> None:
     assert left_a > 2 * left_b and right_b > right_a
 
 
+def test_a_sun_overhead_lights_like_one_just_off_it() -> None:
+    """The sun lattice's frame takes its first axis from +y, or from +x where the light runs
+    within about 26° of vertical (|w·y| ≥ 0.9): a sun either side of the switch, and one
+    straight overhead, light the cloud alike (no degenerate frame darkens a top-lit cloud)."""
+    means = []
+    switch = math.degrees(math.asin(0.9))
+    for elevation in (switch - 0.05, switch + 0.05, 89.95, 90.0):
+        e = math.radians(elevation)
+        sun = cu.Sun(direction=(math.cos(e), math.sin(e), 0.0), intensity=5.0)
+        scene = small_scene().replace(sun=sun)
+        img = cu.render_cpu(scene, camera_for(scene), 48, 36)
+        means.append(float(img[..., :3].mean()))
+    assert means[0] == pytest.approx(means[1], rel=0.01)
+    assert means[2] == pytest.approx(means[3], rel=0.01)
+    assert means[3] > 0.0
+
+
 # --- GL against C++, the volume renderer against the marcher ------------------------------
 @pytest.mark.gl
 def test_gl_physical_matches_cpu(gl_context) -> None:
