@@ -1073,7 +1073,7 @@ void bind_physical_light(py::module_& m) {
       "diffusion_light",
       [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sun_t, V3 to_sun,
          const py::object& sky_e, float albedo, float mean_cosine, int max_iterations,
-         float tolerance, int threads) {
+         float tolerance, int threads, float forward) {
         const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
         if (sun_t.size() != static_cast<py::ssize_t>(g.voxels()))
           throw py::value_error("sun_t must have the extinction's shape");
@@ -1088,13 +1088,16 @@ void bind_physical_light(py::module_& m) {
           throw py::value_error("mean_cosine must be in (-1, 1)");
         if (max_iterations < 1 || max_iterations > 100000)
           throw py::value_error("max_iterations must be in [1, 100000]");
+        if (!(forward >= 0.0f && forward <= 4.0f))
+          throw py::value_error("forward must be in [0, 4]");
         DiffusionParams p{albedo, mean_cosine, max_iterations, tolerance};
         const int channels = sky ? 4 : 1;
         const float *e = ext.data(), *st = sun_t.data(), *se = sky ? sky.data() : nullptr;
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          const std::vector<float> q = diffusion_sources(e, g, st, v3(to_sun), se, albedo);
+          std::vector<float> q = diffusion_sources(e, g, st, v3(to_sun), se, albedo);
+          add_sun_flux_source(q, channels, e, g, st, v3(to_sun), albedo, mean_cosine, forward);
           out = diffusion_fluence(e, g, q.data(), channels, p, threads);
         }
         return to_array(out, {g.d, g.h, g.w, channels});
@@ -1102,8 +1105,10 @@ void bind_physical_light(py::module_& m) {
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sun_t"), py::arg("to_sun"),
       py::arg("sky_e").none(true), py::arg("albedo"), py::arg("mean_cosine"),
       py::arg("max_iterations") = 2000, py::arg("tolerance") = 1e-5f, py::arg("threads") = 0,
+      py::arg("forward") = 0.0f,
       "Collided fluence of the diffusion approximation: (D, H, W, 1 | 4) (sun per unit "
-      "irradiance, then the sky's RGB).");
+      "irradiance, then the sky's RGB); forward: the weight of the forward-scattered sun's "
+      "flux source (0: an isotropic source).");
 }
 
 }  // namespace cumuli::bind

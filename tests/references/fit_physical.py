@@ -33,7 +33,15 @@ import mitsuba_reference as mr  # noqa: E402
 import mitsuba_views as mv  # noqa: E402
 
 #: The fitted constants, in the search's order.
-FITTED = ("OCTAVE_B", "OCTAVE_C", "OCTAVE_POISSON", "SUN_GAIN", "SKY_GAIN", "GAIN_DEPTH")
+FITTED = (
+    "OCTAVE_B",
+    "OCTAVE_C",
+    "OCTAVE_POISSON",
+    "SUN_GAIN",
+    "SKY_GAIN",
+    "GAIN_DEPTH",
+    "SUN_FORWARD",
+)
 #: Each constant's range (the search is clamped to it).
 RANGES = {
     "OCTAVE_B": (0.0, 1.0),
@@ -42,6 +50,7 @@ RANGES = {
     "SUN_GAIN": (1.0, 4.0),
     "SKY_GAIN": (1.0, 6.0),
     "GAIN_DEPTH": (0.0, 8.0),
+    "SUN_FORWARD": (0.0, 1.5),
 }
 GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25}
 

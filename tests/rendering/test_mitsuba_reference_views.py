@@ -38,19 +38,20 @@ GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25, "transmitta
 #: Looser bounds where a view misses the goal: the worst of GL and CPU as measured (llvmpipe,
 #: LLVM 15.0.6, and the CPU twin agree to 0.001), plus a margin of about one point (0.003 for
 #: ΔT). Keyed by (view, metric); every other pair is held to GOAL. Measured with the constants
-#: fitted on the side-lit, back-lit and metaball views (``cumuli.light.physical.FIT_VIEWS``):
-#: back-lit (fitted) median 10.9 %, p90 27.1 % (mean −1.3 % meets the goal); top-lit (held
-#: out) −14.3 % mean, median 15.6 %, p90 29.2 %; L-system (held out) +16.5 % mean, median
-#: 20.8 %, p90 36.3 %, ΔT 0.017. The sunset (held out) and the metaball meet the goal.
+#: fitted on the side-lit, back-lit and metaball views (``cumuli.light.physical.FIT_VIEWS``),
+#: the diffusion fed the forward-scattered sun's flux source: back-lit (fitted) median 10.7 %,
+#: p90 27.1 % (mean −0.3 % meets the goal); top-lit (held out) −12.5 % mean, median 13.0 %,
+#: p90 25.5 %; L-system (held out) +10.7 % mean, median 11.6 %, p90 33.2 %, ΔT 0.017. The
+#: sunset (held out) and the metaball meet the goal.
 GUARDS: dict[tuple[str, str], float] = {
-    ("backlit", "block_median"): 0.12,
-    ("backlit", "block_p90"): 0.285,
-    ("toplit", "mean_ratio"): 0.155,
-    ("toplit", "block_median"): 0.165,
-    ("toplit", "block_p90"): 0.305,
-    ("lsystem", "mean_ratio"): 0.175,
-    ("lsystem", "block_median"): 0.22,
-    ("lsystem", "block_p90"): 0.375,
+    ("backlit", "block_median"): 0.117,
+    ("backlit", "block_p90"): 0.281,
+    ("toplit", "mean_ratio"): 0.135,
+    ("toplit", "block_median"): 0.14,
+    ("toplit", "block_p90"): 0.265,
+    ("lsystem", "mean_ratio"): 0.117,
+    ("lsystem", "block_median"): 0.126,
+    ("lsystem", "block_p90"): 0.342,
     ("lsystem", "transmittance"): 0.02,
 }
 

@@ -202,6 +202,45 @@ def test_diffusion_matches_the_slab_solution() -> None:
     assert 0 < phi[20, 32, 20, 0] < phi[20, 31, 20, 0]
 
 
+def test_the_forward_flux_source_carries_the_sun_deeper() -> None:
+    """The forward-scattered sun's flux source moves the collided sun light along the light:
+    in a slab lit from above the fluence's depth centroid sinks and the top cells dim while the
+    deep ones brighten; lit from below it is the mirror image; weight 0 is the isotropic
+    source, and the sky's channels do not see it."""
+    sigma, albedo, g = 4.0, 0.99, 0.8
+    ext = np.zeros((12, 40, 12), F)
+    ext[1:11, 4:36, 1:11] = sigma
+    lo, hi = (-1.5, -5.0, -1.5), (1.5, 5.0, 1.5)
+    ys = lo[1] + (np.arange(40) + 0.5) * 0.25
+    depth = np.clip(ys.max() - 1.0 - ys, 0.0, None)[None, :, None]  # from the slab's top
+    sun_t = np.broadcast_to(np.exp(-sigma * depth), ext.shape).astype(F)
+    sky = np.ones((*ext.shape, 3), F)
+
+    def solve(to_sun, t, forward):
+        return _core.diffusion_light(ext, lo, hi, t, to_sun, sky, albedo, g, 5000, 1e-6,
+                                     forward=forward)  # fmt: skip
+
+    iso = solve((0.0, 1.0, 0.0), sun_t, 0.0)
+    plain = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky, albedo, g, 5000, 1e-6)
+    np.testing.assert_array_equal(iso, plain)
+    fwd = solve((0.0, 1.0, 0.0), sun_t, 1.0)
+    np.testing.assert_allclose(fwd[..., 1:], iso[..., 1:], rtol=1e-5, atol=1e-7)
+    col_i, col_f = iso[6, 4:36, 6, 0], fwd[6, 4:36, 6, 0]
+    z = np.arange(32)[::-1]  # depth below the top (row 35 is the top medium cell)
+
+    def centroid(c):
+        return float((c * z).sum() / c.sum())
+
+    assert centroid(col_f) > centroid(col_i) + 0.3
+    assert col_f[-1] < col_i[-1] and col_f[-8] > col_i[-8]
+    # The sun from below, through the mirrored slab: the mirror image.
+    up = solve((0.0, -1.0, 0.0), np.ascontiguousarray(sun_t[:, ::-1]), 1.0)
+    np.testing.assert_allclose(up[:, ::-1, :, 0], fwd[..., 0], rtol=2e-3, atol=1e-6)
+    for bad in (-0.5, 5.0, float("nan")):
+        with pytest.raises(ValueError, match="forward"):
+            solve((0.0, 1.0, 0.0), sun_t, bad)
+
+
 def test_diffusion_sky_channels_each_solve_their_own_source() -> None:
     """The sky's colour channels share one solve's operator, each after the first started from
     the previous solution: every channel still converges to its own source's fluence — a
@@ -405,6 +444,23 @@ def test_the_sun_lights_the_side_facing_it() -> None:
     # +x is on the left of a camera looking along +z: that half is lit by the first sun.
     (left_a, right_a), (left_b, right_b) = halves
     assert left_a > 2 * left_b and right_b > right_a
+
+
+def test_a_sun_overhead_lights_like_one_just_off_it() -> None:
+    """The sun lattice's frame takes its first axis from +y, or from +x where the light runs
+    within about 26° of vertical (|w·y| ≥ 0.9): a sun either side of the switch, and one
+    straight overhead, light the cloud alike (no degenerate frame darkens a top-lit cloud)."""
+    means = []
+    switch = math.degrees(math.asin(0.9))
+    for elevation in (switch - 0.05, switch + 0.05, 89.95, 90.0):
+        e = math.radians(elevation)
+        sun = cu.Sun(direction=(math.cos(e), math.sin(e), 0.0), intensity=5.0)
+        scene = small_scene().replace(sun=sun)
+        img = cu.render_cpu(scene, camera_for(scene), 48, 36)
+        means.append(float(img[..., :3].mean()))
+    assert means[0] == pytest.approx(means[1], rel=0.01)
+    assert means[2] == pytest.approx(means[3], rel=0.01)
+    assert means[3] > 0.0
 
 
 # --- GL against C++, the volume renderer against the marcher ------------------------------

@@ -445,6 +445,47 @@ std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, cons
   return q;
 }
 
+void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, const VolumeGrid& g,
+                         const float* sun_t, glm::vec3 to_sun, float albedo, float mean_cosine,
+                         float weight) {
+  if (weight == 0.0f) return;
+  const int W = g.w, H = g.h, Dd = g.d;
+  const std::size_t n = g.voxels();
+  if (q.size() != n * static_cast<std::size_t>(channels))
+    throw std::invalid_argument("source size must be voxels × channels");
+  const glm::vec3 hv = g.voxel_size();
+  const float h[3] = {hv.x, hv.y, hv.z};
+  const float hmin = std::min(h[0], std::min(h[1], h[2]));
+  const glm::vec3 dir = -glm::normalize(to_sun);  // the way the light travels
+  const float s[3] = {dir.x, dir.y, dir.z};
+  // f = 3D·|Q1| per cell (0 outside the medium): Q1 = ϖσ·T·ḡ per unit irradiance.
+  std::vector<float> f(n, 0.0f);
+  std::vector<unsigned char> medium(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float st = ext[i];
+    medium[i] = st * hmin > kMediumThickness;
+    if (!medium[i]) continue;
+    const float stp = (1.0f - albedo) * st + albedo * st * (1.0f - mean_cosine);
+    f[i] = weight * albedo * st * sun_t[i] * mean_cosine / std::max(stp, 1e-12f);
+  }
+  const std::size_t stride[3] = {1, static_cast<std::size_t>(W), static_cast<std::size_t>(W) * H};
+  const int dims[3] = {W, H, Dd};
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!medium[i]) continue;
+    const int c[3] = {static_cast<int>(i % W), static_cast<int>((i / W) % H),
+                      static_cast<int>(i / (static_cast<std::size_t>(W) * H))};
+    for (int a = 0; a < 3; ++a) {
+      if (c[a] + 1 >= dims[a]) continue;
+      const std::size_t j = i + stride[a];
+      if (!medium[j]) continue;
+      // The flux source through the face between two medium cells: what leaves i enters j.
+      const float face = 0.5f * (f[i] + f[j]) * s[a] / h[a];
+      q[i * channels] -= face;
+      q[j * channels] += face;
+    }
+  }
+}
+
 std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
                                      int channels, const DiffusionParams& p, int threads) {
   g.validate();

@@ -19,7 +19,9 @@ maths):
   single scattering (:func:`octave_sum`, the drawers' numpy reference).
 - **Multiple scattering through the cloud**: the diffusion approximation (Stam 1995) on the
   world lattice, fed by the sun's and the sky's first scattering, with Marshak's vacuum
-  boundary: the light that reaches the shadowed side and the far side of the cloud. The camera
+  boundary: the light that reaches the shadowed side and the far side of the cloud. The sun's
+  collided light is forward-scattered: :data:`SUN_FORWARD` of its flux source, ``−∇·(3D·Q1)``
+  (Ishimaru 1978, §9.2), carries it deeper along the light before it diffuses. The camera
   sees the first mean free path of a cell that spans several, where the diffuse light is larger
   than the cell's mean, and the whole of a cell thinner than one: the fluence is read with a
   gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
@@ -63,15 +65,18 @@ from cumuli.sky import sky_args
 #: ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}`` (``β`` = :data:`OCTAVE_POISSON`; 0 gives the plain ``e^{−cⁿ·τ}``).
 OCTAVES = 2
 OCTAVE_A = 1.0
-OCTAVE_B = 0.8
-OCTAVE_C = 0.45
-OCTAVE_POISSON = 0.9
+OCTAVE_B = 0.88
+OCTAVE_C = 0.47
+OCTAVE_POISSON = 0.98
 #: Gains on the lattice's diffuse light, reached in optically thick cells: the sun's multiple
 #: scattering, and the sky's light (:func:`lattice_gains`).
-SUN_GAIN = 1.7
-SKY_GAIN = 3.0
+SUN_GAIN = 1.52
+SKY_GAIN = 3.2
 #: Optical thickness ``τg`` of a lattice cell over which the gains rise from 1 to their value.
-GAIN_DEPTH = 1.1
+GAIN_DEPTH = 1.5
+#: Weight of the forward-scattered sun's flux source in the diffusion (``−∇·(3D·Q1)``, the first
+#: moment of the collided sun light; 0: an isotropic source, 1: the whole of it).
+SUN_FORWARD = 0.57
 #: The views the constants above were fitted on (``benchmarks/fit_physical.py``); the other
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
@@ -267,7 +272,18 @@ def physical_light(
         octaves = OCTAVES
         with _stage(timings, "diffusion"):
             phi = _core.diffusion_light(
-                ext, lo, hi, sun_t, to_sun, sky_e, s.albedo, s.mean_cosine, 2000, 1e-3, threads
+                ext,
+                lo,
+                hi,
+                sun_t,
+                to_sun,
+                sky_e,
+                s.albedo,
+                s.mean_cosine,
+                2000,
+                1e-3,
+                threads,
+                forward=SUN_FORWARD,
             )
         grid[..., 0] = lattice_gains(ext, lo, hi, SUN_GAIN, depth_g) * phi[..., 0]
         if sky_e is not None:

@@ -104,6 +104,15 @@ struct DiffusionParams {
 std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
                                      glm::vec3 to_sun, const float* sky_e, float albedo);
 
+// Adds to the sun's channel of `q` (`channels` per voxel) the forward-scattered sun's flux
+// source −∇·(3D·Q1), Q1 = ϖσ·T·ḡ·ŝ the first moment of the collided source (ŝ the way the light
+// travels; Ishimaru 1978, §9.2, the diffusion equation with the reduced intensity's flux), times
+// `weight`, on the faces between medium cells only: it moves the source along the light
+// (deeper into the cloud) and leaves its sum unchanged. weight 0: nothing is added.
+void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, const VolumeGrid& g,
+                         const float* sun_t, glm::vec3 to_sun, float albedo, float mean_cosine,
+                         float weight);
+
 // φ (the collided fluence, `channels` per voxel) of the diffusion problem above.
 std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
                                      int channels, const DiffusionParams& p, int threads);
