@@ -55,8 +55,9 @@ def _lattice_twin(ext: np.ndarray, lo, hi, samples: int = 4000) -> np.ndarray:
     for k, s in enumerate(steps):
         step = np.asarray(s, float)
         moved = step != 0
-        # Voxel units to the box face: the first moving axis to reach −0.0 or its size.
-        far = np.where(step[moved] > 0, np.array((w, h, d))[moved] - centres[:, moved], centres[:, moved])
+        # Steps to the box face: the first moving axis to reach 0 or its size.
+        size = np.array((w, h, d))[moved]
+        far = np.where(step[moved] > 0, size - centres[:, moved], centres[:, moved])
         t_exit = far.min(axis=1)
         t = (np.arange(samples) + 0.5) / samples
         length = np.linalg.norm(step * vs)
