@@ -1069,11 +1069,11 @@ void bind_physical_light(py::module_& m) {
         return to_array(out, {g.d, g.h, g.w, 3});
       },
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sky_coeffs"), py::arg("order"),
-      py::arg("n_theta"), py::arg("step"), py::arg("threads") = 0, py::arg("method") = "lattice",
+      py::arg("n_theta"), py::arg("step"), py::arg("threads") = 0, py::arg("method") = "march",
       "Sky irradiance reaching each voxel unscattered (SH visibility × sky SH): (D, H, W, 3); "
-      "method 'lattice' (the 26 neighbour directions, τ exact by a recurrence over the lattice; "
-      "voxels within 10 % of cubes, else 'march') or 'march' (a ray per voxel and product-"
-      "quadrature direction, n_theta polar nodes, steps of `step` voxels).");
+      "method 'march' (a ray per voxel and product-quadrature direction, n_theta polar nodes, "
+      "steps of `step` voxels) or 'lattice' (the 26 neighbour directions, τ exact by a "
+      "recurrence over the lattice; voxels within 10 % of cubes, else 'march').");
 
   m.def(
       "diffusion_light",

@@ -26,11 +26,11 @@ maths):
   than the cell's mean, and the whole of a cell thinner than one: the fluence is read with a
   gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
   ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`).
-- **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, over the 26 directions
-  to a voxel's neighbours with Lebedev's weights, the optical depth along each exact for the
-  trilinear lattice; :data:`SKY_RAYS`) times the sky's SH projection gives the sky irradiance
-  reaching each voxel unscattered; with multiple scattering on, it and its
-  diffusion are read with the gain of the same form up to :data:`SKY_GAIN`.
+- **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
+  quadrature with 2·:data:`SKY_SAMPLES`² directions; :data:`SKY_RAYS`) times the sky's SH
+  projection gives the sky irradiance reaching each voxel unscattered; with multiple
+  scattering on, it and its diffusion are read with the gain of the same form up to
+  :data:`SKY_GAIN`.
 
 The constants are fitted against Mitsuba 3 on the reference views of :data:`FIT_VIEWS` and
 tested on the others, :data:`HELD_OUT_VIEWS` (``tests/references/fit_physical.py`` reproduces
@@ -82,12 +82,13 @@ SUN_FORWARD = 0.57
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
 HELD_OUT_VIEWS = ("toplit", "sunset", "lsystem")
-#: SH order of the sky visibility, its rays (``"lattice"``: the 26 directions to a voxel's
-#: neighbours, Lebedev's 26-point rule, τ exact by one pass over the lattice per direction;
-#: ``"march"``: a ray marched per voxel and direction of a product quadrature) and the march's
+#: SH order of the sky visibility, its rays (``"march"``: a ray marched per voxel and direction
+#: of a product quadrature; ``"lattice"``: the 26 directions to a voxel's neighbours, Lebedev's
+#: 26-point rule, τ exact by one pass over the lattice per direction, ~7× faster but 1.5–2
+#: points further from Mitsuba 3 on the held-out views: docs/lighting.md) and the quadrature's
 #: polar nodes (``n_theta``; it also projects the sky's radiance).
 SKY_ORDER = 3
-SKY_RAYS = "lattice"
+SKY_RAYS = "march"
 SKY_SAMPLES = 3
 
 
