@@ -27,9 +27,10 @@ maths):
   gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
   ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`).
 - **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
-  quadrature with 2·:data:`SKY_SAMPLES`² directions) times the sky's SH projection gives the
-  sky irradiance reaching each voxel unscattered; with multiple scattering on, it and its
-  diffusion are read with the gain of the same form up to :data:`SKY_GAIN`.
+  quadrature with 2·:data:`SKY_SAMPLES`² directions; :data:`SKY_RAYS`) times the sky's SH
+  projection gives the sky irradiance reaching each voxel unscattered; with multiple
+  scattering on, it and its diffusion are read with the gain of the same form up to
+  :data:`SKY_GAIN`.
 
 The constants are fitted against Mitsuba 3 on the reference views of :data:`FIT_VIEWS` and
 tested on the others, :data:`HELD_OUT_VIEWS` (``tests/references/fit_physical.py`` reproduces
@@ -81,8 +82,13 @@ SUN_FORWARD = 0.57
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
 HELD_OUT_VIEWS = ("toplit", "sunset", "lsystem")
-#: SH order and quadrature (n_theta) of the sky visibility.
+#: SH order of the sky visibility, its rays (``"march"``: a ray marched per voxel and direction
+#: of a product quadrature; ``"lattice"``: the 26 directions to a voxel's neighbours, Lebedev's
+#: 26-point rule, τ exact by one pass over the lattice per direction, ~7× faster but 1.5–2
+#: points further from Mitsuba 3 on the held-out views: docs/lighting.md) and the quadrature's
+#: polar nodes (``n_theta``; it also projects the sky's radiance).
 SKY_ORDER = 3
+SKY_RAYS = "march"
 SKY_SAMPLES = 3
 
 
@@ -270,7 +276,9 @@ def physical_light(
     if s.sky_light:
         with _stage(timings, "sky"):
             coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
-            sky_e = _core.sky_irradiance(ext, lo, hi, coeffs, SKY_ORDER, SKY_SAMPLES, 1.0, threads)
+            sky_e = _core.sky_irradiance(
+                ext, lo, hi, coeffs, SKY_ORDER, SKY_SAMPLES, 1.0, threads, method=SKY_RAYS
+            )
         grid[..., 1:4] = sky_e
     octaves = 1
     if s.multiple_scattering:
