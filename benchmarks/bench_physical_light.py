@@ -27,6 +27,10 @@ direction) and with the per-voxel march over the 18-direction product quadrature
 directions at ⅛-voxel steps over the cells that hold medium, and the march's time over the
 lattice's.
 
+``moving_sun``: the one-cloud light for a new sun direction from nothing and with the light
+of another sun already made (its extinction lattice and sky visibility memoised: a moving sun
+relights only the sun's terms), the median of the repeats, alternated, and their ratio.
+
 Beside the times, ``mitsuba``: the error the light step gives against Mitsuba 3 — the CPU
 render of the reference scene of ``tests/references`` (side-lit default cumulus, 160×120)
 against its multiple-scattering reference, on the cloud-covered 4×4-pixel blocks: the median
@@ -94,6 +98,7 @@ def stages(sc: cu.Scene, passes: int = 1) -> dict[str, float]:
     clouds: the median of ``passes`` passes."""
     runs: list[dict[str, float]] = []
     for _ in range(passes):
+        cu.light.prepare.clear_memo()  # each stage from nothing (the medium terms are memoised)
         timings: dict[str, float] = {}
         for cloud in sc.clouds:
             physical_light(cloud, sc, THREADS, timings)
@@ -179,6 +184,37 @@ def sky_rays(resolution: int | None, repeats: int) -> dict[str, Any]:
         )
     out["march_over_lattice_one_thread"] = out["march"]["one_thread_ms"] / max(
         out["lattice"]["one_thread_ms"], 1e-9
+    )
+    return out
+
+
+def moving_sun(resolution: int | None, repeats: int) -> dict[str, Any]:
+    """The light for a new sun from nothing and after another sun's (see the docstring)."""
+    import time
+
+    sc = scene("copies", 1, resolution)
+    before = sc.replace(sun=cu.Sun(direction=(0.45, 0.75, 0.5)))
+    after = sc.replace(sun=cu.Sun(direction=(-0.3, 0.8, 0.2)))
+    cloud = sc.clouds[0]
+    cold, warm = [], []
+    for _ in range(max(repeats, 5)):
+        cu.light.prepare.clear_memo()
+        t = time.perf_counter()
+        physical_light(cloud, after, THREADS)
+        cold.append(time.perf_counter() - t)
+        cu.light.prepare.clear_memo()
+        physical_light(cloud, before, THREADS)
+        t = time.perf_counter()
+        physical_light(cloud, after, THREADS)
+        warm.append(time.perf_counter() - t)
+    out = {
+        "from_nothing_ms": 1e3 * float(np.median(cold)),
+        "after_another_sun_ms": 1e3 * float(np.median(warm)),
+    }
+    out["ratio"] = out["from_nothing_ms"] / max(out["after_another_sun_ms"], 1e-9)
+    common.log(
+        f"moving sun: {out['from_nothing_ms']:.1f} ms from nothing, "
+        f"{out['after_another_sun_ms']:.1f} ms after another sun ({out['ratio']:.2f}x)"
     )
     return out
 
@@ -271,6 +307,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     versions = noise_versions(resolution, repeats)
     rays = sky_rays(resolution, repeats)
+    sun_moves = moving_sun(resolution, repeats)
     error = mitsuba_error()
     common.log(
         "against Mitsuba 3: per-block error median {block_rel_median:.4f}, p90 "
@@ -292,6 +329,7 @@ def main(argv: list[str] | None = None) -> int:
         "growth": growth,
         "noise_versions": versions,
         "sky_rays": rays,
+        "moving_sun": sun_moves,
         "mitsuba": error,
         "targets": targets,
     }

@@ -1076,6 +1076,61 @@ void bind_physical_light(py::module_& m) {
       "recurrence over the lattice; voxels within 10 % of cubes, else 'march').");
 
   m.def(
+      "sky_visibility",
+      [](const FloatArray& ext, V3 lo, V3 hi, int order, int n_theta, float step, int threads,
+         const std::string& method) {
+        const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
+        if (method != "lattice" && method != "march")
+          throw py::value_error("method must be 'lattice' or 'march', got '" + method + "'");
+        const SkyRays how = method == "lattice" ? SkyRays::Lattice : SkyRays::March;
+        if (order < 1 || order > kMaxShOrder) throw py::value_error("sh_order must be in [1, 4]");
+        if (n_theta < 1 || n_theta > 64) throw py::value_error("sh_samples must be in [1, 64]");
+        if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");
+        const float* e = ext.data();
+        std::vector<double> vis;
+        {
+          py::gil_scoped_release release;
+          vis = sky_visibility(e, g, order, n_theta, step, threads, how);
+        }
+        py::array_t<double> out({static_cast<py::ssize_t>(g.d), static_cast<py::ssize_t>(g.h),
+                                 static_cast<py::ssize_t>(g.w),
+                                 static_cast<py::ssize_t>(order * order)});
+        std::copy(vis.begin(), vis.end(), out.mutable_data());
+        return out;
+      },
+      py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("order"), py::arg("n_theta"),
+      py::arg("step"), py::arg("threads") = 0, py::arg("method") = "march",
+      "The sky visibility's SH moments per voxel, (D, H, W, order²) float64: sky_irradiance "
+      "without the sky (sky_irradiance_from projects a sky onto them).");
+
+  m.def(
+      "sky_irradiance_from",
+      [](const DoubleArray& visibility, const FloatArray& sky_coeffs) {
+        if (visibility.ndim() != 4)
+          throw py::value_error("visibility must be a (D, H, W, order²) array");
+        const py::ssize_t nc = visibility.shape(3);
+        int order = 0;
+        for (int o = 1; o <= kMaxShOrder; ++o)
+          if (o * o == nc) order = o;
+        if (order == 0)
+          throw py::value_error("visibility's last axis must be order² (1, 4, 9, 16)");
+        if (sky_coeffs.size() != 3 * nc)
+          throw py::value_error("sky_coeffs must hold 3·order² values");
+        const std::size_t voxels = static_cast<std::size_t>(visibility.size() / nc);
+        const double* v = visibility.data();
+        const float* s = sky_coeffs.data();
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          out = sky_irradiance_from(v, voxels, s, order);
+        }
+        return to_array(out, {visibility.shape(0), visibility.shape(1), visibility.shape(2), 3});
+      },
+      py::arg("visibility"), py::arg("sky_coeffs"),
+      "Sky irradiance (D, H, W, 3) from sky_visibility's moments and a sky's SH coefficients: "
+      "the same values sky_irradiance gives.");
+
+  m.def(
       "diffusion_light",
       [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sun_t, V3 to_sun,
          const py::object& sky_e, float albedo, float mean_cosine, int max_iterations,

@@ -74,7 +74,7 @@ def views() -> dict[str, tuple[Callable, Callable[[], np.ndarray]]]:
 
 def errors(names: Sequence[str], backend: str = "cpu") -> dict[str, dict[str, float]]:
     """``mitsuba_views.block_errors`` of each named view with today's constants."""
-    memo.store.clear()  # the light step's memo does not know the constants
+    memo.clear()  # the light step's memo does not know the constants
     table = views()
     out = {}
     for name in names:

@@ -494,9 +494,8 @@ constexpr float kLatticeMaxAspect = 1.1f;
 
 }  // namespace
 
-std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
-                                  int order, int n_theta, float step_voxels, int threads,
-                                  SkyRays rays) {
+std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
+                                   float step_voxels, int threads, SkyRays rays) {
   g.validate();
   if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
   if (!(step_voxels > 0.0f)) throw std::invalid_argument("step must be > 0");
@@ -508,7 +507,7 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
   const glm::vec3 vs = g.voxel_size();
   const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
   const std::size_t nv = g.voxels();
-  std::vector<float> out(nv * 3);
+  std::vector<double> out(nv * static_cast<std::size_t>(nc), 0.0);
   const glm::vec3 inv_vs = 1.0f / vs;
   // Voxels with no medium within one voxel are never read where light scatters: they get the
   // unoccluded sky (V = 1: V_0 = √4π, the other coefficients 0).
@@ -533,17 +532,11 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
     });
     near.swap(pass);
   }
-  // E = Σ_m L_m V_m, V_m = Σ_k w_k y_m(ω_k) e^{−τ(x, ω_k)}, from a voxel's visibility moments.
+  // V_m = Σ_k w_k y_m(ω_k) e^{−τ(x, ω_k)}: a voxel's visibility moments.
   const auto finish = [&](std::size_t v, const double* vis) {
-    for (int ch = 0; ch < 3; ++ch) {
-      double e = 0.0;
-      for (int c = 0; c < nc; ++c) e += static_cast<double>(sky_coeffs[ch * nc + c]) * vis[c];
-      out[v * 3 + ch] = static_cast<float>(std::max(0.0, e));
-    }
+    for (int c = 0; c < nc; ++c) out[v * nc + c] = vis[c];
   };
-  const auto open_sky = [&](std::size_t v) {
-    for (int ch = 0; ch < 3; ++ch) out[v * 3 + ch] = std::max(0.0f, sky_coeffs[ch * nc] * open);
-  };
+  const auto open_sky = [&](std::size_t v) { out[v * nc] = static_cast<double>(open); };
   const float aspect = std::max(vs.x, std::max(vs.y, vs.z)) / std::min(vs.x, std::min(vs.y, vs.z));
   if (rays == SkyRays::Lattice && aspect <= kLatticeMaxAspect) {
     // τ of every voxel along each lattice direction by its recurrence, a few directions at a
@@ -620,6 +613,30 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
     finish(v, vis);
   });
   return out;
+}
+
+std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,
+                                       const float* sky_coeffs, int order) {
+  if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
+  const int nc = order * order;
+  std::vector<float> out(voxels * 3);
+  for (std::size_t v = 0; v < voxels; ++v) {
+    const double* vis = visibility + v * nc;
+    for (int ch = 0; ch < 3; ++ch) {
+      double e = 0.0;
+      for (int c = 0; c < nc; ++c) e += static_cast<double>(sky_coeffs[ch * nc + c]) * vis[c];
+      out[v * 3 + ch] = static_cast<float>(std::max(0.0, e));
+    }
+  }
+  return out;
+}
+
+std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
+                                  int order, int n_theta, float step_voxels, int threads,
+                                  SkyRays rays) {
+  const std::vector<double> vis =
+      sky_visibility(ext, g, order, n_theta, step_voxels, threads, rays);
+  return sky_irradiance_from(vis.data(), g.voxels(), sky_coeffs, order);
 }
 
 // ---------------------------------------------------------------------------------------------

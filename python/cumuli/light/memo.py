@@ -16,20 +16,34 @@ MEMO_SIZE = 64
 #: The memo (key → value) and the lock that guards it.
 store: OrderedDict[Any, Any] = OrderedDict()
 lock = threading.Lock()
+#: What the physical light of a medium keeps apart from its sun and sky (its extinction lattice,
+#: its sky visibility), in a store of its own so that it does not crowd the lights out of
+#: ``store``; entries kept (two per drawable).
+MEDIA_MEMO_SIZE = 32
+media_store: OrderedDict[Any, Any] = OrderedDict()
 
 
-def remember(key: Any, make: Callable[[], Any]) -> Any:
-    """The value memoised under ``key``, made by ``make()`` when there is none."""
+def remember(key: Any, make: Callable[[], Any], media: bool = False) -> Any:
+    """The value memoised under ``key``, made by ``make()`` when there is none (in
+    :data:`media_store` with ``media``)."""
+    where, size = (media_store, MEDIA_MEMO_SIZE) if media else (store, MEMO_SIZE)
     with lock:
-        if key in store:
-            store.move_to_end(key)
-            return store[key]
+        if key in where:
+            where.move_to_end(key)
+            return where[key]
     value = make()
     with lock:
-        store[key] = value
-        while len(store) > MEMO_SIZE:
-            store.popitem(last=False)
+        where[key] = value
+        while len(where) > size:
+            where.popitem(last=False)
     return value
+
+
+def clear() -> None:
+    """Forget every memoised value."""
+    with lock:
+        store.clear()
+        media_store.clear()
 
 
 def content_digest(*arrays: np.ndarray) -> str:

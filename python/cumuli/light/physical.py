@@ -248,8 +248,18 @@ def physical_light(
     n = s.physical_resolution
     lattice = medium.own_lattice(drawable)
     own = lattice is not None and max(lattice) <= n
+    # What the sun and sky do not change (the extinction lattice, the sky's visibility moments)
+    # is memoised apart: a moving sun or a changing sky relights only the terms they reach.
+    medium_key = ("physical medium", drawable_digest(drawable), scene.noise.identity, s,
+                  SUPERSAMPLE)  # fmt: skip
     with _stage(timings, "extinction"):
-        field = extinction_grid(drawable, scene.noise, s, None if own else n, SUPERSAMPLE, threads)
+        field = remember(
+            medium_key,
+            lambda: _frozen(
+                extinction_grid(drawable, scene.noise, s, None if own else n, SUPERSAMPLE, threads)
+            ),
+            media=True,
+        )
     lo, hi = field.box
     to_sun = scene.sun.direction
     frame = sun_frame(lo, hi, to_sun, n)
@@ -275,10 +285,17 @@ def physical_light(
     sky_e = None
     if s.sky_light:
         with _stage(timings, "sky"):
-            coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
-            sky_e = _core.sky_irradiance(
-                ext, lo, hi, coeffs, SKY_ORDER, SKY_SAMPLES, 1.0, threads, method=SKY_RAYS
+            visibility = remember(
+                (*medium_key, "sky visibility", SKY_ORDER, SKY_SAMPLES, SKY_RAYS),
+                lambda: _frozen(
+                    _core.sky_visibility(
+                        ext, lo, hi, SKY_ORDER, SKY_SAMPLES, 1.0, threads, method=SKY_RAYS
+                    )
+                ),
+                media=True,
             )
+            coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
+            sky_e = _core.sky_irradiance_from(visibility, coeffs)
         grid[..., 1:4] = sky_e
     octaves = 1
     if s.multiple_scattering:
@@ -305,6 +322,17 @@ def physical_light(
     depth.setflags(write=False)
     grid.setflags(write=False)
     return PhysicalLight(frame, depth, grid, (lo, hi), octaves)
+
+
+def _frozen(value: Any) -> Any:
+    """A read-only copy of ``value`` (an array, or an ``ExtinctionField``'s values), to be
+    memoised: neither the memo nor a drawable's own array can then be changed through the
+    other."""
+    if isinstance(value, np.ndarray):
+        out = value.copy()
+        out.setflags(write=False)
+        return out
+    return value._replace(values=_frozen(np.asarray(value.values)))
 
 
 def sun_frame(lo: Any, hi: Any, to_sun: Any, n: int) -> tuple:

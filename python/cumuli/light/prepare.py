@@ -38,9 +38,8 @@ from cumuli._util import progress as _progress
 from cumuli._util import validate as check
 from cumuli.light.between import onto_media, own_light_of, through_media
 from cumuli.light.digests import shadow_digest as _shadow_digest
-from cumuli.light.memo import lock as _memo_lock
+from cumuli.light.memo import clear as _memo_clear
 from cumuli.light.memo import remember as _remember
-from cumuli.light.memo import store as _memo
 from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
 from cumuli.scene import Scene
 
@@ -69,8 +68,7 @@ class LitScene:
 
 def clear_memo() -> None:
     """Forget every memoised light (they are recomputed on demand)."""
-    with _memo_lock:
-        _memo.clear()
+    _memo_clear()
     for kind in registry.kinds():
         if kind.forget is not None:
             kind.forget()

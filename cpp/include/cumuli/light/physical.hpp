@@ -93,6 +93,14 @@ enum class SkyRays { Lattice, March };
 // `ext` with steps of step_voxels voxels, stopped once τ > 6 (the e^−6 of visibility left is
 // dropped), over the n_theta product quadrature. Lattice rays (n_theta and step_voxels unused)
 // are taken where the voxels' sides differ by at most 10 %, March rays otherwise.
+// The sky-independent half of sky_irradiance: each voxel's visibility moments V_m (voxels ×
+// order² doubles, voxel-major; V_0 = √4π and the others 0 where no medium lies within one voxel),
+// so that a changed sky or sun re-projects them without marching again.
+std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
+                                   float step_voxels, int threads, SkyRays rays = SkyRays::March);
+// E_sky = max(0, Σ_m L_m V_m) per voxel (RGB interleaved) from sky_visibility's moments.
+std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,
+                                       const float* sky_coeffs, int order);
 std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
                                   int order, int n_theta, float step_voxels, int threads,
                                   SkyRays rays = SkyRays::March);
