@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "common.hpp"
+#include "cumuli/rendering/air.hpp"
 #include "cumuli/rendering/billboards.hpp"
 #include "cumuli/rendering/compositor.hpp"
 #include "cumuli/rendering/impostors.hpp"
@@ -500,6 +501,69 @@ void bind_composite(py::module_& m) {
       "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top. "
       "solid (H, W, 4): rgb and view depth of opaque solids (+inf where none), which hide the "
       "layers entered behind them.");
+
+  m.def(
+      "finish_physical",
+      [](const FloatArray& image, const py::handle& camera_position,
+         const py::handle& camera_target, const py::handle& camera_up, float fov,
+         const py::object& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
+         const py::object& ground, const FloatArray& boxes, float air_extinction, float air_height,
+         float haze, const PhysicalParams& phase, bool resolve, int threads) {
+        if (image.ndim() != 3 || image.shape(2) != 4)
+          throw py::value_error("image must have shape (H, W, 4)");
+        const py::ssize_t height = image.shape(0), width = image.shape(1);
+        if (height < 1 || width < 1 || height > kMaxEdge || width > kMaxEdge)
+          throw py::value_error("image edges must be in [1, " + std::to_string(kMaxEdge) + "]");
+        if (boxes.ndim() != 3 || boxes.shape(1) != 2 || boxes.shape(2) != 3)
+          throw py::value_error("boxes must have shape (n, 2, 3), one (lo, hi) per drawable");
+        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
+        CameraParams cam;
+        cam.position = vec3_arg(camera_position, "camera position");
+        cam.target = vec3_arg(camera_target, "camera target");
+        cam.up = vec3_arg(camera_up, "camera up");
+        cam.fov = finite(fov, "fov");
+        SunParams sun;
+        const glm::vec3 sd = vec3_arg(sun_direction, "sun direction");
+        if (!(glm::dot(sd, sd) > 0.0f)) throw py::value_error("sun direction must not be zero");
+        sun.direction = glm::normalize(sd);
+        sun.radiance = vec3_arg(sun_radiance, "sun radiance");
+        const SkyParams sk = sky_of(sky);
+        const GroundParams gp = ground_of(ground);
+        std::vector<Box> list(static_cast<std::size_t>(boxes.shape(0)));
+        const float* b = boxes.data();
+        for (std::size_t k = 0; k < list.size(); ++k)
+          list[k] = Box{glm::vec3(b[6 * k], b[6 * k + 1], b[6 * k + 2]),
+                        glm::vec3(b[6 * k + 3], b[6 * k + 4], b[6 * k + 5])};
+        AirParams air;
+        air.extinction = air_extinction;
+        air.height = air_height;
+        air.haze = haze;
+        air.phase = phase;
+        air.resolve = resolve;
+        try {
+          cam.validate();
+          air.validate();
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        auto out = new_array({height, width, 4});
+        float* dst = out.mutable_data();
+        std::copy(image.data(), image.data() + image.size(), dst);
+        {
+          py::gil_scoped_release release;
+          finish_physical(dst, static_cast<int>(width), static_cast<int>(height), cam, sk, sun, gp,
+                          list, air, threads);
+        }
+        return out;
+      },
+      py::arg("image"), py::arg("camera_position"), py::arg("camera_target"), py::arg("camera_up"),
+      py::arg("fov"), py::arg("sky"), py::arg("sun_direction"), py::arg("sun_radiance"),
+      py::arg("ground"), py::arg("boxes"), py::arg("air_extinction"), py::arg("air_height"),
+      py::arg("haze"), py::arg("phase"), py::arg("resolve"), py::arg("threads") = 0,
+      "The physical mode's finishing passes on a finished (H, W, 4) image (a new array): the air "
+      "(aerial perspective with air_extinction over air_height, the aureole of haze with "
+      "phase's phase function; boxes (n, 2, 3): the drawables' layer boxes for the clouds' "
+      "depth), then the 3x3 tent resolve when resolve is true.");
 
   m.def(
       "draw_solids",

@@ -237,3 +237,30 @@ def add_air(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None) -> n
         rgb = rgb + glow
     out = np.concatenate([rgb, flat[:, 3:]], axis=1).astype(np.float32)
     return out.reshape(image.shape)
+
+
+def finish(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None, threads: int = 0) -> Any:
+    """``image`` seen through the air, then resolved (``resolve(add_air(image, …), scene)``) in
+    one threaded pass of the core (``_core.finish_physical``): the same formulas per pixel as
+    :func:`add_air` and :func:`cumuli.rendering.resolve.tent_filter`, which stay their numpy
+    reference (the tent is bit for bit the same; the air agrees to float rounding). ``image``
+    itself when neither applies (the paper mode)."""
+    from cumuli import _core
+    from cumuli.ground import ground_args
+    from cumuli.rendering.params import physical_params
+    from cumuli.sky import sky_args
+
+    s = scene.settings
+    fading = s.physical and s.air_extinction > 0.0
+    glowing = s.physical and s.haze > 0.0 and any(scene.sun.radiance)
+    resolving = s.physical and s.resolve and not scene.solids
+    if not (fading or glowing or resolving):
+        return image
+    boxes = np.array([c.layer_box() for c in scene.clouds], np.float32).reshape(-1, 2, 3)
+    return _core.finish_physical(
+        np.ascontiguousarray(image, np.float32), camera.position, camera.target, camera.up,
+        float(camera.fov), sky_args(scene.sky), scene.sun.direction, scene.sun.radiance,
+        ground_args(scene.ground, scene.sky, shadow), boxes,
+        float(s.air_extinction) if fading else 0.0, float(s.air_height),
+        float(s.haze) if glowing else 0.0, physical_params(s, 1), bool(resolving), int(threads),
+    )  # fmt: skip
