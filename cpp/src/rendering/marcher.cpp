@@ -178,6 +178,7 @@ struct PreparedCloud {
   float step;
   const OccupancyGrid* occupancy;  // null without empty-space skipping
   float margin;                    // a thousandth of the smallest cell edge
+  const CandidateFan* fan;         // the candidates of the camera's rays
 };
 
 struct BoxHit {
@@ -339,8 +340,8 @@ class RayMarcher {
                    Scratch& scratch, State& st, float xi) const {
     const CloudShape& shape = pc.cloud->shape;
     Candidate* cand = scratch.candidates.data();
-    const int n = collect_candidates(shape, origin, dir, h.t_in, h.t_out, cand,
-                                     settings_.max_candidates, settings_.sort_candidates);
+    const int n = pc.fan->collect(dir, h.t_in, h.t_out, cand, settings_.max_candidates,
+                                  settings_.sort_candidates);
     const float step = pc.step;
     const float offset = xi * step;  // Δ/2 exactly when not jittered (the paper)
     if (settings_.march == MarchMode::Paper) {
@@ -395,8 +396,8 @@ class RayMarcher {
     const CloudShape& shape = rc.shape;
     const PhysicalParams& ph = settings_.phys;
     Candidate* cand = scratch.candidates.data();
-    const int n = collect_candidates(shape, origin, dir, h.t_in, h.t_out, cand,
-                                     settings_.max_candidates, settings_.sort_candidates);
+    const int n = pc.fan->collect(dir, h.t_in, h.t_out, cand, settings_.max_candidates,
+                                  settings_.sort_candidates);
     const float step = pc.step;
     const float offset = xi * step;
     const bool spheroid = shape.density.model == DensityModel::Spheroid;
@@ -451,8 +452,7 @@ class RayMarcher {
         t += step;
         float q = 0.0f;
         if (spheroid) {
-          const int j = union_owner(shape, cand, n, s, p, cand[k].primitive);
-          q = shape.primitives[static_cast<std::size_t>(j)].normalised_distance(p);
+          union_owner(shape, cand, n, s, p, cand[k].primitive, q);
           if (q > 1.0f) continue;  // outside the cloud: no density (spheroid_density)
         } else if (!metaball_inside(shape, p)) {
           continue;
@@ -490,12 +490,20 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
     grids.reserve(scene.clouds.size());
     for (const auto& c : scene.clouds) grids.push_back(build_occupancy(c.shape));
   }
+  // Every ray starts at the camera: each cloud's candidate terms of that origin, once.
+  std::vector<CandidateFan> fans;
+  fans.reserve(scene.clouds.size());
+  for (const auto& c : scene.clouds) fans.emplace_back(c.shape, camera.position);
   std::vector<PreparedCloud> prepared;
   prepared.reserve(scene.clouds.size());
   for (std::size_t k = 0; k < scene.clouds.size(); ++k) {
     const RenderCloud& c = scene.clouds[k];
-    PreparedCloud pc{&c, candidate_bounds(c.shape),
-                     settings.step_for(camera.position, c.shape.centre()), nullptr, 0.0f};
+    PreparedCloud pc{&c,
+                     candidate_bounds(c.shape),
+                     settings.step_for(camera.position, c.shape.centre()),
+                     nullptr,
+                     0.0f,
+                     &fans[k]};
     if (settings.skip_empty) {
       const OccupancyGrid& g = grids[k];
       const glm::vec3 cell = (g.box.hi - g.box.lo) / static_cast<float>(g.res);
