@@ -37,7 +37,7 @@ py::object item(const py::dict& d, const char* key, std::size_t index) {
 
 // One cloud from a dict: centres, radii, rotations, model, kappa, phi, light [z, y, x],
 // light_lo, light_hi.
-RenderCloud cloud_from_dict(const py::handle& h, std::size_t index) {
+RenderCloud cloud_from_dict(const py::handle& h, std::size_t index, std::vector<py::object>& keep) {
   if (!py::isinstance<py::dict>(h))
     throw py::type_error("clouds[" + std::to_string(index) + "] must be a dict");
   const py::dict d = py::reinterpret_borrow<py::dict>(h);
@@ -53,7 +53,7 @@ RenderCloud cloud_from_dict(const py::handle& h, std::size_t index) {
   }
   if (d.contains("physical") && !d["physical"].is_none()) {
     try {
-      rc.physical = physical_grids_of(d["physical"]);
+      rc.physical = physical_grids_of(d["physical"], &keep);
     } catch (const py::value_error& e) {
       throw py::value_error(at + e.what());
     }
@@ -323,8 +323,9 @@ void bind_march(py::module_& m) {
         scene.solids = solid_spheres(solids);
         scene.ground = ground_of(ground);
         scene.clouds.reserve(clouds.size());
+        std::vector<py::object> keep;  // the physical lattices the clouds view, held to the end
         for (std::size_t i = 0; i < clouds.size(); ++i)
-          scene.clouds.push_back(cloud_from_dict(clouds[i], i));
+          scene.clouds.push_back(cloud_from_dict(clouds[i], i, keep));
 
         try {
           s.validate();

@@ -94,11 +94,13 @@ CandidateFan::CandidateFan(const CloudShape& cloud, glm::vec3 origin) {
   const float scale = candidate_scale(cloud);
   terms_.reserve(cloud.primitives.size());
   for (Ellipsoid e : cloud.primitives) {
+    const glm::vec3 own = e.radii;
     e.radii *= scale;
     // intersect()'s terms that do not depend on the direction, the same expressions.
     const glm::mat3 rt = glm::transpose(e.rotation);
     const glm::vec3 o = (rt * (origin - e.centre)) / e.radii;
-    terms_.push_back(Term{rt, e.radii, o, glm::dot(o, o) - 1.0f});
+    terms_.push_back(
+        Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, e.rotation == glm::mat3(1.0f)});
   }
 }
 

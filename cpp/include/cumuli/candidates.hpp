@@ -59,6 +59,14 @@ class CandidateFan {
   CandidateFan(const CloudShape& cloud, glm::vec3 origin);
   int collect(glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
               bool sorted = true) const;
+  // Primitive j's normalised distance |q| at p: Ellipsoid::normalised_distance, the rotation
+  // skipped when it is the identity (it then changes at most the sign of a zero, which the
+  // squares take off: the same |q| bit for bit).
+  float q(int j, glm::vec3 p) const {
+    const Term& e = terms_[static_cast<std::size_t>(j)];
+    const glm::vec3 v = p - e.centre;
+    return glm::length((e.identity ? v : e.rt * v) / e.unscaled);
+  }
 
  private:
   struct Term {
@@ -66,6 +74,9 @@ class CandidateFan {
     glm::vec3 radii;  // grown by candidate_scale
     glm::vec3 o;      // the origin in the unit-sphere frame
     float c;          // |o|² − 1
+    glm::vec3 centre;
+    glm::vec3 unscaled;  // the primitive's own radii (|q| is the primitive's, not the grown one's)
+    bool identity;       // the rotation is exactly the identity
   };
   std::vector<Term> terms_;
 };

@@ -200,9 +200,16 @@ struct Batch {
   int size = 0;
 };
 
+// The candidates covering the physical march's current sample (RayMarcher::owner_q).
+struct Active {
+  std::vector<int> index;
+  int size = 0;
+};
+
 struct Scratch {
   std::vector<Candidate> candidates;
   Batch batch;
+  Active active;
   std::vector<BoxHit> hits;
   DensitySource src;
   std::uint64_t fbm = 0;
@@ -222,6 +229,7 @@ class RayMarcher {
   // A thread's scratch, its density source counting into it.
   void init(Scratch& scratch) const {
     scratch.candidates.resize(static_cast<std::size_t>(settings_.max_candidates));
+    scratch.active.index.resize(static_cast<std::size_t>(settings_.max_candidates));
     scratch.hits.reserve(prepared_.size());
     scratch.src = src_;
     scratch.src.evaluations = &scratch.fbm;
@@ -382,6 +390,28 @@ class RayMarcher {
     return true;
   }
 
+  // The |q| of union_owner's owner of the sample at s (world point p), for samples taken in
+  // increasing s: the covering candidates are kept in `active` (candidate order) as they enter
+  // (t_in ≤ s; `entered` of them so far) and leave (s > t_out) instead of scanning them all;
+  // the owner's |q| is the smallest. Unsorted candidates (candidate_sort "none") take
+  // union_owner itself.
+  float owner_q(const CloudShape& shape, const CandidateFan& fan, const Candidate* cand, int n,
+                float s, glm::vec3 p, int fallback, Active& active, int& entered) const {
+    if (!settings_.sort_candidates) return fan.q(union_owner(shape, cand, n, s, p, fallback), p);
+    while (entered < n && cand[entered].t_in <= s) active.index[active.size++] = entered++;
+    int kept = 0;
+    for (int i = 0; i < active.size; ++i)
+      if (!(s > cand[active.index[i]].t_out)) active.index[kept++] = active.index[i];
+    active.size = kept;
+    if (kept == 0) return fan.q(fallback, p);
+    float best_q = fan.q(cand[active.index[0]].primitive, p);
+    for (int i = 1; i < kept; ++i) {
+      const float q = fan.q(cand[active.index[i]].primitive, p);
+      if (q < best_q) best_q = q;
+    }
+    return best_q;
+  }
+
   // The physical mode (RENDER_CONTRACT "Physical lighting"): the union of the candidate
   // intervals, each sample at ξ·Δ into its step, σ = extinction_scale·ρ. False when done.
   // The samples inside the cloud's primitives are queued (kBatch at most) and their fBm
@@ -435,6 +465,10 @@ class RayMarcher {
       b.size = 0;
       return true;
     };
+    // The candidates covering the sample (union_owner's), kept as s grows.
+    Active& active = scratch.active;
+    active.size = 0;
+    int entered = 0;
     float t = -INFINITY;
     for (int k = 0; k < n; ++k) {
       if (cand[k].t_out <= t) continue;
@@ -452,7 +486,7 @@ class RayMarcher {
         t += step;
         float q = 0.0f;
         if (spheroid) {
-          union_owner(shape, cand, n, s, p, cand[k].primitive, q);
+          q = owner_q(shape, *pc.fan, cand, n, s, p, cand[k].primitive, active, entered);
           if (q > 1.0f) continue;  // outside the cloud: no density (spheroid_density)
         } else if (!metaball_inside(shape, p)) {
           continue;
