@@ -1,6 +1,7 @@
 """The physical mode's air between the camera and what it sees (RENDER_CONTRACT "Physical
-lighting", "Air"): aerial perspective and the aureole, one numpy pass on the finished image of
-either backend (so GL and CPU agree exactly).
+lighting", "Air"): aerial perspective and the aureole, one pass on the finished image of
+either backend (so GL and CPU agree exactly): :func:`finish` runs it with the resolve pass in
+the core, threaded; :func:`add_air` is its numpy reference.
 
 - **Aerial perspective.** Along a view ray the air's extinction ``k = air_extinction`` (per
   world unit) hides what lies at distance ``t`` by ``1 − exp(−k·t)`` and puts the sky's horizon
