@@ -221,17 +221,22 @@ def physical_light(
     threads: int = 0,
     timings: dict[str, float] | None = None,
     gain_depth: float | None = None,
+    forward: float | None = None,
 ) -> PhysicalLight:
     """The :class:`PhysicalLight` of a drawable with a medium (a `Cloud`, a `VolumeCloud`, ...)
     under ``scene``'s sun and sky. ``timings``, a dict, receives the wall seconds of each of the
     :data:`STAGES` (added to what it holds: the benchmarks profile the light step with it).
-    ``gain_depth``: the ``τg`` of :func:`lattice_gains` (None: :data:`GAIN_DEPTH`)."""
+    ``gain_depth``: the ``τg`` of :func:`lattice_gains` (None: :data:`GAIN_DEPTH`); ``forward``:
+    the weight of the diffusion's forward-scattered sun source (None: :data:`SUN_FORWARD`)."""
     medium = registry.of(drawable).medium
     if medium is None:
         raise TypeError(f"no physical light pass for {type(drawable).__name__}")
     depth_g = GAIN_DEPTH if gain_depth is None else float(gain_depth)
     if not (math.isfinite(depth_g) and depth_g >= 0.0):
         raise ValueError(f"gain_depth must be finite and >= 0, got {gain_depth}")
+    weight_f = SUN_FORWARD if forward is None else float(forward)
+    if not (math.isfinite(weight_f) and weight_f >= 0.0):
+        raise ValueError(f"forward must be finite and >= 0, got {forward}")
     check_budget(scene)
     s = scene.settings
     n = s.physical_resolution
@@ -283,7 +288,7 @@ def physical_light(
                 2000,
                 1e-3,
                 threads,
-                forward=SUN_FORWARD,
+                forward=weight_f,
             )
         grid[..., 0] = lattice_gains(ext, lo, hi, SUN_GAIN, depth_g) * phi[..., 0]
         if sky_e is not None:
