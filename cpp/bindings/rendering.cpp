@@ -505,11 +505,10 @@ void bind_composite(py::module_& m) {
 
   m.def(
       "finish_physical",
-      [](const FloatArray& image, const py::handle& camera_position,
-         const py::handle& camera_target, const py::handle& camera_up, float fov,
-         const py::object& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
-         const py::object& ground, const FloatArray& boxes, float air_extinction, float air_height,
-         float haze, const PhysicalParams& phase, bool resolve, int threads) {
+      [](const FloatArray& image, const CameraParams& camera, const SkyParams& sky,
+         const SunParams& sun_params, const py::object& ground, const FloatArray& boxes,
+         const std::tuple<float, float, float>& air_terms, const PhysicalParams& phase,
+         bool resolve, int threads) {
         if (image.ndim() != 3 || image.shape(2) != 4)
           throw py::value_error("image must have shape (H, W, 4)");
         const py::ssize_t height = image.shape(0), width = image.shape(1);
@@ -518,17 +517,7 @@ void bind_composite(py::module_& m) {
         if (boxes.ndim() != 3 || boxes.shape(1) != 2 || boxes.shape(2) != 3)
           throw py::value_error("boxes must have shape (n, 2, 3), one (lo, hi) per drawable");
         if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
-        CameraParams cam;
-        cam.position = vec3_arg(camera_position, "camera position");
-        cam.target = vec3_arg(camera_target, "camera target");
-        cam.up = vec3_arg(camera_up, "camera up");
-        cam.fov = finite(fov, "fov");
-        SunParams sun;
-        const glm::vec3 sd = vec3_arg(sun_direction, "sun direction");
-        if (!(glm::dot(sd, sd) > 0.0f)) throw py::value_error("sun direction must not be zero");
-        sun.direction = glm::normalize(sd);
-        sun.radiance = vec3_arg(sun_radiance, "sun radiance");
-        const SkyParams sk = sky_of(sky);
+        const SunParams sun = sun_of(sun_params);
         const GroundParams gp = ground_of(ground);
         std::vector<Box> list(static_cast<std::size_t>(boxes.shape(0)));
         const float* b = boxes.data();
@@ -536,13 +525,11 @@ void bind_composite(py::module_& m) {
           list[k] = Box{glm::vec3(b[6 * k], b[6 * k + 1], b[6 * k + 2]),
                         glm::vec3(b[6 * k + 3], b[6 * k + 4], b[6 * k + 5])};
         AirParams air;
-        air.extinction = air_extinction;
-        air.height = air_height;
-        air.haze = haze;
+        std::tie(air.extinction, air.height, air.haze) = air_terms;
         air.phase = phase;
         air.resolve = resolve;
         try {
-          cam.validate();
+          camera.validate();
           air.validate();
         } catch (const std::invalid_argument& e) {
           throw py::value_error(e.what());
@@ -552,17 +539,16 @@ void bind_composite(py::module_& m) {
         std::copy(image.data(), image.data() + image.size(), dst);
         {
           py::gil_scoped_release release;
-          finish_physical(dst, static_cast<int>(width), static_cast<int>(height), cam, sk, sun, gp,
-                          list, air, threads);
+          finish_physical(dst, static_cast<int>(width), static_cast<int>(height), camera, sky, sun,
+                          gp, list, air, threads);
         }
         return out;
       },
-      py::arg("image"), py::arg("camera_position"), py::arg("camera_target"), py::arg("camera_up"),
-      py::arg("fov"), py::arg("sky"), py::arg("sun_direction"), py::arg("sun_radiance"),
-      py::arg("ground"), py::arg("boxes"), py::arg("air_extinction"), py::arg("air_height"),
-      py::arg("haze"), py::arg("phase"), py::arg("resolve"), py::arg("threads") = 0,
+      py::arg("image"), py::arg("camera"), py::arg("sky"), py::arg("sun"), py::arg("ground"),
+      py::arg("boxes"), py::arg("air"), py::arg("phase"), py::arg("resolve"),
+      py::arg("threads") = 0,
       "The physical mode's finishing passes on a finished (H, W, 4) image (a new array): the air "
-      "(aerial perspective with air_extinction over air_height, the aureole of haze with "
+      "(air = (air_extinction, air_height, haze): aerial perspective, and the aureole with "
       "phase's phase function; boxes (n, 2, 3): the drawables' layer boxes for the clouds' "
       "depth), then the 3x3 tent resolve when resolve is true.");
 

@@ -169,17 +169,13 @@ def test_the_core_pass_is_the_numpy_reference(phase: str, ground: bool) -> None:
 
 def test_the_core_pass_checks_its_arguments() -> None:
     from cumuli import _core
-    from cumuli.rendering.params import physical_params
-    from cumuli.sky import sky_args
+    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
 
     scene = cloud_scene()
-    cam = camera_at(40.0)
     args = dict(
-        camera_position=cam.position, camera_target=cam.target, camera_up=cam.up,
-        fov=float(cam.fov), sky=sky_args(scene.sky), sun_direction=scene.sun.direction,
-        sun_radiance=scene.sun.radiance, ground=None, boxes=np.zeros((0, 2, 3), np.float32),
-        air_extinction=0.01, air_height=10.0, haze=0.05,
-        phase=physical_params(scene.settings, 1), resolve=True,
+        camera=camera_params(camera_at(40.0)), sky=sky_params(scene.sky),
+        sun=sun_params(scene.sun), ground=None, boxes=np.zeros((0, 2, 3), np.float32),
+        air=(0.01, 10.0, 0.05), phase=physical_params(scene.settings, 1), resolve=True,
     )  # fmt: skip
     img = np.zeros((4, 5, 4), np.float32)
     assert _core.finish_physical(img, **args).shape == (4, 5, 4)
@@ -188,6 +184,6 @@ def test_the_core_pass_checks_its_arguments() -> None:
     with pytest.raises(ValueError, match="boxes"):
         _core.finish_physical(img, **{**args, "boxes": np.zeros((1, 3), np.float32)})
     with pytest.raises(ValueError, match="air extinction"):
-        _core.finish_physical(img, **{**args, "air_extinction": -1.0})
+        _core.finish_physical(img, **{**args, "air": (-1.0, 10.0, 0.05)})
     with pytest.raises(ValueError, match="haze"):
-        _core.finish_physical(img, **{**args, "haze": float("nan")})
+        _core.finish_physical(img, **{**args, "air": (0.01, 10.0, float("nan"))})

@@ -248,8 +248,7 @@ def finish(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None, threa
     itself when neither applies (the paper mode)."""
     from cumuli import _core
     from cumuli.ground import ground_args
-    from cumuli.rendering.params import physical_params
-    from cumuli.sky import sky_args
+    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
 
     s = scene.settings
     fading = s.physical and s.air_extinction > 0.0
@@ -258,10 +257,13 @@ def finish(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None, threa
     if not (fading or glowing or resolving):
         return image
     boxes = np.array([c.layer_box() for c in scene.clouds], np.float32).reshape(-1, 2, 3)
+    air = (
+        float(s.air_extinction) if fading else 0.0,
+        float(s.air_height),
+        float(s.haze) if glowing else 0.0,
+    )
     return _core.finish_physical(
-        np.ascontiguousarray(image, np.float32), camera.position, camera.target, camera.up,
-        float(camera.fov), sky_args(scene.sky), scene.sun.direction, scene.sun.radiance,
-        ground_args(scene.ground, scene.sky, shadow), boxes,
-        float(s.air_extinction) if fading else 0.0, float(s.air_height),
-        float(s.haze) if glowing else 0.0, physical_params(s, 1), bool(resolving), int(threads),
+        np.ascontiguousarray(image, np.float32), camera_params(camera), sky_params(scene.sky),
+        sun_params(scene.sun), ground_args(scene.ground, scene.sky, shadow), boxes, air,
+        physical_params(s, 1), bool(resolving), int(threads),
     )  # fmt: skip
