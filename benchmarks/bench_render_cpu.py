@@ -13,9 +13,10 @@ of 2, the image difference against 2e-3, CPU and GL frame-time ratios), and ``hd
 scene (``cumuli.demo.default_scene``, physical lighting, resolve on) at 1920×1080 on 2 threads,
 its light step done once outside the timing (a ``LitScene``), against the limit of 0.6 s, with
 each noise version (2, the hash, which the scene uses by default; 1, the table), the frame's fBm
-evaluations and what they would cost in the bulk SIMD kernel on 2 threads (``fbm_bulk_s``,
-``fbm_bulk_share`` of the frame: the marcher evaluates its samples one at a time through the
-scalar path, so this is what batching them would leave of the noise's part).
+evaluations and what they cost in the bulk SIMD kernel on 2 threads (``fbm_bulk_s``,
+``fbm_bulk_share`` of the frame: the physical marcher queues its samples and evaluates them 16 at
+a time in that kernel, so this is about the noise's part of the frame; the paper marcher still
+evaluates one at a time).
 Light grids are computed once, outside the timings. Writes ``render_cpu.json`` and
 ``render_cpu.png`` under ``benchmarks/out/`` (or ``--out``); ``--quick`` renders 96×72 with fewer
 repeats.

@@ -166,7 +166,7 @@ GroundParams ground_of(const py::object& obj) {
   return g;
 }
 
-PhysicalGrids physical_grids_of(const py::object& obj) {
+PhysicalGrids physical_grids_of(const py::object& obj, std::vector<py::object>* keep) {
   const py::tuple t = obj.cast<py::tuple>();
   if (t.size() != 5)
     throw py::value_error("physical light must be (frame, depth, grid_lo, grid_hi, rgba)");
@@ -181,11 +181,19 @@ PhysicalGrids physical_grids_of(const py::object& obj) {
   const auto res = f[5].cast<std::array<int, 3>>();
   for (int a = 0; a < 3; ++a) g.frame.res[a] = res[a];
   const FloatArray depth = t[1].cast<FloatArray>();
-  g.depth.assign(depth.data(), depth.data() + depth.size());
   const FloatArray rgba = t[4].cast<FloatArray>();
   g.grid = grid_of(rgba, 0, t[2].cast<V3>(), t[3].cast<V3>(), "physical light", 1);
   if (rgba.shape(3) != 4) throw py::value_error("physical light lattice must be (D, H, W, 4)");
-  g.rgba.assign(rgba.data(), rgba.data() + rgba.size());
+  if (keep != nullptr) {
+    // Viewed in place: `keep` holds the arrays (as cast, copies included) for the caller.
+    keep->push_back(depth);
+    keep->push_back(rgba);
+    g.set_views(depth.data(), static_cast<std::size_t>(depth.size()), rgba.data(),
+                static_cast<std::size_t>(rgba.size()));
+  } else {
+    g.depth.assign(depth.data(), depth.data() + depth.size());
+    g.rgba.assign(rgba.data(), rgba.data() + rgba.size());
+  }
   try {
     g.validate();
   } catch (const std::invalid_argument& e) {

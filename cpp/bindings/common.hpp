@@ -78,7 +78,9 @@ SkyParams sky_of(const py::handle& h);
 // optionally shadow ((nz, nx) float32) with extent (x0, z0, x1, z1).
 GroundParams ground_of(const py::object& g);
 // A drawable's physical light: (frame, depth (nw, nv, nu), grid_lo, grid_hi, rgba (D, H, W, 4)).
-PhysicalGrids physical_grids_of(const py::object& t);
+// With `keep`, the lattices are viewed, not copied: `keep` receives the arrays viewed, which the
+// caller holds (with the GIL) for as long as the grids are used.
+PhysicalGrids physical_grids_of(const py::object& t, std::vector<py::object>* keep = nullptr);
 
 // --- bound parameter structs: field helpers -----------------------------------------------------
 

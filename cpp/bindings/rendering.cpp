@@ -13,6 +13,7 @@
 #include <utility>
 
 #include "common.hpp"
+#include "cumuli/rendering/air.hpp"
 #include "cumuli/rendering/billboards.hpp"
 #include "cumuli/rendering/compositor.hpp"
 #include "cumuli/rendering/impostors.hpp"
@@ -36,7 +37,7 @@ py::object item(const py::dict& d, const char* key, std::size_t index) {
 
 // One cloud from a dict: centres, radii, rotations, model, kappa, phi, light [z, y, x],
 // light_lo, light_hi.
-RenderCloud cloud_from_dict(const py::handle& h, std::size_t index) {
+RenderCloud cloud_from_dict(const py::handle& h, std::size_t index, std::vector<py::object>& keep) {
   if (!py::isinstance<py::dict>(h))
     throw py::type_error("clouds[" + std::to_string(index) + "] must be a dict");
   const py::dict d = py::reinterpret_borrow<py::dict>(h);
@@ -52,7 +53,7 @@ RenderCloud cloud_from_dict(const py::handle& h, std::size_t index) {
   }
   if (d.contains("physical") && !d["physical"].is_none()) {
     try {
-      rc.physical = physical_grids_of(d["physical"]);
+      rc.physical = physical_grids_of(d["physical"], &keep);
     } catch (const py::value_error& e) {
       throw py::value_error(at + e.what());
     }
@@ -322,8 +323,9 @@ void bind_march(py::module_& m) {
         scene.solids = solid_spheres(solids);
         scene.ground = ground_of(ground);
         scene.clouds.reserve(clouds.size());
+        std::vector<py::object> keep;  // the physical lattices the clouds view, held to the end
         for (std::size_t i = 0; i < clouds.size(); ++i)
-          scene.clouds.push_back(cloud_from_dict(clouds[i], i));
+          scene.clouds.push_back(cloud_from_dict(clouds[i], i, keep));
 
         try {
           s.validate();
@@ -500,6 +502,55 @@ void bind_composite(py::module_& m) {
       "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top. "
       "solid (H, W, 4): rgb and view depth of opaque solids (+inf where none), which hide the "
       "layers entered behind them.");
+
+  m.def(
+      "finish_physical",
+      [](const FloatArray& image, const CameraParams& camera, const SkyParams& sky,
+         const SunParams& sun_params, const py::object& ground, const FloatArray& boxes,
+         const std::tuple<float, float, float>& air_terms, const PhysicalParams& phase,
+         bool resolve, int threads) {
+        if (image.ndim() != 3 || image.shape(2) != 4)
+          throw py::value_error("image must have shape (H, W, 4)");
+        const py::ssize_t height = image.shape(0), width = image.shape(1);
+        if (height < 1 || width < 1 || height > kMaxEdge || width > kMaxEdge)
+          throw py::value_error("image edges must be in [1, " + std::to_string(kMaxEdge) + "]");
+        if (boxes.ndim() != 3 || boxes.shape(1) != 2 || boxes.shape(2) != 3)
+          throw py::value_error("boxes must have shape (n, 2, 3), one (lo, hi) per drawable");
+        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
+        const SunParams sun = sun_of(sun_params);
+        const GroundParams gp = ground_of(ground);
+        std::vector<Box> list(static_cast<std::size_t>(boxes.shape(0)));
+        const float* b = boxes.data();
+        for (std::size_t k = 0; k < list.size(); ++k)
+          list[k] = Box{glm::vec3(b[6 * k], b[6 * k + 1], b[6 * k + 2]),
+                        glm::vec3(b[6 * k + 3], b[6 * k + 4], b[6 * k + 5])};
+        AirParams air;
+        std::tie(air.extinction, air.height, air.haze) = air_terms;
+        air.phase = phase;
+        air.resolve = resolve;
+        try {
+          camera.validate();
+          air.validate();
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        auto out = new_array({height, width, 4});
+        float* dst = out.mutable_data();
+        std::copy(image.data(), image.data() + image.size(), dst);
+        {
+          py::gil_scoped_release release;
+          finish_physical(dst, static_cast<int>(width), static_cast<int>(height), camera, sky, sun,
+                          gp, list, air, threads);
+        }
+        return out;
+      },
+      py::arg("image"), py::arg("camera"), py::arg("sky"), py::arg("sun"), py::arg("ground"),
+      py::arg("boxes"), py::arg("air"), py::arg("phase"), py::arg("resolve"),
+      py::arg("threads") = 0,
+      "The physical mode's finishing passes on a finished (H, W, 4) image (a new array): the air "
+      "(air = (air_extinction, air_height, haze): aerial perspective, and the aureole with "
+      "phase's phase function; boxes (n, 2, 3): the drawables' layer boxes for the clouds' "
+      "depth), then the 3x3 tent resolve when resolve is true.");
 
   m.def(
       "draw_solids",

@@ -27,18 +27,16 @@ Box candidate_bounds(const CloudShape& cloud) {
 
 namespace {
 
-// collect_candidates over the primitives index(0), ..., index(n − 1).
-template <class Index>
-int collect(const CloudShape& cloud, Index index, int n, glm::vec3 origin, glm::vec3 dir,
-            float t_min, float t_max, Candidate* out, int capacity, bool sorted) {
-  const float scale = candidate_scale(cloud);
+// collect_candidates over the primitives index(0), ..., index(n − 1); hit(j, iv) intersects the
+// ray with primitive j (grown by candidate_scale).
+template <class Index, class Hit>
+int collect(Index index, int n, Hit hit, float t_min, float t_max, Candidate* out, int capacity,
+            bool sorted) {
   int count = 0;
   for (int i = 0; i < n; ++i) {
     const std::size_t j = static_cast<std::size_t>(index(i));
-    Ellipsoid e = cloud.primitives[j];
-    e.radii *= scale;
     Interval iv;
-    if (!intersect(e, origin, dir, iv)) continue;
+    if (!hit(j, iv)) continue;
     const float t0 = std::max(iv.t_in, t_min);
     const float t1 = std::min(iv.t_out, t_max);
     if (!(t1 > t0)) continue;
@@ -63,6 +61,18 @@ int collect(const CloudShape& cloud, Index index, int n, glm::vec3 origin, glm::
   return count;
 }
 
+template <class Index>
+int collect(const CloudShape& cloud, Index index, int n, glm::vec3 origin, glm::vec3 dir,
+            float t_min, float t_max, Candidate* out, int capacity, bool sorted) {
+  const float scale = candidate_scale(cloud);
+  auto hit = [&](std::size_t j, Interval& iv) {
+    Ellipsoid e = cloud.primitives[j];
+    e.radii *= scale;
+    return intersect(e, origin, dir, iv);
+  };
+  return collect(index, n, hit, t_min, t_max, out, capacity, sorted);
+}
+
 }  // namespace
 
 int collect_candidates(const CloudShape& cloud, glm::vec3 origin, glm::vec3 dir, float t_min,
@@ -80,8 +90,48 @@ int collect_candidates(const CloudShape& cloud, const int* subset, int count, gl
       sorted);
 }
 
+CandidateFan::CandidateFan(const CloudShape& cloud, glm::vec3 origin) {
+  const float scale = candidate_scale(cloud);
+  terms_.reserve(cloud.primitives.size());
+  for (Ellipsoid e : cloud.primitives) {
+    const glm::vec3 own = e.radii;
+    e.radii *= scale;
+    // intersect()'s terms that do not depend on the direction, the same expressions.
+    const glm::mat3 rt = glm::transpose(e.rotation);
+    const glm::vec3 o = (rt * (origin - e.centre)) / e.radii;
+    terms_.push_back(
+        Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, e.rotation == glm::mat3(1.0f)});
+  }
+}
+
+int CandidateFan::collect(glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
+                          bool sorted) const {
+  auto hit = [&](std::size_t j, Interval& iv) {
+    const Term& e = terms_[j];
+    // The rest of intersect(), operation by operation.
+    const glm::vec3 d = (e.rt * dir) / e.radii;
+    const float a = glm::dot(d, d);
+    if (!(a > 0.0f)) return false;
+    const float b = glm::dot(e.o, d);
+    const float disc = b * b - a * e.c;
+    if (disc < 0.0f) return false;
+    const float sq = std::sqrt(disc);
+    iv.t_in = (-b - sq) / a;
+    iv.t_out = (-b + sq) / a;
+    return true;
+  };
+  return cumuli::collect([](int i) { return i; }, static_cast<int>(terms_.size()), hit, t_min,
+                         t_max, out, capacity, sorted);
+}
+
 int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,
                 int fallback) {
+  float q;
+  return union_owner(cloud, cand, n, s, p, fallback, q);
+}
+
+int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,
+                int fallback, float& q_owner) {
   // |q| is computed only once a second candidate covers s: the common case of one covering
   // primitive costs nothing.
   auto q_of = [&](int m) {
@@ -102,7 +152,11 @@ int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, 
       best = m;
     }
   }
-  return best < 0 ? fallback : cand[best].primitive;
+  const int owner = best < 0 ? fallback : cand[best].primitive;
+  q_owner = best_q != INFINITY
+                ? best_q
+                : cloud.primitives[static_cast<std::size_t>(owner)].normalised_distance(p);
+  return owner;
 }
 
 }  // namespace cumuli

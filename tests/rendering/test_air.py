@@ -136,3 +136,54 @@ def test_the_air_settings_are_checked_and_saved(tmp_path) -> None:
     s = cloud_scene(air_height=30.0, sun_angular_diameter=1.0, diffuse_shadows=False)
     back = cu.load_scene(s.save(tmp_path / "s.json"))
     assert back.settings == s.settings
+
+
+@pytest.mark.parametrize("phase", ["mie", "hg", "dual_hg"])
+@pytest.mark.parametrize("ground", [False, True])
+def test_the_core_pass_is_the_numpy_reference(phase: str, ground: bool) -> None:
+    from cumuli.rendering.air import add_air, finish
+    from cumuli.rendering.resolve import tent_filter
+
+    scene = cloud_scene(air_extinction=0.01, phase=phase).replace(
+        sun=cu.Sun(direction=(0.1, 0.2, -0.97), intensity=6.0)  # towards the camera: an aureole
+    )
+    scene = scene.replace(settings=scene.settings.replace(haze=0.05, resolve=True))
+    if ground:
+        scene = scene.replace(ground=cu.Ground(height=-8.0))
+    cam = cu.Camera(position=(0.0, 2.0, -60.0), target=(0.0, 0.0, 0.0), fov=40)
+    shadow = cu.prepare_light(scene).shadow
+    rng = np.random.default_rng(3)
+    img = rng.uniform(0.0, 2.0, (36, 48, 4)).astype(np.float32)
+    img[..., 3] = rng.choice([0.0, 0.4, 1.0], (36, 48))  # clear, partial and covered pixels
+    ref = tent_filter(add_air(img, scene, cam, shadow))
+    one = finish(img, scene, cam, shadow, threads=1)
+    np.testing.assert_allclose(one, ref, rtol=1e-5, atol=1e-6)
+    assert np.abs(one - img).max() > 0.01  # the air changed the image
+    np.testing.assert_array_equal(finish(img, scene, cam, shadow, threads=3), one)
+    # The resolve alone is numpy's tent bit for bit; the paper mode is left alone.
+    plain = scene.replace(settings=scene.settings.replace(haze=0.0, air_extinction=0.0))
+    np.testing.assert_array_equal(finish(img, plain, cam, shadow), tent_filter(img))
+    paper = scene.replace(settings=cu.RenderSettings(lighting="paper"))
+    assert finish(img, paper, cam, shadow) is img
+
+
+def test_the_core_pass_checks_its_arguments() -> None:
+    from cumuli import _core
+    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
+
+    scene = cloud_scene()
+    args = dict(
+        camera=camera_params(camera_at(40.0)), sky=sky_params(scene.sky),
+        sun=sun_params(scene.sun), ground=None, boxes=np.zeros((0, 2, 3), np.float32),
+        air=(0.01, 10.0, 0.05), phase=physical_params(scene.settings, 1), resolve=True,
+    )  # fmt: skip
+    img = np.zeros((4, 5, 4), np.float32)
+    assert _core.finish_physical(img, **args).shape == (4, 5, 4)
+    with pytest.raises(ValueError, match="image"):
+        _core.finish_physical(np.zeros((4, 5, 3), np.float32), **args)
+    with pytest.raises(ValueError, match="boxes"):
+        _core.finish_physical(img, **{**args, "boxes": np.zeros((1, 3), np.float32)})
+    with pytest.raises(ValueError, match="air extinction"):
+        _core.finish_physical(img, **{**args, "air": (-1.0, 10.0, 0.05)})
+    with pytest.raises(ValueError, match="haze"):
+        _core.finish_physical(img, **{**args, "air": (0.01, 10.0, float("nan"))})

@@ -4,6 +4,8 @@
 // order as the GLSL marcher. The caller owns the buffer: no allocation per ray.
 #pragma once
 
+#include <vector>
+
 #include "cumuli/model/cloud.hpp"
 
 namespace cumuli {
@@ -45,5 +47,38 @@ int collect_candidates(const CloudShape& cloud, const int* subset, int count, gl
 // (UnionAttribution in lighting.cpp: |q|² from the candidate test's quadratic, active list).
 int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,
                 int fallback);
+// The same, with the owner's |q| at p in `q_owner` (computed once: the comparison's own value).
+int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,
+                int fallback, float& q_owner);
+
+// collect_candidates for the rays of one origin (a camera's): the terms of each primitive's
+// intersection that depend only on the origin are computed once, and every direction gets the
+// same intervals, bit for bit, as collect_candidates(cloud, origin, dir, ...).
+class CandidateFan {
+ public:
+  CandidateFan(const CloudShape& cloud, glm::vec3 origin);
+  int collect(glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
+              bool sorted = true) const;
+  // Primitive j's normalised distance |q| at p: Ellipsoid::normalised_distance, the rotation
+  // skipped when it is the identity (it then changes at most the sign of a zero, which the
+  // squares take off: the same |q| bit for bit).
+  float q(int j, glm::vec3 p) const {
+    const Term& e = terms_[static_cast<std::size_t>(j)];
+    const glm::vec3 v = p - e.centre;
+    return glm::length((e.identity ? v : e.rt * v) / e.unscaled);
+  }
+
+ private:
+  struct Term {
+    glm::mat3 rt;     // the rotation's transpose
+    glm::vec3 radii;  // grown by candidate_scale
+    glm::vec3 o;      // the origin in the unit-sphere frame
+    float c;          // |o|² − 1
+    glm::vec3 centre;
+    glm::vec3 unscaled;  // the primitive's own radii (|q| is the primitive's, not the grown one's)
+    bool identity;       // the rotation is exactly the identity
+  };
+  std::vector<Term> terms_;
+};
 
 }  // namespace cumuli

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -177,6 +178,7 @@ struct PreparedCloud {
   float step;
   const OccupancyGrid* occupancy;  // null without empty-space skipping
   float margin;                    // a thousandth of the smallest cell edge
+  const CandidateFan* fan;         // the candidates of the camera's rays
 };
 
 struct BoxHit {
@@ -184,11 +186,30 @@ struct BoxHit {
   int cloud;
 };
 
-// Per-thread scratch: candidates of one cloud and the clouds a ray hits.
 // Per-thread scratch: candidates of one cloud, the clouds a ray hits, the density source with
 // this thread's fBm counter, and the thread's work counters.
+// The physical march's queued samples (march_physical): position, normalised distance to the
+// owning primitive, the step and skip counts after each, and their fBm.
+struct Batch {
+  static constexpr int kSize = 16;
+  float pts[3 * kSize];
+  float q[kSize];
+  float rho[kSize];
+  int steps[kSize];
+  std::uint64_t skipped[kSize];
+  int size = 0;
+};
+
+// The candidates covering the physical march's current sample (RayMarcher::owner_q).
+struct Active {
+  std::vector<int> index;
+  int size = 0;
+};
+
 struct Scratch {
   std::vector<Candidate> candidates;
+  Batch batch;
+  Active active;
   std::vector<BoxHit> hits;
   DensitySource src;
   std::uint64_t fbm = 0;
@@ -208,6 +229,7 @@ class RayMarcher {
   // A thread's scratch, its density source counting into it.
   void init(Scratch& scratch) const {
     scratch.candidates.resize(static_cast<std::size_t>(settings_.max_candidates));
+    scratch.active.index.resize(static_cast<std::size_t>(settings_.max_candidates));
     scratch.hits.reserve(prepared_.size());
     scratch.src = src_;
     scratch.src.evaluations = &scratch.fbm;
@@ -238,7 +260,9 @@ class RayMarcher {
     st.cos_theta = glm::dot(dir, scene_.sun.direction);
     st.t_limit = t_solid;
     if (settings_.physical) {
-      const OctaveTerms terms(settings_.phys, st.cos_theta);
+      // The octaves' phase terms (a few pow per order) are built at the ray's first sample with
+      // density: most rays of a frame never meet one.
+      std::optional<OctaveTerms> terms;
       for (const BoxHit& h : hits) {
         if (!march_physical(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch,
                             st, terms, xi))
@@ -324,8 +348,8 @@ class RayMarcher {
                    Scratch& scratch, State& st, float xi) const {
     const CloudShape& shape = pc.cloud->shape;
     Candidate* cand = scratch.candidates.data();
-    const int n = collect_candidates(shape, origin, dir, h.t_in, h.t_out, cand,
-                                     settings_.max_candidates, settings_.sort_candidates);
+    const int n = pc.fan->collect(dir, h.t_in, h.t_out, cand, settings_.max_candidates,
+                                  settings_.sort_candidates);
     const float step = pc.step;
     const float offset = xi * step;  // Δ/2 exactly when not jittered (the paper)
     if (settings_.march == MarchMode::Paper) {
@@ -366,44 +390,117 @@ class RayMarcher {
     return true;
   }
 
+  // The |q| of union_owner's owner of the sample at s (world point p), for samples taken in
+  // increasing s: the covering candidates are kept in `active` (candidate order) as they enter
+  // (t_in ≤ s; `entered` of them so far) and leave (s > t_out) instead of scanning them all;
+  // the owner's |q| is the smallest. Unsorted candidates (candidate_sort "none") take
+  // union_owner itself.
+  float owner_q(const CloudShape& shape, const CandidateFan& fan, const Candidate* cand, int n,
+                float s, glm::vec3 p, int fallback, Active& active, int& entered) const {
+    if (!settings_.sort_candidates) return fan.q(union_owner(shape, cand, n, s, p, fallback), p);
+    while (entered < n && cand[entered].t_in <= s) active.index[active.size++] = entered++;
+    int kept = 0;
+    for (int i = 0; i < active.size; ++i)
+      if (!(s > cand[active.index[i]].t_out)) active.index[kept++] = active.index[i];
+    active.size = kept;
+    if (kept == 0) return fan.q(fallback, p);
+    float best_q = fan.q(cand[active.index[0]].primitive, p);
+    for (int i = 1; i < kept; ++i) {
+      const float q = fan.q(cand[active.index[i]].primitive, p);
+      if (q < best_q) best_q = q;
+    }
+    return best_q;
+  }
+
   // The physical mode (RENDER_CONTRACT "Physical lighting"): the union of the candidate
   // intervals, each sample at ξ·Δ into its step, σ = extinction_scale·ρ. False when done.
+  // The samples inside the cloud's primitives are queued (kBatch at most) and their fBm
+  // evaluated together by the noise's bulk kernel (bit-identical to one at a time); then they
+  // are shaded in order. A ray that turns opaque in a batch takes back the steps (and skips) it
+  // queued past that sample, so the image and the work counted are those of the one-by-one march
+  // (the evaluations past it, at most kBatch − 1 per ray, are done but not counted).
   bool march_physical(const PreparedCloud& pc, const BoxHit& h, glm::vec3 origin, glm::vec3 dir,
-                      Scratch& scratch, State& st, const OctaveTerms& terms, float xi) const {
+                      Scratch& scratch, State& st, std::optional<OctaveTerms>& terms,
+                      float xi) const {
     const RenderCloud& rc = *pc.cloud;
     const CloudShape& shape = rc.shape;
     const PhysicalParams& ph = settings_.phys;
     Candidate* cand = scratch.candidates.data();
-    const int n = collect_candidates(shape, origin, dir, h.t_in, h.t_out, cand,
-                                     settings_.max_candidates, settings_.sort_candidates);
+    const int n = pc.fan->collect(dir, h.t_in, h.t_out, cand, settings_.max_candidates,
+                                  settings_.sort_candidates);
     const float step = pc.step;
     const float offset = xi * step;
-    const bool attribute = shape.density.model == DensityModel::Spheroid;
+    const bool spheroid = shape.density.model == DensityModel::Spheroid;
+    Batch& b = scratch.batch;
+    b.size = 0;
+    // Shades the queued samples in order; false when the ray turned opaque.
+    auto flush = [&]() -> bool {
+      if (b.size == 0) return true;
+      const std::size_t count = static_cast<std::size_t>(b.size);
+      if (src_.constant >= 0.0f) {
+        std::fill(b.rho, b.rho + count, src_.constant);
+      } else {
+        src_.noise->fbm_many(b.pts, count, b.rho, src_.fbm, 1);
+      }
+      for (int i = 0; i < b.size; ++i) {
+        if (src_.constant < 0.0f) ++scratch.fbm;
+        const DensitySample d = spheroid
+                                    ? spheroid_density_given(shape.density.kappa, b.q[i], b.rho[i])
+                                    : DensitySample{metaball_rho(shape, b.rho[i]), 1.0f};
+        if (!(d.rho > 0.0f)) continue;
+        const glm::vec3 p(b.pts[3 * i], b.pts[3 * i + 1], b.pts[3 * i + 2]);
+        const float sigma = ph.extinction_scale * d.rho;
+        const float a = std::exp(-sigma * step);
+        if (!terms) terms.emplace(ph, st.cos_theta);
+        const glm::vec3 S = rc.physical.source(p, *terms, scene_.sun.radiance, ph.albedo);
+        st.colour += st.T * (1.0f - a) * S;
+        st.T *= a;
+        if (st.T < ph.min_transmittance) {
+          st.steps = b.steps[i];
+          scratch.skipped = b.skipped[i];
+          b.size = 0;
+          return false;
+        }
+      }
+      b.size = 0;
+      return true;
+    };
+    // The candidates covering the sample (union_owner's), kept as s grows.
+    Active& active = scratch.active;
+    active.size = 0;
+    int entered = 0;
     float t = -INFINITY;
     for (int k = 0; k < n; ++k) {
       if (cand[k].t_out <= t) continue;
       t = std::max(t, cand[k].t_in);
       while (t < cand[k].t_out) {
-        if (st.steps >= settings_.max_steps) return false;
+        if (st.steps >= settings_.max_steps) {
+          flush();
+          return false;
+        }
         const float s = t + offset;
-        if (!(s < st.t_limit)) return true;  // a solid hides the rest of the ray
+        if (!(s < st.t_limit)) return flush();  // a solid hides the rest of the ray
         if (skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st)) continue;
         ++st.steps;
         const glm::vec3 p = origin + s * dir;
-        const int j =
-            attribute ? union_owner(shape, cand, n, s, p, cand[k].primitive) : cand[k].primitive;
-        const DensitySample d = cloud_density(shape, j, p, scratch.src);
         t += step;
-        if (!(d.rho > 0.0f)) continue;
-        const float sigma = ph.extinction_scale * d.rho;
-        const float a = std::exp(-sigma * step);
-        const glm::vec3 S = rc.physical.source(p, terms, scene_.sun.radiance, ph.albedo);
-        st.colour += st.T * (1.0f - a) * S;
-        st.T *= a;
-        if (st.T < ph.min_transmittance) return false;
+        float q = 0.0f;
+        if (spheroid) {
+          q = owner_q(shape, *pc.fan, cand, n, s, p, cand[k].primitive, active, entered);
+          if (q > 1.0f) continue;  // outside the cloud: no density (spheroid_density)
+        } else if (!metaball_inside(shape, p)) {
+          continue;
+        }
+        b.pts[3 * b.size] = p.x;
+        b.pts[3 * b.size + 1] = p.y;
+        b.pts[3 * b.size + 2] = p.z;
+        b.q[b.size] = q;
+        b.steps[b.size] = st.steps;
+        b.skipped[b.size] = scratch.skipped;
+        if (++b.size == Batch::kSize && !flush()) return false;
       }
     }
-    return true;
+    return flush();
   }
 
   const MarchScene& scene_;
@@ -427,12 +524,20 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
     grids.reserve(scene.clouds.size());
     for (const auto& c : scene.clouds) grids.push_back(build_occupancy(c.shape));
   }
+  // Every ray starts at the camera: each cloud's candidate terms of that origin, once.
+  std::vector<CandidateFan> fans;
+  fans.reserve(scene.clouds.size());
+  for (const auto& c : scene.clouds) fans.emplace_back(c.shape, camera.position);
   std::vector<PreparedCloud> prepared;
   prepared.reserve(scene.clouds.size());
   for (std::size_t k = 0; k < scene.clouds.size(); ++k) {
     const RenderCloud& c = scene.clouds[k];
-    PreparedCloud pc{&c, candidate_bounds(c.shape),
-                     settings.step_for(camera.position, c.shape.centre()), nullptr, 0.0f};
+    PreparedCloud pc{&c,
+                     candidate_bounds(c.shape),
+                     settings.step_for(camera.position, c.shape.centre()),
+                     nullptr,
+                     0.0f,
+                     &fans[k]};
     if (settings.skip_empty) {
       const OccupancyGrid& g = grids[k];
       const glm::vec3 cell = (g.box.hi - g.box.lo) / static_cast<float>(g.res);

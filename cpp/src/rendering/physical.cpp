@@ -68,18 +68,18 @@ float OctaveTerms::sum(float tau) const {
 void PhysicalGrids::validate() const {
   frame.validate();
   grid.validate();
-  if (depth.size() != static_cast<std::size_t>(frame.res[0]) * frame.res[1] * frame.res[2])
+  if (depth_size() != static_cast<std::size_t>(frame.res[0]) * frame.res[1] * frame.res[2])
     throw std::invalid_argument("sun depth lattice does not match its frame");
-  if (rgba.size() != grid.voxels() * 4)
+  if (rgba_size() != grid.voxels() * 4)
     throw std::invalid_argument("light lattice must be (D, H, W, 4)");
 }
 
 glm::vec3 PhysicalGrids::source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance,
                                 float albedo) const {
   constexpr float kInv4Pi = 0.0795774715459477f;
-  const float tau = sample_frame(depth.data(), frame, p);
+  const float tau = sample_frame(depth_data(), frame, p);
   float L[4];
-  sample_trilinear(rgba.data(), grid, 4, p, L);
+  sample_trilinear(rgba_data(), grid, 4, p, L);
   const float sun = terms.sum(tau) + L[0] * kInv4Pi;
   return albedo * (sun_irradiance * sun + glm::vec3(L[1], L[2], L[3]) * kInv4Pi);
 }

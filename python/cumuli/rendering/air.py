@@ -1,6 +1,7 @@
 """The physical mode's air between the camera and what it sees (RENDER_CONTRACT "Physical
-lighting", "Air"): aerial perspective and the aureole, one numpy pass on the finished image of
-either backend (so GL and CPU agree exactly).
+lighting", "Air"): aerial perspective and the aureole, one pass on the finished image of
+either backend (so GL and CPU agree exactly): :func:`finish` runs it with the resolve pass in
+the core, threaded; :func:`add_air` is its numpy reference.
 
 - **Aerial perspective.** Along a view ray the air's extinction ``k = air_extinction`` (per
   world unit) hides what lies at distance ``t`` by ``1 − exp(−k·t)`` and puts the sky's horizon
@@ -237,3 +238,32 @@ def add_air(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None) -> n
         rgb = rgb + glow
     out = np.concatenate([rgb, flat[:, 3:]], axis=1).astype(np.float32)
     return out.reshape(image.shape)
+
+
+def finish(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None, threads: int = 0) -> Any:
+    """``image`` seen through the air, then resolved (``resolve(add_air(image, …), scene)``) in
+    one threaded pass of the core (``_core.finish_physical``): the same formulas per pixel as
+    :func:`add_air` and :func:`cumuli.rendering.resolve.tent_filter`, which stay their numpy
+    reference (the tent is bit for bit the same; the air agrees to float rounding). ``image``
+    itself when neither applies (the paper mode)."""
+    from cumuli import _core
+    from cumuli.ground import ground_args
+    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
+
+    s = scene.settings
+    fading = s.physical and s.air_extinction > 0.0
+    glowing = s.physical and s.haze > 0.0 and any(scene.sun.radiance)
+    resolving = s.physical and s.resolve and not scene.solids
+    if not (fading or glowing or resolving):
+        return image
+    boxes = np.array([c.layer_box() for c in scene.clouds], np.float32).reshape(-1, 2, 3)
+    air = (
+        float(s.air_extinction) if fading else 0.0,
+        float(s.air_height),
+        float(s.haze) if glowing else 0.0,
+    )
+    return _core.finish_physical(
+        np.ascontiguousarray(image, np.float32), camera_params(camera), sky_params(scene.sky),
+        sun_params(scene.sun), ground_args(scene.ground, scene.sky, shadow), boxes, air,
+        physical_params(s, 1), bool(resolving), int(threads),
+    )  # fmt: skip

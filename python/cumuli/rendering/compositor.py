@@ -30,10 +30,9 @@ from cumuli.gl.context import GLContext, _thread_default, check_context, default
 from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.volume import DEFAULT_DETAIL, VolumeCloud
-from cumuli.rendering.air import add_air
+from cumuli.rendering.air import finish
 from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
 from cumuli.rendering.painters import CPUPainter, GLPainter
-from cumuli.rendering.resolve import resolve
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
 from cumuli.settings import RenderSettings
@@ -107,7 +106,7 @@ def compose(
     if impostors is None and single_pass(scene):
         kind, indices = calls[0]
         image = painter.layer(lit, kind, indices, camera, width, height, True)
-        return resolve(add_air(image, scene, camera, lit.shadow), scene)
+        return finish(image, scene, camera, lit.shadow, threads)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
     else:
@@ -125,7 +124,7 @@ def compose(
         solid,
         ground_args(scene.ground, scene.sky, lit.shadow),
     )  # fmt: skip
-    return resolve(add_air(image, scene, camera, lit.shadow), scene)
+    return finish(image, scene, camera, lit.shadow, threads)
 
 
 def _lit(scene: Any) -> tuple[LitScene | None, Scene]:

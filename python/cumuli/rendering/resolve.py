@@ -1,5 +1,7 @@
 """The physical mode's resolve pass (RENDER_CONTRACT "Physical lighting", "Resolve"): a 3×3
-tent filter over the finished image, the same numpy pass for both backends.
+tent filter over the finished image, the same pass for both backends (the renderers run it in
+the core after the air, :func:`cumuli.rendering.air.finish`; :func:`tent_filter` is its numpy
+reference, bit for bit).
 
 The physical marcher jitters each pixel's samples by interleaved gradient noise (Jimenez 2014),
 a pattern made to be averaged over a pixel's 3×3 neighbourhood: unfiltered it shows as a

@@ -60,17 +60,37 @@ struct OctaveTerms {
   float sum(float tau) const;
 };
 
-// A drawable's physical light as the drawers read it.
+// A drawable's physical light as the drawers read it: its lattices held in the vectors, or
+// viewed where they lie (set_views: the caller keeps them alive while drawing; a renderer's
+// lattices run to tens of MB, which a copy per frame would spend a good part of the frame on).
 struct PhysicalGrids {
   SunFrame frame;
   std::vector<float> depth;  // [w][v][u]
   VolumeGrid grid;
   std::vector<float> rgba;  // [z][y][x][4]: F, S.rgb
 
+  void set_views(const float* depth_values, std::size_t depth_count, const float* rgba_values,
+                 std::size_t rgba_count) {
+    depth_view_ = depth_values;
+    depth_count_ = depth_count;
+    rgba_view_ = rgba_values;
+    rgba_count_ = rgba_count;
+  }
+  const float* depth_data() const { return depth_view_ != nullptr ? depth_view_ : depth.data(); }
+  std::size_t depth_size() const { return depth_view_ != nullptr ? depth_count_ : depth.size(); }
+  const float* rgba_data() const { return rgba_view_ != nullptr ? rgba_view_ : rgba.data(); }
+  std::size_t rgba_size() const { return rgba_view_ != nullptr ? rgba_count_ : rgba.size(); }
+
   void validate() const;  // throws std::invalid_argument
   // The scattered radiance per unit σt·Δ... : ϖ·(E_sun·(octaves + F/4π) + S/4π).
   glm::vec3 source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance,
                    float albedo) const;
+
+ private:
+  const float* depth_view_ = nullptr;
+  std::size_t depth_count_ = 0;
+  const float* rgba_view_ = nullptr;
+  std::size_t rgba_count_ = 0;
 };
 
 // Interleaved gradient noise in [0, 1) of pixel (row, col) for `seed`.

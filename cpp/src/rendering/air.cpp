@@ -1,0 +1,201 @@
+#include "cumuli/rendering/air.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include <glm/geometric.hpp>
+
+#include "cumuli/parallel.hpp"
+
+namespace cumuli {
+
+void AirParams::validate() const {
+  if (!(std::isfinite(extinction) && extinction >= 0.0f))
+    throw std::invalid_argument("air extinction must be finite and >= 0");
+  if (!(std::isfinite(height) && height >= 0.0f))
+    throw std::invalid_argument("air height must be finite and >= 0");
+  if (!(std::isfinite(haze) && haze >= 0.0f))
+    throw std::invalid_argument("haze must be finite and >= 0");
+  if (haze > 0.0f) phase.validate();
+}
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// 1 − e^{−k·t} in float32 (1 where t is infinite), as air.py's _fade.
+float fade(double k, double t) {
+  if (!std::isfinite(t)) return 1.0f;
+  return static_cast<float>(-std::expm1(-k * t));
+}
+
+// Distance along the ray to the ground plane, +∞ where it misses it (or there is none).
+double ground_distance(const GroundParams& ground, double above, double dy) {
+  if (!ground.enabled || !(dy < 0.0 && above > 0.0)) return kInf;
+  return above / -dy;
+}
+
+// The midpoint of the ray's chord through the first box it enters (from 0 when it starts
+// inside), NaN where it enters none.
+double cloud_depth(const std::vector<Box>& boxes, const double o[3], const double d[3]) {
+  double depth = std::numeric_limits<double>::quiet_NaN(), entry = kInf;
+  double inv[3];
+  for (int k = 0; k < 3; ++k) inv[k] = 1.0 / d[k];
+  for (const Box& b : boxes) {
+    double t0 = 0.0, t1 = kInf;
+    for (int k = 0; k < 3; ++k) {
+      double a = (static_cast<double>(b.lo[k]) - o[k]) * inv[k];
+      double c = (static_cast<double>(b.hi[k]) - o[k]) * inv[k];
+      // A ray parallel to a slab's faces: inside it (NaN on a face) or not at all.
+      if (std::isnan(a)) a = -kInf;
+      if (std::isnan(c)) c = kInf;
+      t0 = std::max(t0, std::min(a, c));
+      t1 = std::min(t1, std::max(a, c));
+    }
+    if (t1 >= t0 && t0 < entry) {
+      entry = t0;
+      depth = 0.5 * (t0 + t1);
+    }
+  }
+  return depth;
+}
+
+// The aureole's phase at cosine c, in float64 (air.py's phase_values, whose Mie phase is the
+// core's float32 approx_mie: here the same blend in float64, d^{3/2} as d·√d, a pixel's worth
+// of pow calls fewer; it agrees to float rounding).
+double aureole_phase(const PhysicalParams& p, double c) {
+  constexpr double kFourPi = 12.566370614359172;
+  auto hg = [c](double g) {
+    const double d = 1.0 + g * g - 2.0 * g * c;
+    return (1.0 - g * g) / (kFourPi * d * std::sqrt(d));
+  };
+  if (p.mie) {
+    const ApproxMie& m = p.mie_params;
+    const double gd = m.g_d, alpha = m.alpha, wd = m.w_d;
+    const double draine =
+        hg(gd) * (1.0 + alpha * c * c) / (1.0 + alpha * (1.0 + 2.0 * gd * gd) / 3.0);
+    return (1.0 - wd) * hg(static_cast<double>(m.g_hg)) + wd * draine;
+  }
+  const double g1 = p.g1;
+  if (!p.dual_hg) return hg(g1);
+  const double w = p.blend;
+  return (1.0 - w) * hg(g1) + w * hg(static_cast<double>(p.g2));
+}
+
+struct AirPass {
+  const CameraParams& camera;
+  const SkyParams& sky;
+  const SunParams& sun;
+  const GroundParams& ground;
+  const std::vector<Box>& boxes;
+  const AirParams& air;
+  CameraRays rays;
+  double origin[3];
+  double above;  // the camera's height over the ground plane
+  double rim;    // cos of the sun disc's radius: the aureole is held at the rim inside the disc
+  double glow_rgb[3];
+  bool fading, glowing;
+
+  AirPass(const CameraParams& cam, int width, int height, const SkyParams& sk, const SunParams& sn,
+          const GroundParams& gr, const std::vector<Box>& bx, const AirParams& a)
+      : camera(cam), sky(sk), sun(sn), ground(gr), boxes(bx), air(a), rays(cam, width, height) {
+    for (int k = 0; k < 3; ++k) origin[k] = static_cast<double>(cam.position[k]);
+    above = origin[1] - static_cast<double>(gr.height);
+    constexpr double kDegToRad = 0.017453292519943295;
+    rim = std::cos(static_cast<double>(sk.sun_disc_radius) * kDegToRad);
+    for (int k = 0; k < 3; ++k)
+      glow_rgb[k] = static_cast<double>(a.haze) * static_cast<double>(sn.radiance[k]);
+    fading = a.extinction > 0.0f;
+    glowing =
+        a.haze > 0.0f && (sn.radiance.x != 0.0f || sn.radiance.y != 0.0f || sn.radiance.z != 0.0f);
+  }
+
+  void pixel(int row, int col, float* px) const {
+    const glm::vec3 dir = rays.direction(row, col);
+    const double d[3] = {dir.x, dir.y, dir.z};
+    glm::vec3 rgb(px[0], px[1], px[2]);
+    const float alpha = std::clamp(px[3], 0.0f, 1.0f);
+    const float clear = 1.0f - alpha;
+    float front = 0.0f;
+    if (fading) {
+      const double k = air.extinction;
+      double t_bg = ground_distance(ground, above, d[1]);
+      if (!std::isfinite(t_bg)) {
+        const double dy = std::abs(d[1]);
+        t_bg = dy > 0.0 ? static_cast<double>(air.height) / dy : kInf;
+      }
+      const float behind = fade(k, t_bg);
+      const glm::vec3 horizon = sky.horizon;
+      glm::vec3 bg = rgb;  // where nothing covers the pixel, its colour is its background
+      if (alpha > 0.0f && alpha < 1.0f) bg = background(sky, sun, ground, camera.position, dir);
+      glm::vec3 faded = bg + behind * (horizon - bg);
+      if (alpha > 0.0f) {
+        const double depth = cloud_depth(boxes, origin, d);
+        front = fade(k, std::isnan(depth) ? 0.0 : depth);
+        const glm::vec3 clouds = rgb - clear * bg;  // the clouds' own (premultiplied) radiance
+        faded = clouds + front * (alpha * horizon - clouds) + clear * faded;
+      }
+      rgb = faded;
+    }
+    if (glowing) {
+      const double c = d[0] * static_cast<double>(sun.direction.x) +
+                       d[1] * static_cast<double>(sun.direction.y) +
+                       d[2] * static_cast<double>(sun.direction.z);
+      const double p = aureole_phase(air.phase, std::min(c, rim));
+      const float share = clear + alpha * front;
+      for (int k = 0; k < 3; ++k) rgb[k] += static_cast<float>(p * glow_rgb[k]) * share;
+    }
+    px[0] = rgb.x;
+    px[1] = rgb.y;
+    px[2] = rgb.z;
+  }
+};
+
+// One row of the tent along x (edges clamped): dst = ¼·left + ½·centre + ¼·right.
+void tent_row(const float* src, float* dst, int width) {
+  for (int c = 0; c < width; ++c) {
+    const float* l = src + 4 * std::max(c - 1, 0);
+    const float* m = src + 4 * c;
+    const float* r = src + 4 * std::min(c + 1, width - 1);
+    for (int k = 0; k < 4; ++k) dst[4 * c + k] = 0.25f * l[k] + 0.5f * m[k] + 0.25f * r[k];
+  }
+}
+
+}  // namespace
+
+void finish_physical(float* rgba, int width, int height, const CameraParams& camera,
+                     const SkyParams& sky, const SunParams& sun, const GroundParams& ground,
+                     const std::vector<Box>& boxes, const AirParams& air, int threads) {
+  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+  camera.validate();
+  air.validate();
+  const AirPass pass(camera, width, height, sky, sun, ground, boxes, air);
+  const std::size_t row_floats = static_cast<std::size_t>(width) * 4;
+  std::vector<float> rows(air.resolve ? row_floats * static_cast<std::size_t>(height) : 0);
+  // The air, then each row's tent along x into `rows` (a row needs only its own pixels).
+  parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
+    for (std::size_t r = r0; r < r1; ++r) {
+      float* row = rgba + r * row_floats;
+      if (pass.fading || pass.glowing)
+        for (int c = 0; c < width; ++c) pass.pixel(static_cast<int>(r), c, row + 4 * c);
+      if (air.resolve) tent_row(row, rows.data() + r * row_floats, width);
+    }
+  });
+  if (!air.resolve) return;
+  // The tent along y, from the x-filtered rows back into the image.
+  parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
+    for (std::size_t r = r0; r < r1; ++r) {
+      const float* up = rows.data() + (r > 0 ? r - 1 : r) * row_floats;
+      const float* mid = rows.data() + r * row_floats;
+      const float* down =
+          rows.data() + (r + 1 < static_cast<std::size_t>(height) ? r + 1 : r) * row_floats;
+      float* dst = rgba + r * row_floats;
+      for (std::size_t i = 0; i < row_floats; ++i)
+        dst[i] = 0.25f * up[i] + 0.5f * mid[i] + 0.25f * down[i];
+    }
+  });
+}
+
+}  // namespace cumuli
