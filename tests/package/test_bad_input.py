@@ -247,10 +247,10 @@ def test_cpu_backend_checks_the_image_size_before_the_light_pass() -> None:
     cu.light.prepare.clear_memo()
     with pytest.raises(ValueError, match="larger than the limit"):
         cu.render_cpu(scene, cam, 1 << 14, 1 << 14)
-    assert not cu.light.prepare._memo  # no light pass ran
+    assert not cu.light.memo.store and not cu.light.memo.media_store  # no light pass ran
     with pytest.raises(ValueError, match=r"width must be <= 16384, got 20000$"):
         cu.render(scene, cam, 20000, 2, backend="cpu")
-    assert not cu.light.prepare._memo
+    assert not cu.light.memo.store and not cu.light.memo.media_store
 
 
 # --- Renderer arguments are checked before a GL context is made -------------------------------

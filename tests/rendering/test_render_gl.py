@@ -449,12 +449,12 @@ def test_primitive_limits_per_cloud(hand_lit: HandLitRenderer, model: str, limit
     big = cloud(limit + 1)
     del HAND_GRIDS[big]  # the refusal must come before any light pass
     scene = cu.Scene(clouds=[sphere_cloud([[9, 0, 0]], [1.0]), big], settings=settings)
-    before = cu.light.prepare._memo.copy()
+    before = cu.light.memo.store.copy()
     with pytest.raises(ValueError, match=r"clouds\[1\] has .* backend='cpu' or fewer primitives"):
         hand_lit.renderer.render(scene, front_camera(), 8, 6)
     with pytest.raises(ValueError, match=f"at most {limit} per {model} cloud"):
         cu.render(scene, front_camera(), 8, 6)
-    assert cu.light.prepare._memo.keys() == before.keys()  # no light pass ran
+    assert cu.light.memo.store.keys() == before.keys()  # no light pass ran
     # What the message suggests works: the CPU marcher has no such limit.
     cpu = cu.render(
         lit(scene.replace(clouds=[cloud(limit + 1)])), front_camera(), 4, 3, backend="cpu"
