@@ -81,6 +81,11 @@ SUN_FORWARD = 0.57
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
 HELD_OUT_VIEWS = ("toplit", "sunset", "lsystem")
+#: The diffusion's solve: conjugate gradients preconditioned by the modified incomplete Cholesky
+#: factor over the medium cells (``"mic"``; ``"jacobi"``: the diagonal, over the whole lattice),
+#: to a residual of ``DIFFUSION_TOLERANCE`` of the source's.
+DIFFUSION_SOLVER = "mic"
+DIFFUSION_TOLERANCE = 1e-3
 #: SH order and quadrature (n_theta) of the sky visibility.
 SKY_ORDER = 3
 SKY_SAMPLES = 3
@@ -281,9 +286,10 @@ def physical_light(
                 s.albedo,
                 s.mean_cosine,
                 2000,
-                1e-3,
+                DIFFUSION_TOLERANCE,
                 threads,
                 forward=SUN_FORWARD,
+                solver=DIFFUSION_SOLVER,
             )
         grid[..., 0] = lattice_gains(ext, lo, hi, SUN_GAIN, depth_g) * phi[..., 0]
         if sky_e is not None:

@@ -1,0 +1,41 @@
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace cumuli {
+
+// A symmetric positive definite 7-point system over a compact list of cells (the medium cells
+// of a lattice, in lattice order): row k is diag[k]·x_k − Σ_a cond[k][a]·x_{nb[k][a]}, the
+// neighbours ordered −x, −y, −z (earlier cells) then +x, +y, +z (later cells); a missing
+// neighbour has cond 0 and index size() (a zero slot past the cells).
+struct CellSystem {
+  struct Row {
+    std::array<std::int32_t, 6> nb{};
+    std::array<float, 6> cond{};
+    float diag = 1.0f;
+  };
+  std::vector<Row> rows;
+  std::size_t size() const { return rows.size(); }
+};
+
+// The modified incomplete Cholesky factor (MIC(0), no fill: Gustafsson 1978) of a CellSystem in
+// its own order, kept as the scaled couplings of the two triangular sweeps.
+struct MicFactor {
+  std::vector<float> inv_sqrt;              // 1/√e_k, size()+1 (the zero slot 0)
+  std::vector<std::array<float, 3>> lower;  // cond[k][a]·inv_sqrt[nb[k][a]], a = −x, −y, −z
+  std::vector<std::array<float, 3>> upper;  // cond[k][3+a]·inv_sqrt[k], a = +x, +y, +z
+};
+
+// MIC(0) of `s`: the dropped fill-in moved to the diagonal with weight `tau` (row sums kept at
+// tau = 1); a pivot below `safety`·diag falls back to the diagonal.
+MicFactor mic_factor(const CellSystem& s, float tau = 0.97f, float safety = 0.25f);
+
+// Solves s·x = b by conjugate gradients preconditioned with `f`, on one thread (each step in
+// the cells' order: the result does not depend on anything else), from x's values (size()+1
+// entries, the last 0) until |r| ≤ tolerance·|b| or max_iterations. Returns the iterations.
+int solve_mic(const CellSystem& s, const MicFactor& f, const std::vector<double>& b,
+              std::vector<double>& x, double tolerance, int max_iterations);
+
+}  // namespace cumuli
