@@ -1077,8 +1077,9 @@ void bind_physical_light(py::module_& m) {
         const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
         if (sun_t.size() != static_cast<py::ssize_t>(g.voxels()))
           throw py::value_error("sun_t must have the extinction's shape");
-        FloatArray sky;
-        if (!sky_e.is_none()) {
+        FloatArray sky;  // (a default FloatArray is an empty array, not a null handle)
+        const bool has_sky = !sky_e.is_none();
+        if (has_sky) {
           sky = sky_e.cast<FloatArray>();
           if (sky.size() != static_cast<py::ssize_t>(g.voxels()) * 3)
             throw py::value_error("sky_e must have shape (D, H, W, 3)");
@@ -1097,8 +1098,8 @@ void bind_physical_light(py::module_& m) {
         const DiffusionSolver kind =
             solver == "mic" ? DiffusionSolver::mic : DiffusionSolver::jacobi;
         DiffusionParams p{albedo, mean_cosine, max_iterations, tolerance, kind};
-        const int channels = sky ? 4 : 1;
-        const float *e = ext.data(), *st = sun_t.data(), *se = sky ? sky.data() : nullptr;
+        const int channels = has_sky ? 4 : 1;
+        const float *e = ext.data(), *st = sun_t.data(), *se = has_sky ? sky.data() : nullptr;
         std::vector<float> out;
         {
           py::gil_scoped_release release;
