@@ -28,32 +28,41 @@ MicFactor mic_factor(const CellSystem& s, float tau, float safety) {
   }
   for (std::size_t k = 0; k < m; ++k) {
     const CellSystem::Row& row = s.rows[k];
+    const double pk = f.inv_sqrt[k];
     for (int a = 0; a < 3; ++a) {
-      f.lower[k][a] = row.cond[a] * f.inv_sqrt[row.nb[a]];
-      f.upper[k][a] = row.cond[3 + a] * f.inv_sqrt[k];
+      f.lower[k][a] = static_cast<float>(row.cond[a] * pk * f.inv_sqrt[row.nb[a]]);
+      f.upper[k][a] = static_cast<float>(row.cond[3 + a] * pk * pk);
     }
   }
+  f.inv_sqrt.resize(m);
   return f;
 }
 
 namespace {
 
-// z = M⁻¹·r, M = L·Lᵀ the MIC(0) factor: the forward sweep in the cells' order, then back.
-void precondition(const CellSystem& s, const MicFactor& f, const std::vector<double>& r,
-                  std::vector<double>& z) {
-  const std::size_t m = s.size();
-  for (std::size_t k = 0; k < m; ++k) {
-    const auto& nb = s.rows[k].nb;
-    const auto& l = f.lower[k];
-    const double t = r[k] + l[0] * z[nb[0]] + l[1] * z[nb[1]] + l[2] * z[nb[2]];
-    z[k] = t * f.inv_sqrt[k];
-  }
-  for (std::size_t k = m; k-- > 0;) {
+// One cell of the forward sweep of z = M⁻¹·r. The −x neighbour, when there is one, is the
+// previous cell: its value comes in a register (`prev`, with a coefficient of 0 where there is
+// none), added last, so that the chain from cell to cell is one multiply and one add.
+inline double forward_at(const CellSystem& s, const MicFactor& f, double r,
+                         const std::vector<double>& z, std::size_t k, double prev) {
+  const auto& nb = s.rows[k].nb;
+  const auto& l = f.lower[k];
+  return (f.inv_sqrt[k] * r + l[1] * z[nb[1]] + l[2] * z[nb[2]]) + l[0] * prev;
+}
+
+// The backward sweep of z = M⁻¹·r over the forward sweep's values (in z), with Σ r·z; the +x
+// neighbour is the next cell (as above).
+double backward(const CellSystem& s, const MicFactor& f, const std::vector<double>& r,
+                std::vector<double>& z) {
+  double rz = 0.0, next = 0.0;
+  for (std::size_t k = s.size(); k-- > 0;) {
     const auto& nb = s.rows[k].nb;
     const auto& u = f.upper[k];
-    const double t = z[k] + u[0] * z[nb[3]] + u[1] * z[nb[4]] + u[2] * z[nb[5]];
-    z[k] = t * f.inv_sqrt[k];
+    next = (f.inv_sqrt[k] * z[k] + u[1] * z[nb[4]] + u[2] * z[nb[5]]) + u[0] * next;
+    z[k] = next;
+    rz += r[k] * next;
   }
+  return rz;
 }
 
 double apply_row(const CellSystem::Row& row, const std::vector<double>& x, std::size_t k) {
@@ -81,12 +90,10 @@ int solve_mic(const CellSystem& s, const MicFactor& f, const std::vector<double>
     x.assign(m + 1, 0.0);
     return 0;
   }
-  precondition(s, f, r, z);
-  double rz = 0.0;
-  for (std::size_t k = 0; k < m; ++k) {
-    p[k] = z[k];
-    rz += r[k] * z[k];
-  }
+  double prev = 0.0;
+  for (std::size_t k = 0; k < m; ++k) prev = z[k] = forward_at(s, f, r[k], z, k, prev);
+  double rz = backward(s, f, r, z);
+  for (std::size_t k = 0; k < m; ++k) p[k] = z[k];
   int it = 0;
   while (it < max_iterations) {
     ++it;
@@ -97,16 +104,17 @@ int solve_mic(const CellSystem& s, const MicFactor& f, const std::vector<double>
     }
     if (!(pAp > 0.0)) break;
     const double alpha = rz / pAp;
+    // The update, |r|² and the forward sweep of the preconditioner in one pass.
     double rr = 0.0;
+    prev = 0.0;
     for (std::size_t k = 0; k < m; ++k) {
       x[k] += alpha * p[k];
       r[k] -= alpha * Ap[k];
       rr += r[k] * r[k];
+      prev = z[k] = forward_at(s, f, r[k], z, k, prev);
     }
     if (std::sqrt(rr) <= tolerance * bnorm) break;
-    precondition(s, f, r, z);
-    double rz_next = 0.0;
-    for (std::size_t k = 0; k < m; ++k) rz_next += r[k] * z[k];
+    const double rz_next = backward(s, f, r, z);
     const double beta = rz_next / rz;
     rz = rz_next;
     for (std::size_t k = 0; k < m; ++k) p[k] = z[k] + beta * p[k];

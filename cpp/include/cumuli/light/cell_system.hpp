@@ -9,7 +9,9 @@ namespace cumuli {
 // A symmetric positive definite 7-point system over a compact list of cells (the medium cells
 // of a lattice, in lattice order): row k is diag[k]·x_k − Σ_a cond[k][a]·x_{nb[k][a]}, the
 // neighbours ordered −x, −y, −z (earlier cells) then +x, +y, +z (later cells); a missing
-// neighbour has cond 0 and index size() (a zero slot past the cells).
+// neighbour has cond 0 and index size() (a zero slot past the cells). The −x neighbour, when there
+// is one, is the previous cell (k − 1) and the +x neighbour the next (k + 1): the solve's sweeps
+// rely on it.
 struct CellSystem {
   struct Row {
     std::array<std::int32_t, 6> nb{};
@@ -20,12 +22,14 @@ struct CellSystem {
   std::size_t size() const { return rows.size(); }
 };
 
-// The modified incomplete Cholesky factor (MIC(0), no fill: Gustafsson 1978) of a CellSystem in
-// its own order, kept as the scaled couplings of the two triangular sweeps.
+// The modified incomplete Cholesky factor (MIC(0), no fill: Gustafsson 1978) M = L·Lᵀ of a
+// CellSystem in its own order, kept as the coefficients of its two triangular sweeps: with
+// p_k = 1/√e_k (e_k the pivot), forward y_k = p_k·r_k + Σ_lower lower[k][a]·y_j and backward
+// z_k = p_k·y_k + Σ_upper upper[k][a]·z_j, lower[k][a] = c_kj·p_j·p_k, upper[k][a] = c_kj·p_k².
 struct MicFactor {
-  std::vector<float> inv_sqrt;              // 1/√e_k, size()+1 (the zero slot 0)
-  std::vector<std::array<float, 3>> lower;  // cond[k][a]·inv_sqrt[nb[k][a]], a = −x, −y, −z
-  std::vector<std::array<float, 3>> upper;  // cond[k][3+a]·inv_sqrt[k], a = +x, +y, +z
+  std::vector<float> inv_sqrt;              // p_k
+  std::vector<std::array<float, 3>> lower;  // a = −x, −y, −z
+  std::vector<std::array<float, 3>> upper;  // a = +x, +y, +z
 };
 
 // MIC(0) of `s`: the dropped fill-in moved to the diagonal with weight `tau` (row sums kept at
