@@ -285,7 +285,6 @@ def physical_light(
                 sky_e,
                 s.albedo,
                 s.mean_cosine,
-                2000,
                 DIFFUSION_TOLERANCE,
                 threads,
                 forward=SUN_FORWARD,

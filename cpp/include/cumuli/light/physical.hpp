@@ -96,7 +96,7 @@ enum class DiffusionSolver { jacobi, mic };
 struct DiffusionParams {
   float albedo = 0.99f;       // ϖ
   float mean_cosine = 0.6f;   // ḡ of the phase function
-  int max_iterations = 2000;  // conjugate-gradient iterations per channel
+  int max_iterations = 5000;  // conjugate-gradient iterations per channel, at most
   float tolerance = 1e-5f;    // on the residual relative to the source
   DiffusionSolver solver = DiffusionSolver::mic;
 };
