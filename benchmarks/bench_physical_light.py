@@ -20,6 +20,13 @@ the least-squares slope of log(time) over log(clouds).
 wide fBm kernels compute the lattice in registers), timed alike (interleaved), each with its
 stage profile and the largest stage (``slowest_stage``): where the light step's time goes.
 
+``sky_rays``: the sky visibility stage alone on the default cloud's extinction lattice, with the
+lattice's 26 neighbour steps (the default: Lebedev's rule, τ exact by one recurrence per
+direction) and with the per-voxel march over the 18-direction product quadrature, interleaved
+(one thread and ``THREADS``), each with its mean |error| and signed error against a march of 512
+directions at ⅛-voxel steps over the cells that hold medium, and the march's time over the
+lattice's.
+
 Beside the times, ``mitsuba``: the error the light step gives against Mitsuba 3 — the CPU
 render of the reference scene of ``tests/references`` (side-lit default cumulus, 160×120)
 against its multiple-scattering reference, on the cloud-covered 4×4-pixel blocks: the median
@@ -129,6 +136,53 @@ def noise_versions(resolution: int | None, repeats: int) -> dict[str, Any]:
     return out
 
 
+def sky_rays(resolution: int | None, repeats: int) -> dict[str, Any]:
+    """The sky visibility with lattice and march rays (see the docstring)."""
+    from cumuli import _core
+    from cumuli.light import physical as phys
+    from cumuli.sky import sky_args
+
+    sc = scene("copies", 1, resolution)
+    s = sc.settings
+    field = phys.extinction_grid(
+        sc.clouds[0], sc.noise, s, s.physical_resolution, phys.SUPERSAMPLE, THREADS
+    )
+    ext = np.ascontiguousarray(field.values)
+    lo, hi = field.box
+    coeffs = _core.sky_sh(sky_args(sc.sky), phys.SKY_ORDER, phys.SKY_SAMPLES)
+
+    def sky(method: str, threads: int, n_theta: int = phys.SKY_SAMPLES, step: float = 1.0):
+        return _core.sky_irradiance(
+            ext, lo, hi, coeffs, phys.SKY_ORDER, n_theta, step, threads, method=method
+        )
+
+    fns = {
+        f"{m}_{t}": (lambda m=m, t=t: sky(m, t)) for m in ("lattice", "march") for t in (1, THREADS)
+    }
+    timed = common.interleaved_repeats(fns, max(repeats, 5), warmup=1)
+    reference = sky("march", THREADS, 16, 0.125)
+    inside = ext > 0.0
+    scale = float(reference[inside].mean())
+    out: dict[str, Any] = {"lattice": list(ext.shape), "medium_cells": int(inside.sum())}
+    for m in ("lattice", "march"):
+        diff = (sky(m, THREADS) - reference)[inside]
+        out[m] = {
+            "one_thread_ms": 1e3 * common.spread(timed[f"{m}_1"][0])["median"],
+            "threads_ms": 1e3 * common.spread(timed[f"{m}_{THREADS}"][0])["median"],
+            "mean_abs_error": float(np.abs(diff).mean()) / scale,
+            "mean_signed_error": float(diff.mean()) / scale,
+        }
+        common.log(
+            f"sky {m:7s}: {out[m]['one_thread_ms']:6.1f} ms one thread, "
+            f"{out[m]['threads_ms']:6.1f} ms {THREADS}; error against 512 directions "
+            f"{out[m]['mean_abs_error']:.4f} (signed {out[m]['mean_signed_error']:+.4f})"
+        )
+    out["march_over_lattice_one_thread"] = out["march"]["one_thread_ms"] / max(
+        out["lattice"]["one_thread_ms"], 1e-9
+    )
+    return out
+
+
 def mitsuba_error() -> dict[str, float]:
     """The physical mode's error against the Mitsuba 3 reference (see the module docstring)."""
     sys.path.insert(0, str(REFERENCES))
@@ -216,6 +270,7 @@ def main(argv: list[str] | None = None) -> int:
             TARGET_GROWTH, growth[s]["last_over_one"] if full else None, "<="
         )
     versions = noise_versions(resolution, repeats)
+    rays = sky_rays(resolution, repeats)
     error = mitsuba_error()
     common.log(
         "against Mitsuba 3: per-block error median {block_rel_median:.4f}, p90 "
@@ -236,6 +291,7 @@ def main(argv: list[str] | None = None) -> int:
         "series": results,
         "growth": growth,
         "noise_versions": versions,
+        "sky_rays": rays,
         "mitsuba": error,
         "targets": targets,
     }

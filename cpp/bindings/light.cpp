@@ -1050,8 +1050,11 @@ void bind_physical_light(py::module_& m) {
   m.def(
       "sky_irradiance",
       [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sky_coeffs, int order, int n_theta,
-         float step, int threads) {
+         float step, int threads, const std::string& method) {
         const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
+        if (method != "lattice" && method != "march")
+          throw py::value_error("method must be 'lattice' or 'march', got '" + method + "'");
+        const SkyRays how = method == "lattice" ? SkyRays::Lattice : SkyRays::March;
         if (order < 1 || order > kMaxShOrder) throw py::value_error("sh_order must be in [1, 4]");
         if (n_theta < 1 || n_theta > 64) throw py::value_error("sh_samples must be in [1, 64]");
         if (sky_coeffs.size() != 3 * order * order)
@@ -1061,13 +1064,16 @@ void bind_physical_light(py::module_& m) {
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = sky_irradiance(e, g, s, order, n_theta, step, threads);
+          out = sky_irradiance(e, g, s, order, n_theta, step, threads, how);
         }
         return to_array(out, {g.d, g.h, g.w, 3});
       },
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sky_coeffs"), py::arg("order"),
-      py::arg("n_theta"), py::arg("step"), py::arg("threads") = 0,
-      "Sky irradiance reaching each voxel unscattered (SH visibility × sky SH): (D, H, W, 3).");
+      py::arg("n_theta"), py::arg("step"), py::arg("threads") = 0, py::arg("method") = "march",
+      "Sky irradiance reaching each voxel unscattered (SH visibility × sky SH): (D, H, W, 3); "
+      "method 'march' (a ray per voxel and product-quadrature direction, n_theta polar nodes, "
+      "steps of `step` voxels) or 'lattice' (the 26 neighbour directions, τ exact by a "
+      "recurrence over the lattice; voxels within 10 % of cubes, else 'march').");
 
   m.def(
       "diffusion_light",

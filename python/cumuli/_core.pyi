@@ -1189,9 +1189,9 @@ def similarity_matrix(volumes: typing.Annotated[numpy.typing.ArrayLike, numpy.fl
     """
     D_kl = Σ (ρ_k − ρ_l)² for all pairs: (N, N) float64.
     """
-def sky_irradiance(extinction: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], lo: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], hi: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], sky_coeffs: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], order: typing.SupportsInt | typing.SupportsIndex, n_theta: typing.SupportsInt | typing.SupportsIndex, step: typing.SupportsFloat | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> numpy.typing.NDArray[numpy.float32]:
+def sky_irradiance(extinction: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], lo: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], hi: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], sky_coeffs: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], order: typing.SupportsInt | typing.SupportsIndex, n_theta: typing.SupportsInt | typing.SupportsIndex, step: typing.SupportsFloat | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex = 0, method: str = 'march') -> numpy.typing.NDArray[numpy.float32]:
     """
-    Sky irradiance reaching each voxel unscattered (SH visibility × sky SH): (D, H, W, 3).
+    Sky irradiance reaching each voxel unscattered (SH visibility × sky SH): (D, H, W, 3); method 'march' (a ray per voxel and product-quadrature direction, n_theta polar nodes, steps of `step` voxels) or 'lattice' (the 26 neighbour directions, τ exact by a recurrence over the lattice; voxels within 10 % of cubes, else 'march').
     """
 def sky_sh(sky: typing.Any, order: typing.SupportsInt | typing.SupportsIndex, n_theta: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.float32]:
     ...

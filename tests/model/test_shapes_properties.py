@@ -37,6 +37,14 @@ def test_mesh_random_arrays(
     np.testing.assert_allclose(np.linalg.det(rot.astype(np.float64)), 1.0, atol=1e-4)
 
 
+def test_mesh_of_subnormal_extent_gets_a_valid_default_radius() -> None:
+    """A mesh whose bounding box is a subnormal float32 (2e−42): its default floor on the radii,
+    1e−4 of the diagonal, would round to 0 in float32; it is held at the smallest normal."""
+    v = np.array([[2.17e-42, 0, 0], [0, 0, 0]], np.float32)
+    c, r, rot = cumuli.ellipsoids_from_mesh(v, np.array([[0, 0, 0]]), rotate=False)
+    assert (r >= np.finfo(np.float32).tiny).all() and np.isfinite(c).all()
+
+
 @SETTINGS
 @given(
     data=st.data(),

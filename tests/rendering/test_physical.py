@@ -275,12 +275,12 @@ def test_sky_visibility_march_drops_only_what_is_past_six_optical_depths() -> No
     lo, hi = (-2.0, -2.0, -2.0), (2.0, 2.0, 2.0)
     ext = np.zeros((16, 16, 16), F)
     ext[3:13, 3:13, 3:13] = 1e-9
-    open_sky = _core.sky_irradiance(ext, lo, hi, coeffs, 3, 3, 1.0)
+    open_sky = _core.sky_irradiance(ext, lo, hi, coeffs, 3, 3, 1.0, method="march")
     np.testing.assert_allclose(
         open_sky, np.broadcast_to(open_sky[0, 0, 0], open_sky.shape), rtol=1e-5
     )
     ext[3:13, 3:13, 3:13] = 16.0  # voxels of 0.25: 4 optical depths each
-    e = _core.sky_irradiance(ext, lo, hi, coeffs, 3, 3, 1.0)
+    e = _core.sky_irradiance(ext, lo, hi, coeffs, 3, 3, 1.0, method="march")
     for ch in range(3):
         corner, centre, sky = e[3, 3, 3, ch], e[8, 8, 8, ch], open_sky[0, 0, 0, ch]
         assert math.exp(-10) * sky <= centre <= math.exp(-6) * sky < corner < sky

@@ -18,8 +18,8 @@ from cumuli.rendering.particles import draw_particles_cpu
 
 W, H = 240, 120
 #: Most a sprite cloud's mean lit-side or shadow-side luminance may differ from the marched
-#: cloud's beside it, as a factor. Measured at 240×120 (CPU): particles 1.09 lit / 1.43 shadow,
-#: billboards 0.76 / 1.08; with the papers' own shading in the physical mode, particles were
+#: cloud's beside it, as a factor. Measured at 240×120 (CPU): particles 1.08 lit / 1.40 shadow,
+#: billboards 0.76 / 1.02; with the papers' own shading in the physical mode, particles were
 #: 2.95 / 2.76 times as bright (billboards 0.99 / 0.69) and a darker zenith left them as they
 #: were.
 RATIO = 1.6

@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <stdexcept>
 #include <vector>
 
@@ -348,15 +349,163 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
   return out;
 }
 
+namespace {
+
+#if defined(__GNUC__) && !defined(__clang__) && defined(__x86_64__) && defined(__GLIBC__)
+#define SKY_VEC_CLONES __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define SKY_VEC_CLONES
+#endif
+
+// The 26 steps to a voxel's neighbours (faces, edges, corners): on a lattice of cubic voxels their
+// directions are the nodes of Lebedev's 26-point rule on the sphere (exact for spherical
+// polynomials of degree ≤ 7), with weights 4π·{1/21, 4/105, 9/280} by the number of axes moved.
+struct LatticeDirection {
+  glm::ivec3 step;
+  float weight;
+};
+
+std::vector<LatticeDirection> lattice_directions() {
+  constexpr double kFourPi = 12.566370614359172;
+  const double weight[4] = {0.0, kFourPi / 21.0, kFourPi * 4.0 / 105.0, kFourPi * 9.0 / 280.0};
+  std::vector<LatticeDirection> out;
+  for (int z = -1; z <= 1; ++z)
+    for (int y = -1; y <= 1; ++y)
+      for (int x = -1; x <= 1; ++x) {
+        const int moved = (x != 0) + (y != 0) + (z != 0);
+        if (moved > 0) out.push_back({{x, y, z}, static_cast<float>(weight[moved])});
+      }
+  return out;
+}
+
+// τ at every voxel centre along the lattice step D (each component −1, 0 or 1) to the box: the
+// recurrence τ(x) = ∫ from x to x + D + τ(x + D), voxels visited so that x + D comes first.
+// Along one step the trilinear field is a polynomial of degree ≤ 3 (the number of axes moved),
+// so Simpson's rule on its end values and midpoint (the mean of the 2, 4 or 8 voxels around
+// it) is exact; a voxel whose step leaves the lattice integrates the edge-clamped field over the
+// half voxel to the box face the same way. Exact for the trilinear field, as a march with
+// vanishing steps would be.
+// tau[v] = sixth·(ρ(v) + 4·mean of the N voxels around the step's midpoint + ρ(v + dv)) + tau[v +
+// dv] for v in [vb, ve) of one row, whose steps land in another row already done (so the voxels are
+// independent and the loop vectorises).
+template <int N>
+SKY_VEC_CLONES void lattice_row(float* tau, const float* ext, std::ptrdiff_t vb, std::ptrdiff_t ve,
+                                const std::ptrdiff_t* around, std::ptrdiff_t dv, float sixth) {
+  constexpr float inv = 1.0f / static_cast<float>(N);
+#pragma GCC ivdep
+  for (std::ptrdiff_t v = vb; v < ve; ++v) {
+    float mid = 0.0f;
+    for (int k = 0; k < N; ++k) mid += ext[v + around[k]];
+    tau[v] = sixth * (ext[v] + 4.0f * (mid * inv) + ext[v + dv]) + tau[v + dv];
+  }
+}
+
+void lattice_optical_depth(const float* ext, const VolumeGrid& g, glm::ivec3 D, float* tau) {
+  const glm::vec3 vs = g.voxel_size();
+  const float len = glm::length(glm::vec3(D) * vs);  // world length of one step
+  const float sixth = len / 6.0f;
+  const std::ptrdiff_t sy = g.w, sz = static_cast<std::ptrdiff_t>(g.w) * g.h;
+  const std::ptrdiff_t dv = D.x + D.y * sy + D.z * sz;
+  // The voxels around the step's midpoint: x + any subset of D's axes (x and x + D among them).
+  std::array<std::ptrdiff_t, 8> around{};
+  int count = 0;
+  for (int bz = 0; bz <= (D.z != 0); ++bz)
+    for (int by = 0; by <= (D.y != 0); ++by)
+      for (int bx = 0; bx <= (D.x != 0); ++bx)
+        around[count++] = bx * D.x + by * D.y * sy + bz * D.z * sz;
+  // Half a step to the box face, through the edge-clamped field.
+  const auto to_face = [&](int x, int y, int z) {
+    const glm::vec3 u = glm::vec3(x, y, z) + 0.5f, d(D);
+    const float a = ext[x + y * sy + z * sz];
+    const float q = trilinear_voxel(ext, g.w, g.h, g.d, u + 0.25f * d);
+    const float e = trilinear_voxel(ext, g.w, g.h, g.d, u + 0.5f * d);
+    return 0.5f * sixth * (a + 4.0f * q + e);
+  };
+  // Rows in lexicographic order against the step, so that x + D is always done before x. Only a
+  // row's first or last voxel can step out across x; the others step into another row (done
+  // already) unless the step runs along x alone.
+  const auto start = [](int c, int n) { return c > 0 ? n - 1 : 0; };
+  const auto inc = [](int c) { return c > 0 ? -1 : 1; };
+  const int xa = D.x < 0 ? 1 : 0, xb = D.x > 0 ? g.w - 1 : g.w;  // x whose step stays inside
+  for (int kz = 0, z = start(D.z, g.d); kz < g.d; ++kz, z += inc(D.z)) {
+    const bool z_in = z + D.z >= 0 && z + D.z < g.d;
+    for (int ky = 0, y = start(D.y, g.h); ky < g.h; ++ky, y += inc(D.y)) {
+      const std::ptrdiff_t row = y * sy + z * sz;
+      if (!(z_in && y + D.y >= 0 && y + D.y < g.h)) {
+        for (int x = 0; x < g.w; ++x) tau[row + x] = to_face(x, y, z);
+        continue;
+      }
+      if (D.x != 0) tau[row + (D.x > 0 ? g.w - 1 : 0)] = to_face(D.x > 0 ? g.w - 1 : 0, y, z);
+      if (D.y == 0 && D.z == 0) {  // along x: each voxel needs the one before it
+        for (int k = 0, x = D.x > 0 ? g.w - 2 : 1; k < g.w - 1; ++k, x -= D.x) {
+          const std::ptrdiff_t v = row + x;
+          tau[v] =
+              sixth * (ext[v] + 4.0f * (0.5f * (ext[v] + ext[v + dv])) + ext[v + dv]) + tau[v + dv];
+        }
+        continue;
+      }
+      const std::ptrdiff_t vb = row + xa, ve = row + xb;
+      if (count == 2)
+        lattice_row<2>(tau, ext, vb, ve, around.data(), dv, sixth);
+      else if (count == 4)
+        lattice_row<4>(tau, ext, vb, ve, around.data(), dv, sixth);
+      else
+        lattice_row<8>(tau, ext, vb, ve, around.data(), dv, sixth);
+    }
+  }
+}
+
+// e^{−x} for x ≥ 0 in plain float operations, so that a loop of it vectorises (std::exp does
+// not) and gives the same bits on every instruction set: x = n·ln 2 − r with n the nearest
+// integer, e^{−r} by a degree-7 polynomial on |r| ≤ ln 2 / 2 (Cephes' expf coefficients,
+// relative error ~2e−7), times 2^−n built in the exponent bits. Below e^−87 it returns e^−87.
+inline float exp_neg(float x) {
+  x = std::min(std::max(x, 0.0f), 87.0f);
+  const int n = static_cast<int>(x * 1.44269504088896341f + 0.5f);
+  const float fn = static_cast<float>(n);
+  const float r = (fn * 0.693359375f - x) + fn * -2.12194440e-4f;  // −x + n·ln 2, split ln 2
+  float p = 1.9875691500e-4f;
+  p = p * r + 1.3981999507e-3f;
+  p = p * r + 8.3334519073e-3f;
+  p = p * r + 4.1665795894e-2f;
+  p = p * r + 1.6666665459e-1f;
+  p = p * r + 5.0000001201e-1f;
+  p = p * (r * r) + r + 1.0f;
+  const std::uint32_t bits = static_cast<std::uint32_t>(127 - n) << 23;
+  float scale;
+  std::memcpy(&scale, &bits, sizeof scale);
+  return p * scale;
+}
+
+// acc[c][v] += e^{−τ[v]}·wy[c] for voxels [vb, ve): one direction's share of the visibility's
+// SH moments (wy its quadrature weight × its basis values), coefficient-major so the voxel loop
+// vectorises. Compiled for the baseline and AVX2 / AVX-512 (the same operations, so the same bits).
+SKY_VEC_CLONES void add_visibility(float* acc, std::size_t nv, const float* tau, std::size_t vb,
+                                   std::size_t ve, const float* wy, int nc, float* scratch) {
+  for (std::size_t v = vb; v < ve; ++v) scratch[v - vb] = exp_neg(tau[v]);
+  for (int c = 0; c < nc; ++c) {
+    float* a = acc + static_cast<std::size_t>(c) * nv;
+    const float w = wy[c];
+    for (std::size_t v = vb; v < ve; ++v) a[v] += scratch[v - vb] * w;
+  }
+}
+
+// Lattice rays stand for the sphere's directions only where the voxels are near cubes.
+constexpr float kLatticeMaxAspect = 1.1f;
+
+}  // namespace
+
 std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
-                                  int order, int n_theta, float step_voxels, int threads) {
+                                  int order, int n_theta, float step_voxels, int threads,
+                                  SkyRays rays) {
   g.validate();
   if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
   if (!(step_voxels > 0.0f)) throw std::invalid_argument("step must be > 0");
   const SphereQuadrature quad(n_theta);
   const int nc = order * order;
-  std::vector<float> basis(quad.dirs.size() * nc);
-  for (std::size_t k = 0; k < quad.dirs.size(); ++k) sh_eval(order, quad.dirs[k], &basis[k * nc]);
+  const std::size_t ndir = quad.dirs.size();
+  std::vector<float> basis(ndir * nc);
+  for (std::size_t k = 0; k < ndir; ++k) sh_eval(order, quad.dirs[k], &basis[k * nc]);
   const glm::vec3 vs = g.voxel_size();
   const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
   const std::size_t nv = g.voxels();
@@ -365,24 +514,91 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
   // Voxels with no medium within one voxel are never read where light scatters: they get the
   // unoccluded sky (V = 1: V_0 = √4π, the other coefficients 0).
   const float open = 3.5449077018110318f;  // √(4π)
+  // The 3×3×3 neighbourhood's "any medium", as three one-axis dilations.
+  std::vector<unsigned char> near(nv), pass(nv);
+  for (std::size_t v = 0; v < nv; ++v) near[v] = ext[v] > 0.0f;
+  const std::size_t strides[3] = {1, static_cast<std::size_t>(g.w),
+                                  static_cast<std::size_t>(g.w) * static_cast<std::size_t>(g.h)};
+  const int dims[3] = {g.w, g.h, g.d};
+  for (int a = 0; a < 3; ++a) {
+    const std::size_t st = strides[a];
+    const std::size_t n_a = static_cast<std::size_t>(dims[a]);
+    parallel_chunks(nv, threads, [&](std::size_t vb, std::size_t ve) {
+      for (std::size_t v = vb; v < ve; ++v) {
+        const std::size_t c = (v / st) % n_a;
+        unsigned char m = near[v];
+        if (c > 0) m |= near[v - st];
+        if (c + 1 < n_a) m |= near[v + st];
+        pass[v] = m;
+      }
+    });
+    near.swap(pass);
+  }
+  // E = Σ_m L_m V_m, V_m = Σ_k w_k y_m(ω_k) e^{−τ(x, ω_k)}, from a voxel's visibility moments.
+  const auto finish = [&](std::size_t v, const double* vis) {
+    for (int ch = 0; ch < 3; ++ch) {
+      double e = 0.0;
+      for (int c = 0; c < nc; ++c) e += static_cast<double>(sky_coeffs[ch * nc + c]) * vis[c];
+      out[v * 3 + ch] = static_cast<float>(std::max(0.0, e));
+    }
+  };
+  const auto open_sky = [&](std::size_t v) {
+    for (int ch = 0; ch < 3; ++ch) out[v * 3 + ch] = std::max(0.0f, sky_coeffs[ch * nc] * open);
+  };
+  const float aspect = std::max(vs.x, std::max(vs.y, vs.z)) / std::min(vs.x, std::min(vs.y, vs.z));
+  if (rays == SkyRays::Lattice && aspect <= kLatticeMaxAspect) {
+    // τ of every voxel along each lattice direction by its recurrence, a few directions at a
+    // time; each voxel's moments summed over the directions in their order, so the result does
+    // not depend on the thread count.
+    const std::vector<LatticeDirection> dirs = lattice_directions();
+    const std::size_t nd = dirs.size();
+    std::vector<float> lbasis(nd * nc);
+    for (std::size_t k = 0; k < nd; ++k)
+      sh_eval(order, glm::normalize(glm::vec3(dirs[k].step) * vs), &lbasis[k * nc]);
+    const std::size_t batch =
+        std::min<std::size_t>(nd, std::max<std::size_t>(resolve_threads(threads, nd), 1));
+    std::vector<float> depth(batch * nv);
+    std::vector<float> wy(nd * nc);  // weight × basis, per direction
+    for (std::size_t k = 0; k < nd; ++k)
+      for (int c = 0; c < nc; ++c) wy[k * nc + c] = dirs[k].weight * lbasis[k * nc + c];
+    std::vector<float> moments(static_cast<std::size_t>(nc) * nv, 0.0f);  // [c][v]
+    constexpr std::size_t kChunk = 4096;
+    const std::size_t chunks = (nv + kChunk - 1) / kChunk;
+    for (std::size_t k0 = 0; k0 < nd; k0 += batch) {
+      const std::size_t kn = std::min(batch, nd - k0);
+      parallel_for(kn, threads, [&](std::size_t j) {
+        lattice_optical_depth(ext, g, dirs[k0 + j].step, depth.data() + j * nv);
+      });
+      // Each voxel's sums run over the directions in their order: the same on any thread count.
+      parallel_for(chunks, threads, [&](std::size_t b) {
+        float scratch[kChunk];
+        const std::size_t vb = b * kChunk, ve = std::min(nv, vb + kChunk);
+        for (std::size_t j = 0; j < kn; ++j)
+          add_visibility(moments.data(), nv, depth.data() + j * nv, vb, ve, &wy[(k0 + j) * nc], nc,
+                         scratch);
+      });
+    }
+    parallel_for(nv, threads, [&](std::size_t v) {
+      if (!near[v]) {
+        open_sky(v);
+        return;
+      }
+      double vis[kMaxShOrder * kMaxShOrder];
+      for (int c = 0; c < nc; ++c) vis[c] = moments[static_cast<std::size_t>(c) * nv + v];
+      finish(v, vis);
+    });
+    return out;
+  }
   parallel_for(nv, threads, [&](std::size_t v) {
-    const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),
-              z = static_cast<int>(v / (static_cast<std::size_t>(g.w) * g.h));
-    bool near = false;
-    for (int dz = -1; dz <= 1 && !near; ++dz)
-      for (int dy = -1; dy <= 1 && !near; ++dy)
-        for (int dx = -1; dx <= 1 && !near; ++dx) {
-          const int xx = x + dx, yy = y + dy, zz = z + dz;
-          if (xx < 0 || yy < 0 || zz < 0 || xx >= g.w || yy >= g.h || zz >= g.d) continue;
-          near = ext[(static_cast<std::size_t>(zz) * g.h + yy) * g.w + xx] > 0.0f;
-        }
-    if (!near) {
-      for (int ch = 0; ch < 3; ++ch) out[v * 3 + ch] = std::max(0.0f, sky_coeffs[ch * nc] * open);
+    if (!near[v]) {
+      open_sky(v);
       return;
     }
+    const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),
+              z = static_cast<int>(v / (static_cast<std::size_t>(g.w) * g.h));
     const glm::vec3 p = g.centre(x, y, z);
     double vis[kMaxShOrder * kMaxShOrder] = {};
-    for (std::size_t k = 0; k < quad.dirs.size(); ++k) {
+    for (std::size_t k = 0; k < ndir; ++k) {
       const glm::vec3 d = quad.dirs[k];
       Interval span;
       double tau = 0.0;
@@ -402,11 +618,7 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
       const double vw = std::exp(-tau) * quad.weights[k];
       for (int c = 0; c < nc; ++c) vis[c] += vw * basis[k * nc + c];
     }
-    for (int ch = 0; ch < 3; ++ch) {
-      double e = 0.0;
-      for (int c = 0; c < nc; ++c) e += static_cast<double>(sky_coeffs[ch * nc + c]) * vis[c];
-      out[v * 3 + ch] = static_cast<float>(std::max(0.0, e));
-    }
+    finish(v, vis);
   });
   return out;
 }

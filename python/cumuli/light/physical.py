@@ -27,9 +27,10 @@ maths):
   gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
   ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`).
 - **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
-  quadrature with 2·:data:`SKY_SAMPLES`² directions) times the sky's SH projection gives the
-  sky irradiance reaching each voxel unscattered; with multiple scattering on, it and its
-  diffusion are read with the gain of the same form up to :data:`SKY_GAIN`.
+  quadrature with 2·:data:`SKY_SAMPLES`² directions; :data:`SKY_RAYS`) times the sky's SH
+  projection gives the sky irradiance reaching each voxel unscattered; with multiple
+  scattering on, it and its diffusion are read with the gain of the same form up to
+  :data:`SKY_GAIN`.
 
 The constants are fitted against Mitsuba 3 on the reference views of :data:`FIT_VIEWS` and
 tested on the others, :data:`HELD_OUT_VIEWS` (``tests/references/fit_physical.py`` reproduces
@@ -86,8 +87,13 @@ HELD_OUT_VIEWS = ("toplit", "sunset", "lsystem")
 #: to a residual of ``DIFFUSION_TOLERANCE`` of the source's.
 DIFFUSION_SOLVER = "mic"
 DIFFUSION_TOLERANCE = 1e-3
-#: SH order and quadrature (n_theta) of the sky visibility.
+#: SH order of the sky visibility, its rays (``"march"``: a ray marched per voxel and direction
+#: of a product quadrature; ``"lattice"``: the 26 directions to a voxel's neighbours, Lebedev's
+#: 26-point rule, τ exact by one pass over the lattice per direction, ~7× faster but 1.5–2
+#: points further from Mitsuba 3 on the held-out views: docs/lighting.md) and the quadrature's
+#: polar nodes (``n_theta``; it also projects the sky's radiance).
 SKY_ORDER = 3
+SKY_RAYS = "march"
 SKY_SAMPLES = 3
 
 
@@ -226,17 +232,22 @@ def physical_light(
     threads: int = 0,
     timings: dict[str, float] | None = None,
     gain_depth: float | None = None,
+    forward: float | None = None,
 ) -> PhysicalLight:
     """The :class:`PhysicalLight` of a drawable with a medium (a `Cloud`, a `VolumeCloud`, ...)
     under ``scene``'s sun and sky. ``timings``, a dict, receives the wall seconds of each of the
     :data:`STAGES` (added to what it holds: the benchmarks profile the light step with it).
-    ``gain_depth``: the ``τg`` of :func:`lattice_gains` (None: :data:`GAIN_DEPTH`)."""
+    ``gain_depth``: the ``τg`` of :func:`lattice_gains` (None: :data:`GAIN_DEPTH`); ``forward``:
+    the weight of the diffusion's forward-scattered sun source (None: :data:`SUN_FORWARD`)."""
     medium = registry.of(drawable).medium
     if medium is None:
         raise TypeError(f"no physical light pass for {type(drawable).__name__}")
     depth_g = GAIN_DEPTH if gain_depth is None else float(gain_depth)
     if not (math.isfinite(depth_g) and depth_g >= 0.0):
         raise ValueError(f"gain_depth must be finite and >= 0, got {gain_depth}")
+    weight_f = SUN_FORWARD if forward is None else float(forward)
+    if not (math.isfinite(weight_f) and weight_f >= 0.0):
+        raise ValueError(f"forward must be finite and >= 0, got {forward}")
     check_budget(scene)
     s = scene.settings
     n = s.physical_resolution
@@ -270,7 +281,9 @@ def physical_light(
     if s.sky_light:
         with _stage(timings, "sky"):
             coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
-            sky_e = _core.sky_irradiance(ext, lo, hi, coeffs, SKY_ORDER, SKY_SAMPLES, 1.0, threads)
+            sky_e = _core.sky_irradiance(
+                ext, lo, hi, coeffs, SKY_ORDER, SKY_SAMPLES, 1.0, threads, method=SKY_RAYS
+            )
         grid[..., 1:4] = sky_e
     octaves = 1
     if s.multiple_scattering:
@@ -287,7 +300,7 @@ def physical_light(
                 s.mean_cosine,
                 DIFFUSION_TOLERANCE,
                 threads,
-                forward=SUN_FORWARD,
+                forward=weight_f,
                 solver=DIFFUSION_SOLVER,
             )
         grid[..., 0] = lattice_gains(ext, lo, hi, SUN_GAIN, depth_g) * phi[..., 0]

@@ -52,6 +52,11 @@ CAF_RATE = 3.0
 #: cells are few and thin (a sprite cloud's extinction is its light pass's, spread over cells
 #: 1/GRID of its size), and its sprites show their cell's surface like a medium's thick cell does.
 PROXY_GAIN_DEPTH = 0.1
+#: The weight of a proxy's forward-scattered sun source in its diffusion: none. A proxy's few,
+#: thin cells cannot carry the flux source's gradient (``cumuli.light.physical.SUN_FORWARD``):
+#: on them it moves the light onto the side away from the sun, and a sprite cloud's shadow side
+#: came out brighter than its lit side.
+PROXY_FORWARD = 0.0
 #: Particle clouds' proxy lattices kept (least recently used dropped first).
 MEMO_SIZE = 256
 _memo: OrderedDict[tuple, tuple] = OrderedDict()
@@ -197,7 +202,9 @@ def proxy_light(lattice: tuple, scene: Any) -> Any:
             return known
     volume = VolumeCloud(density=sigma, box=(tuple(lo), tuple(hi)), sigma_t=1.0)
     alone = replace(scene, clouds=[volume], lights=(), solids=(), settings=settings, sky=sky)
-    light = physical_light(volume, alone, threads=1, gain_depth=PROXY_GAIN_DEPTH)
+    light = physical_light(
+        volume, alone, threads=1, gain_depth=PROXY_GAIN_DEPTH, forward=PROXY_FORWARD
+    )
     with _lock:
         _lights[key] = light
         while len(_lights) > LIGHT_MEMO_SIZE:

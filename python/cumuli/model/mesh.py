@@ -21,9 +21,11 @@ from cumuli.model.cloud import MAX_PRIMITIVES, Cloud
 
 
 def _default_min_radius(vertices: np.ndarray) -> float:
-    """1e-4 of the mesh's bounding-box diagonal (1e-6 for a single point)."""
+    """1e-4 of the mesh's bounding-box diagonal (1e-6 for a single point), never below the
+    smallest normal float32 (the core takes it as float32: a subnormal mesh must not floor its
+    radii at 0)."""
     diag = float(np.linalg.norm(vertices.max(axis=0).astype(np.float64) - vertices.min(axis=0)))
-    return 1e-4 * diag if diag > 0 else 1e-6
+    return max(1e-4 * diag, float(np.finfo(np.float32).tiny)) if diag > 0 else 1e-6
 
 
 def ellipsoids_from_mesh(

@@ -81,12 +81,21 @@ struct Medium {
 std::vector<float> light_space_depth(const Medium& medium, const SunFrame& frame, float step,
                                      int threads);
 
+// The sky visibility's rays: Lattice, the 26 steps to a voxel's neighbours (Lebedev's 26-point
+// rule where voxels are cubes; τ exact for the trilinear field, one pass over the lattice per
+// direction), or March, the n_theta product quadrature (SphereQuadrature) with a ray marched per
+// voxel and direction.
+enum class SkyRays { Lattice, March };
+
 // E_sky (RGB, interleaved) at every voxel centre of the extinction lattice `ext` (σt, [z][y][x]
-// over g): Σ_m L_m V_m with V the SH projection (order², n_theta quadrature) of exp(−τ(x, ω)),
-// τ marched through `ext` with steps of step_voxels voxels, stopped once τ > 6 (the e^−6 of
-// visibility left is dropped); voxels with no medium within one voxel get the open sky.
+// over g): Σ_m L_m V_m with V the SH projection (order² coefficients) of exp(−τ(x, ω)); voxels
+// with no medium within one voxel get the open sky. March rays (the default): τ marched through
+// `ext` with steps of step_voxels voxels, stopped once τ > 6 (the e^−6 of visibility left is
+// dropped), over the n_theta product quadrature. Lattice rays (n_theta and step_voxels unused)
+// are taken where the voxels' sides differ by at most 10 %, March rays otherwise.
 std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
-                                  int order, int n_theta, float step_voxels, int threads);
+                                  int order, int n_theta, float step_voxels, int threads,
+                                  SkyRays rays = SkyRays::March);
 
 // The diffusion's linear solver: conjugate gradients preconditioned by the diagonal (Jacobi)
 // over the whole lattice, or by the modified incomplete Cholesky factor (MIC(0)) over the
