@@ -1133,13 +1133,14 @@ void bind_physical_light(py::module_& m) {
   m.def(
       "diffusion_light",
       [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sun_t, V3 to_sun,
-         const py::object& sky_e, float albedo, float mean_cosine, int max_iterations,
-         float tolerance, int threads, float forward) {
+         const py::object& sky_e, float albedo, float mean_cosine, float tolerance, int threads,
+         float forward, const std::string& solver) {
         const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
         if (sun_t.size() != static_cast<py::ssize_t>(g.voxels()))
           throw py::value_error("sun_t must have the extinction's shape");
-        FloatArray sky;
-        if (!sky_e.is_none()) {
+        FloatArray sky;  // (a default FloatArray is an empty array, not a null handle)
+        const bool has_sky = !sky_e.is_none();
+        if (has_sky) {
           sky = sky_e.cast<FloatArray>();
           if (sky.size() != static_cast<py::ssize_t>(g.voxels()) * 3)
             throw py::value_error("sky_e must have shape (D, H, W, 3)");
@@ -1147,13 +1148,21 @@ void bind_physical_light(py::module_& m) {
         if (!(albedo >= 0.0f && albedo <= 1.0f)) throw py::value_error("albedo must be in [0, 1]");
         if (!(mean_cosine > -1.0f && mean_cosine < 1.0f))
           throw py::value_error("mean_cosine must be in (-1, 1)");
-        if (max_iterations < 1 || max_iterations > 100000)
-          throw py::value_error("max_iterations must be in [1, 100000]");
         if (!(forward >= 0.0f && forward <= 4.0f))
           throw py::value_error("forward must be in [0, 4]");
-        DiffusionParams p{albedo, mean_cosine, max_iterations, tolerance};
-        const int channels = sky ? 4 : 1;
-        const float *e = ext.data(), *st = sun_t.data(), *se = sky ? sky.data() : nullptr;
+        if (!(tolerance > 0.0f && tolerance < 1.0f))
+          throw py::value_error("tolerance must be in (0, 1)");
+        if (solver != "mic" && solver != "jacobi")
+          throw py::value_error("solver must be 'mic' or 'jacobi', got '" + solver + "'");
+        const DiffusionSolver kind =
+            solver == "mic" ? DiffusionSolver::mic : DiffusionSolver::jacobi;
+        DiffusionParams p;
+        p.albedo = albedo;
+        p.mean_cosine = mean_cosine;
+        p.tolerance = tolerance;
+        p.solver = kind;
+        const int channels = has_sky ? 4 : 1;
+        const float *e = ext.data(), *st = sun_t.data(), *se = has_sky ? sky.data() : nullptr;
         std::vector<float> out;
         {
           py::gil_scoped_release release;
@@ -1165,11 +1174,13 @@ void bind_physical_light(py::module_& m) {
       },
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sun_t"), py::arg("to_sun"),
       py::arg("sky_e").none(true), py::arg("albedo"), py::arg("mean_cosine"),
-      py::arg("max_iterations") = 2000, py::arg("tolerance") = 1e-5f, py::arg("threads") = 0,
-      py::arg("forward") = 0.0f,
+      py::arg("tolerance") = 1e-5f, py::arg("threads") = 0, py::arg("forward") = 0.0f,
+      py::arg("solver") = "mic",
       "Collided fluence of the diffusion approximation: (D, H, W, 1 | 4) (sun per unit "
       "irradiance, then the sky's RGB); forward: the weight of the forward-scattered sun's "
-      "flux source (0: an isotropic source).");
+      "flux source (0: an isotropic source); solver: the conjugate gradients' preconditioner, "
+      "'mic' (modified incomplete Cholesky over the medium cells) or 'jacobi' (the diagonal, "
+      "over the whole lattice).");
 }
 
 }  // namespace cumuli::bind

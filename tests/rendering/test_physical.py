@@ -187,7 +187,7 @@ def test_diffusion_matches_the_slab_solution() -> None:
     sun_t = np.where(ext > 0, np.exp(-sigma * np.maximum(top - ys, 0))[None, :, None], 1.0).astype(
         F
     )
-    phi = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), None, albedo, g, 5000, 1e-6)
+    phi = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), None, albedo, g, 1e-6)
     col = phi[20, 4:32, 20, 0][::-1][:10]  # from the top medium cell down
     sa, ss = (1 - albedo) * sigma, albedo * sigma
     d = 1 / (3 * (sa + ss * (1 - g)))
@@ -217,11 +217,11 @@ def test_the_forward_flux_source_carries_the_sun_deeper() -> None:
     sky = np.ones((*ext.shape, 3), F)
 
     def solve(to_sun, t, forward):
-        return _core.diffusion_light(ext, lo, hi, t, to_sun, sky, albedo, g, 5000, 1e-6,
+        return _core.diffusion_light(ext, lo, hi, t, to_sun, sky, albedo, g, 1e-6,
                                      forward=forward)  # fmt: skip
 
     iso = solve((0.0, 1.0, 0.0), sun_t, 0.0)
-    plain = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky, albedo, g, 5000, 1e-6)
+    plain = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky, albedo, g, 1e-6)
     np.testing.assert_array_equal(iso, plain)
     fwd = solve((0.0, 1.0, 0.0), sun_t, 1.0)
     np.testing.assert_allclose(fwd[..., 1:], iso[..., 1:], rtol=1e-5, atol=1e-7)
@@ -254,13 +254,13 @@ def test_diffusion_sky_channels_each_solve_their_own_source() -> None:
     ys = np.linspace(0.2, 1.0, 16, dtype=F)[None, :, None] * np.ones(ext.shape, F)
     xs = np.linspace(1.0, 0.3, 16, dtype=F)[None, None, :] * np.ones(ext.shape, F)
     sky_a = np.stack([ys, 2.5 * ys, 0.5 * ys], -1).astype(F)
-    phi = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky_a, 0.99, 0.6, 5000, 1e-6)
+    phi = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky_a, 0.99, 0.6, 1e-6)
     inside = ext > 0.1
     r = phi[..., 1][inside]
     np.testing.assert_allclose(phi[..., 2][inside], 2.5 * r, rtol=1e-4)
     np.testing.assert_allclose(phi[..., 3][inside], 0.5 * r, rtol=1e-4)
     sky_b = np.stack([ys, xs, ys], -1).astype(F)
-    phi_b = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky_b, 0.99, 0.6, 5000, 1e-6)
+    phi_b = _core.diffusion_light(ext, lo, hi, sun_t, (0.0, 1.0, 0.0), sky_b, 0.99, 0.6, 1e-6)
     np.testing.assert_allclose(phi_b[..., 3][inside], phi_b[..., 1][inside], rtol=1e-4)
     np.testing.assert_allclose(phi_b[..., 1], phi[..., 1], rtol=1e-4, atol=1e-7)
     assert not np.allclose(phi_b[..., 2][inside], phi_b[..., 1][inside], rtol=0.05)

@@ -11,6 +11,7 @@
 #include <glm/geometric.hpp>
 
 #include "cumuli/candidates.hpp"
+#include "cumuli/light/cell_system.hpp"
 #include "cumuli/parallel.hpp"
 
 namespace cumuli {
@@ -716,29 +717,62 @@ void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, 
   }
 }
 
-std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
-                                     int channels, const DiffusionParams& p, int threads) {
-  g.validate();
-  if (channels < 1 || channels > 8) throw std::invalid_argument("channels must be in [1, 8]");
-  if (!(p.albedo >= 0.0f && p.albedo <= 1.0f))
-    throw std::invalid_argument("albedo must be in [0, 1]");
-  const int W = g.w, H = g.h, Dd = g.d;
-  const std::size_t n = g.voxels();
-  const glm::vec3 hv = g.voxel_size();
-  const float h[3] = {hv.x, hv.y, hv.z};
-  const float hmin = std::min(h[0], std::min(h[1], h[2]));
-  const std::size_t stride[3] = {1, static_cast<std::size_t>(W), static_cast<std::size_t>(W) * H};
-  const int dims[3] = {W, H, Dd};
-  std::vector<unsigned char> medium(n);
-  std::vector<float> D(n, 0.0f), diag(n, 1.0f);
-  for (std::size_t i = 0; i < n; ++i) {
-    medium[i] = ext[i] * hmin > kMediumThickness;
-    if (!medium[i]) continue;
-    const float st = ext[i], sa = (1.0f - p.albedo) * st;
-    const float stp = sa + p.albedo * st * (1.0f - p.mean_cosine);
-    D[i] = 1.0f / (3.0f * std::max(stp, 1e-12f));
-    diag[i] = sa;
+namespace {
+
+// The diffusion's lattice: which cells hold the medium and their diffusion coefficient
+// D = 1/(3σt'), σt' = σa + ϖσt(1 − ḡ) the reduced extinction.
+struct DiffusionLattice {
+  int W, H, Dd;
+  std::size_t n;
+  float h[3];
+  std::size_t stride[3];
+  int dims[3];
+  std::vector<unsigned char> medium;
+  std::vector<float> D;
+
+  DiffusionLattice(const float* ext, const VolumeGrid& g, const DiffusionParams& p)
+      : W(g.w), H(g.h), Dd(g.d), n(g.voxels()), medium(g.voxels()), D(g.voxels(), 0.0f) {
+    const glm::vec3 hv = g.voxel_size();
+    h[0] = hv.x;
+    h[1] = hv.y;
+    h[2] = hv.z;
+    const float hmin = std::min(h[0], std::min(h[1], h[2]));
+    stride[0] = 1;
+    stride[1] = static_cast<std::size_t>(W);
+    stride[2] = static_cast<std::size_t>(W) * H;
+    dims[0] = W;
+    dims[1] = H;
+    dims[2] = Dd;
+    for (std::size_t i = 0; i < n; ++i) {
+      medium[i] = ext[i] * hmin > kMediumThickness;
+      if (!medium[i]) continue;
+      const float st = ext[i], sa = (1.0f - p.albedo) * st;
+      const float stp = sa + p.albedo * st * (1.0f - p.mean_cosine);
+      D[i] = 1.0f / (3.0f * std::max(stp, 1e-12f));
+    }
   }
+  // The conductance of the face between medium cells i and j = i + stride[a].
+  float conductance(std::size_t i, std::size_t j, int a) const {
+    return 2.0f * D[i] * D[j] / (D[i] + D[j]) / (h[a] * h[a]);
+  }
+  // The Marshak boundary's leak from a medium cell of coefficient d through a face ⊥ axis a.
+  float leak(float d, int a) const { return 2.0f * d / (h[a] * (h[a] + 4.0f * d)); }
+};
+
+// The old solve (solver jacobi): conjugate gradients preconditioned by the diagonal over the
+// whole lattice, into out (`channels` per voxel; the medium cells' values).
+void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* source, int channels,
+                    const DiffusionParams& p, int threads, std::vector<float>& out) {
+  const std::size_t n = L.n;
+  const int W = L.W, H = L.H;
+  const auto& stride = L.stride;
+  const auto& dims = L.dims;
+  const auto& h = L.h;
+  const auto& medium = L.medium;
+  const auto& D = L.D;
+  std::vector<float> diag(n, 1.0f);
+  for (std::size_t i = 0; i < n; ++i)
+    if (medium[i]) diag[i] = (1.0f - p.albedo) * ext[i];
   // Face conductances (to the + neighbour along each axis) and the diagonal.
   std::vector<float> cond(3 * n, 0.0f);
   auto coord = [&](std::size_t i, int a) {
@@ -882,33 +916,134 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
   } else {
     round({0}, nullptr, 0);
   }
-  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
   for (int c = 0; c < channels; ++c)
     for (std::size_t i = 0; i < n; ++i)
-      out[i * channels + c] = medium[i] ? static_cast<float>(std::max(0.0, xs[c][i])) : 0.0f;
-  // Empty cells next to the medium: the mean boundary value φ·4D/(h + 4D) of their medium
-  // neighbours, so that lookups between a surface cell and an empty one see the surface value.
-  std::vector<float> fill(n * static_cast<std::size_t>(channels), 0.0f);
-  parallel_for(n, threads, [&](std::size_t i) {
-    if (medium[i]) return;
-    int count = 0;
-    for (int a = 0; a < 3; ++a) {
-      for (int side = -1; side <= 1; side += 2) {
-        const int cc = coord(i, a) + side;
-        if (cc < 0 || cc >= dims[a]) continue;
-        const std::size_t j = side > 0 ? i + stride[a] : i - stride[a];
-        if (!medium[j]) continue;
-        const float f = 4.0f * D[j] / (h[a] + 4.0f * D[j]);
-        for (int c = 0; c < channels; ++c) fill[i * channels + c] += f * out[j * channels + c];
-        ++count;
-      }
-    }
-    if (count > 0)
-      for (int c = 0; c < channels; ++c) fill[i * channels + c] /= static_cast<float>(count);
-  });
+      if (medium[i]) out[i * channels + c] = static_cast<float>(std::max(0.0, xs[c][i]));
+}
+
+// The medium cells as a CellSystem (in lattice order) and each one's lattice index.
+CellSystem medium_system(const DiffusionLattice& L, const float* ext, const DiffusionParams& p,
+                         std::vector<std::size_t>& cells) {
+  const std::size_t n = L.n;
+  std::vector<std::int32_t> at(n, -1);
+  cells.clear();
   for (std::size_t i = 0; i < n; ++i)
-    if (!medium[i])
-      for (int c = 0; c < channels; ++c) out[i * channels + c] = fill[i * channels + c];
+    if (L.medium[i]) {
+      at[i] = static_cast<std::int32_t>(cells.size());
+      cells.push_back(i);
+    }
+  const auto none = static_cast<std::int32_t>(cells.size());
+  CellSystem sys;
+  sys.rows.resize(cells.size());
+  std::size_t k = 0;
+  for (int z = 0; z < L.Dd; ++z)
+    for (int y = 0; y < L.H; ++y)
+      for (int x = 0; x < L.W; ++x) {
+        const std::size_t i = (static_cast<std::size_t>(z) * L.H + y) * L.W + x;
+        if (!L.medium[i]) continue;
+        CellSystem::Row& row = sys.rows[k++];
+        const int c[3] = {x, y, z};
+        float diag = (1.0f - p.albedo) * ext[i];
+        for (int a = 0; a < 3; ++a) {
+          const std::size_t s = L.stride[a];
+          const bool plus = c[a] + 1 < L.dims[a] && L.medium[i + s];
+          const bool minus = c[a] > 0 && L.medium[i - s];
+          const float cp = plus ? L.conductance(i, i + s, a) : 0.0f;
+          const float cm = minus ? L.conductance(i - s, i, a) : 0.0f;
+          diag += plus ? cp : L.leak(L.D[i], a);
+          diag += minus ? cm : L.leak(L.D[i], a);
+          row.nb[a] = minus ? at[i - s] : none;
+          row.cond[a] = cm;
+          row.nb[3 + a] = plus ? at[i + s] : none;
+          row.cond[3 + a] = cp;
+        }
+        row.diag = diag;
+      }
+  return sys;
+}
+
+// The new solve (solver mic): conjugate gradients preconditioned by MIC(0), over the medium cells
+// only, each channel on one thread, into out (`channels` per voxel; the medium cells' values).
+void fluence_mic(const DiffusionLattice& L, const float* ext, const float* source, int channels,
+                 const DiffusionParams& p, int threads, std::vector<float>& out) {
+  std::vector<std::size_t> cells;
+  const CellSystem sys = medium_system(L, ext, p, cells);
+  const MicFactor factor = mic_factor(sys);
+  const std::size_t m = cells.size();
+  // One channel's solve into xs[c] (m + 1 values); `from` (< 0: none) the channel whose solution
+  // it starts from, scaled by the least-squares ratio of the two channels' sources.
+  std::vector<std::vector<double>> xs(static_cast<std::size_t>(channels));
+  auto solve = [&](int c, int from) {
+    std::vector<double> b(m);
+    for (std::size_t k = 0; k < m; ++k) b[k] = source[cells[k] * channels + c];
+    std::vector<double>& x = xs[c];
+    x.assign(m + 1, 0.0);
+    if (from >= 0) {
+      double num = 0.0, den = 0.0;
+      for (std::size_t k = 0; k < m; ++k) {
+        const double bf = source[cells[k] * channels + from];
+        num += b[k] * bf;
+        den += bf * bf;
+      }
+      const double scale = den > 0.0 ? num / den : 0.0;
+      for (std::size_t k = 0; k < m; ++k) x[k] = scale * xs[from][k];
+    }
+    solve_mic(sys, factor, b, x, p.tolerance, p.max_iterations);
+    for (std::size_t k = 0; k < m; ++k)
+      out[cells[k] * channels + c] = static_cast<float>(std::max(0.0, x[k]));
+  };
+  // As the Jacobi solve's: the sun's and the sky's red first, then green and blue from red.
+  std::vector<int> first{0}, rest;
+  if (channels >= 2) first.push_back(1);
+  for (int c = 2; c < channels; ++c) rest.push_back(c);
+  parallel_for(first.size(), threads, [&](std::size_t k) { solve(first[k], -1); });
+  parallel_for(rest.size(), threads, [&](std::size_t k) { solve(rest[k], 1); });
+}
+
+}  // namespace
+
+std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
+                                     int channels, const DiffusionParams& p, int threads) {
+  g.validate();
+  if (channels < 1 || channels > 8) throw std::invalid_argument("channels must be in [1, 8]");
+  if (!(p.albedo >= 0.0f && p.albedo <= 1.0f))
+    throw std::invalid_argument("albedo must be in [0, 1]");
+  const DiffusionLattice L(ext, g, p);
+  const std::size_t n = L.n;
+  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
+  if (p.solver == DiffusionSolver::mic)
+    fluence_mic(L, ext, source, channels, p, threads, out);
+  else
+    fluence_jacobi(L, ext, source, channels, p, threads, out);
+  // Empty cells next to the medium: the mean boundary value φ·4D/(h + 4D) of their medium
+  // neighbours, so that lookups between a surface cell and an empty one see the surface value
+  // (the medium cells' values are read only: the empty ones are written in place).
+  parallel_for(static_cast<std::size_t>(L.Dd), threads, [&](std::size_t zz) {
+    const int z = static_cast<int>(zz);
+    float acc[8];
+    for (int y = 0; y < L.H; ++y)
+      for (int x = 0; x < L.W; ++x) {
+        const std::size_t i = (static_cast<std::size_t>(z) * L.H + y) * L.W + x;
+        if (L.medium[i]) continue;
+        const int c[3] = {x, y, z};
+        int count = 0;
+        for (int ch = 0; ch < channels; ++ch) acc[ch] = 0.0f;
+        for (int a = 0; a < 3; ++a) {
+          for (int side = -1; side <= 1; side += 2) {
+            const int cc = c[a] + side;
+            if (cc < 0 || cc >= L.dims[a]) continue;
+            const std::size_t j = side > 0 ? i + L.stride[a] : i - L.stride[a];
+            if (!L.medium[j]) continue;
+            const float f = 4.0f * L.D[j] / (L.h[a] + 4.0f * L.D[j]);
+            for (int ch = 0; ch < channels; ++ch) acc[ch] += f * out[j * channels + ch];
+            ++count;
+          }
+        }
+        if (count > 0)
+          for (int ch = 0; ch < channels; ++ch)
+            out[i * channels + ch] = acc[ch] / static_cast<float>(count);
+      }
+  });
   return out;
 }
 

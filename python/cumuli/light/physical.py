@@ -82,6 +82,11 @@ SUN_FORWARD = 0.57
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
 HELD_OUT_VIEWS = ("toplit", "sunset", "lsystem")
+#: The diffusion's solve: conjugate gradients preconditioned by the modified incomplete Cholesky
+#: factor over the medium cells (``"mic"``; ``"jacobi"``: the diagonal, over the whole lattice),
+#: to a residual of ``DIFFUSION_TOLERANCE`` of the source's.
+DIFFUSION_SOLVER = "mic"
+DIFFUSION_TOLERANCE = 1e-3
 #: SH order of the sky visibility, its rays (``"march"``: a ray marched per voxel and direction
 #: of a product quadrature; ``"lattice"``: the 26 directions to a voxel's neighbours, Lebedev's
 #: 26-point rule, τ exact by one pass over the lattice per direction, ~7× faster but 1.5–2
@@ -310,10 +315,10 @@ def physical_light(
                 sky_e,
                 s.albedo,
                 s.mean_cosine,
-                2000,
-                1e-3,
+                DIFFUSION_TOLERANCE,
                 threads,
                 forward=weight_f,
+                solver=DIFFUSION_SOLVER,
             )
         grid[..., 0] = lattice_gains(ext, lo, hi, SUN_GAIN, depth_g) * phi[..., 0]
         if sky_e is not None:

@@ -105,11 +105,17 @@ std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const f
                                   int order, int n_theta, float step_voxels, int threads,
                                   SkyRays rays = SkyRays::March);
 
+// The diffusion's linear solver: conjugate gradients preconditioned by the diagonal (Jacobi)
+// over the whole lattice, or by the modified incomplete Cholesky factor (MIC(0)) over the
+// medium cells only.
+enum class DiffusionSolver { jacobi, mic };
+
 struct DiffusionParams {
   float albedo = 0.99f;       // ϖ
   float mean_cosine = 0.6f;   // ḡ of the phase function
-  int max_iterations = 2000;  // conjugate-gradient iterations per channel
+  int max_iterations = 5000;  // conjugate-gradient iterations per channel, at most
   float tolerance = 1e-5f;    // on the residual relative to the source
+  DiffusionSolver solver = DiffusionSolver::mic;
 };
 
 // The collided sources per cell (`channels` per voxel, interleaved): channel 0 the sun's
