@@ -10,9 +10,15 @@
 
 #include <glm/geometric.hpp>
 
+#if (defined(__GNUC__) || defined(__clang__)) && defined(__x86_64__)
+#include <immintrin.h>
+#define CUMULI_X86_SKY 1
+#endif
+
 #include "cumuli/candidates.hpp"
 #include "cumuli/light/cell_system.hpp"
 #include "cumuli/parallel.hpp"
+#include "cumuli/simd.hpp"
 
 namespace cumuli {
 
@@ -490,6 +496,207 @@ SKY_VEC_CLONES void add_visibility(float* acc, std::size_t nv, const float* tau,
   }
 }
 
+// The sky march takes kSkyLanes voxels' rays along one direction at a time, one per SIMD lane.
+constexpr int kSkyLanes = 8;
+
+// A lattice copied with a one-voxel border that repeats its edge: a trilinear read at voxel
+// coordinates u ∈ [0, dims] needs no clamping and gives trilinear_voxel's value bit for bit.
+struct PaddedLattice {
+  std::vector<float> v;
+  int w, h, d;  // padded dimensions
+  PaddedLattice(const float* ext, const VolumeGrid& g) : w(g.w + 2), h(g.h + 2), d(g.d + 2) {
+    v.resize(static_cast<std::size_t>(w) * h * d);
+    for (int z = 0; z < d; ++z)
+      for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+          const int sx = std::clamp(x - 1, 0, g.w - 1), sy = std::clamp(y - 1, 0, g.h - 1),
+                    sz = std::clamp(z - 1, 0, g.d - 1);
+          v[(static_cast<std::size_t>(z) * h + y) * w + x] =
+              ext[(static_cast<std::size_t>(sz) * g.h + sy) * g.w + sx];
+        }
+  }
+};
+
+// One direction's rays for kSkyLanes voxels: samples u0 + i·du (voxel coordinates), i < n, each
+// of length h. Unused lanes have n = 0.
+struct SkyLaneRays {
+  float u0x[kSkyLanes], u0y[kSkyLanes], u0z[kSkyLanes];
+  float dux[kSkyLanes], duy[kSkyLanes], duz[kSkyLanes];
+  float h[kSkyLanes];
+  int n[kSkyLanes];
+};
+
+// Voxel centres for kSkyLanes sky rays, strictly inside the lattice's box.
+struct SkyLaneOrigins {
+  float x[kSkyLanes], y[kSkyLanes], z[kSkyLanes];
+};
+
+// The lanes' rays along direction d from inside the box to where they leave it, in segments of at
+// most dt sampled at their midpoints. From inside, the box's entry is behind (t0 = 0) and its exit
+// the nearest face ahead on each axis: the same numbers as intersect(box, …) with t0 = max(t_in,
+// 0).
+SKY_VEC_CLONES void sky_lane_rays(const SkyLaneOrigins& o, glm::vec3 d, const Box& box,
+                                  glm::vec3 inv_vs, float dt, SkyLaneRays& r) {
+  const glm::vec3 inv_d = 1.0f / d;
+  float face[3], origin_lo[3];
+  for (int a = 0; a < 3; ++a) {
+    face[a] = inv_d[a] >= 0.0f ? box.hi[a] : box.lo[a];  // ±∞ for a zero component: never nearest
+    origin_lo[a] = box.lo[a];
+  }
+  for (int l = 0; l < kSkyLanes; ++l) {
+    const float len = std::min(std::min((face[0] - o.x[l]) * inv_d.x, (face[1] - o.y[l]) * inv_d.y),
+                               (face[2] - o.z[l]) * inv_d.z);
+    const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
+    const float h = len / static_cast<float>(n);
+    const float mid = 0.5f * h;
+    r.u0x[l] = ((o.x[l] + mid * d.x) - origin_lo[0]) * inv_vs.x;
+    r.u0y[l] = ((o.y[l] + mid * d.y) - origin_lo[1]) * inv_vs.y;
+    r.u0z[l] = ((o.z[l] + mid * d.z) - origin_lo[2]) * inv_vs.z;
+    r.dux[l] = (h * d.x) * inv_vs.x;
+    r.duy[l] = (h * d.y) * inv_vs.y;
+    r.duz[l] = (h * d.z) * inv_vs.z;
+    r.h[l] = h;
+    r.n[l] = n;
+  }
+}
+
+// τ along each lane's ray, summed sample by sample in double until it passes kSkyDepthCut: the
+// same operations in the same order as one ray at a time (trilinear_voxel's), so the same bits.
+void march_sky_lanes_portable(const PaddedLattice& pad, const SkyLaneRays& r, double* tau_out) {
+  int steps = 0;
+  for (int l = 0; l < kSkyLanes; ++l) steps = std::max(steps, r.n[l]);
+  const float* vol = pad.v.data();
+  const int W = pad.w, WH = pad.w * pad.h;
+  double tau[kSkyLanes] = {};
+  for (int i = 0; i < steps; ++i) {
+    int live = 0;
+    // No branches in this loop, so that it vectorises: an idle lane (past its depth cut or its
+    // ray's end) reads a sample of its ray, inside the lattice, and adds 0·value.
+    for (int l = 0; l < kSkyLanes; ++l) {
+      const int active = (i < r.n[l]) & (tau[l] <= kSkyDepthCut);
+      live += active;
+      const float fl = static_cast<float>(std::min(i, r.n[l] - 1));
+      const float h = active ? r.h[l] : 0.0f;
+      const float sx = (r.u0x[l] + fl * r.dux[l]) - 0.5f;
+      const float sy = (r.u0y[l] + fl * r.duy[l]) - 0.5f;
+      const float sz = (r.u0z[l] + fl * r.duz[l]) - 0.5f;
+      const float flx = std::floor(sx), fly = std::floor(sy), flz = std::floor(sz);
+      const float fx = sx - flx, fy = sy - fly, fz = sz - flz;
+      // Padded index of voxel floor(s): one more than the lattice's (kept inside the padding,
+      // as trilinear_voxel clamps, should rounding carry a sample past the box).
+      const int base = std::clamp(static_cast<int>(flz) + 1, 0, pad.d - 2) * WH +
+                       std::clamp(static_cast<int>(fly) + 1, 0, pad.h - 2) * W +
+                       std::clamp(static_cast<int>(flx) + 1, 0, pad.w - 2);
+      const float* a = vol + base;
+      const float c00 = a[0] + fx * (a[1] - a[0]);
+      const float c10 = a[W] + fx * (a[W + 1] - a[W]);
+      const float c01 = a[WH] + fx * (a[WH + 1] - a[WH]);
+      const float c11 = a[WH + W] + fx * (a[WH + W + 1] - a[WH + W]);
+      const float c0 = c00 + fy * (c10 - c00);
+      const float c1 = c01 + fy * (c11 - c01);
+      const float value = c0 + fz * (c1 - c0);
+      tau[l] += static_cast<double>(value) * static_cast<double>(h);
+    }
+    if (live == 0) break;
+  }
+  for (int l = 0; l < kSkyLanes; ++l) tau_out[l] = tau[l];
+}
+
+#ifdef CUMULI_X86_SKY
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12's intrinsics' own "undefined"
+#endif
+__attribute__((target("avx2"), always_inline)) inline __m256 gather_at(const float* vol,
+                                                                       __m256i base,
+                                                                       __m256i offset) {
+  return _mm256_i32gather_ps(vol, _mm256_add_epi32(base, offset), 4);
+}
+__attribute__((target("avx2"), always_inline)) inline __m256 lerp(__m256 a, __m256 b, __m256 f) {
+  return _mm256_add_ps(a, _mm256_mul_ps(f, _mm256_sub_ps(b, a)));  // a + f·(b − a), as in C++
+}
+
+// march_sky_lanes_portable with the eight lanes in AVX2 registers and their reads gathered: the
+// same IEEE operations lane by lane (no FMA), so the same bits.
+__attribute__((target("avx2"))) void march_sky_lanes_avx2(const PaddedLattice& pad,
+                                                          const SkyLaneRays& r, double* tau_out) {
+  static_assert(kSkyLanes == 8, "one AVX2 register of lanes");
+  int steps = 0;
+  for (int l = 0; l < kSkyLanes; ++l) steps = std::max(steps, r.n[l]);
+  const float* vol = pad.v.data();
+  const __m256i n = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r.n));
+  const __m256i last = _mm256_sub_epi32(n, _mm256_set1_epi32(1));  // a lane's last sample
+  const __m256 u0x = _mm256_loadu_ps(r.u0x), u0y = _mm256_loadu_ps(r.u0y),
+               u0z = _mm256_loadu_ps(r.u0z);
+  const __m256 dux = _mm256_loadu_ps(r.dux), duy = _mm256_loadu_ps(r.duy),
+               duz = _mm256_loadu_ps(r.duz);
+  const __m256 h = _mm256_loadu_ps(r.h), half = _mm256_set1_ps(0.5f);
+  const __m256i W = _mm256_set1_epi32(pad.w), WH = _mm256_set1_epi32(pad.w * pad.h),
+                one = _mm256_set1_epi32(1);
+  const __m256i zero = _mm256_setzero_si256(), top_x = _mm256_set1_epi32(pad.w - 2),
+                top_y = _mm256_set1_epi32(pad.h - 2), top_z = _mm256_set1_epi32(pad.d - 2);
+  const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256d cut = _mm256_set1_pd(kSkyDepthCut);
+  __m256d tau_lo = _mm256_setzero_pd(), tau_hi = _mm256_setzero_pd();
+  for (int i = 0; i < steps; ++i) {
+    const int under_cut = _mm256_movemask_pd(_mm256_cmp_pd(tau_lo, cut, _CMP_LE_OQ)) |
+                          (_mm256_movemask_pd(_mm256_cmp_pd(tau_hi, cut, _CMP_LE_OQ)) << 4);
+    const int on_ray =
+        _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(n, _mm256_set1_epi32(i))));
+    const int live = under_cut & on_ray;
+    if (live == 0) break;
+    const __m256 active = _mm256_castsi256_ps(
+        _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(live), lane_bit), lane_bit));
+    // Where to read does not wait on τ, so the gathers of successive steps overlap.
+    const __m256 fl = _mm256_cvtepi32_ps(_mm256_min_epi32(_mm256_set1_epi32(i), last));
+    const __m256 hl = _mm256_and_ps(active, h);
+    const __m256 sx = _mm256_sub_ps(_mm256_add_ps(u0x, _mm256_mul_ps(fl, dux)), half);
+    const __m256 sy = _mm256_sub_ps(_mm256_add_ps(u0y, _mm256_mul_ps(fl, duy)), half);
+    const __m256 sz = _mm256_sub_ps(_mm256_add_ps(u0z, _mm256_mul_ps(fl, duz)), half);
+    const __m256 flx = _mm256_floor_ps(sx), fly = _mm256_floor_ps(sy), flz = _mm256_floor_ps(sz);
+    const __m256 fx = _mm256_sub_ps(sx, flx), fy = _mm256_sub_ps(sy, fly),
+                 fz = _mm256_sub_ps(sz, flz);
+    // Padded indices kept inside the padding, as in march_sky_lanes_portable.
+    const __m256i ix = _mm256_min_epi32(
+        _mm256_max_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(flx), one), zero), top_x);
+    const __m256i iy = _mm256_min_epi32(
+        _mm256_max_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(fly), one), zero), top_y);
+    const __m256i iz = _mm256_min_epi32(
+        _mm256_max_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(flz), one), zero), top_z);
+    const __m256i base = _mm256_add_epi32(
+        _mm256_add_epi32(_mm256_mullo_epi32(iz, WH), _mm256_mullo_epi32(iy, W)), ix);
+    const __m256i WH_W = _mm256_add_epi32(WH, W);
+    const __m256 a000 = gather_at(vol, base, zero), a100 = gather_at(vol, base, one);
+    const __m256 a010 = gather_at(vol, base, W),
+                 a110 = gather_at(vol, base, _mm256_add_epi32(W, one));
+    const __m256 a001 = gather_at(vol, base, WH),
+                 a101 = gather_at(vol, base, _mm256_add_epi32(WH, one));
+    const __m256 a011 = gather_at(vol, base, WH_W),
+                 a111 = gather_at(vol, base, _mm256_add_epi32(WH_W, one));
+    const __m256 c00 = lerp(a000, a100, fx), c10 = lerp(a010, a110, fx);
+    const __m256 c01 = lerp(a001, a101, fx), c11 = lerp(a011, a111, fx);
+    const __m256 value = lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
+    tau_lo = _mm256_add_pd(tau_lo, _mm256_mul_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(value)),
+                                                 _mm256_cvtps_pd(_mm256_castps256_ps128(hl))));
+    tau_hi = _mm256_add_pd(tau_hi, _mm256_mul_pd(_mm256_cvtps_pd(_mm256_extractf128_ps(value, 1)),
+                                                 _mm256_cvtps_pd(_mm256_extractf128_ps(hl, 1))));
+  }
+  _mm256_storeu_pd(tau_out, tau_lo);
+  _mm256_storeu_pd(tau_out + 4, tau_hi);
+}
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
+#endif
+
+// The lanes' τ by the kernel of the SIMD level in use (the same bits either way).
+void march_sky_lanes(const PaddedLattice& pad, const SkyLaneRays& r, double* tau) {
+#ifdef CUMULI_X86_SKY
+  if (simd_level() != SimdLevel::Scalar) return march_sky_lanes_avx2(pad, r, tau);
+#endif
+  march_sky_lanes_portable(pad, r, tau);
+}
+
 // Lattice rays stand for the sphere's directions only where the voxels are near cubes.
 constexpr float kLatticeMaxAspect = 1.1f;
 
@@ -582,36 +789,46 @@ std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
     });
     return out;
   }
-  parallel_for(nv, threads, [&](std::size_t v) {
-    if (!near[v]) {
+  // Rays marched kSkyLanes voxels at a time (neighbours along x: rays of about one length).
+  const PaddedLattice pad(ext, g);
+  std::vector<std::size_t> marched;
+  for (std::size_t v = 0; v < nv; ++v) {
+    if (near[v])
+      marched.push_back(v);
+    else
       open_sky(v);
-      return;
-    }
-    const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),
-              z = static_cast<int>(v / (static_cast<std::size_t>(g.w) * g.h));
-    const glm::vec3 p = g.centre(x, y, z);
-    double vis[kMaxShOrder * kMaxShOrder] = {};
-    for (std::size_t k = 0; k < ndir; ++k) {
-      const glm::vec3 d = quad.dirs[k];
-      Interval span;
-      double tau = 0.0;
-      if (intersect(g.box, p, 1.0f / d, span) && span.t_out > 0.0f) {
-        const float len = span.t_out - std::max(span.t_in, 0.0f);
-        const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
-        const float h = len / static_cast<float>(n);
-        const float t0 = std::max(span.t_in, 0.0f);
-        // Samples at the segments' midpoints, stepped in voxel coordinates.
-        const glm::vec3 u0 = (p + (t0 + 0.5f * h) * d - g.box.lo) * inv_vs;
-        const glm::vec3 du = (h * d) * inv_vs;
-        for (int i = 0; i < n && tau <= kSkyDepthCut; ++i)
-          tau += static_cast<double>(
-                     trilinear_voxel(ext, g.w, g.h, g.d, u0 + static_cast<float>(i) * du)) *
-                 h;
+  }
+  const std::size_t groups = (marched.size() + kSkyLanes - 1) / kSkyLanes;
+  const glm::vec3 middle = 0.5f * (g.box.lo + g.box.hi);
+  parallel_for(groups, threads, [&](std::size_t group) {
+    const std::size_t first = group * kSkyLanes;
+    const int lanes = static_cast<int>(std::min<std::size_t>(kSkyLanes, marched.size() - first));
+    SkyLaneOrigins o;
+    for (int l = 0; l < kSkyLanes; ++l) {  // spare lanes march from the box's middle, unread
+      glm::vec3 p = middle;
+      if (l < lanes) {
+        const std::size_t v = marched[first + l];
+        const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),
+                  z = static_cast<int>(v / (static_cast<std::size_t>(g.w) * g.h));
+        p = g.centre(x, y, z);
       }
-      const double vw = std::exp(-tau) * quad.weights[k];
-      for (int c = 0; c < nc; ++c) vis[c] += vw * basis[k * nc + c];
+      o.x[l] = p.x, o.y[l] = p.y, o.z[l] = p.z;
     }
-    finish(v, vis);
+    double vis[kMaxShOrder * kMaxShOrder][kSkyLanes] = {};  // [coefficient][lane]
+    for (std::size_t k = 0; k < ndir; ++k) {
+      SkyLaneRays rays;
+      sky_lane_rays(o, quad.dirs[k], g.box, inv_vs, dt, rays);
+      double tau[kSkyLanes], vw[kSkyLanes];
+      march_sky_lanes(pad, rays, tau);
+      for (int l = 0; l < kSkyLanes; ++l) vw[l] = std::exp(-tau[l]) * quad.weights[k];
+      for (int c = 0; c < nc; ++c)
+        for (int l = 0; l < kSkyLanes; ++l) vis[c][l] += vw[l] * basis[k * nc + c];
+    }
+    for (int l = 0; l < lanes; ++l) {
+      double moments[kMaxShOrder * kMaxShOrder];
+      for (int c = 0; c < nc; ++c) moments[c] = vis[c][l];
+      finish(marched[first + l], moments);
+    }
   });
   return out;
 }
