@@ -938,6 +938,12 @@ void medium_of(MediumArgs& m, const py::list& clouds, const py::list& volumes, c
   }
 }
 
+SkyRays sky_rays_of(const std::string& method) {
+  if (method == "march") return SkyRays::March;
+  if (method == "lattice") return SkyRays::Lattice;
+  throw py::value_error("method must be 'lattice' or 'march', got '" + method + "'");
+}
+
 SunFrame frame_of(const py::tuple& t) {
   if (t.size() != 6) throw py::value_error("frame must be (u, v, w, lo, hi, res)");
   SunFrame f;
@@ -980,24 +986,28 @@ void bind_physical_light(py::module_& m) {
       "light_space_depth",
       [](const py::list& clouds, const py::list& volumes, const Noise* noise, int octaves,
          float gain, float lacunarity, float frequency, const py::tuple& frame, float step,
-         int threads) {
+         int threads, double depth_cut) {
         MediumArgs args;
         medium_of(args, clouds, volumes, noise, octaves, gain, lacunarity, frequency);
         const SunFrame f = frame_of(frame);
         if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");
+        if (!(depth_cut > 0.0))
+          throw py::value_error("depth_cut must be > 0 (inf: march every column to its end)");
         if (static_cast<double>(f.hi.z - f.lo.z) / step > (1 << 22))
           throw py::value_error("step is too small for the frame's depth");
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = light_space_depth(args.medium, f, step, threads);
+          out = light_space_depth(args.medium, f, step, threads, depth_cut);
         }
         return to_array(out, {f.res[2], f.res[1], f.res[0]});
       },
       py::arg("clouds"), py::arg("volumes"), py::arg("noise").none(true), py::arg("octaves"),
       py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"), py::arg("frame"),
-      py::arg("step"), py::arg("threads") = 0,
-      "Optical depth from the sun-side face of a light frame to each node: (nw, nv, nu).");
+      py::arg("step"), py::arg("threads") = 0, py::arg("depth_cut") = INFINITY,
+      "Optical depth from the sun-side face of a light frame to each node: (nw, nv, nu). Each\n"
+      "drawable's march along a column ends after the segment where its depth exceeds depth_cut:\n"
+      "nodes before keep their exact depth, nodes after hold a depth above the cut.");
 
   m.def(
       "medium_optical_depth",
@@ -1052,9 +1062,7 @@ void bind_physical_light(py::module_& m) {
       [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sky_coeffs, int order, int n_theta,
          float step, int threads, const std::string& method) {
         const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
-        if (method != "lattice" && method != "march")
-          throw py::value_error("method must be 'lattice' or 'march', got '" + method + "'");
-        const SkyRays how = method == "lattice" ? SkyRays::Lattice : SkyRays::March;
+        const SkyRays how = sky_rays_of(method);
         if (order < 1 || order > kMaxShOrder) throw py::value_error("sh_order must be in [1, 4]");
         if (n_theta < 1 || n_theta > 64) throw py::value_error("sh_samples must be in [1, 64]");
         if (sky_coeffs.size() != 3 * order * order)
@@ -1080,9 +1088,7 @@ void bind_physical_light(py::module_& m) {
       [](const FloatArray& ext, V3 lo, V3 hi, int order, int n_theta, float step, int threads,
          const std::string& method) {
         const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
-        if (method != "lattice" && method != "march")
-          throw py::value_error("method must be 'lattice' or 'march', got '" + method + "'");
-        const SkyRays how = method == "lattice" ? SkyRays::Lattice : SkyRays::March;
+        const SkyRays how = sky_rays_of(method);
         if (order < 1 || order > kMaxShOrder) throw py::value_error("sh_order must be in [1, 4]");
         if (n_theta < 1 || n_theta > 64) throw py::value_error("sh_samples must be in [1, 64]");
         if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");

@@ -1041,9 +1041,11 @@ def light_grid(cloud: CloudShape, noise: Noise, sun_dir: typing.Annotated[collec
     """
     Light grid L(v) [z, y, x] (see cumuli.light_grid). Returns (grid, samples, lo, hi, total_samples, seconds).
     """
-def light_space_depth(clouds: list, volumes: list, noise: Noise, octaves: typing.SupportsInt | typing.SupportsIndex, gain: typing.SupportsFloat | typing.SupportsIndex, lacunarity: typing.SupportsFloat | typing.SupportsIndex, frequency: typing.SupportsFloat | typing.SupportsIndex, frame: tuple, step: typing.SupportsFloat | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> numpy.typing.NDArray[numpy.float32]:
+def light_space_depth(clouds: list, volumes: list, noise: Noise, octaves: typing.SupportsInt | typing.SupportsIndex, gain: typing.SupportsFloat | typing.SupportsIndex, lacunarity: typing.SupportsFloat | typing.SupportsIndex, frequency: typing.SupportsFloat | typing.SupportsIndex, frame: tuple, step: typing.SupportsFloat | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex = 0, depth_cut: typing.SupportsFloat | typing.SupportsIndex = ...) -> numpy.typing.NDArray[numpy.float32]:
     """
-    Optical depth from the sun-side face of a light frame to each node: (nw, nv, nu).
+    Optical depth from the sun-side face of a light frame to each node: (nw, nv, nu). Each
+    drawable's march along a column ends after the segment where its depth exceeds depth_cut:
+    nodes before keep their exact depth, nodes after hold a depth above the cut.
     """
 def light_volume(arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg1: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg2: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg3: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg4: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg5: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg6: typing.SupportsFloat | typing.SupportsIndex, arg7: typing.SupportsInt | typing.SupportsIndex, arg8: bool, arg9: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg10: typing.SupportsFloat | typing.SupportsIndex, arg11: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.float32]:
     """

@@ -11,6 +11,7 @@ import pytest
 
 import cumuli as cu
 from cumuli import _core
+from cumuli.light import physical
 from cumuli.light.physical import OCTAVES, octave_sum, physical_light
 from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
 from cumuli.sky import sky_args
@@ -155,7 +156,7 @@ def test_sun_depth_matches_a_brute_force_march() -> None:
     cloud, s = scene.clouds[0], scene.settings
     lo, hi = (np.asarray(b) for b in light.box)
     rng = np.random.default_rng(3)
-    pts = (lo + (hi - lo) * rng.uniform(0.2, 0.8, size=(25, 3))).astype(F)
+    pts = (lo + (hi - lo) * rng.uniform(0.2, 0.8, size=(40, 3))).astype(F)
     sun = np.asarray(scene.sun.direction)
     # τ from p to the lattice's sun-side face (which lies beyond the cloud): march to the box.
     got = light.sample_depth(pts)
@@ -169,8 +170,16 @@ def test_sun_depth_matches_a_brute_force_march() -> None:
         rho, _ = cloud.density((p + ts[:, None] * sun).astype(F), scene.noise, **s.fbm_params())
         want.append(s.extinction_scale * rho.sum() * ds)
     want = np.array(want)
-    # Trilinear between lattice nodes: close where the depth varies smoothly.
-    assert np.median(np.abs(got - want) / np.maximum(want, 1.0)) < 0.1
+    # The march stops past SUN_DEPTH_CUT (no light is left): deeper points hold a depth above it.
+    cut = physical.SUN_DEPTH_CUT
+    shallow, deep = want < 0.8 * cut, want > 1.2 * cut
+    assert shallow.sum() >= 15, want
+    assert np.all(got[deep] > cut) and np.all(got[deep] <= 1.05 * want[deep])
+    # Trilinear between lattice nodes: close where the depth varies smoothly (the shallow points
+    # include the cloud's fringe, where a node's depth differs most from a point's).
+    got, want = got[shallow], want[shallow]
+    assert np.median(np.abs(got - want)) < 1.5
+    assert abs(np.mean(got - want)) < 1.0
     assert np.corrcoef(got, want)[0, 1] > 0.97
 
 

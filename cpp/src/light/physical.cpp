@@ -54,11 +54,16 @@ MarchSamples& march_samples() {
 // Calls visit(s, σt, ℓ) for the segments of o + t·d, t in [t0, t1], inside the union of the
 // cloud's candidate intervals: segments of at most `step` from each union interval's start (the
 // last one cut at its end), σt at the midpoint s with the union attribution rule. The samples
-// are laid out first and the fBm of those that can hold density evaluated in one bulk call
-// (the SIMD kernels): the same values as one cloud_density per sample, visited in order.
+// are laid out first and the fBm of those that can hold density evaluated in bulk calls (the
+// SIMD kernels): the same values as one cloud_density per sample, visited in order.
+//
+// With a finite `stop_depth` the samples are laid out and evaluated a chunk at a time and the
+// march ends after the segment where the optical depth visited so far exceeds it: the segments
+// visited are the first ones of the unstopped march, bit for bit.
 template <class Visit>
 void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float t1, float step,
-                 Visit&& visit, const std::vector<int>* subset = nullptr) {
+                 Visit&& visit, const std::vector<int>* subset = nullptr,
+                 double stop_depth = INFINITY) {
   Candidate cand[kMaxCandidates];
   const CloudShape& shape = *c.shape;
   const int n = subset == nullptr
@@ -67,85 +72,115 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
                                          d, t0, t1, cand, kMaxCandidates, true);
   if (n == 0) return;
   const bool attribute = shape.density.model == DensityModel::Spheroid;
+  const bool stops = std::isfinite(stop_depth);
+  constexpr std::size_t kStopChunk = 64;  // samples laid out between checks of the depth
   MarchSamples& m = march_samples();
-  m.clear();
   // union_owner's rule, kept incrementally (s only grows along the march): `active` holds the
   // candidates that cover s, in candidate order; the owner is the one with the smallest |q|, the
   // first on ties, and its |q| is the one eq. (2) needs.
   int active[kMaxCandidates];
   int n_active = 0, next = 0;
+  // Where the layout stands: candidate k, ray parameter t, and whether t lies in k's interval.
+  int k = 0;
   float t = -INFINITY;
-  for (int k = 0; k < n; ++k) {
-    if (cand[k].t_out <= t) continue;
-    t = std::max(t, cand[k].t_in);
-    while (t < cand[k].t_out) {
-      const float end = std::min(t + step, cand[k].t_out);
-      const float s = 0.5f * (t + end);
-      const glm::vec3 p = o + s * d;
-      bool dense = false;
-      if (attribute) {
-        int kept = 0;
-        for (int a = 0; a < n_active; ++a)
-          if (!(s > cand[active[a]].t_out)) active[kept++] = active[a];
-        n_active = kept;
-        for (; next < n && cand[next].t_in <= s; ++next)
-          if (!(s > cand[next].t_out)) active[n_active++] = next;
-        // |q|² of a candidate's primitive: normalised_distance is its square root, and the
-        // square root of the smallest |q|² is the smallest |q| (sqrt is correctly rounded, so
-        // monotonic): one root per sample.
-        const auto q2_of = [&](int c) {
-          const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[c].primitive)];
-          const glm::vec3 l = e.to_local(p);
-          return glm::dot(l, l);
-        };
-        float q2 = 0.0f;
-        if (n_active == 0) {
-          q2 = q2_of(k);  // rounding left s just past every interval: the marched candidate
-        } else {
-          q2 = q2_of(active[0]);
-          for (int a = 1; a < n_active; ++a) q2 = std::min(q2, q2_of(active[a]));
-        }
-        const float q = std::sqrt(q2);
-        dense = q <= 1.0f;
-        if (dense) m.q.push_back(q);
-      } else {
-        dense = metaball_inside(shape, p);
+  bool in_interval = false;
+  // Lays out the next samples (all of them, or kStopChunk when the march may stop); false once
+  // the ray's candidates are done.
+  const auto lay_out = [&]() {
+    m.clear();
+    for (; k < n; ++k) {
+      if (!in_interval) {
+        if (cand[k].t_out <= t) continue;
+        t = std::max(t, cand[k].t_in);
+        in_interval = true;
       }
-      m.dense.push_back(dense ? static_cast<int>(m.pts.size() / 3) : -1);
-      if (dense) m.pts.insert(m.pts.end(), {p.x, p.y, p.z});
-      m.s.push_back(s);
-      m.len.push_back(end - t);
-      t = end;
+      while (t < cand[k].t_out) {
+        if (stops && m.s.size() == kStopChunk) return true;
+        const float end = std::min(t + step, cand[k].t_out);
+        const float s = 0.5f * (t + end);
+        const glm::vec3 p = o + s * d;
+        bool dense = false;
+        if (attribute) {
+          int kept = 0;
+          for (int a = 0; a < n_active; ++a)
+            if (!(s > cand[active[a]].t_out)) active[kept++] = active[a];
+          n_active = kept;
+          for (; next < n && cand[next].t_in <= s; ++next)
+            if (!(s > cand[next].t_out)) active[n_active++] = next;
+          // |q|² of a candidate's primitive: normalised_distance is its square root, and the
+          // square root of the smallest |q|² is the smallest |q| (sqrt is correctly rounded, so
+          // monotonic): one root per sample.
+          const auto q2_of = [&](int c) {
+            const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[c].primitive)];
+            const glm::vec3 l = e.to_local(p);
+            return glm::dot(l, l);
+          };
+          float q2 = 0.0f;
+          if (n_active == 0) {
+            q2 = q2_of(k);  // rounding left s just past every interval: the marched candidate
+          } else {
+            q2 = q2_of(active[0]);
+            for (int a = 1; a < n_active; ++a) q2 = std::min(q2, q2_of(active[a]));
+          }
+          const float q = std::sqrt(q2);
+          dense = q <= 1.0f;
+          if (dense) m.q.push_back(q);
+        } else {
+          dense = metaball_inside(shape, p);
+        }
+        m.dense.push_back(dense ? static_cast<int>(m.pts.size() / 3) : -1);
+        if (dense) m.pts.insert(m.pts.end(), {p.x, p.y, p.z});
+        m.s.push_back(s);
+        m.len.push_back(end - t);
+        t = end;
+      }
+      in_interval = false;
     }
-  }
-  const std::size_t count = m.pts.size() / 3;
-  m.fbm.resize(count);
-  c.source.many(m.pts.data(), count, m.fbm.data());
+    return false;
+  };
   const float kappa = shape.density.kappa;
-  for (std::size_t i = 0; i < m.s.size(); ++i) {
-    const int g = m.dense[i];
-    float rho = 0.0f;
-    if (g >= 0) {
-      const std::size_t gi = static_cast<std::size_t>(g);
-      rho = attribute ? spheroid_density_given(kappa, m.q[gi], m.fbm[gi]).rho
-                      : metaball_rho(shape, m.fbm[gi]);
+  double tau = 0.0;
+  bool more = true;
+  while (more) {
+    more = lay_out();
+    const std::size_t count = m.pts.size() / 3;
+    m.fbm.resize(count);
+    c.source.many(m.pts.data(), count, m.fbm.data());
+    for (std::size_t i = 0; i < m.s.size(); ++i) {
+      const int g = m.dense[i];
+      float rho = 0.0f;
+      if (g >= 0) {
+        const std::size_t gi = static_cast<std::size_t>(g);
+        rho = attribute ? spheroid_density_given(kappa, m.q[gi], m.fbm[gi]).rho
+                        : metaball_rho(shape, m.fbm[gi]);
+      }
+      const float sigma = c.scale * rho;
+      visit(m.s[i], sigma, m.len[i]);
+      if (stops) {
+        tau += static_cast<double>(sigma) * m.len[i];
+        if (tau > stop_depth) return;
+      }
     }
-    visit(m.s[i], c.scale * rho, m.len[i]);
   }
 }
 
+// As march_cloud, for a volume's trilinear lattice: segments of equal length across its box.
 template <class Visit>
 void march_volume(const VolumeMedium& v, glm::vec3 o, glm::vec3 d, float t0, float t1, float step,
-                  Visit&& visit) {
+                  Visit&& visit, double stop_depth = INFINITY) {
   Interval span;
   if (!intersect(v.grid.box, o, 1.0f / d, span)) return;
   const float a = std::max(span.t_in, t0), b = std::min(span.t_out, t1);
   if (!(b > a)) return;
   const int n = std::max(1, static_cast<int>(std::ceil((b - a) / step)));
   const float h = (b - a) / static_cast<float>(n);
+  double tau = 0.0;
   for (int i = 0; i < n; ++i) {
     const float s = a + (static_cast<float>(i) + 0.5f) * h;
-    visit(s, v.scale * sample_trilinear(v.density, v.grid, o + s * d), h);
+    const float sigma = v.scale * sample_trilinear(v.density, v.grid, o + s * d);
+    visit(s, sigma, h);
+    tau += static_cast<double>(sigma) * h;
+    if (tau > stop_depth) return;
   }
 }
 
@@ -277,9 +312,10 @@ float Medium::optical_depth(glm::vec3 o, glm::vec3 d, float step) const {
 }
 
 std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, float step,
-                                     int threads) {
+                                     int threads, double depth_cut) {
   f.validate();
   if (!(step > 0.0f) || !std::isfinite(step)) throw std::invalid_argument("step must be > 0");
+  if (!(depth_cut > 0.0)) throw std::invalid_argument("depth_cut must be > 0");
   const std::size_t nu = static_cast<std::size_t>(f.res[0]),
                     nv = static_cast<std::size_t>(f.res[1]),
                     nw = static_cast<std::size_t>(f.res[2]);
@@ -328,10 +364,10 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
           subset.push_back(static_cast<int>(k));
       }
       if (!subset.empty())
-        march_cloud(medium.clouds[m], origin, f.w, 0.0f, length, step, keep, &subset);
+        march_cloud(medium.clouds[m], origin, f.w, 0.0f, length, step, keep, &subset, depth_cut);
     }
     for (const VolumeMedium& v : medium.volumes)
-      march_volume(v, origin, f.w, 0.0f, length, step, keep);
+      march_volume(v, origin, f.w, 0.0f, length, step, keep, depth_cut);
     if (segs.empty()) return;
     // τ(t) = Σ over segments of σ·|[a, b] ∩ [0, t]|, at the nodes t_k = (k + ½)·dw.
     auto earlier = [](const auto& a, const auto& b) { return a[0] < b[0]; };
@@ -746,30 +782,20 @@ std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
   };
   const auto open_sky = [&](std::size_t v) { out[v * nc] = static_cast<double>(open); };
   const float aspect = std::max(vs.x, std::max(vs.y, vs.z)) / std::min(vs.x, std::min(vs.y, vs.z));
-  if (rays == SkyRays::Lattice && aspect <= kLatticeMaxAspect) {
-    // τ of every voxel along each lattice direction by its recurrence, a few directions at a
-    // time; each voxel's moments summed over the directions in their order, so the result does
-    // not depend on the thread count.
-    const std::vector<LatticeDirection> dirs = lattice_directions();
-    const std::size_t nd = dirs.size();
-    std::vector<float> lbasis(nd * nc);
-    for (std::size_t k = 0; k < nd; ++k)
-      sh_eval(order, glm::normalize(glm::vec3(dirs[k].step) * vs), &lbasis[k * nc]);
+  // Lattice rays: τ of every voxel along one direction in one pass over the lattice,
+  // a few directions at a time (one per thread); each voxel's moments summed over the directions
+  // in their order, so the result does not depend on the thread count.
+  const auto by_direction = [&](std::size_t nd, const std::vector<float>& wy, auto&& depth_along) {
     const std::size_t batch =
         std::min<std::size_t>(nd, std::max<std::size_t>(resolve_threads(threads, nd), 1));
     std::vector<float> depth(batch * nv);
-    std::vector<float> wy(nd * nc);  // weight × basis, per direction
-    for (std::size_t k = 0; k < nd; ++k)
-      for (int c = 0; c < nc; ++c) wy[k * nc + c] = dirs[k].weight * lbasis[k * nc + c];
     std::vector<float> moments(static_cast<std::size_t>(nc) * nv, 0.0f);  // [c][v]
     constexpr std::size_t kChunk = 4096;
     const std::size_t chunks = (nv + kChunk - 1) / kChunk;
     for (std::size_t k0 = 0; k0 < nd; k0 += batch) {
       const std::size_t kn = std::min(batch, nd - k0);
-      parallel_for(kn, threads, [&](std::size_t j) {
-        lattice_optical_depth(ext, g, dirs[k0 + j].step, depth.data() + j * nv);
-      });
-      // Each voxel's sums run over the directions in their order: the same on any thread count.
+      parallel_for(kn, threads,
+                   [&](std::size_t j) { depth_along(k0 + j, j, depth.data() + j * nv); });
       parallel_for(chunks, threads, [&](std::size_t b) {
         float scratch[kChunk];
         const std::size_t vb = b * kChunk, ve = std::min(nv, vb + kChunk);
@@ -786,6 +812,19 @@ std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
       double vis[kMaxShOrder * kMaxShOrder];
       for (int c = 0; c < nc; ++c) vis[c] = moments[static_cast<std::size_t>(c) * nv + v];
       finish(v, vis);
+    });
+  };
+  if (rays == SkyRays::Lattice && aspect <= kLatticeMaxAspect) {
+    const std::vector<LatticeDirection> dirs = lattice_directions();
+    const std::size_t nd = dirs.size();
+    std::vector<float> lbasis(nd * nc);
+    for (std::size_t k = 0; k < nd; ++k)
+      sh_eval(order, glm::normalize(glm::vec3(dirs[k].step) * vs), &lbasis[k * nc]);
+    std::vector<float> wy(nd * nc);  // weight × basis, per direction
+    for (std::size_t k = 0; k < nd; ++k)
+      for (int c = 0; c < nc; ++c) wy[k * nc + c] = dirs[k].weight * lbasis[k * nc + c];
+    by_direction(nd, wy, [&](std::size_t k, std::size_t, float* depth) {
+      lattice_optical_depth(ext, g, dirs[k].step, depth);
     });
     return out;
   }

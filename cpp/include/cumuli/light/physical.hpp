@@ -24,6 +24,7 @@
 //    at the surface see the fluence there.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <vector>
 
@@ -78,8 +79,11 @@ struct Medium {
 
 // τ at every node of `frame` ([w][v][u] floats): the optical depth of `medium` from the frame's
 // sun-side face (w = lo.w) to the node along +w, marched in segments of at most `step`.
+// `depth_cut` (> 0; infinite: none) ends each drawable's march along a column after the segment
+// where its depth exceeds the cut: a node keeps the exact value unless that segment ends before
+// it, and then holds a depth above the cut (the light beyond, e^−cut, is not worth marching).
 std::vector<float> light_space_depth(const Medium& medium, const SunFrame& frame, float step,
-                                     int threads);
+                                     int threads, double depth_cut = INFINITY);
 
 // The sky visibility's rays: Lattice, the 26 steps to a voxel's neighbours (Lebedev's 26-point
 // rule where voxels are cubes; τ exact for the trilinear field, one pass over the lattice per
