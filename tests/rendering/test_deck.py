@@ -53,13 +53,15 @@ def test_the_deck_is_registered_once_with_every_stage() -> None:
 def test_the_deck_is_drawn_as_its_lattice(deck: cu.CloudDeck, lighting: str) -> None:
     # The deck's light and drawer are its baked volume's: the same picture, bit for bit in the
     # paper mode; in the physical mode its sun rays march at its own step (half a cell, where a
-    # volume takes settings.light_step), which moves the picture by less than 1e-3 of itself.
+    # volume takes settings.light_step), which moves the picture by less than 2e-3 of itself
+    # (0.16 % at most since the sun lattice holds four nodes per cell along the light, whose
+    # spacing no longer bounds both steps alike).
     as_deck = cu.render(scene([deck], lighting), CAMERA, W, H, backend="cpu")
     as_volume = cu.render(scene([deck.to_volume()], lighting), CAMERA, W, H, backend="cpu")
     if lighting == "paper":
         np.testing.assert_array_equal(as_deck, as_volume)
     else:
-        np.testing.assert_allclose(as_deck, as_volume, rtol=1e-3, atol=1e-3)
+        np.testing.assert_allclose(as_deck, as_volume, rtol=2e-3, atol=1e-3)
     assert (as_deck[..., 3] > 0.5).mean() > 0.3  # the camera looks into the deck
     assert np.isfinite(as_deck).all()
 
