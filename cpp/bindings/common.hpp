@@ -7,6 +7,8 @@
 
 #include <array>
 #include <cmath>
+#include <memory>
+#include <stdexcept>
 #include <string>
 #include <type_traits>
 #include <utility>
@@ -69,6 +71,22 @@ VolumeGrid grid_of(const FloatArray& vols, int lead, const V3& lo, const V3& hi,
 // A float32 / float64 array holding a copy of `v`.
 py::array_t<float> to_array(const std::vector<float>& v, const std::vector<py::ssize_t>& shape);
 py::array_t<double> to_array_d(const std::vector<double>& v, py::ssize_t n);
+
+// An array over `v`'s own storage, no copy (the array keeps the vector alive): for the large
+// results of the light step, whose copy and fresh pages cost as much as some of its stages.
+template <class T>
+py::array_t<T> adopt_array(std::vector<T>&& v, const std::vector<py::ssize_t>& shape) {
+  py::ssize_t count = 1;
+  for (const py::ssize_t n : shape) count *= n;
+  if (count != static_cast<py::ssize_t>(v.size()))
+    throw std::logic_error("adopt_array: the shape does not hold the vector's values");
+  if (v.empty()) return py::array_t<T>(shape);
+  auto holder = std::make_unique<std::vector<T>>(std::move(v));
+  T* data = holder->data();
+  py::capsule owner(holder.get(), [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  holder.release();  // the capsule owns it now
+  return py::array_t<T>(shape, data, owner);
+}
 
 // The sky as Python passes it: a SkyParams, or the tuple (zenith, horizon, ground, exponent,
 // disc radius, disc intensity).

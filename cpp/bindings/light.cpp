@@ -1000,7 +1000,7 @@ void bind_physical_light(py::module_& m) {
           py::gil_scoped_release release;
           out = light_space_depth(args.medium, f, step, threads, depth_cut);
         }
-        return to_array(out, {f.res[2], f.res[1], f.res[0]});
+        return adopt_array(std::move(out), {f.res[2], f.res[1], f.res[0]});
       },
       py::arg("clouds"), py::arg("volumes"), py::arg("noise").none(true), py::arg("octaves"),
       py::arg("gain"), py::arg("lacunarity"), py::arg("frequency"), py::arg("frame"),
@@ -1098,11 +1098,10 @@ void bind_physical_light(py::module_& m) {
           py::gil_scoped_release release;
           vis = sky_visibility(e, g, order, n_theta, step, threads, how);
         }
-        py::array_t<double> out({static_cast<py::ssize_t>(g.d), static_cast<py::ssize_t>(g.h),
-                                 static_cast<py::ssize_t>(g.w),
-                                 static_cast<py::ssize_t>(order * order)});
-        std::copy(vis.begin(), vis.end(), out.mutable_data());
-        return out;
+        return adopt_array(
+            std::move(vis),
+            {static_cast<py::ssize_t>(g.d), static_cast<py::ssize_t>(g.h),
+             static_cast<py::ssize_t>(g.w), static_cast<py::ssize_t>(order * order)});
       },
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("order"), py::arg("n_theta"),
       py::arg("step"), py::arg("threads") = 0, py::arg("method") = "march",
@@ -1130,7 +1129,8 @@ void bind_physical_light(py::module_& m) {
           py::gil_scoped_release release;
           out = sky_irradiance_from(v, voxels, s, order);
         }
-        return to_array(out, {visibility.shape(0), visibility.shape(1), visibility.shape(2), 3});
+        return adopt_array(std::move(out),
+                           {visibility.shape(0), visibility.shape(1), visibility.shape(2), 3});
       },
       py::arg("visibility"), py::arg("sky_coeffs"),
       "Sky irradiance (D, H, W, 3) from sky_visibility's moments and a sky's SH coefficients: "
@@ -1176,7 +1176,7 @@ void bind_physical_light(py::module_& m) {
           add_sun_flux_source(q, channels, e, g, st, v3(to_sun), albedo, mean_cosine, forward);
           out = diffusion_fluence(e, g, q.data(), channels, p, threads);
         }
-        return to_array(out, {g.d, g.h, g.w, channels});
+        return adopt_array(std::move(out), {g.d, g.h, g.w, channels});
       },
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sun_t"), py::arg("to_sun"),
       py::arg("sky_e").none(true), py::arg("albedo"), py::arg("mean_cosine"),

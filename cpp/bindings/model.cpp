@@ -324,7 +324,7 @@ void bind_shapes(py::module_& m) {
           py::gil_scoped_release release;
           out = density_grid(cloud, src, box, res.data(), supersample, threads);
         }
-        return to_array(out, {res[2], res[1], res[0]});
+        return adopt_array(std::move(out), {res[2], res[1], res[0]});
       },
       py::arg("cloud"), py::arg("noise").none(true), py::arg("constant"), py::arg("fbm"),
       py::arg("lo"), py::arg("hi"), py::arg("res"), py::arg("supersample") = 1,
