@@ -1041,7 +1041,7 @@ void bind_physical_light(py::module_& m) {
 
   m.def(
       "sample_frame",
-      [](const FloatArray& values, const py::tuple& frame, const FloatArray& points) {
+      [](const FloatArray& values, const py::tuple& frame, const FloatArray& points, int threads) {
         const SunFrame f = frame_of(frame);
         if (values.ndim() != 3 || values.shape(0) != f.res[2] || values.shape(1) != f.res[1] ||
             values.shape(2) != f.res[0])
@@ -1049,12 +1049,18 @@ void bind_physical_light(py::module_& m) {
         require_points(points, "points");
         const py::ssize_t n = points.shape(0);
         auto out = new_array({n});
-        for (py::ssize_t i = 0; i < n; ++i) {
-          const float* p = points.data() + 3 * i;
-          out.mutable_data()[i] = sample_frame(values.data(), f, glm::vec3(p[0], p[1], p[2]));
+        float* o = out.mutable_data();
+        const float *v = values.data(), *pts = points.data();
+        {
+          py::gil_scoped_release release;
+          parallel_for(static_cast<std::size_t>(n), threads, [&](std::size_t i) {
+            const float* p = pts + 3 * i;
+            o[i] = sample_frame(v, f, glm::vec3(p[0], p[1], p[2]));
+          });
         }
         return out;
       },
+      py::arg("values"), py::arg("frame"), py::arg("points"), py::arg("threads") = 0,
       "Trilinear values of a light-frame lattice at (N, 3) world points.");
 
   m.def(

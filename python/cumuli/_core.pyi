@@ -1135,7 +1135,7 @@ def render_volume_cpu(density: typing.Annotated[numpy.typing.ArrayLike, numpy.fl
     """
     CPU emission–absorption march of a lit density volume: (H, W, 4) float32, row 0 on top. camera: a VolumeCamera; params: VolumeRenderParams (image, sun, sky, medium; physical with its PhysicalParams and physical_light); solids (n, 4) stop every ray at the nearest solid; noise: the fBm lattice of the physical mode's detail (params.detail > 0).
     """
-def sample_frame(arg0: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], arg1: tuple, arg2: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> numpy.typing.NDArray[numpy.float32]:
+def sample_frame(values: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], frame: tuple, points: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], threads: typing.SupportsInt | typing.SupportsIndex = 0) -> numpy.typing.NDArray[numpy.float32]:
     """
     Trilinear values of a light-frame lattice at (N, 3) world points.
     """

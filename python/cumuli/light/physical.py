@@ -295,7 +295,7 @@ def physical_light(
     d, h, w = ext.shape
     with _stage(timings, "sun_transmittance"):
         centres = _lattice_centres(lo, hi, (w, h, d))
-        tau = _core.sample_frame(depth, frame, centres)
+        tau = _core.sample_frame(depth, frame, centres, threads)
         sun_t = np.exp(-tau).astype(np.float32).reshape(ext.shape)
     grid = np.zeros((d, h, w, 4), np.float32)
     sky_e = None
