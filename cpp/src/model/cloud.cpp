@@ -89,7 +89,11 @@ DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
 bool metaball_inside(const CloudShape& cloud, glm::vec3 p) {
   float field = 0.0f;
   for (const auto& e : cloud.primitives) {
-    const glm::vec3 q = e.to_local(p);
+    // to_local without the rotation where it is the identity: the same |q|² bit for bit (at
+    // most the sign of a zero changes, which the square takes off).
+    const glm::vec3 v = p - e.centre;
+    const glm::vec3 q =
+        (e.rotation == glm::mat3(1.0f) ? v : glm::transpose(e.rotation) * v) / e.radii;
     const float d2 = glm::dot(q, q);
     if (d2 <= 1e-12f) return true;
     field += 1.0f / d2;
