@@ -50,6 +50,30 @@ def work_lines(render_cpu: dict[str, Any]) -> list[str]:
         "follow); it saves density evaluations of empty samples (metaball clouds). The fBm "
         "saving comes from the early exit."
     )
+    return lines + [""] + hd_lines(render_cpu)
+
+
+def hd_lines(render_cpu: dict[str, Any]) -> list[str]:
+    """The 1080p physical frame on the CPU twin against its limit, per noise version."""
+    hd = render_cpu.get("hd")
+    if not hd or "target" not in hd:
+        return []
+    t = hd["target"]
+    w, h = hd["image"]
+    lines = [
+        f"### A {w}×{h} physical frame on the CPU twin (bench_render_cpu)",
+        "",
+        f"{t.get('measure', '')}; median of the repeats.",
+        "",
+    ]
+    rows = [
+        [f"noise version {v}", f"{r['wall_s']['median']:.3f}", f"{r['fbm_bulk_share']:.0%}"]
+        for v, r in sorted(hd["versions"].items())
+    ]
+    lines += table(["scene", "seconds", "share in the bulk fBm"], rows)
+    reached = t.get("reached")
+    shown = "n/a" if reached is None else f"{reached:.3f} s ({verdict(t.get('met'))})"
+    lines.append(f"Target: ≤ {t['limit']:g} s on {hd['threads']} threads; reached {shown}.")
     return lines + [""]
 
 
