@@ -19,6 +19,14 @@ struct Ellipsoid {
   glm::vec3 to_local(glm::vec3 p) const {
     return (glm::transpose(rotation) * (p - centre)) / radii;
   }
+  bool unrotated() const { return rotation == glm::mat3(1.0f); }
+  // to_local with the rotation skipped when `identity` (= unrotated(), known to the caller):
+  // the identity's products and sums give the vector itself, changing at most the sign of a
+  // zero, so |q|² (the square takes the sign off) is to_local's bit for bit.
+  glm::vec3 to_local_given(glm::vec3 p, bool identity) const {
+    const glm::vec3 v = p - centre;
+    return (identity ? v : glm::transpose(rotation) * v) / radii;
+  }
   // |q|: 0 at the centre, 1 on the surface. Inline: the light step and the marchers call it
   // once per sample and primitive.
   float normalised_distance(glm::vec3 p) const { return glm::length(to_local(p)); }

@@ -74,8 +74,7 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
   const bool attribute = shape.density.model == DensityModel::Spheroid;
   bool unrotated[kMaxCandidates];
   for (int j = 0; j < n; ++j)
-    unrotated[j] =
-        shape.primitives[static_cast<std::size_t>(cand[j].primitive)].rotation == glm::mat3(1.0f);
+    unrotated[j] = shape.primitives[static_cast<std::size_t>(cand[j].primitive)].unrotated();
   const bool stops = std::isfinite(stop_depth);
   constexpr std::size_t kStopChunk = 64;  // samples laid out between checks of the depth
   MarchSamples& m = march_samples();
@@ -116,10 +115,7 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
           // monotonic): one root per sample.
           const auto q2_of = [&](int c) {
             const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[c].primitive)];
-            const glm::vec3 v = p - e.centre;
-            // to_local without the rotation where it is the identity: at most the sign of a
-            // zero changes, which the square takes off (the same |q|² bit for bit).
-            const glm::vec3 l = (unrotated[c] ? v : glm::transpose(e.rotation) * v) / e.radii;
+            const glm::vec3 l = e.to_local_given(p, unrotated[c]);
             return glm::dot(l, l);
           };
           float q2 = 0.0f;

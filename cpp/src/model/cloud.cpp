@@ -89,11 +89,7 @@ DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
 bool metaball_inside(const CloudShape& cloud, glm::vec3 p) {
   float field = 0.0f;
   for (const auto& e : cloud.primitives) {
-    // to_local without the rotation where it is the identity: the same |q|² bit for bit (at
-    // most the sign of a zero changes, which the square takes off).
-    const glm::vec3 v = p - e.centre;
-    const glm::vec3 q =
-        (e.rotation == glm::mat3(1.0f) ? v : glm::transpose(e.rotation) * v) / e.radii;
+    const glm::vec3 q = e.to_local_given(p, e.unrotated());
     const float d2 = glm::dot(q, q);
     if (d2 <= 1e-12f) return true;
     field += 1.0f / d2;
@@ -148,9 +144,8 @@ void min_q2(const Ellipsoid& e, const float* x, const float* y, const float* z, 
             float* q2) {
   const glm::mat3& r = e.rotation;
   const glm::vec3 c = e.centre, rad = e.radii;
-  if (r == glm::mat3(1.0f)) {
-    // The identity's products and sums give v itself (at most the sign of a zero changes, which
-    // the square takes off): the same |q|² bit for bit, without them.
+  if (e.unrotated()) {
+    // Ellipsoid::to_local_given's shortcut, written out per point: the same |q|² bit for bit.
     for (int i = 0; i < count; ++i) {
       const float lx = (x[i] - c.x) / rad.x, ly = (y[i] - c.y) / rad.y, lz = (z[i] - c.z) / rad.z;
       const float d = lx * lx + ly * ly + lz * lz;
