@@ -303,7 +303,7 @@ def physical_light(
         with _stage(timings, "sky"):
             visibility = remember(
                 (*medium_key, "sky visibility", SKY_ORDER, SKY_SAMPLES, SKY_RAYS),
-                lambda: _frozen(
+                lambda: _read_only(
                     _core.sky_visibility(
                         ext, lo, hi, SKY_ORDER, SKY_SAMPLES, 1.0, threads, method=SKY_RAYS
                     )
@@ -338,6 +338,13 @@ def physical_light(
     depth.setflags(write=False)
     grid.setflags(write=False)
     return PhysicalLight(frame, depth, grid, (lo, hi), octaves)
+
+
+def _read_only(fresh: np.ndarray) -> np.ndarray:
+    """``fresh``, an array nothing else holds (a core result), made read-only to be memoised:
+    no copy is needed, unlike :func:`_frozen`'s."""
+    fresh.setflags(write=False)
+    return fresh
 
 
 def _frozen(value: Any) -> Any:
