@@ -609,10 +609,10 @@ def test_only_clouds_upstream_of_a_lattice_shade_it() -> None:
     assert cu.prepare_light(moved_up).lights[0] is not before
 
 
-def test_other_clouds_shadow_is_marched_on_a_coarser_lattice_and_filled_bilinearly() -> None:
-    """The optical depth of the clouds upstream, marched on every second column of the sun's
-    lattice and bilinear in between, stays close to the march of every column (the shadow one
-    cloud casts on another is as soft as the world lattice it lights)."""
+def test_other_clouds_shadow_is_read_from_their_own_sun_lattices() -> None:
+    """The optical depth of the clouds upstream is each one's own sun lattice (the same axes)
+    read at the column's face point: close to a march from every column's face through them,
+    and zero across the light outside their lattice."""
     from cumuli.light import physical as ph
 
     first = small_cloud()
@@ -622,20 +622,24 @@ def test_other_clouds_shadow_is_marched_on_a_coarser_lattice_and_filled_bilinear
     scene = small_scene().replace(clouds=[first, upstream])
     frame = physical_light(first, small_scene()).frame
     step = scene.settings.light_step
-    coarse = ph._upstream_depth([upstream], scene, frame, step, 0)
+    shared = ph._upstream_depth([upstream], scene, frame, 0)
     u, v, w, flo, fhi, (nu, nv, _) = frame
     fu = flo[0] + (np.arange(nu) + 0.5) * (fhi[0] - flo[0]) / nu
     fv = flo[1] + (np.arange(nv) + 0.5) * (fhi[1] - flo[1]) / nv
     gv, gu = np.meshgrid(fv, fu, indexing="ij")
     pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
            + flo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
+    # A march from every face point, until τ passes the lattices' cut (no light is left).
     full = ph.optical_depth([upstream], scene, pts, SUN.direction, step, 0).reshape(nv, nu)
-    assert coarse.shape == full.shape and full.max() > 5
-    assert np.abs(coarse - full).mean() < 0.03 * full.max()
-    assert coarse.sum() == pytest.approx(full.sum(), rel=0.03)
-    # The fill is bilinear between texel centres over the same extent: constants stay constant,
-    # and a lattice upsampled to its own shape is itself.
-    a = np.arange(12, dtype=np.float32).reshape(3, 4)
-    np.testing.assert_array_equal(ph._bilinear_upsample(a, (3, 4)), a)
-    np.testing.assert_allclose(ph._bilinear_upsample(np.full((3, 4), 2.5, np.float32), (7, 9)), 2.5)
-    assert ph._bilinear_upsample(a, (6, 8))[0, 1] == pytest.approx(0.25)
+    full = np.minimum(full, ph.SUN_DEPTH_CUT)
+    shared = np.minimum(shared, ph.SUN_DEPTH_CUT)
+    assert shared.shape == full.shape and full.max() > 5
+    assert np.abs(shared - full).mean() < 0.03 * full.max()
+    assert shared.sum() == pytest.approx(full.sum(), rel=0.03)
+    # Each cloud's own lattice is marched once and shared: the light of the first reuses it.
+    frame_up, depth_up = ph.own_sun_depth(upstream, scene)
+    assert ph.own_sun_depth(upstream, scene)[1] is depth_up
+    assert not depth_up.flags.writeable
+    # Away from the upstream cloud across the light, nothing: a cloud beside it is not shaded.
+    aside = first.translated((10.0 * float(np.max(hi - lo)), 0.0, 0.0))
+    assert not ph._upstream_depth([aside], scene.replace(clouds=[first, aside]), frame, 0).any()

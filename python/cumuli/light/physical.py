@@ -271,26 +271,14 @@ def physical_light(
         )
     lo, hi = field.box
     to_sun = scene.sun.direction
-    frame = sun_frame(lo, hi, to_sun, n)
-    clouds, volumes = medium_args([drawable], s)
-    step = float(min(march_step(drawable, s.light_step), (frame[4][2] - frame[3][2]) / (ALONG * n)))
     with _stage(timings, "sun_depth"):
-        depth = _core.light_space_depth(
-            clouds,
-            volumes,
-            scene.noise._core,
-            *fbm_args(s),
-            frame,
-            step,
-            threads,
-            depth_cut=SUN_DEPTH_CUT,
-        )
-    # The other drawables' shadow: their optical depth upstream of every column, from those
-    # whose box the sun's lattice can see upstream (the others cast nothing on it).
+        frame, depth = own_sun_depth(drawable, scene, threads)
+    # The other drawables' shadow: their optical depth upstream of every node, from those whose
+    # box the sun's lattice can see upstream (the others cast nothing on it).
     others = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
     if others:
         with _stage(timings, "upstream"):
-            depth += _upstream_depth(others, scene, frame, step, threads)[None]
+            depth = depth + _upstream_depth(others, scene, frame, threads)[None]
     ext = field.values
     d, h, w = ext.shape
     with _stage(timings, "sun_transmittance"):
@@ -386,43 +374,59 @@ def upstream_of(frame: tuple, drawables: Any) -> list[Any]:
     return out
 
 
-#: The other drawables' optical depth is marched on every UPSTREAM_COARSEN-th column of the
-#: sun's lattice (each way across the light) and bilinearly filled in between: their shadow on
-#: this drawable is already as soft as the world lattice it lights, and marching it through
-#: every column was the part of the light step that grew with the square of the clouds.
-UPSTREAM_COARSEN = 2
+def own_sun_depth(drawable: Any, scene: Any, threads: int = 0) -> tuple[tuple, np.ndarray]:
+    """``(frame, τ)``: the sun's lattice over ``drawable``'s box (:func:`sun_frame`) and the
+    optical depth of the drawable alone at its nodes, marched until it passes
+    :data:`SUN_DEPTH_CUT`; memoised, read-only. Every drawable's lattice has the same axes (they
+    follow from the sun alone), so one drawable's lattice is also the shadow it casts on the
+    others (:func:`_upstream_depth`): each is marched once, whatever the clouds it shades."""
+    s = scene.settings
+    n = s.physical_resolution
+    lo, hi = (tuple(float(np.float32(v)) for v in b) for b in drawable.layer_box())
+    frame = sun_frame(lo, hi, scene.sun.direction, n)
+    step = float(min(march_step(drawable, s.light_step), (frame[4][2] - frame[3][2]) / (ALONG * n)))
+    clouds, volumes = medium_args([drawable], s)
+    key = ("own sun depth", drawable_digest(drawable), scene.noise.identity, s, frame, step,
+           SUN_DEPTH_CUT)  # fmt: skip
+    depth = remember(
+        key,
+        lambda: _read_only(
+            _core.light_space_depth(
+                clouds,
+                volumes,
+                scene.noise._core,
+                *fbm_args(s),
+                frame,
+                step,
+                threads,
+                depth_cut=SUN_DEPTH_CUT,
+            )  # fmt: skip
+        ),
+    )
+    return frame, depth
 
 
-def _upstream_depth(others: Any, scene: Any, frame: tuple, step: float, threads: int) -> np.ndarray:
+def _upstream_depth(others: Any, scene: Any, frame: tuple, threads: int) -> np.ndarray:
     """``(nv, nu)``: the optical depth of ``others`` towards the sun from the sun-side face of
-    every column of ``frame``, marched on a lattice :data:`UPSTREAM_COARSEN` × coarser across
-    the light (over the same face) and bilinear in between (texel centres, clamped)."""
-    u, v, w, lo, hi, (nu, nv, nw) = frame
-    cu_, cv_ = max(2, -(-nu // UPSTREAM_COARSEN)), max(2, -(-nv // UPSTREAM_COARSEN))
-    fu = lo[0] + (np.arange(cu_) + 0.5) * (hi[0] - lo[0]) / cu_
-    fv = lo[1] + (np.arange(cv_) + 0.5) * (hi[1] - lo[1]) / cv_
+    every column of ``frame``: each one's own sun lattice (:func:`own_sun_depth`, whose axes are
+    the same) read at the column's face point, trilinear, and zero across the light outside it.
+    Its lattice holds the depth from its own sun-side face, so a face beyond it reads the whole
+    of it, one inside it the part upstream."""
+    u, v, w, lo, hi, (nu, nv, _) = frame
+    fu = lo[0] + (np.arange(nu) + 0.5) * (hi[0] - lo[0]) / nu
+    fv = lo[1] + (np.arange(nv) + 0.5) * (hi[1] - lo[1]) / nv
     gv, gu = np.meshgrid(fv, fu, indexing="ij")
     pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
            + lo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
-    tau = optical_depth(others, scene, pts, scene.sun.direction, step, threads)
-    if tau is None:
-        return np.zeros((nv, nu), np.float32)
-    return _bilinear_upsample(tau.reshape(cv_, cu_), (nv, nu))
-
-
-def _bilinear_upsample(a: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
-    """``a`` ``(m, n)`` resampled to ``shape`` over the same extent: bilinear between texel
-    centres, clamped at the edges."""
-    out = a.astype(np.float64)
-    for axis, size in enumerate(shape):
-        src = out.shape[axis]
-        x = np.clip((np.arange(size) + 0.5) * src / size - 0.5, 0.0, src - 1.0)
-        i0 = np.minimum(np.floor(x).astype(np.int64), src - 2) if src > 1 else np.zeros(size, int)
-        f = x - i0
-        lo_, hi_ = np.take(out, i0, axis=axis), np.take(out, np.minimum(i0 + 1, src - 1), axis=axis)
-        f = f.reshape((-1, 1) if axis == 0 else (1, -1))
-        out = lo_ + f * (hi_ - lo_)
-    return out.astype(np.float32)
+    across = np.stack([gu.ravel(), gv.ravel()], 1)  # the same (u, v) in every lattice
+    out = np.zeros(nv * nu, np.float32)
+    for other in others:
+        other_frame, other_depth = own_sun_depth(other, scene, threads)
+        olo, ohi = np.asarray(other_frame[3][:2]), np.asarray(other_frame[4][:2])
+        inside = np.all((across >= olo) & (across <= ohi), axis=1)
+        if inside.any():
+            out[inside] += _core.sample_frame(other_depth, other_frame, pts[inside], threads)
+    return out.reshape(nv, nu)
 
 
 def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarray:
