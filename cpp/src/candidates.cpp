@@ -99,8 +99,7 @@ CandidateFan::CandidateFan(const CloudShape& cloud, glm::vec3 origin) {
     // intersect()'s terms that do not depend on the direction, the same expressions.
     const glm::mat3 rt = glm::transpose(e.rotation);
     const glm::vec3 o = (rt * (origin - e.centre)) / e.radii;
-    terms_.push_back(
-        Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, e.rotation == glm::mat3(1.0f)});
+    terms_.push_back(Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, e.unrotated()});
   }
 }
 

@@ -88,10 +88,12 @@ def test_the_physical_lights_sun_depth_is_the_exact_march_up_to_the_cut() -> Non
     scene, cloud = _default_cloud()
     scene = cu.Scene([cloud], sun=scene.sun, settings=cu.RenderSettings(physical_resolution=16))
     light = phys.physical_light(cloud, scene, threads=2)
-    args, _ = _depth_args(cloud, scene, 16)
+    frame, own = phys.own_sun_depth(cloud, scene)
+    assert light.frame == frame and light.sun_depth is own  # one cloud: its own lattice
     n = scene.settings.physical_resolution
-    frame = args[-1]
     step = min(phys.march_step(cloud, scene.settings.light_step),
                (frame[4][2] - frame[3][2]) / (phys.ALONG * n))  # fmt: skip
+    clouds, volumes = phys.medium_args([cloud], scene.settings)
+    args = (clouds, volumes, scene.noise._core, *phys.fbm_args(scene.settings), frame)
     exact = _core.light_space_depth(*args, float(step), 2)
     _check_cut(exact, light.sun_depth, phys.SUN_DEPTH_CUT)

@@ -785,20 +785,30 @@ std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
   };
   const auto open_sky = [&](std::size_t v) { out[v * nc] = static_cast<double>(open); };
   const float aspect = std::max(vs.x, std::max(vs.y, vs.z)) / std::min(vs.x, std::min(vs.y, vs.z));
-  // Lattice rays: τ of every voxel along one direction in one pass over the lattice,
-  // a few directions at a time (one per thread); each voxel's moments summed over the directions
-  // in their order, so the result does not depend on the thread count.
-  const auto by_direction = [&](std::size_t nd, const std::vector<float>& wy, auto&& depth_along) {
+  if (rays == SkyRays::Lattice && aspect <= kLatticeMaxAspect) {
+    // τ of every voxel along each lattice direction by its recurrence, a few directions at a
+    // time; each voxel's moments summed over the directions in their order, so the result does
+    // not depend on the thread count.
+    const std::vector<LatticeDirection> dirs = lattice_directions();
+    const std::size_t nd = dirs.size();
+    std::vector<float> lbasis(nd * nc);
+    for (std::size_t k = 0; k < nd; ++k)
+      sh_eval(order, glm::normalize(glm::vec3(dirs[k].step) * vs), &lbasis[k * nc]);
     const std::size_t batch =
         std::min<std::size_t>(nd, std::max<std::size_t>(resolve_threads(threads, nd), 1));
     std::vector<float> depth(batch * nv);
+    std::vector<float> wy(nd * nc);  // weight × basis, per direction
+    for (std::size_t k = 0; k < nd; ++k)
+      for (int c = 0; c < nc; ++c) wy[k * nc + c] = dirs[k].weight * lbasis[k * nc + c];
     std::vector<float> moments(static_cast<std::size_t>(nc) * nv, 0.0f);  // [c][v]
     constexpr std::size_t kChunk = 4096;
     const std::size_t chunks = (nv + kChunk - 1) / kChunk;
     for (std::size_t k0 = 0; k0 < nd; k0 += batch) {
       const std::size_t kn = std::min(batch, nd - k0);
-      parallel_for(kn, threads,
-                   [&](std::size_t j) { depth_along(k0 + j, j, depth.data() + j * nv); });
+      parallel_for(kn, threads, [&](std::size_t j) {
+        lattice_optical_depth(ext, g, dirs[k0 + j].step, depth.data() + j * nv);
+      });
+      // Each voxel's sums run over the directions in their order: the same on any thread count.
       parallel_for(chunks, threads, [&](std::size_t b) {
         float scratch[kChunk];
         const std::size_t vb = b * kChunk, ve = std::min(nv, vb + kChunk);
@@ -815,19 +825,6 @@ std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
       double vis[kMaxShOrder * kMaxShOrder];
       for (int c = 0; c < nc; ++c) vis[c] = moments[static_cast<std::size_t>(c) * nv + v];
       finish(v, vis);
-    });
-  };
-  if (rays == SkyRays::Lattice && aspect <= kLatticeMaxAspect) {
-    const std::vector<LatticeDirection> dirs = lattice_directions();
-    const std::size_t nd = dirs.size();
-    std::vector<float> lbasis(nd * nc);
-    for (std::size_t k = 0; k < nd; ++k)
-      sh_eval(order, glm::normalize(glm::vec3(dirs[k].step) * vs), &lbasis[k * nc]);
-    std::vector<float> wy(nd * nc);  // weight × basis, per direction
-    for (std::size_t k = 0; k < nd; ++k)
-      for (int c = 0; c < nc; ++c) wy[k * nc + c] = dirs[k].weight * lbasis[k * nc + c];
-    by_direction(nd, wy, [&](std::size_t k, std::size_t, float* depth) {
-      lattice_optical_depth(ext, g, dirs[k].step, depth);
     });
     return out;
   }

@@ -273,8 +273,8 @@ def physical_light(
     to_sun = scene.sun.direction
     with _stage(timings, "sun_depth"):
         frame, depth = own_sun_depth(drawable, scene, threads)
-    # The other drawables' shadow: their optical depth upstream of every node, from those whose
-    # box the sun's lattice can see upstream (the others cast nothing on it).
+    # The other drawables' shadow: their optical depth upstream of every column, from those
+    # whose box the sun's lattice can see upstream (the others cast nothing on it).
     others = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
     if others:
         with _stage(timings, "upstream"):
@@ -400,7 +400,7 @@ def own_sun_depth(drawable: Any, scene: Any, threads: int = 0) -> tuple[tuple, n
                 step,
                 threads,
                 depth_cut=SUN_DEPTH_CUT,
-            )  # fmt: skip
+            )
         ),
     )
     return frame, depth
