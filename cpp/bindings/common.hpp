@@ -74,16 +74,16 @@ py::array_t<double> to_array_d(const std::vector<double>& v, py::ssize_t n);
 
 // An array over `v`'s own storage, no copy (the array keeps the vector alive): for the large
 // results of the light step, whose copy and fresh pages cost as much as some of its stages.
-template <class T>
-py::array_t<T> adopt_array(std::vector<T>&& v, const std::vector<py::ssize_t>& shape) {
+template <class T, class Alloc>
+py::array_t<T> adopt_array(std::vector<T, Alloc>&& v, const std::vector<py::ssize_t>& shape) {
   py::ssize_t count = 1;
   for (const py::ssize_t n : shape) count *= n;
   if (count != static_cast<py::ssize_t>(v.size()))
     throw std::logic_error("adopt_array: the shape does not hold the vector's values");
   if (v.empty()) return py::array_t<T>(shape);
-  auto holder = std::make_unique<std::vector<T>>(std::move(v));
+  auto holder = std::make_unique<std::vector<T, Alloc>>(std::move(v));
   T* data = holder->data();
-  py::capsule owner(holder.get(), [](void* p) { delete static_cast<std::vector<T>*>(p); });
+  py::capsule owner(holder.get(), [](void* p) { delete static_cast<std::vector<T, Alloc>*>(p); });
   holder.release();  // the capsule owns it now
   return py::array_t<T>(shape, data, owner);
 }

@@ -995,7 +995,7 @@ void bind_physical_light(py::module_& m) {
           throw py::value_error("depth_cut must be > 0 (inf: march every column to its end)");
         if (static_cast<double>(f.hi.z - f.lo.z) / step > (1 << 22))
           throw py::value_error("step is too small for the frame's depth");
-        std::vector<float> out;
+        LargeVector<float> out;
         {
           py::gil_scoped_release release;
           out = light_space_depth(args.medium, f, step, threads, depth_cut);
@@ -1099,7 +1099,7 @@ void bind_physical_light(py::module_& m) {
         if (n_theta < 1 || n_theta > 64) throw py::value_error("sh_samples must be in [1, 64]");
         if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");
         const float* e = ext.data();
-        std::vector<double> vis;
+        LargeVector<double> vis;
         {
           py::gil_scoped_release release;
           vis = sky_visibility(e, g, order, n_theta, step, threads, how);

@@ -29,18 +29,22 @@ constexpr int kMaxCandidates = 256;
 constexpr double kSkyDepthCut = 6.0;
 
 // A ray's samples through one cloud, gathered before their density is known (one buffer per
-// thread, reused from ray to ray): each sample's ray parameter s and length, and where it can
-// hold density (inside its owner primitive, or the metaball iso-surface), its point and |q|.
+// thread, reused from ray to ray): each sample's ray parameter s, length and marched candidate,
+// the smallest |q|² of the candidates that cover it, and where it can hold density (inside its
+// owner primitive, or the metaball iso-surface), its point, |q| and fBm. Sized, not pushed to:
+// `count` samples, `dense_count` dense ones.
 struct MarchSamples {
-  std::vector<float> s, len;
+  std::vector<float> s, len, q2;
+  std::vector<int> marched;
   std::vector<int> dense;  // index of the sample's point in pts / q / fbm, or −1 (no density)
   std::vector<float> pts, q, fbm;
-  void clear() {
-    s.clear();
-    len.clear();
-    dense.clear();
-    pts.clear();
-    q.clear();
+  std::size_t count = 0, dense_count = 0;
+  void reserve(std::size_t n) {
+    if (s.size() >= n) return;
+    for (auto* v : {&s, &len, &q2, &q, &fbm}) v->resize(n);
+    marched.resize(n);
+    dense.resize(n);
+    pts.resize(3 * n);
   }
 };
 
@@ -78,19 +82,15 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
   const bool stops = std::isfinite(stop_depth);
   constexpr std::size_t kStopChunk = 64;  // samples laid out between checks of the depth
   MarchSamples& m = march_samples();
-  // union_owner's rule, kept incrementally (s only grows along the march): `active` holds the
-  // candidates that cover s, in candidate order; the owner is the one with the smallest |q|, the
-  // first on ties, and its |q| is the one eq. (2) needs.
-  int active[kMaxCandidates];
-  int n_active = 0, next = 0;
+  m.reserve(kStopChunk);
   // Where the layout stands: candidate k, ray parameter t, and whether t lies in k's interval.
   int k = 0;
   float t = -INFINITY;
   bool in_interval = false;
-  // Lays out the next samples (all of them, or kStopChunk when the march may stop); false once
-  // the ray's candidates are done.
+  // Lays out the next samples' s, length and marched candidate (all of them, or kStopChunk when
+  // the march may stop); false once the ray's candidates are done. s only grows along the march.
   const auto lay_out = [&]() {
-    m.clear();
+    m.count = 0;
     for (; k < n; ++k) {
       if (!in_interval) {
         if (cand[k].t_out <= t) continue;
@@ -98,58 +98,99 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
         in_interval = true;
       }
       while (t < cand[k].t_out) {
-        if (stops && m.s.size() == kStopChunk) return true;
+        if (stops && m.count == kStopChunk) return true;
+        if (m.count == m.s.size()) m.reserve(2 * m.count);
         const float end = std::min(t + step, cand[k].t_out);
-        const float s = 0.5f * (t + end);
-        const glm::vec3 p = o + s * d;
-        bool dense = false;
-        if (attribute) {
-          int kept = 0;
-          for (int a = 0; a < n_active; ++a)
-            if (!(s > cand[active[a]].t_out)) active[kept++] = active[a];
-          n_active = kept;
-          for (; next < n && cand[next].t_in <= s; ++next)
-            if (!(s > cand[next].t_out)) active[n_active++] = next;
-          // |q|² of a candidate's primitive: normalised_distance is its square root, and the
-          // square root of the smallest |q|² is the smallest |q| (sqrt is correctly rounded, so
-          // monotonic): one root per sample.
-          const auto q2_of = [&](int c) {
-            const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[c].primitive)];
-            const glm::vec3 l = e.to_local_given(p, unrotated[c]);
-            return glm::dot(l, l);
-          };
-          float q2 = 0.0f;
-          if (n_active == 0) {
-            q2 = q2_of(k);  // rounding left s just past every interval: the marched candidate
-          } else {
-            q2 = q2_of(active[0]);
-            for (int a = 1; a < n_active; ++a) q2 = std::min(q2, q2_of(active[a]));
-          }
-          const float q = std::sqrt(q2);
-          dense = q <= 1.0f;
-          if (dense) m.q.push_back(q);
-        } else {
-          dense = metaball_inside(shape, p);
-        }
-        m.dense.push_back(dense ? static_cast<int>(m.pts.size() / 3) : -1);
-        if (dense) m.pts.insert(m.pts.end(), {p.x, p.y, p.z});
-        m.s.push_back(s);
-        m.len.push_back(end - t);
+        m.s[m.count] = 0.5f * (t + end);
+        m.len[m.count] = end - t;
+        m.marched[m.count] = k;
+        ++m.count;
         t = end;
       }
       in_interval = false;
     }
     return false;
   };
+  // union_owner's rule for the laid-out samples: the owner of s is the covering candidate
+  // (t_in ≤ s ≤ t_out) with the smallest |q|, and its |q| is the one eq. (2) needs. Taken a
+  // candidate at a time over the samples it covers (a run of them: s is sorted), the smallest
+  // |q|² of every sample is a loop the compiler vectorises, each lane rounding as the scalar
+  // path does (p = o + s·d, to_local_given, dot): the same bits as one owner per sample. A
+  // sample that rounding left outside every interval takes its marched candidate's |q|.
+  const auto q2_of = [&](int j, float s) {
+    const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[j].primitive)];
+    const glm::vec3 l = e.to_local_given(o + s * d, unrotated[j]);
+    return glm::dot(l, l);
+  };
+  const auto smallest_q2 = [&]() {
+    const std::size_t count = m.count;
+    float* q2 = m.q2.data();
+    const float* s = m.s.data();
+    std::fill(q2, q2 + count, INFINITY);
+    const float s_first = s[0], s_last = s[count - 1];
+    for (int j = 0; j < n && cand[j].t_in <= s_last; ++j) {
+      if (cand[j].t_out < s_first) continue;
+      const std::size_t i0 =
+          static_cast<std::size_t>(std::lower_bound(s, s + count, cand[j].t_in) - s);
+      const std::size_t i1 =
+          static_cast<std::size_t>(std::upper_bound(s, s + count, cand[j].t_out) - s);
+      const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[j].primitive)];
+      if (unrotated[j]) {
+        const glm::vec3 centre = e.centre, radii = e.radii;
+        for (std::size_t i = i0; i < i1; ++i) {
+          const float lx = (o.x + s[i] * d.x - centre.x) / radii.x;
+          const float ly = (o.y + s[i] * d.y - centre.y) / radii.y;
+          const float lz = (o.z + s[i] * d.z - centre.z) / radii.z;
+          q2[i] = std::min(q2[i], lx * lx + ly * ly + lz * lz);
+        }
+      } else {
+        for (std::size_t i = i0; i < i1; ++i) q2[i] = std::min(q2[i], q2_of(j, s[i]));
+      }
+    }
+    for (std::size_t i = 0; i < count; ++i)
+      if (q2[i] == INFINITY) q2[i] = q2_of(m.marched[i], s[i]);
+  };
+  // Which samples can hold density, and their points: written at the next dense slot whether
+  // dense or not (branch-free: the edge samples' tests are unpredictable).
+  const auto gather_dense = [&]() {
+    std::size_t g = 0;
+    if (attribute) {
+      smallest_q2();
+      for (std::size_t i = 0; i < m.count; ++i) {
+        const float s = m.s[i];
+        const float q = std::sqrt(m.q2[i]);  // sqrt is monotonic: the root of the smallest |q|²
+        const bool dense = q <= 1.0f;
+        m.q[g] = q;
+        m.pts[3 * g] = o.x + s * d.x;
+        m.pts[3 * g + 1] = o.y + s * d.y;
+        m.pts[3 * g + 2] = o.z + s * d.z;
+        m.dense[i] = dense ? static_cast<int>(g) : -1;
+        g += dense ? 1 : 0;
+      }
+    } else {
+      for (std::size_t i = 0; i < m.count; ++i) {
+        const glm::vec3 p = o + m.s[i] * d;
+        const bool dense = metaball_inside(shape, p);
+        m.dense[i] = dense ? static_cast<int>(g) : -1;
+        if (dense) {
+          m.pts[3 * g] = p.x;
+          m.pts[3 * g + 1] = p.y;
+          m.pts[3 * g + 2] = p.z;
+          ++g;
+        }
+      }
+    }
+    m.dense_count = g;
+  };
   const float kappa = shape.density.kappa;
   double tau = 0.0;
   bool more = true;
   while (more) {
     more = lay_out();
-    const std::size_t count = m.pts.size() / 3;
-    m.fbm.resize(count);
-    c.source.many(m.pts.data(), count, m.fbm.data());
-    for (std::size_t i = 0; i < m.s.size(); ++i) {
+    if (m.count == 0) break;
+    gather_dense();
+    c.source.many(m.pts.data(), m.dense_count, m.fbm.data());
+    for (std::size_t i = 0; i < m.count; ++i) {
       const int g = m.dense[i];
       float rho = 0.0f;
       if (g >= 0) {
@@ -314,7 +355,7 @@ float Medium::optical_depth(glm::vec3 o, glm::vec3 d, float step) const {
   return static_cast<float>(tau);
 }
 
-std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, float step,
+LargeVector<float> light_space_depth(const Medium& medium, const SunFrame& f, float step,
                                      int threads, double depth_cut) {
   f.validate();
   if (!(step > 0.0f) || !std::isfinite(step)) throw std::invalid_argument("step must be > 0");
@@ -322,7 +363,7 @@ std::vector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
   const std::size_t nu = static_cast<std::size_t>(f.res[0]),
                     nv = static_cast<std::size_t>(f.res[1]),
                     nw = static_cast<std::size_t>(f.res[2]);
-  std::vector<float> out(nu * nv * nw, 0.0f);
+  LargeVector<float> out(nu * nv * nw, 0.0f);
   const float dw = (f.hi.z - f.lo.z) / static_cast<float>(nw);
   const float length = f.hi.z - f.lo.z;
   // Every column runs along w: it can meet a primitive only where its (u, v) frame coordinates
@@ -535,106 +576,95 @@ SKY_VEC_CLONES void add_visibility(float* acc, std::size_t nv, const float* tau,
   }
 }
 
-// The sky march takes kSkyLanes voxels' rays along one direction at a time, one per SIMD lane.
+// The sky march takes a run of kSkyLanes neighbouring voxels along x, one per SIMD lane, and
+// marches them along one direction together. Their rays are the same ray moved by whole voxels:
+// sample i of every lane lies at (i + ½)·du voxels from its voxel's centre, so all lanes share
+// the sample's fractional position, and their trilinear corners are kSkyLanes consecutive
+// lattice values — plain vector loads, no gathers. A ray runs in steps of dt to where it leaves
+// the box; its last sample, at the same spacing, weighs only the part of its step inside the box.
 constexpr int kSkyLanes = 8;
 
-// A lattice copied with a one-voxel border that repeats its edge: a trilinear read at voxel
-// coordinates u ∈ [0, dims] needs no clamping and gives trilinear_voxel's value bit for bit.
+// A lattice copied with a border of `pad` voxels that repeat its edge (clamp-to-edge reads need no
+// clamping), and kSlack spare values before and after it: a run's lanes that lie past the
+// lattice's end read there (their samples are never counted).
 struct PaddedLattice {
+  static constexpr std::size_t kSlack = 2 * kSkyLanes;
   std::vector<float> v;
-  int w, h, d;  // padded dimensions
-  PaddedLattice(const float* ext, const VolumeGrid& g) : w(g.w + 2), h(g.h + 2), d(g.d + 2) {
-    v.resize(static_cast<std::size_t>(w) * h * d);
+  int pad, w, h, d;  // border and padded dimensions
+  PaddedLattice(const float* ext, const VolumeGrid& g, int border)
+      : pad(border), w(g.w + 2 * border), h(g.h + 2 * border), d(g.d + 2 * border) {
+    v.assign(static_cast<std::size_t>(w) * h * d + 2 * kSlack, 0.0f);
+    float* out = v.data() + kSlack;
     for (int z = 0; z < d; ++z)
       for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
-          const int sx = std::clamp(x - 1, 0, g.w - 1), sy = std::clamp(y - 1, 0, g.h - 1),
-                    sz = std::clamp(z - 1, 0, g.d - 1);
-          v[(static_cast<std::size_t>(z) * h + y) * w + x] =
+          const int sx = std::clamp(x - pad, 0, g.w - 1), sy = std::clamp(y - pad, 0, g.h - 1),
+                    sz = std::clamp(z - pad, 0, g.d - 1);
+          out[(static_cast<std::size_t>(z) * h + y) * w + x] =
               ext[(static_cast<std::size_t>(sz) * g.h + sy) * g.w + sx];
         }
   }
+  const float* origin() const { return v.data() + kSlack; }  // the padded lattice's first value
+  // Padded index of lattice voxel (x, y, z).
+  std::ptrdiff_t index(int x, int y, int z) const {
+    return (static_cast<std::ptrdiff_t>(z + pad) * h + (y + pad)) * w + (x + pad);
+  }
 };
 
-// One direction's rays for kSkyLanes voxels: samples u0 + i·du (voxel coordinates), i < n, each
-// of length h. Unused lanes have n = 0.
-struct SkyLaneRays {
-  float u0x[kSkyLanes], u0y[kSkyLanes], u0z[kSkyLanes];
-  float dux[kSkyLanes], duy[kSkyLanes], duz[kSkyLanes];
-  float h[kSkyLanes];
+// One direction's rays for a run of kSkyLanes voxels starting at lattice voxel (x0, y, z): steps
+// du (voxel units) of length dt; lane l takes n[l] samples, the last weighing last[l] (≤ dt).
+// Lanes with no ray (past the row, or no medium near) have n = 0.
+struct SkyRun {
+  std::ptrdiff_t first;  // padded index of the run's first voxel
+  glm::vec3 du;
+  float dt;
+  float last[kSkyLanes];
   int n[kSkyLanes];
 };
 
-// Voxel centres for kSkyLanes sky rays, strictly inside the lattice's box.
-struct SkyLaneOrigins {
-  float x[kSkyLanes], y[kSkyLanes], z[kSkyLanes];
+// Sample i's shared offset from the lanes' voxels: the lattice step to its trilinear cell's
+// first corner (padded index units) and the fractions within the cell.
+struct SkySample {
+  std::ptrdiff_t offset;
+  float fx, fy, fz;
 };
-
-// The lanes' rays along direction d from inside the box to where they leave it, in segments of at
-// most dt sampled at their midpoints. From inside, the box's entry is behind (t0 = 0) and its exit
-// the nearest face ahead on each axis: the same numbers as intersect(box, …) with t0 = max(t_in,
-// 0).
-SKY_VEC_CLONES void sky_lane_rays(const SkyLaneOrigins& o, glm::vec3 d, const Box& box,
-                                  glm::vec3 inv_vs, float dt, SkyLaneRays& r) {
-  const glm::vec3 inv_d = 1.0f / d;
-  float face[3], origin_lo[3];
-  for (int a = 0; a < 3; ++a) {
-    face[a] = inv_d[a] >= 0.0f ? box.hi[a] : box.lo[a];  // ±∞ for a zero component: never nearest
-    origin_lo[a] = box.lo[a];
-  }
-  for (int l = 0; l < kSkyLanes; ++l) {
-    const float len = std::min(std::min((face[0] - o.x[l]) * inv_d.x, (face[1] - o.y[l]) * inv_d.y),
-                               (face[2] - o.z[l]) * inv_d.z);
-    const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
-    const float h = len / static_cast<float>(n);
-    const float mid = 0.5f * h;
-    r.u0x[l] = ((o.x[l] + mid * d.x) - origin_lo[0]) * inv_vs.x;
-    r.u0y[l] = ((o.y[l] + mid * d.y) - origin_lo[1]) * inv_vs.y;
-    r.u0z[l] = ((o.z[l] + mid * d.z) - origin_lo[2]) * inv_vs.z;
-    r.dux[l] = (h * d.x) * inv_vs.x;
-    r.duy[l] = (h * d.y) * inv_vs.y;
-    r.duz[l] = (h * d.z) * inv_vs.z;
-    r.h[l] = h;
-    r.n[l] = n;
-  }
+inline SkySample sky_sample(const SkyRun& r, int i, int w, int wh) {
+  const float k = static_cast<float>(i) + 0.5f;
+  // Voxel coordinates minus ½ (trilinear's texel centres) of sample i, less the voxel's index.
+  const float sx = k * r.du.x, sy = k * r.du.y, sz = k * r.du.z;
+  const float flx = std::floor(sx), fly = std::floor(sy), flz = std::floor(sz);
+  return {static_cast<std::ptrdiff_t>(flz) * wh + static_cast<std::ptrdiff_t>(fly) * w +
+              static_cast<std::ptrdiff_t>(flx),
+          sx - flx, sy - fly, sz - flz};
 }
 
-// τ along each lane's ray, summed sample by sample in double until it passes kSkyDepthCut: the
-// same operations in the same order as one ray at a time (trilinear_voxel's), so the same bits.
-void march_sky_lanes_portable(const PaddedLattice& pad, const SkyLaneRays& r, double* tau_out) {
+// A lane's weight at sample i: dt on its ray, its last weight at its last sample, 0 after.
+inline float sky_weight(const SkyRun& r, int l, int i) {
+  return i < r.n[l] - 1 ? r.dt : (i == r.n[l] - 1 ? r.last[l] : 0.0f);
+}
+
+// τ along each lane's ray, summed sample by sample in double while it is ≤ kSkyDepthCut.
+void march_sky_run_portable(const PaddedLattice& pad, const SkyRun& r, double* tau_out) {
   int steps = 0;
   for (int l = 0; l < kSkyLanes; ++l) steps = std::max(steps, r.n[l]);
-  const float* vol = pad.v.data();
-  const int W = pad.w, WH = pad.w * pad.h;
+  const std::ptrdiff_t W = pad.w, WH = static_cast<std::ptrdiff_t>(pad.w) * pad.h;
   double tau[kSkyLanes] = {};
   for (int i = 0; i < steps; ++i) {
+    const SkySample smp = sky_sample(r, i, pad.w, pad.w * pad.h);
+    const float* a0 = pad.origin() + r.first + smp.offset;
     int live = 0;
-    // No branches in this loop, so that it vectorises: an idle lane (past its depth cut or its
-    // ray's end) reads a sample of its ray, inside the lattice, and adds 0·value.
     for (int l = 0; l < kSkyLanes; ++l) {
-      const int active = (i < r.n[l]) & (tau[l] <= kSkyDepthCut);
+      const bool active = i < r.n[l] && tau[l] <= kSkyDepthCut;
       live += active;
-      const float fl = static_cast<float>(std::min(i, r.n[l] - 1));
-      const float h = active ? r.h[l] : 0.0f;
-      const float sx = (r.u0x[l] + fl * r.dux[l]) - 0.5f;
-      const float sy = (r.u0y[l] + fl * r.duy[l]) - 0.5f;
-      const float sz = (r.u0z[l] + fl * r.duz[l]) - 0.5f;
-      const float flx = std::floor(sx), fly = std::floor(sy), flz = std::floor(sz);
-      const float fx = sx - flx, fy = sy - fly, fz = sz - flz;
-      // Padded index of voxel floor(s): one more than the lattice's (kept inside the padding,
-      // as trilinear_voxel clamps, should rounding carry a sample past the box).
-      const int base = std::clamp(static_cast<int>(flz) + 1, 0, pad.d - 2) * WH +
-                       std::clamp(static_cast<int>(fly) + 1, 0, pad.h - 2) * W +
-                       std::clamp(static_cast<int>(flx) + 1, 0, pad.w - 2);
-      const float* a = vol + base;
-      const float c00 = a[0] + fx * (a[1] - a[0]);
-      const float c10 = a[W] + fx * (a[W + 1] - a[W]);
-      const float c01 = a[WH] + fx * (a[WH + 1] - a[WH]);
-      const float c11 = a[WH + W] + fx * (a[WH + W + 1] - a[WH + W]);
-      const float c0 = c00 + fy * (c10 - c00);
-      const float c1 = c01 + fy * (c11 - c01);
-      const float value = c0 + fz * (c1 - c0);
-      tau[l] += static_cast<double>(value) * static_cast<double>(h);
+      const float* a = a0 + l;
+      const float c00 = a[0] + smp.fx * (a[1] - a[0]);
+      const float c10 = a[W] + smp.fx * (a[W + 1] - a[W]);
+      const float c01 = a[WH] + smp.fx * (a[WH + 1] - a[WH]);
+      const float c11 = a[WH + W] + smp.fx * (a[WH + W + 1] - a[WH + W]);
+      const float c0 = c00 + smp.fy * (c10 - c00);
+      const float c1 = c01 + smp.fy * (c11 - c01);
+      const float value = c0 + smp.fz * (c1 - c0);
+      if (active) tau[l] += static_cast<double>(value) * static_cast<double>(sky_weight(r, l, i));
     }
     if (live == 0) break;
   }
@@ -642,98 +672,98 @@ void march_sky_lanes_portable(const PaddedLattice& pad, const SkyLaneRays& r, do
 }
 
 #ifdef CUMULI_X86_SKY
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wmaybe-uninitialized"  // GCC 12's intrinsics' own "undefined"
-#endif
-__attribute__((target("avx2"), always_inline)) inline __m256 gather_at(const float* vol,
-                                                                       __m256i base,
-                                                                       __m256i offset) {
-  return _mm256_i32gather_ps(vol, _mm256_add_epi32(base, offset), 4);
-}
 __attribute__((target("avx2"), always_inline)) inline __m256 lerp(__m256 a, __m256 b, __m256 f) {
   return _mm256_add_ps(a, _mm256_mul_ps(f, _mm256_sub_ps(b, a)));  // a + f·(b − a), as in C++
 }
 
-// march_sky_lanes_portable with the eight lanes in AVX2 registers and their reads gathered: the
-// same IEEE operations lane by lane (no FMA), so the same bits.
-__attribute__((target("avx2"))) void march_sky_lanes_avx2(const PaddedLattice& pad,
-                                                          const SkyLaneRays& r, double* tau_out) {
+// march_sky_run_portable with the eight lanes in AVX2 registers: the same IEEE operations lane
+// by lane (no FMA), so the same bits.
+__attribute__((target("avx2"))) void march_sky_run_avx2(const PaddedLattice& pad, const SkyRun& r,
+                                                        double* tau_out) {
   static_assert(kSkyLanes == 8, "one AVX2 register of lanes");
   int steps = 0;
   for (int l = 0; l < kSkyLanes; ++l) steps = std::max(steps, r.n[l]);
-  const float* vol = pad.v.data();
+  const std::ptrdiff_t W = pad.w, WH = static_cast<std::ptrdiff_t>(pad.w) * pad.h;
   const __m256i n = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r.n));
   const __m256i last = _mm256_sub_epi32(n, _mm256_set1_epi32(1));  // a lane's last sample
-  const __m256 u0x = _mm256_loadu_ps(r.u0x), u0y = _mm256_loadu_ps(r.u0y),
-               u0z = _mm256_loadu_ps(r.u0z);
-  const __m256 dux = _mm256_loadu_ps(r.dux), duy = _mm256_loadu_ps(r.duy),
-               duz = _mm256_loadu_ps(r.duz);
-  const __m256 h = _mm256_loadu_ps(r.h), half = _mm256_set1_ps(0.5f);
-  const __m256i W = _mm256_set1_epi32(pad.w), WH = _mm256_set1_epi32(pad.w * pad.h),
-                one = _mm256_set1_epi32(1);
-  const __m256i zero = _mm256_setzero_si256(), top_x = _mm256_set1_epi32(pad.w - 2),
-                top_y = _mm256_set1_epi32(pad.h - 2), top_z = _mm256_set1_epi32(pad.d - 2);
-  const __m256i lane_bit = _mm256_setr_epi32(1, 2, 4, 8, 16, 32, 64, 128);
+  const __m256 last_w = _mm256_loadu_ps(r.last), dt = _mm256_set1_ps(r.dt);
   const __m256d cut = _mm256_set1_pd(kSkyDepthCut);
   __m256d tau_lo = _mm256_setzero_pd(), tau_hi = _mm256_setzero_pd();
   for (int i = 0; i < steps; ++i) {
-    const int under_cut = _mm256_movemask_pd(_mm256_cmp_pd(tau_lo, cut, _CMP_LE_OQ)) |
-                          (_mm256_movemask_pd(_mm256_cmp_pd(tau_hi, cut, _CMP_LE_OQ)) << 4);
-    const int on_ray =
-        _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_cmpgt_epi32(n, _mm256_set1_epi32(i))));
-    const int live = under_cut & on_ray;
-    if (live == 0) break;
-    const __m256 active = _mm256_castsi256_ps(
-        _mm256_cmpeq_epi32(_mm256_and_si256(_mm256_set1_epi32(live), lane_bit), lane_bit));
-    // Where to read does not wait on τ, so the gathers of successive steps overlap.
-    const __m256 fl = _mm256_cvtepi32_ps(_mm256_min_epi32(_mm256_set1_epi32(i), last));
-    const __m256 hl = _mm256_and_ps(active, h);
-    const __m256 sx = _mm256_sub_ps(_mm256_add_ps(u0x, _mm256_mul_ps(fl, dux)), half);
-    const __m256 sy = _mm256_sub_ps(_mm256_add_ps(u0y, _mm256_mul_ps(fl, duy)), half);
-    const __m256 sz = _mm256_sub_ps(_mm256_add_ps(u0z, _mm256_mul_ps(fl, duz)), half);
-    const __m256 flx = _mm256_floor_ps(sx), fly = _mm256_floor_ps(sy), flz = _mm256_floor_ps(sz);
-    const __m256 fx = _mm256_sub_ps(sx, flx), fy = _mm256_sub_ps(sy, fly),
-                 fz = _mm256_sub_ps(sz, flz);
-    // Padded indices kept inside the padding, as in march_sky_lanes_portable.
-    const __m256i ix = _mm256_min_epi32(
-        _mm256_max_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(flx), one), zero), top_x);
-    const __m256i iy = _mm256_min_epi32(
-        _mm256_max_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(fly), one), zero), top_y);
-    const __m256i iz = _mm256_min_epi32(
-        _mm256_max_epi32(_mm256_add_epi32(_mm256_cvttps_epi32(flz), one), zero), top_z);
-    const __m256i base = _mm256_add_epi32(
-        _mm256_add_epi32(_mm256_mullo_epi32(iz, WH), _mm256_mullo_epi32(iy, W)), ix);
-    const __m256i WH_W = _mm256_add_epi32(WH, W);
-    const __m256 a000 = gather_at(vol, base, zero), a100 = gather_at(vol, base, one);
-    const __m256 a010 = gather_at(vol, base, W),
-                 a110 = gather_at(vol, base, _mm256_add_epi32(W, one));
-    const __m256 a001 = gather_at(vol, base, WH),
-                 a101 = gather_at(vol, base, _mm256_add_epi32(WH, one));
-    const __m256 a011 = gather_at(vol, base, WH_W),
-                 a111 = gather_at(vol, base, _mm256_add_epi32(WH_W, one));
-    const __m256 c00 = lerp(a000, a100, fx), c10 = lerp(a010, a110, fx);
-    const __m256 c01 = lerp(a001, a101, fx), c11 = lerp(a011, a111, fx);
+    const __m256i at = _mm256_set1_epi32(i);
+    const __m256 before_last = _mm256_castsi256_ps(_mm256_cmpgt_epi32(last, at));
+    const __m256 is_last = _mm256_castsi256_ps(_mm256_cmpeq_epi32(last, at));
+    const __m256 wgt = _mm256_or_ps(_mm256_and_ps(before_last, dt), _mm256_and_ps(is_last, last_w));
+    // A lane adds value·weight while on its ray and under the cut, +0 after (τ unchanged).
+    const __m256i on_ray = _mm256_cmpgt_epi32(n, at);
+    const __m256d act_lo =
+        _mm256_and_pd(_mm256_cmp_pd(tau_lo, cut, _CMP_LE_OQ),
+                      _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm256_castsi256_si128(on_ray))));
+    const __m256d act_hi = _mm256_and_pd(
+        _mm256_cmp_pd(tau_hi, cut, _CMP_LE_OQ),
+        _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm256_extracti128_si256(on_ray, 1))));
+    if ((_mm256_movemask_pd(act_lo) | _mm256_movemask_pd(act_hi)) == 0) break;
+    const SkySample smp = sky_sample(r, i, pad.w, pad.w * pad.h);
+    const float* a = pad.origin() + r.first + smp.offset;
+    const __m256 fx = _mm256_set1_ps(smp.fx), fy = _mm256_set1_ps(smp.fy),
+                 fz = _mm256_set1_ps(smp.fz);
+    const __m256 c00 = lerp(_mm256_loadu_ps(a), _mm256_loadu_ps(a + 1), fx);
+    const __m256 c10 = lerp(_mm256_loadu_ps(a + W), _mm256_loadu_ps(a + W + 1), fx);
+    const __m256 c01 = lerp(_mm256_loadu_ps(a + WH), _mm256_loadu_ps(a + WH + 1), fx);
+    const __m256 c11 = lerp(_mm256_loadu_ps(a + WH + W), _mm256_loadu_ps(a + WH + W + 1), fx);
     const __m256 value = lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
-    tau_lo = _mm256_add_pd(tau_lo, _mm256_mul_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(value)),
-                                                 _mm256_cvtps_pd(_mm256_castps256_ps128(hl))));
-    tau_hi = _mm256_add_pd(tau_hi, _mm256_mul_pd(_mm256_cvtps_pd(_mm256_extractf128_ps(value, 1)),
-                                                 _mm256_cvtps_pd(_mm256_extractf128_ps(hl, 1))));
+    tau_lo = _mm256_add_pd(
+        tau_lo, _mm256_and_pd(act_lo, _mm256_mul_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(value)),
+                                                    _mm256_cvtps_pd(_mm256_castps256_ps128(wgt)))));
+    tau_hi = _mm256_add_pd(
+        tau_hi,
+        _mm256_and_pd(act_hi, _mm256_mul_pd(_mm256_cvtps_pd(_mm256_extractf128_ps(value, 1)),
+                                            _mm256_cvtps_pd(_mm256_extractf128_ps(wgt, 1)))));
   }
   _mm256_storeu_pd(tau_out, tau_lo);
   _mm256_storeu_pd(tau_out + 4, tau_hi);
 }
-#if defined(__GNUC__) && !defined(__clang__)
-#pragma GCC diagnostic pop
-#endif
 #endif
 
+// One direction of the sphere's quadrature for the sky march: its step in voxel units and the
+// box faces its rays leave by.
+struct SkyDirection {
+  glm::vec3 du, inv_d, face;
+};
+
+// A run's rays along `dir` from its lanes' voxel centres (cx, cy, cz) to where they leave the box:
+// from inside, the nearest face ahead on each axis. Lanes not in `lanes` get no ray. Branch-free
+// over the lanes, so that it vectorises.
+SKY_VEC_CLONES void sky_run_rays(const float* cx, const float* cy, const float* cz,
+                                 const int* marched, const SkyDirection& dir, float dt, SkyRun& r) {
+  for (int l = 0; l < kSkyLanes; ++l) {
+    const float len =
+        std::min(std::min((dir.face.x - cx[l]) * dir.inv_d.x, (dir.face.y - cy[l]) * dir.inv_d.y),
+                 (dir.face.z - cz[l]) * dir.inv_d.z);
+    const int n = std::max(1, static_cast<int>(std::ceil(len / dt)));
+    r.n[l] = marched[l] ? n : 0;
+    r.last[l] = marched[l] ? len - static_cast<float>(n - 1) * dt : 0.0f;
+  }
+}
+
+// vis[c][l] += w·e^{−τ[l]}·y_c: one direction's share of a run's visibility moments (w its
+// quadrature weight, y its basis values); e^{−τ} by exp_neg, in plain operations, so that the
+// lanes vectorise with the same bits on every instruction set.
+SKY_VEC_CLONES void add_run_visibility(const double* tau, float w, const float* y, int nc,
+                                       double (*vis)[kSkyLanes]) {
+  double vw[kSkyLanes];
+  for (int l = 0; l < kSkyLanes; ++l)
+    vw[l] = static_cast<double>(exp_neg(static_cast<float>(tau[l]))) * static_cast<double>(w);
+  for (int c = 0; c < nc; ++c)
+    for (int l = 0; l < kSkyLanes; ++l) vis[c][l] += vw[l] * static_cast<double>(y[c]);
+}
+
 // The lanes' τ by the kernel of the SIMD level in use (the same bits either way).
-void march_sky_lanes(const PaddedLattice& pad, const SkyLaneRays& r, double* tau) {
+void march_sky_run(const PaddedLattice& pad, const SkyRun& r, double* tau) {
 #ifdef CUMULI_X86_SKY
-  if (simd_level() != SimdLevel::Scalar) return march_sky_lanes_avx2(pad, r, tau);
+  if (simd_level() != SimdLevel::Scalar) return march_sky_run_avx2(pad, r, tau);
 #endif
-  march_sky_lanes_portable(pad, r, tau);
+  march_sky_run_portable(pad, r, tau);
 }
 
 // Lattice rays stand for the sphere's directions only where the voxels are near cubes.
@@ -741,7 +771,7 @@ constexpr float kLatticeMaxAspect = 1.1f;
 
 }  // namespace
 
-std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
+LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
                                    float step_voxels, int threads, SkyRays rays) {
   g.validate();
   if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
@@ -754,7 +784,7 @@ std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
   const glm::vec3 vs = g.voxel_size();
   const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
   const std::size_t nv = g.voxels();
-  std::vector<double> out(nv * static_cast<std::size_t>(nc), 0.0);
+  LargeVector<double> out(nv * static_cast<std::size_t>(nc), 0.0);
   const glm::vec3 inv_vs = 1.0f / vs;
   // Voxels with no medium within one voxel are never read where light scatters: they get the
   // unoccluded sky (V = 1: V_0 = √4π, the other coefficients 0).
@@ -828,45 +858,69 @@ std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
     });
     return out;
   }
-  // Rays marched kSkyLanes voxels at a time (neighbours along x: rays of about one length).
-  const PaddedLattice pad(ext, g);
-  std::vector<std::size_t> marched;
-  for (std::size_t v = 0; v < nv; ++v) {
-    if (near[v])
-      marched.push_back(v);
-    else
-      open_sky(v);
-  }
-  const std::size_t groups = (marched.size() + kSkyLanes - 1) / kSkyLanes;
-  const glm::vec3 middle = 0.5f * (g.box.lo + g.box.hi);
-  parallel_for(groups, threads, [&](std::size_t group) {
-    const std::size_t first = group * kSkyLanes;
-    const int lanes = static_cast<int>(std::min<std::size_t>(kSkyLanes, marched.size() - first));
-    SkyLaneOrigins o;
-    for (int l = 0; l < kSkyLanes; ++l) {  // spare lanes march from the box's middle, unread
-      glm::vec3 p = middle;
-      if (l < lanes) {
-        const std::size_t v = marched[first + l];
-        const int x = static_cast<int>(v % g.w), y = static_cast<int>((v / g.w) % g.h),
-                  z = static_cast<int>(v / (static_cast<std::size_t>(g.w) * g.h));
-        p = g.centre(x, y, z);
+  // Runs of kSkyLanes neighbours along x from each voxel with medium near that no earlier run
+  // holds; a run's lanes past the row or with no medium near march nothing.
+  const PaddedLattice pad(ext, g, 2 + static_cast<int>(std::ceil(0.5f * step_voxels)));
+  struct Run {
+    int x0, y, z;
+    unsigned lanes;  // bit l: voxel x0 + l is marched
+  };
+  std::vector<Run> runs;
+  for (int z = 0; z < g.d; ++z)
+    for (int y = 0; y < g.h; ++y) {
+      const std::size_t row = (static_cast<std::size_t>(z) * g.h + y) * g.w;
+      for (int x = 0; x < g.w;) {
+        if (!near[row + x]) {
+          open_sky(row + x);
+          ++x;
+          continue;
+        }
+        Run run{x, y, z, 0u};
+        for (int l = 0; l < kSkyLanes && x + l < g.w; ++l) {
+          if (near[row + x + l])
+            run.lanes |= 1u << l;
+          else
+            open_sky(row + x + l);
+        }
+        runs.push_back(run);
+        x += kSkyLanes;
       }
-      o.x[l] = p.x, o.y[l] = p.y, o.z[l] = p.z;
+    }
+  std::vector<SkyDirection> directions(ndir);
+  for (std::size_t k = 0; k < ndir; ++k) {
+    const glm::vec3 d = quad.dirs[k];
+    SkyDirection& dir = directions[k];
+    dir.du = (dt * d) * inv_vs;
+    dir.inv_d = 1.0f / d;
+    for (int a = 0; a < 3; ++a)  // ±∞ for a zero component: never the nearest face
+      dir.face[a] = dir.inv_d[a] >= 0.0f ? g.box.hi[a] : g.box.lo[a];
+  }
+  parallel_for(runs.size(), threads, [&](std::size_t index) {
+    const Run& run = runs[index];
+    float cx[kSkyLanes], cy[kSkyLanes], cz[kSkyLanes];
+    int marched[kSkyLanes];
+    for (int l = 0; l < kSkyLanes; ++l) {
+      const glm::vec3 c = g.centre(run.x0 + l, run.y, run.z);
+      cx[l] = c.x, cy[l] = c.y, cz[l] = c.z;
+      marched[l] = static_cast<int>(run.lanes >> l & 1u);
     }
     double vis[kMaxShOrder * kMaxShOrder][kSkyLanes] = {};  // [coefficient][lane]
+    SkyRun r;
+    r.first = pad.index(run.x0, run.y, run.z);
+    r.dt = dt;
     for (std::size_t k = 0; k < ndir; ++k) {
-      SkyLaneRays rays;
-      sky_lane_rays(o, quad.dirs[k], g.box, inv_vs, dt, rays);
-      double tau[kSkyLanes], vw[kSkyLanes];
-      march_sky_lanes(pad, rays, tau);
-      for (int l = 0; l < kSkyLanes; ++l) vw[l] = std::exp(-tau[l]) * quad.weights[k];
-      for (int c = 0; c < nc; ++c)
-        for (int l = 0; l < kSkyLanes; ++l) vis[c][l] += vw[l] * basis[k * nc + c];
+      r.du = directions[k].du;
+      sky_run_rays(cx, cy, cz, marched, directions[k], dt, r);
+      double tau[kSkyLanes];
+      march_sky_run(pad, r, tau);
+      add_run_visibility(tau, quad.weights[k], &basis[k * nc], nc, vis);
     }
-    for (int l = 0; l < lanes; ++l) {
+    const std::size_t row = (static_cast<std::size_t>(run.z) * g.h + run.y) * g.w;
+    for (int l = 0; l < kSkyLanes; ++l) {
+      if (!(run.lanes >> l & 1u)) continue;
       double moments[kMaxShOrder * kMaxShOrder];
       for (int c = 0; c < nc; ++c) moments[c] = vis[c][l];
-      finish(marched[first + l], moments);
+      finish(row + run.x0 + l, moments);
     }
   });
   return out;
@@ -891,7 +945,7 @@ std::vector<float> sky_irradiance_from(const double* visibility, std::size_t vox
 std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
                                   int order, int n_theta, float step_voxels, int threads,
                                   SkyRays rays) {
-  const std::vector<double> vis =
+  const LargeVector<double> vis =
       sky_visibility(ext, g, order, n_theta, step_voxels, threads, rays);
   return sky_irradiance_from(vis.data(), g.voxels(), sky_coeffs, order);
 }

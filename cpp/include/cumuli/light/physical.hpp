@@ -30,6 +30,7 @@
 
 #include <glm/vec3.hpp>
 
+#include "cumuli/large_buffer.hpp"
 #include "cumuli/light/volume.hpp"
 #include "cumuli/model/cloud.hpp"
 #include "cumuli/primitives.hpp"
@@ -82,7 +83,7 @@ struct Medium {
 // `depth_cut` (> 0; infinite: none) ends each drawable's march along a column after the segment
 // where its depth exceeds the cut: a node keeps the exact value unless that segment ends before
 // it, and then holds a depth above the cut (the light beyond, e^−cut, is not worth marching).
-std::vector<float> light_space_depth(const Medium& medium, const SunFrame& frame, float step,
+LargeVector<float> light_space_depth(const Medium& medium, const SunFrame& frame, float step,
                                      int threads, double depth_cut = INFINITY);
 
 // The sky visibility's rays: Lattice, the 26 steps to a voxel's neighbours (Lebedev's 26-point
@@ -100,7 +101,7 @@ enum class SkyRays { Lattice, March };
 // The sky-independent half of sky_irradiance: each voxel's visibility moments V_m (voxels ×
 // order² doubles, voxel-major; V_0 = √4π and the others 0 where no medium lies within one voxel),
 // so that a changed sky or sun re-projects them without marching again.
-std::vector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
+LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
                                    float step_voxels, int threads, SkyRays rays = SkyRays::March);
 // E_sky = max(0, Σ_m L_m V_m) per voxel (RGB interleaved) from sky_visibility's moments.
 std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,
