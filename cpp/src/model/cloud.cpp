@@ -124,12 +124,11 @@ DensitySample field_density(const CloudShape& cloud, glm::vec3 p, const DensityS
 
 namespace {
 
-constexpr int kMaxSamples = 8 * 8 * 8;  // ss³ for the largest supersampling
-
 // A row's buffers (one per thread, reused from row to row; taken once per row: each access to
 // a thread_local in a shared library can cost a call).
 struct GridRow {
-  std::vector<int> in_row, in_cell, owner_cell;
+  std::vector<int> in_row, owner_cell;
+  std::vector<float> x, y, z, q2;  // the row's samples, cell by cell, and their smallest |q|²
   std::vector<float> pts, qs, rho;
 };
 GridRow& grid_row() {
@@ -140,20 +139,20 @@ GridRow& grid_row() {
 // q2[i] = min(q2[i], |q|²) of the points (x[i], y[i], z[i]) against e: Ellipsoid::to_local and
 // glm::dot written out in glm's order of operations, so that each point gets the same float
 // operations as dot(to_local(p), to_local(p)) while the loop vectorises across the points.
-void min_q2(const Ellipsoid& e, const float* x, const float* y, const float* z, int count,
-            float* q2) {
+void min_q2(const Ellipsoid& e, bool unrotated, const float* x, const float* y, const float* z,
+            std::size_t count, float* q2) {
   const glm::mat3& r = e.rotation;
   const glm::vec3 c = e.centre, rad = e.radii;
-  if (e.unrotated()) {
+  if (unrotated) {
     // Ellipsoid::to_local_given's shortcut, written out per point: the same |q|² bit for bit.
-    for (int i = 0; i < count; ++i) {
+    for (std::size_t i = 0; i < count; ++i) {
       const float lx = (x[i] - c.x) / rad.x, ly = (y[i] - c.y) / rad.y, lz = (z[i] - c.z) / rad.z;
       const float d = lx * lx + ly * ly + lz * lz;
       q2[i] = std::min(q2[i], d);
     }
     return;
   }
-  for (int i = 0; i < count; ++i) {
+  for (std::size_t i = 0; i < count; ++i) {
     const float vx = x[i] - c.x, vy = y[i] - c.y, vz = z[i] - c.z;
     // (Rᵀ·v)_a = R[a][0]·v.x + R[a][1]·v.y + R[a][2]·v.z, left to right, then ÷ radii_a.
     const float lx = (r[0][0] * vx + r[0][1] * vy + r[0][2] * vz) / rad.x;
@@ -190,39 +189,45 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
     plo[k] -= pad;
     phi[k] += pad;
   }
+  std::vector<char> unrotated(np);
+  for (std::size_t k = 0; k < np; ++k) unrotated[k] = cloud.primitives[k].unrotated();
+  // The cells along x whose span [x0, x1] a primitive's bounds meet: a run (x0 and x1 grow with
+  // x), found with the same float comparisons as testing each cell.
+  const auto cell_x0 = [&](std::size_t x) { return box.lo.x + static_cast<float>(x) * cell.x; };
+  const auto meets = [&](std::size_t k, std::size_t x) {
+    const float x0 = cell_x0(x), x1 = x0 + cell.x;
+    return plo[k].x <= x1 && phi[k].x >= x0;
+  };
   // Per row: the samples that can hold density (inside their nearest primitive, or inside the
   // metaball iso-surface) are gathered first, their fBm evaluated in one bulk call, then eq. (2)
   // (or eq. 21) finishes each and the cells sum their samples in the same order as one
-  // field_density per sample would: the same values, with the SIMD fBm kernels.
+  // field_density per sample would: the same values, with the SIMD fBm kernels. A spheroid
+  // sample's smallest |q|² is taken a primitive at a time over the samples of the cells it
+  // meets (a loop that vectorises; min does not depend on the order).
   const float kappa = cloud.density.kappa;
+  const std::size_t m = static_cast<std::size_t>(ss * ss * ss);
   parallel_for(nz * ny, threads, [&](std::size_t row) {
     const std::size_t z = row / ny, y = row % ny;
     const glm::vec3 row_lo =
         box.lo + glm::vec3(0.0f, static_cast<float>(y), static_cast<float>(z)) * cell;
     const glm::vec3 row_hi = row_lo + cell;
     GridRow& buf = grid_row();
-    std::vector<int>&in_row = buf.in_row, &in_cell = buf.in_cell, &owner_cell = buf.owner_cell;
+    std::vector<int>&in_row = buf.in_row, &owner_cell = buf.owner_cell;
     std::vector<float>&pts = buf.pts, &qs = buf.qs;
     in_row.clear();
-    pts.clear();
-    qs.clear();
-    owner_cell.clear();
     for (std::size_t k = 0; k < np; ++k)
       if (plo[k].y <= row_hi.y && phi[k].y >= row_lo.y && plo[k].z <= row_hi.z &&
           phi[k].z >= row_lo.z)
         in_row.push_back(static_cast<int>(k));
     if (spheroid && in_row.empty()) return;
-    // A cell's samples, and their smallest |q|² (the root of the smallest |q|² is the smallest
-    // |q|: sqrt is correctly rounded, hence monotonic; one root per sample).
-    float sx[kMaxSamples], sy[kMaxSamples], sz[kMaxSamples], q2[kMaxSamples];
-    const int m = ss * ss * ss;
-    for (std::size_t x = 0; x < nx; ++x) {
-      in_cell.clear();
-      const float x0 = box.lo.x + static_cast<float>(x) * cell.x, x1 = x0 + cell.x;
-      for (int k : in_row)
-        if (plo[k].x <= x1 && phi[k].x >= x0) in_cell.push_back(k);
-      if (spheroid && in_cell.empty()) continue;
-      int i = 0;
+    // The row's samples, cell by cell (c (z) outermost, then b (y), then a (x) within a cell).
+    const std::size_t count = nx * m;
+    buf.x.resize(count);
+    buf.y.resize(count);
+    buf.z.resize(count);
+    buf.q2.assign(count, INFINITY);
+    float *sx = buf.x.data(), *sy = buf.y.data(), *sz = buf.z.data(), *q2 = buf.q2.data();
+    for (std::size_t x = 0, i = 0; x < nx; ++x)
       for (int c = 0; c < ss; ++c)
         for (int b = 0; b < ss; ++b)
           for (int a = 0; a < ss; ++a, ++i) {
@@ -233,27 +238,51 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
             sx[i] = p.x;
             sy[i] = p.y;
             sz[i] = p.z;
-            q2[i] = INFINITY;
           }
-      if (spheroid)
-        for (int k : in_cell)
-          min_q2(cloud.primitives[static_cast<std::size_t>(k)], sx, sy, sz, m, q2);
-      for (i = 0; i < m; ++i) {
-        const glm::vec3 p(sx[i], sy[i], sz[i]);
-        float best_q = 0.0f;
-        if (spheroid) {
-          best_q = std::sqrt(q2[i]);
-          if (!(best_q <= 1.0f)) continue;
-        } else if (!metaball_inside(cloud, p)) {
-          continue;
+    if (spheroid) {
+      for (const int k : in_row) {
+        const std::size_t kk = static_cast<std::size_t>(k);
+        // First cell whose x1 reaches the primitive, then on while its x0 does not pass it.
+        std::size_t first = static_cast<std::size_t>(
+            std::clamp((plo[kk].x - box.lo.x) / cell.x - 1.0f, 0.0f, static_cast<float>(nx)));
+        while (first > 0 && meets(kk, first - 1)) --first;
+        while (first < nx && !meets(kk, first)) {
+          if (cell_x0(first) > phi[kk].x) {
+            first = nx;  // past the primitive: it meets no cell of the row
+            break;
+          }
+          ++first;
         }
-        pts.insert(pts.end(), {p.x, p.y, p.z});
-        qs.push_back(best_q);
-        owner_cell.push_back(static_cast<int>(x));
+        std::size_t end = first;
+        while (end < nx && meets(kk, end)) ++end;
+        if (end > first)
+          min_q2(cloud.primitives[kk], unrotated[kk] != 0, sx + first * m, sy + first * m,
+                 sz + first * m, (end - first) * m, q2 + first * m);
       }
     }
+    // The samples that can hold density, written at the next slot whether or not they do
+    // (branch-free for spheroids: the edge samples' tests are unpredictable).
+    pts.resize(3 * count);
+    qs.resize(count);
+    owner_cell.resize(count);
+    std::size_t n = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      float best_q = 0.0f;
+      bool dense = true;
+      if (spheroid) {
+        best_q = std::sqrt(q2[i]);
+        dense = best_q <= 1.0f;
+      } else {
+        dense = metaball_inside(cloud, glm::vec3(sx[i], sy[i], sz[i]));
+      }
+      pts[3 * n] = sx[i];
+      pts[3 * n + 1] = sy[i];
+      pts[3 * n + 2] = sz[i];
+      qs[n] = best_q;
+      owner_cell[n] = static_cast<int>(i / m);
+      n += dense ? 1 : 0;
+    }
     std::vector<float>& rho = buf.rho;
-    const std::size_t n = qs.size();
     rho.resize(n);
     src.many(pts.data(), n, rho.data());
     double sum = 0.0;
