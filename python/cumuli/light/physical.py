@@ -45,6 +45,7 @@ from __future__ import annotations
 
 import math
 import time
+from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
@@ -353,6 +354,30 @@ def sun_frame(lo: Any, hi: Any, to_sun: Any, n: int) -> tuple:
     return _core.light_frame(lo3, hi3, to_sun, (ACROSS * n, ACROSS * n, ALONG * n))
 
 
+#: Drawables' extents along the sun's axes (:func:`_frame_extent`), least recently used dropped.
+_EXTENTS: OrderedDict[tuple, np.ndarray] = OrderedDict()
+_EXTENTS_SIZE = 4096
+
+
+def _frame_extent(drawable: Any, axes: np.ndarray) -> np.ndarray:
+    """``(2, 3)``: the least and greatest frame coordinates (along the sun lattice's ``u, v, w``
+    axes, rows of ``axes``) of the corners of ``drawable``'s box; remembered by the drawable's
+    content and the axes, so that a scene's n clouds culling each other box-test in n², not
+    compute n² boxes."""
+    key = (drawable_digest(drawable), axes.tobytes())
+    out = _EXTENTS.get(key)
+    if out is None:
+        blo, bhi = drawable.layer_box()
+        f = box_corners(blo, bhi) @ axes.T  # (8, 3) frame coordinates
+        out = np.stack([f.min(axis=0), f.max(axis=0)])
+        _EXTENTS[key] = out
+        while len(_EXTENTS) > _EXTENTS_SIZE:
+            _EXTENTS.popitem(last=False)
+    else:
+        _EXTENTS.move_to_end(key)
+    return out
+
+
 def upstream_of(frame: tuple, drawables: Any) -> list[Any]:
     """The ``drawables`` with a medium whose box reaches the sun's lattice ``frame`` upstream:
     it overlaps the lattice's columns across the light and begins before the lattice's sun-side
@@ -361,17 +386,14 @@ def upstream_of(frame: tuple, drawables: Any) -> list[Any]:
     where they do not stand in each other's light."""
     u, v, w, lo, hi, _ = frame
     axes = np.array([u, v, w], np.float64)
-    out = []
-    for d in drawables:
-        if registry.of(d).medium is None:
-            continue
-        blo, bhi = d.layer_box()
-        f = box_corners(blo, bhi) @ axes.T  # (8, 3) frame coordinates
-        fmin, fmax = f.min(axis=0), f.max(axis=0)
-        if (fmax[0] > lo[0] and fmin[0] < hi[0] and fmax[1] > lo[1] and fmin[1] < hi[1]
-                and fmin[2] < lo[2]):  # fmt: skip
-            out.append(d)
-    return out
+    media = [d for d in drawables if registry.of(d).medium is not None]
+    if not media:
+        return []
+    ext = np.stack([_frame_extent(d, axes) for d in media])  # (n, 2, 3)
+    fmin, fmax = ext[:, 0], ext[:, 1]
+    reach = ((fmax[:, 0] > lo[0]) & (fmin[:, 0] < hi[0]) & (fmax[:, 1] > lo[1])
+             & (fmin[:, 1] < hi[1]) & (fmin[:, 2] < lo[2]))  # fmt: skip
+    return [d for d, r in zip(media, reach, strict=True) if r]
 
 
 def own_sun_depth(drawable: Any, scene: Any, threads: int = 0) -> tuple[tuple, np.ndarray]:
@@ -415,18 +437,22 @@ def _upstream_depth(others: Any, scene: Any, frame: tuple, threads: int) -> np.n
     u, v, w, lo, hi, (nu, nv, _) = frame
     fu = lo[0] + (np.arange(nu) + 0.5) * (hi[0] - lo[0]) / nu
     fv = lo[1] + (np.arange(nv) + 0.5) * (hi[1] - lo[1]) / nv
-    gv, gu = np.meshgrid(fv, fu, indexing="ij")
-    pts = (gu[..., None] * np.asarray(u) + gv[..., None] * np.asarray(v)
-           + lo[2] * np.asarray(w)).reshape(-1, 3).astype(np.float32)  # fmt: skip
-    across = np.stack([gu.ravel(), gv.ravel()], 1)  # the same (u, v) in every lattice
-    out = np.zeros(nv * nu, np.float32)
+    u, v, face = np.asarray(u), np.asarray(v), lo[2] * np.asarray(w)
+    out = np.zeros((nv, nu), np.float32)
     for other in others:
         other_frame, other_depth = own_sun_depth(other, scene, threads)
-        olo, ohi = np.asarray(other_frame[3][:2]), np.asarray(other_frame[4][:2])
-        inside = np.all((across >= olo) & (across <= ohi), axis=1)
-        if inside.any():
-            out[inside] += _core.sample_frame(other_depth, other_frame, pts[inside], threads)
-    return out.reshape(nv, nu)
+        # The columns within its lattice across the light: a rectangle of them (the same (u, v)
+        # axes in every lattice), the columns whose u and v lie in its [lo, hi].
+        (olu, olv), (ohu, ohv) = other_frame[3][:2], other_frame[4][:2]
+        i0, i1 = np.searchsorted(fu, olu, "left"), np.searchsorted(fu, ohu, "right")
+        j0, j1 = np.searchsorted(fv, olv, "left"), np.searchsorted(fv, ohv, "right")
+        if i0 >= i1 or j0 >= j1:
+            continue
+        gu, gv = fu[i0:i1], fv[j0:j1]
+        pts = (gu[None, :, None] * u + gv[:, None, None] * v + face).reshape(-1, 3)
+        read = _core.sample_frame(other_depth, other_frame, pts.astype(np.float32), threads)
+        out[j0:j1, i0:i1] += read.reshape(j1 - j0, i1 - i0)
+    return out
 
 
 def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarray:
