@@ -38,9 +38,17 @@ and 90th percentile of the per-block relative error, the signed ratio of the mea
 minus 1 and the mean |ΔT| (``tests/rendering/test_mitsuba_reference.py`` holds them to
 15 %, 40 %, ±10 % and 0.01), so that a faster light step shows what it costs in error.
 
+``alone``: each cloud of the largest *seeds* scene lit alone (the same scene with that cloud
+only), the median of the repeats each, interleaved. The seeds differ in size (the light step
+of ``gaussian_cumulus(seed=k)`` alone ranges over ~±15 % around its mean), so for that series
+"one cloud" is their mean alone: n clouds over one is then how the step grows with the number
+of clouds, not how much larger than seed 1 the other seeds happen to be
+(``last_over_first`` keeps the ratio to seed 1 alone beside it).
+
 Targets (the light step of the physical default): ≤ 40 ms per default cloud (the one-cloud
-scene), and linear in clouds: 16 clouds ≤ 16× one (each series; ``met`` is null in --quick).
-Nothing passes or fails on time.
+scene), and linear in clouds: 16 clouds ≤ 16× one (each series: the copies over the cumulus
+alone, the seeds over their mean alone; ``met`` is null in --quick). Nothing passes or fails on
+time.
 """
 
 from __future__ import annotations
@@ -85,6 +93,15 @@ def scene(series: str, count: int, resolution: int | None) -> cu.Scene:
         cloud = base.clouds[0] if series == "copies" else cu.gaussian_cumulus(seed=1 + k)
         clouds.append(cloud.translated(offset))
     return base.replace(clouds=clouds)
+
+
+def each_alone(sc: cu.Scene, repeats: int) -> list[float]:
+    """Seconds of the light step of each cloud of ``sc`` lit alone (median of ``repeats``,
+    the clouds interleaved)."""
+    singles = [sc.replace(clouds=[c]) for c in sc.clouds]
+    fns = {str(k): (lambda one=one: light_step(one)) for k, one in enumerate(singles)}
+    timed = common.interleaved_repeats(fns, repeats)
+    return [common.spread(timed[str(k)][0])["median"] for k in range(len(sc.clouds))]
 
 
 def light_step(sc: cu.Scene) -> None:
@@ -280,6 +297,16 @@ def main(argv: list[str] | None = None) -> int:
                 + ", ".join(f"{k} {1e3 * v:.1f}" for k, v in per_stage.items())
                 + " ms)"
             )
+    # One cloud of each series: the cumulus alone for the copies, the seeds' mean alone.
+    alone = each_alone(scene("seeds", counts[-1], resolution), repeats)
+    common.log(
+        f"seeds alone: mean {1e3 * np.mean(alone):.1f} ms, seed 1 {1e3 * alone[0]:.1f} ms, "
+        f"range {1e3 * min(alone):.1f}-{1e3 * max(alone):.1f} ms"
+    )
+    one = {
+        "copies": results["copies"]["1"]["light_step_s"]["median"],
+        "seeds": float(np.mean(alone)),
+    }
     growth: dict[str, Any] = {}
     for s in SERIES:
         rows = [results[s][str(c)] for c in counts]
@@ -290,10 +317,12 @@ def main(argv: list[str] | None = None) -> int:
                 k: exponent(list(counts), [max(r["stages_s"][k], 1e-9) for r in rows])
                 for k in STAGES
             },
-            "last_over_one": secs[-1] / secs[0],
-            # The same ratio in process CPU seconds: what other load on a shared machine
-            # inflates least (it stretches the short one-cloud step more than the long ones).
-            "last_over_one_cpu": rows[-1]["light_step_cpu_s"]["median"]
+            "one_s": one[s],
+            "last_over_one": secs[-1] / one[s],
+            "last_over_first": secs[-1] / secs[0],
+            # The first over the last in process CPU seconds: what other load on a shared
+            # machine inflates least (it stretches the short one-cloud step more than the long).
+            "last_over_first_cpu": rows[-1]["light_step_cpu_s"]["median"]
             / rows[0]["light_step_cpu_s"]["median"],
         }
     full = not args.quick
@@ -327,6 +356,7 @@ def main(argv: list[str] | None = None) -> int:
         "stages": list(STAGES),
         "series": results,
         "growth": growth,
+        "seeds_alone_s": alone,
         "noise_versions": versions,
         "sky_rays": rays,
         "moving_sun": sun_moves,
@@ -338,7 +368,8 @@ def main(argv: list[str] | None = None) -> int:
     for s in SERIES:
         common.log(
             f"growth exponent ({s}): {growth[s]['exponent']:.3f}; {counts[-1]} clouds over one: "
-            f"{growth[s]['last_over_one']:.2f} wall, {growth[s]['last_over_one_cpu']:.2f} CPU"
+            f"{growth[s]['last_over_one']:.2f} (over the first alone: "
+            f"{growth[s]['last_over_first']:.2f} wall, {growth[s]['last_over_first_cpu']:.2f} CPU)"
         )
     path = common.write_json(args.out / "physical_light.json", data)
     plot(data, args.out / "physical_light.png")

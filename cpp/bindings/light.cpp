@@ -1064,6 +1064,34 @@ void bind_physical_light(py::module_& m) {
       "Trilinear values of a light-frame lattice at (N, 3) world points.");
 
   m.def(
+      "lattice_transmittance",
+      [](const FloatArray& depth, const py::tuple& frame, V3 lo, V3 cell,
+         const std::array<int, 3>& dims, int threads) {
+        const SunFrame f = frame_of(frame);
+        if (depth.ndim() != 3 || depth.shape(0) != f.res[2] || depth.shape(1) != f.res[1] ||
+            depth.shape(2) != f.res[0])
+          throw py::value_error("depth must have the frame's shape (nw, nv, nu)");
+        for (int a = 0; a < 3; ++a) {
+          if (dims[a] < 1 || dims[a] > 4096)
+            throw py::value_error("dims must be three lattice sizes in [1, 4096]");
+          if (!std::isfinite(lo[a]) || !(cell[a] > 0.0f) || !std::isfinite(cell[a]))
+            throw py::value_error("lo must be finite and cell finite and > 0");
+        }
+        const float* v = depth.data();
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          out = lattice_transmittance(v, f, v3(lo), v3(cell), dims.data(), threads);
+        }
+        return adopt_array(std::move(out), {dims[2], dims[1], dims[0]});
+      },
+      py::arg("depth"), py::arg("frame"), py::arg("lo"), py::arg("cell"), py::arg("dims"),
+      py::arg("threads") = 0,
+      "e^-tau of a light-frame lattice of optical depths at the centres of a (W, H, D) lattice "
+      "(lo + (index + 1/2)*cell per axis, float32), shape (D, H, W): the sun's transmittance "
+      "on a drawable's world lattice.");
+
+  m.def(
       "sky_irradiance",
       [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& sky_coeffs, int order, int n_theta,
          float step, int threads, const std::string& method) {
@@ -1116,7 +1144,7 @@ void bind_physical_light(py::module_& m) {
 
   m.def(
       "sky_irradiance_from",
-      [](const DoubleArray& visibility, const FloatArray& sky_coeffs) {
+      [](const DoubleArray& visibility, const FloatArray& sky_coeffs, int threads) {
         if (visibility.ndim() != 4)
           throw py::value_error("visibility must be a (D, H, W, order²) array");
         const py::ssize_t nc = visibility.shape(3);
@@ -1133,12 +1161,12 @@ void bind_physical_light(py::module_& m) {
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = sky_irradiance_from(v, voxels, s, order);
+          out = sky_irradiance_from(v, voxels, s, order, threads);
         }
         return adopt_array(std::move(out),
                            {visibility.shape(0), visibility.shape(1), visibility.shape(2), 3});
       },
-      py::arg("visibility"), py::arg("sky_coeffs"),
+      py::arg("visibility"), py::arg("sky_coeffs"), py::arg("threads") = 0,
       "Sky irradiance (D, H, W, 3) from sky_visibility's moments and a sky's SH coefficients: "
       "the same values sky_irradiance gives.");
 

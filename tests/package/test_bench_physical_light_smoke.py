@@ -37,8 +37,19 @@ def test_bench_physical_light_quick_writes_json_and_plot(
         assert rows["1"]["stages_s"]["upstream"] == 0.0
         growth = data["growth"][series]
         assert growth["exponent"] is not None and growth["last_over_one"] > 0
-        assert growth["last_over_one_cpu"] > 0
+        assert growth["last_over_first_cpu"] > 0
+        assert growth["last_over_first"] == pytest.approx(
+            rows[str(data["counts"][-1])]["light_step_s"]["median"]
+            / rows["1"]["light_step_s"]["median"]
+        )
         assert set(growth["stage_exponents"]) == set(STAGES)
+    # "One cloud" of the seeds series is the mean of each seed alone.
+    alone = data["seeds_alone_s"]
+    assert len(alone) == data["counts"][-1] and min(alone) > 0
+    assert data["growth"]["seeds"]["one_s"] == pytest.approx(sum(alone) / len(alone))
+    assert (
+        data["growth"]["copies"]["one_s"] == data["series"]["copies"]["1"]["light_step_s"]["median"]
+    )
     for name in ("per_default_cloud_ms", "sixteen_over_one_copies", "sixteen_over_one_seeds"):
         t = data["targets"][name]
         assert t["met"] is None and t["reached"] is None  # --quick measures no target

@@ -339,6 +339,23 @@ float sample_frame(const float* values, const SunFrame& f, glm::vec3 p) {
   return c0 + fz * (c1 - c0);
 }
 
+std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
+                                         glm::vec3 cell, const int dims[3], int threads) {
+  f.validate();
+  const std::size_t w = static_cast<std::size_t>(dims[0]), h = static_cast<std::size_t>(dims[1]),
+                    d = static_cast<std::size_t>(dims[2]);
+  std::vector<float> out(w * h * d);
+  parallel_for(d * h, threads, [&](std::size_t row) {
+    const float y = lo.y + (static_cast<float>(row % h) + 0.5f) * cell.y;
+    const float z = lo.z + (static_cast<float>(row / h) + 0.5f) * cell.z;
+    for (std::size_t i = 0; i < w; ++i) {
+      const float x = lo.x + (static_cast<float>(i) + 0.5f) * cell.x;
+      out[row * w + i] = std::exp(-sample_frame(depth, f, glm::vec3(x, y, z)));
+    }
+  });
+  return out;
+}
+
 // ---------------------------------------------------------------------------------------------
 // Optical depths
 
@@ -927,18 +944,18 @@ LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
 }
 
 std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,
-                                       const float* sky_coeffs, int order) {
+                                       const float* sky_coeffs, int order, int threads) {
   if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
   const int nc = order * order;
   std::vector<float> out(voxels * 3);
-  for (std::size_t v = 0; v < voxels; ++v) {
+  parallel_for(voxels, threads, [&](std::size_t v) {
     const double* vis = visibility + v * nc;
     for (int ch = 0; ch < 3; ++ch) {
       double e = 0.0;
       for (int c = 0; c < nc; ++c) e += static_cast<double>(sky_coeffs[ch * nc + c]) * vis[c];
       out[v * 3 + ch] = static_cast<float>(std::max(0.0, e));
     }
-  }
+  });
   return out;
 }
 

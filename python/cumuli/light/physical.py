@@ -224,10 +224,19 @@ def lattice_gains(
         raise ValueError(f"gain_depth must be finite and >= 0, got {depth}")
     if depth == 0.0:
         return np.full(ext.shape, gain, np.float32)
+    return _gain_from(_gain_rise(ext, lo, hi, depth), gain)
+
+
+def _gain_rise(ext: np.ndarray, lo: Any, hi: Any, depth: float) -> np.ndarray:
+    """``1 − e^{−τc/τg}`` of every cell of the float64 lattice ``ext`` (:func:`lattice_gains`)."""
     d, h, w = ext.shape
     edges = (np.asarray(hi, np.float64) - np.asarray(lo, np.float64)) / (w, h, d)
     cell = float(np.prod(np.abs(edges)) ** (1.0 / 3.0))
-    rise = -np.expm1(-np.maximum(ext, 0.0) * cell / depth)
+    return -np.expm1(-np.maximum(ext, 0.0) * cell / depth)
+
+
+def _gain_from(rise: np.ndarray, gain: float) -> np.ndarray:
+    """:func:`lattice_gains` from its rise (:func:`_gain_rise`)."""
     return (1.0 + (gain - 1.0) * rise).astype(np.float32)
 
 
@@ -283,9 +292,8 @@ def physical_light(
     ext = field.values
     d, h, w = ext.shape
     with _stage(timings, "sun_transmittance"):
-        centres = _lattice_centres(lo, hi, (w, h, d))
-        tau = _core.sample_frame(depth, frame, centres, threads)
-        sun_t = np.exp(-tau).astype(np.float32).reshape(ext.shape)
+        lo32, cell32 = _lattice_cells(lo, hi, (w, h, d))
+        sun_t = _core.lattice_transmittance(depth, frame, lo32, cell32, (w, h, d), threads)
     grid = np.zeros((d, h, w, 4), np.float32)
     sky_e = None
     if s.sky_light:
@@ -300,7 +308,7 @@ def physical_light(
                 media=True,
             )
             coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
-            sky_e = _core.sky_irradiance_from(visibility, coeffs)
+            sky_e = _core.sky_irradiance_from(visibility, coeffs, threads)
         grid[..., 1:4] = sky_e
     octaves = 1
     if s.multiple_scattering:
@@ -320,9 +328,15 @@ def physical_light(
                 forward=weight_f,
                 solver=DIFFUSION_SOLVER,
             )
-        grid[..., 0] = lattice_gains(ext, lo, hi, SUN_GAIN, depth_g) * phi[..., 0]
+        # Both gains rise alike with the cells' thickness (lattice_gains): the rise once.
+        rise = None if depth_g == 0.0 else _gain_rise(np.asarray(ext, np.float64), lo, hi, depth_g)
+
+        def gain_of(g: float) -> np.ndarray:
+            return np.full(ext.shape, g, np.float32) if rise is None else _gain_from(rise, g)
+
+        grid[..., 0] = gain_of(SUN_GAIN) * phi[..., 0]
         if sky_e is not None:
-            sky_gain = lattice_gains(ext, lo, hi, SKY_GAIN, depth_g)
+            sky_gain = gain_of(SKY_GAIN)
             grid[..., 1:4] = sky_gain[..., None] * (sky_e + phi[..., 1:4])
     depth.setflags(write=False)
     grid.setflags(write=False)
@@ -455,16 +469,12 @@ def _upstream_depth(others: Any, scene: Any, frame: tuple, threads: int) -> np.n
     return out
 
 
-def _lattice_centres(lo: Any, hi: Any, shape: tuple[int, int, int]) -> np.ndarray:
-    """World texel centres of a ``(x, y, z)`` lattice over the box, in ``[z, y, x]`` order."""
-    axes = [
-        np.float32(lo[a])
-        + (np.arange(shape[a], dtype=np.float32) + np.float32(0.5))
-        * np.float32((hi[a] - lo[a]) / shape[a])
-        for a in range(3)
-    ]
-    zz, yy, xx = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
-    return np.ascontiguousarray(np.stack([xx, yy, zz], -1).reshape(-1, 3), dtype=np.float32)
+def _lattice_cells(lo: Any, hi: Any, shape: tuple[int, int, int]) -> tuple[tuple, tuple]:
+    """``(lo, cell)`` as float32 values of a ``(x, y, z)`` lattice over the box: its texel
+    centres are ``lo + (index + ½)·cell`` per axis (``_core.lattice_transmittance``)."""
+    lo32 = tuple(float(np.float32(lo[a])) for a in range(3))
+    cell32 = tuple(float(np.float32((hi[a] - lo[a]) / shape[a])) for a in range(3))
+    return lo32, cell32
 
 
 def octave_sum(settings: Any, tau: Any, cos_theta: Any, octaves: int) -> np.ndarray:

@@ -57,6 +57,12 @@ SunFrame make_sun_frame(const Box& world_box, glm::vec3 to_sun, const int res[3]
 // Trilinear value of a [w][v][u] lattice at world point p (texel centres, clamp to edge).
 float sample_frame(const float* values, const SunFrame& f, glm::vec3 p);
 
+// e^{−τ} of a frame's optical depths `depth` at the centres of a dims[0] × dims[1] × dims[2]
+// (x, y, z) lattice, [z][y][x]: centre (i, j, k) at lo + (index + ½)·cell per axis, in float32
+// as written (the sun's transmittance on a drawable's world lattice).
+std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
+                                         glm::vec3 cell, const int dims[3], int threads);
+
 // What extinction a ray meets.
 struct CloudMedium {
   const CloudShape* shape = nullptr;
@@ -103,9 +109,10 @@ enum class SkyRays { Lattice, March };
 // so that a changed sky or sun re-projects them without marching again.
 LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
                                    float step_voxels, int threads, SkyRays rays = SkyRays::March);
-// E_sky = max(0, Σ_m L_m V_m) per voxel (RGB interleaved) from sky_visibility's moments.
+// E_sky = max(0, Σ_m L_m V_m) per voxel (RGB interleaved) from sky_visibility's moments (each
+// voxel's sum on one thread: the same on any thread count).
 std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,
-                                       const float* sky_coeffs, int order);
+                                       const float* sky_coeffs, int order, int threads = 1);
 std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
                                   int order, int n_theta, float step_voxels, int threads,
                                   SkyRays rays = SkyRays::March);
