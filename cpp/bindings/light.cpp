@@ -4,8 +4,10 @@
 // absorption factors and vertex shading (light/caf.hpp). Long loops release the GIL.
 #include "cumuli/light/ndt.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
+#include <initializer_list>
 #include <stdexcept>
 #include <string>
 
@@ -1141,6 +1143,53 @@ void bind_physical_light(py::module_& m) {
       py::arg("step"), py::arg("threads") = 0, py::arg("method") = "march",
       "The sky visibility's SH moments per voxel, (D, H, W, order²) float64: sky_irradiance "
       "without the sky (sky_irradiance_from projects a sky onto them).");
+
+  m.def(
+      "physical_grid",
+      [](const FloatArray& ext, const py::object& phi, const py::object& sky_e, double cell,
+         double gain_depth, double sun_gain, double sky_gain, int threads) {
+        if (ext.ndim() != 3) throw py::value_error("extinction must be a (D, H, W) array");
+        const std::size_t voxels = static_cast<std::size_t>(ext.size());
+        const auto lattice = [&](const py::object& a, const char* name, FloatArray& held,
+                                 std::initializer_list<py::ssize_t> last) -> const float* {
+          if (a.is_none()) return nullptr;
+          held = a.cast<FloatArray>();
+          bool ok = held.ndim() == 4;
+          for (int k = 0; ok && k < 3; ++k) ok = held.shape(k) == ext.shape(k);
+          if (ok) ok = std::find(last.begin(), last.end(), held.shape(3)) != last.end();
+          if (!ok)
+            throw py::value_error(
+                std::string(name) +
+                " must be a (D, H, W, channels) array on the extinction's lattice");
+          return held.data();
+        };
+        FloatArray phi_a, sky_a;
+        const float* f = lattice(phi, "phi", phi_a, {1, 4});
+        const float* s = lattice(sky_e, "sky_e", sky_a, {3});
+        const int channels = f != nullptr ? static_cast<int>(phi_a.shape(3)) : 0;
+        if (f != nullptr && s != nullptr && channels != 4)
+          throw py::value_error("with sky_e, phi must hold the sun's and the sky's 4 channels");
+        for (const double g : {sun_gain, sky_gain})
+          if (!(g > 0.0) || !std::isfinite(g))
+            throw py::value_error("gains must be finite and > 0");
+        if (!(gain_depth >= 0.0) || !std::isfinite(gain_depth))
+          throw py::value_error("gain_depth must be finite and >= 0");
+        if (!(cell > 0.0) || !std::isfinite(cell))
+          throw py::value_error("cell must be finite and > 0");
+        const float* e = ext.data();
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          out = physical_grid(e, voxels, f, channels, s, cell, gain_depth, sun_gain, sky_gain,
+                              threads);
+        }
+        return adopt_array(std::move(out), {ext.shape(0), ext.shape(1), ext.shape(2), 4});
+      },
+      py::arg("extinction"), py::arg("phi"), py::arg("sky_e"), py::arg("cell"),
+      py::arg("gain_depth"), py::arg("sun_gain"), py::arg("sky_gain"), py::arg("threads") = 0,
+      "A drawable's physical light lattice (D, H, W, 4), float32: A = G_sun*phi_sun, RGB = "
+      "G_sky*(sky_e + phi_sky) (sky_e alone without phi), G = 1 + (G_inf - 1)*(1 - "
+      "exp(-max(extinction, 0)*cell/gain_depth)) (G_inf where gain_depth is 0).");
 
   m.def(
       "sky_irradiance_from",

@@ -943,6 +943,42 @@ LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
   return out;
 }
 
+std::vector<float> physical_grid(const float* ext, std::size_t voxels, const float* phi,
+                                 int phi_channels, const float* sky_e, double cell,
+                                 double gain_depth, double sun_gain, double sky_gain, int threads) {
+  if (phi != nullptr && phi_channels != 1 && phi_channels != 4)
+    throw std::invalid_argument("phi must have 1 or 4 channels");
+  if (phi != nullptr && phi_channels == 1 && sky_e != nullptr)
+    throw std::invalid_argument("a sky's light needs the fluence's sky channels");
+  std::vector<float> out(voxels * 4, 0.0f);
+  parallel_chunks(voxels, threads, [&](std::size_t vb, std::size_t ve) {
+    for (std::size_t v = vb; v < ve; ++v) {
+      float* o = &out[v * 4];
+      if (phi == nullptr) {
+        if (sky_e != nullptr)
+          for (int c = 0; c < 3; ++c) o[1 + c] = sky_e[v * 3 + c];
+        continue;
+      }
+      // As lattice_gains: the rise in double, each gain rounded to float.
+      const double rise =
+          gain_depth == 0.0
+              ? 1.0
+              : -std::expm1((-std::max(static_cast<double>(ext[v]), 0.0) * cell) / gain_depth);
+      const auto gain = [&](double g) {
+        return gain_depth == 0.0 ? static_cast<float>(g)
+                                 : static_cast<float>(1.0 + (g - 1.0) * rise);
+      };
+      const float* f = phi + v * static_cast<std::size_t>(phi_channels);
+      o[0] = gain(sun_gain) * f[0];
+      if (sky_e != nullptr) {
+        const float g = gain(sky_gain);
+        for (int c = 0; c < 3; ++c) o[1 + c] = g * (sky_e[v * 3 + c] + f[1 + c]);
+      }
+    }
+  });
+  return out;
+}
+
 std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,
                                        const float* sky_coeffs, int order, int threads) {
   if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");

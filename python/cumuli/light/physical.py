@@ -224,20 +224,15 @@ def lattice_gains(
         raise ValueError(f"gain_depth must be finite and >= 0, got {depth}")
     if depth == 0.0:
         return np.full(ext.shape, gain, np.float32)
-    return _gain_from(_gain_rise(ext, lo, hi, depth), gain)
-
-
-def _gain_rise(ext: np.ndarray, lo: Any, hi: Any, depth: float) -> np.ndarray:
-    """``1 − e^{−τc/τg}`` of every cell of the float64 lattice ``ext`` (:func:`lattice_gains`)."""
-    d, h, w = ext.shape
-    edges = (np.asarray(hi, np.float64) - np.asarray(lo, np.float64)) / (w, h, d)
-    cell = float(np.prod(np.abs(edges)) ** (1.0 / 3.0))
-    return -np.expm1(-np.maximum(ext, 0.0) * cell / depth)
-
-
-def _gain_from(rise: np.ndarray, gain: float) -> np.ndarray:
-    """:func:`lattice_gains` from its rise (:func:`_gain_rise`)."""
+    rise = -np.expm1(-np.maximum(ext, 0.0) * _cell_size(lo, hi, ext.shape) / depth)
     return (1.0 + (gain - 1.0) * rise).astype(np.float32)
+
+
+def _cell_size(lo: Any, hi: Any, shape: tuple[int, ...]) -> float:
+    """The geometric mean of the edges of a ``(D, H, W)`` lattice's cells over the box."""
+    d, h, w = shape[:3]
+    edges = (np.asarray(hi, np.float64) - np.asarray(lo, np.float64)) / (w, h, d)
+    return float(np.prod(np.abs(edges)) ** (1.0 / 3.0))
 
 
 def physical_light(
@@ -294,8 +289,7 @@ def physical_light(
     with _stage(timings, "sun_transmittance"):
         lo32, cell32 = _lattice_cells(lo, hi, (w, h, d))
         sun_t = _core.lattice_transmittance(depth, frame, lo32, cell32, (w, h, d), threads)
-    grid = np.zeros((d, h, w, 4), np.float32)
-    sky_e = None
+    sky_e = phi = None
     if s.sky_light:
         with _stage(timings, "sky"):
             visibility = remember(
@@ -309,7 +303,6 @@ def physical_light(
             )
             coeffs = _core.sky_sh(sky_args(scene.sky), SKY_ORDER, SKY_SAMPLES)
             sky_e = _core.sky_irradiance_from(visibility, coeffs, threads)
-        grid[..., 1:4] = sky_e
     octaves = 1
     if s.multiple_scattering:
         octaves = OCTAVES
@@ -328,16 +321,11 @@ def physical_light(
                 forward=weight_f,
                 solver=DIFFUSION_SOLVER,
             )
-        # Both gains rise alike with the cells' thickness (lattice_gains): the rise once.
-        rise = None if depth_g == 0.0 else _gain_rise(np.asarray(ext, np.float64), lo, hi, depth_g)
-
-        def gain_of(g: float) -> np.ndarray:
-            return np.full(ext.shape, g, np.float32) if rise is None else _gain_from(rise, g)
-
-        grid[..., 0] = gain_of(SUN_GAIN) * phi[..., 0]
-        if sky_e is not None:
-            sky_gain = gain_of(SKY_GAIN)
-            grid[..., 1:4] = sky_gain[..., None] * (sky_e + phi[..., 1:4])
+    # A: G_sun·φ_sun; RGB: G_sky·(E_sky + φ_sky), the gains of lattice_gains (E_sky alone
+    # without multiple scattering).
+    grid = _core.physical_grid(
+        ext, phi, sky_e, _cell_size(lo, hi, ext.shape), depth_g, SUN_GAIN, SKY_GAIN, threads
+    )
     depth.setflags(write=False)
     grid.setflags(write=False)
     return PhysicalLight(frame, depth, grid, (lo, hi), octaves)

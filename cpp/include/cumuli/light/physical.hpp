@@ -109,6 +109,16 @@ enum class SkyRays { Lattice, March };
 // so that a changed sky or sun re-projects them without marching again.
 LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
                                    float step_voxels, int threads, SkyRays rays = SkyRays::March);
+// A drawable's physical light lattice, RGBA per voxel (`voxels` of them): A the diffuse sun, RGB
+// the sky, from the diffusion's fluence `phi` (4 channels: sun, sky RGB; 1: sun; nullptr: no
+// multiple scattering) and the sky irradiance `sky_e` (RGB; nullptr: no sky light):
+//   A = G_sun·φ_sun, RGB = G_sky·(E_sky + φ_sky)   (E_sky alone without φ; 0 without either),
+// G = 1 + (G∞ − 1)(1 − e^{−τc/τg}) per cell, τc = max(σt, 0)·cell, in double rounded to float
+// (G∞ everywhere when τg = 0); the products in float.
+std::vector<float> physical_grid(const float* ext, std::size_t voxels, const float* phi,
+                                 int phi_channels, const float* sky_e, double cell,
+                                 double gain_depth, double sun_gain, double sky_gain, int threads);
+
 // E_sky = max(0, Σ_m L_m V_m) per voxel (RGB interleaved) from sky_visibility's moments (each
 // voxel's sum on one thread: the same on any thread count).
 std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,

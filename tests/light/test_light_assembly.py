@@ -1,0 +1,120 @@
+"""The light step's assembly in the core: the sun's transmittance on a drawable's world lattice
+(``_core.lattice_transmittance``: e^−τ of its sun lattice at the world lattice's texel centres,
+the trilinear read of ``_core.sample_frame`` at those points), the sky irradiance from the
+visibility moments on any number of threads, and the RGBA light lattice from the fluence, the
+sky irradiance and the lattice gains (``_core.physical_grid``) against a numpy twin."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cumuli as cu
+from cumuli import _core
+from cumuli.demo import cumulus_scene
+from cumuli.light.physical import lattice_gains, own_sun_depth
+
+F32 = np.float32
+
+
+def _centres(lo: tuple, cell: tuple, dims: tuple[int, int, int]) -> np.ndarray:
+    """Texel centres ``lo + (index + ½)·cell`` in float32, ``[z][y][x]`` order, (N, 3)."""
+    axes = [
+        F32(lo[a]) + (np.arange(dims[a], dtype=F32) + F32(0.5)) * F32(cell[a]) for a in range(3)
+    ]
+    zz, yy, xx = np.meshgrid(axes[2], axes[1], axes[0], indexing="ij")
+    return np.stack([xx, yy, zz], -1).reshape(-1, 3)
+
+
+def test_transmittance_is_the_frame_read_at_the_lattice_centres() -> None:
+    scene = cumulus_scene(settings=cu.RenderSettings(physical_resolution=16))
+    frame, depth = own_sun_depth(scene.clouds[0], scene, 2)
+    lo, hi = scene.clouds[0].layer_box()
+    dims = (13, 7, 11)
+    lo32 = tuple(float(F32(v)) for v in lo)
+    cell = tuple(float(F32((hi[a] - lo[a]) / dims[a])) for a in range(3))
+    got = _core.lattice_transmittance(depth, frame, lo32, cell, dims, 2)
+    assert got.shape == (11, 7, 13) and got.dtype == np.float32
+    tau = _core.sample_frame(depth, frame, _centres(lo32, cell, dims), 1).reshape(11, 7, 13)
+    assert tau.max() > 1.0  # the cloud shades part of the lattice
+    np.testing.assert_allclose(got, np.exp(-tau.astype(np.float64)), rtol=3e-7, atol=0)
+    for threads in (1, 3):
+        assert np.array_equal(
+            _core.lattice_transmittance(depth, frame, lo32, cell, dims, threads), got
+        )
+
+
+def test_transmittance_rejects_bad_input() -> None:
+    scene = cumulus_scene(settings=cu.RenderSettings(physical_resolution=8))
+    frame, depth = own_sun_depth(scene.clouds[0], scene, 1)
+    with pytest.raises(ValueError, match="frame's shape"):
+        _core.lattice_transmittance(depth[1:], frame, (0, 0, 0), (1, 1, 1), (4, 4, 4))
+    with pytest.raises(ValueError, match="cell"):
+        _core.lattice_transmittance(depth, frame, (0, 0, 0), (1, -1, 1), (4, 4, 4))
+    with pytest.raises(ValueError, match="lo"):
+        _core.lattice_transmittance(depth, frame, (0, float("nan"), 0), (1, 1, 1), (4, 4, 4))
+    with pytest.raises(ValueError, match="dims"):
+        _core.lattice_transmittance(depth, frame, (0, 0, 0), (1, 1, 1), (4, 0, 4))
+
+
+def test_sky_irradiance_is_the_same_on_any_thread_count() -> None:
+    rng = np.random.default_rng(4)
+    vis = rng.normal(size=(5, 6, 7, 9))
+    coeffs = rng.normal(size=27).astype(F32)
+    one = _core.sky_irradiance_from(vis, coeffs, 1)
+    want = np.maximum(0.0, np.einsum("dhwc,kc->dhwk", vis, coeffs.reshape(3, 9).astype(np.float64)))
+    np.testing.assert_allclose(one, want, rtol=1e-6, atol=1e-6)
+    for threads in (2, 3):
+        assert np.array_equal(_core.sky_irradiance_from(vis, coeffs, threads), one)
+
+
+def _grid_twin(ext, phi, sky_e, lo, hi, depth, sun_gain, sky_gain) -> np.ndarray:
+    """The light lattice as numpy writes it (lattice_gains' gains, float32 products)."""
+    grid = np.zeros((*ext.shape, 4), F32)
+    if sky_e is not None:
+        grid[..., 1:4] = sky_e
+    if phi is not None:
+        grid[..., 0] = lattice_gains(ext, lo, hi, sun_gain, depth) * phi[..., 0]
+        if sky_e is not None:
+            gain = lattice_gains(ext, lo, hi, sky_gain, depth)
+            grid[..., 1:4] = gain[..., None] * (sky_e + phi[..., 1:4])
+    return grid
+
+
+@pytest.mark.parametrize("depth", [0.0, 0.7])
+@pytest.mark.parametrize("parts", ["sky and fluence", "fluence", "sky", "neither"])
+def test_light_grid_is_its_numpy_twin(parts: str, depth: float) -> None:
+    rng = np.random.default_rng(9)
+    shape = (5, 4, 6)
+    ext = (rng.uniform(-0.2, 3.0, shape)).astype(F32)  # a few negative values: clamped to 0
+    lo, hi = (0.1, -1.0, 2.0), (3.3, 1.5, 4.7)
+    sky_e = rng.uniform(0, 2, (*shape, 3)).astype(F32) if "sky" in parts else None
+    channels = 4 if sky_e is not None else 1
+    phi = rng.uniform(0, 5, (*shape, channels)).astype(F32) if "fluence" in parts else None
+    d, h, w = shape
+    edges = (np.asarray(hi) - np.asarray(lo)) / (w, h, d)
+    cell = float(np.prod(np.abs(edges)) ** (1.0 / 3.0))
+    want = _grid_twin(ext, phi, sky_e, lo, hi, depth, 1.52, 3.2)
+    for threads in (1, 2, 3):
+        got = _core.physical_grid(ext, phi, sky_e, cell, depth, 1.52, 3.2, threads)
+        assert got.shape == (*shape, 4) and got.dtype == np.float32
+        assert np.array_equal(got, want)
+
+
+def test_light_grid_rejects_bad_input() -> None:
+    ext = np.ones((3, 3, 3), F32)
+    phi4, sky = np.ones((3, 3, 3, 4), F32), np.ones((3, 3, 3, 3), F32)
+    with pytest.raises(ValueError, match="phi"):
+        _core.physical_grid(ext, np.ones((3, 3, 2, 4), F32), None, 1.0, 0.5, 1.5, 3.0)
+    with pytest.raises(ValueError, match="4 channels"):
+        _core.physical_grid(ext, np.ones((3, 3, 3, 1), F32), sky, 1.0, 0.5, 1.5, 3.0)
+    with pytest.raises(ValueError, match="sky_e"):
+        _core.physical_grid(ext, phi4, np.ones((3, 3, 3, 4), F32), 1.0, 0.5, 1.5, 3.0)
+    with pytest.raises(ValueError, match="gains"):
+        _core.physical_grid(ext, phi4, sky, 1.0, 0.5, float("nan"), 3.0)
+    with pytest.raises(ValueError, match="gain_depth"):
+        _core.physical_grid(ext, phi4, sky, 1.0, -1.0, 1.5, 3.0)
+    with pytest.raises(ValueError, match="cell"):
+        _core.physical_grid(ext, phi4, sky, 0.0, 0.5, 1.5, 3.0)
+    with pytest.raises(ValueError, match="extinction"):
+        _core.physical_grid(ext[0], phi4, sky, 1.0, 0.5, 1.5, 3.0)
