@@ -250,7 +250,9 @@ def test_the_physical_resolution_is_held_to_the_budget_before_the_light_pass(mon
     err, peak = _traced(lambda: cu.render(scene, scene.default_camera(), 8, 8, backend="cpu"))
     assert "physical_resolution=256" in str(err) and peak < 8 << 20
     memory, samples = settings.physical_cost(2)
-    assert memory > cu.get_limits().memory and samples > cu.get_limits().work
+    # Held by its work (its memory, ~3.6 GB with two sun-lattice nodes per cell along the
+    # light, is within the 4 GiB default; the work is twice the limit).
+    assert samples > cu.get_limits().work and memory > cu.get_limits().memory / 2
     small = cu.RenderSettings(lighting="physical", physical_resolution=16)
     with cu.limits(memory=small.physical_cost(2)[0] - 1):
         with pytest.raises(ValueError, match="physical_resolution=16"):

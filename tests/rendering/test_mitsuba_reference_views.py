@@ -39,19 +39,20 @@ GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25, "transmitta
 #: LLVM 15.0.6, and the CPU twin agree to 0.001), plus a margin of about one point (0.003 for
 #: ΔT). Keyed by (view, metric); every other pair is held to GOAL. Measured with the constants
 #: fitted on the side-lit, back-lit and metaball views (``cumuli.light.physical.FIT_VIEWS``),
-#: the diffusion fed the forward-scattered sun's flux source: back-lit (fitted) median 10.7 %,
-#: p90 27.1 % (mean −0.3 % meets the goal); top-lit (held out) −12.5 % mean, median 13.0 %,
-#: p90 25.5 %; L-system (held out) +10.7 % mean, median 11.6 %, p90 33.2 %, ΔT 0.017. The
-#: sunset (held out) and the metaball meet the goal.
+#: the diffusion fed the forward-scattered sun's flux source, with the sun lattice of two nodes
+#: per cell along the light and the sky marched by runs of lanes: back-lit (fitted) median
+#: 11.0 %, p90 27.2 % (mean −0.4 % meets the goal); top-lit (held out) −13.5 % mean, median
+#: 14.0 %, p90 26.1 %; L-system (held out) +9.6 % mean, median 10.1 %, p90 30.0 %, ΔT 0.017.
+#: The sunset (held out) and the metaball meet the goal.
 GUARDS: dict[tuple[str, str], float] = {
     ("backlit", "block_median"): 0.117,
     ("backlit", "block_p90"): 0.281,
-    ("toplit", "mean_ratio"): 0.135,
-    ("toplit", "block_median"): 0.14,
-    ("toplit", "block_p90"): 0.265,
-    ("lsystem", "mean_ratio"): 0.117,
-    ("lsystem", "block_median"): 0.126,
-    ("lsystem", "block_p90"): 0.342,
+    ("toplit", "mean_ratio"): 0.145,
+    ("toplit", "block_median"): 0.15,
+    ("toplit", "block_p90"): 0.272,
+    ("lsystem", "mean_ratio"): 0.106,
+    ("lsystem", "block_median"): 0.111,
+    ("lsystem", "block_p90"): 0.31,
     ("lsystem", "transmittance"): 0.02,
 }
 

@@ -6,7 +6,8 @@ The approximations, with their constants (``cpp/include/cumuli/light/physical.hp
 maths):
 
 - **Sun, single scattering and low orders**: ``τ_sun`` on a lattice whose third axis runs along
-  the light, :data:`ALONG` × finer than across it, marched through the drawable's own extinction
+  the light (:data:`ACROSS` nodes per world cell across it, :data:`ALONG` along it; the march
+  itself in steps of at most ``light_step``), marched through the drawable's own extinction
   (the procedural density of a 2018 cloud, not a voxelisation), plus the optical depth of the
   scene's other drawables upstream of each column (clouds shade each other). The drawers add
   the first :data:`OCTAVES` scattering orders as octaves after Wrenninge, Kulla & Lundqvist
