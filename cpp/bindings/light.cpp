@@ -1066,6 +1066,28 @@ void bind_physical_light(py::module_& m) {
       "Trilinear values of a light-frame lattice at (N, 3) world points.");
 
   m.def(
+      "add_upstream_depth",
+      [](const FloatArray& depth, const FloatArray& upstream, int threads) {
+        if (depth.ndim() != 3 || upstream.ndim() != 2 || upstream.shape(0) != depth.shape(1) ||
+            upstream.shape(1) != depth.shape(2))
+          throw py::value_error("depth must be (nw, nv, nu) and upstream (nv, nu)");
+        const std::size_t plane = static_cast<std::size_t>(upstream.size());
+        const std::size_t layers = static_cast<std::size_t>(depth.shape(0));
+        const float *d = depth.data(), *u = upstream.data();
+        LargeVector<float> out(layers * plane);
+        {
+          py::gil_scoped_release release;
+          parallel_for(layers, threads, [&](std::size_t k) {
+            for (std::size_t i = 0; i < plane; ++i) out[k * plane + i] = d[k * plane + i] + u[i];
+          });
+        }
+        return adopt_array(std::move(out), {depth.shape(0), depth.shape(1), depth.shape(2)});
+      },
+      py::arg("depth"), py::arg("upstream"), py::arg("threads") = 0,
+      "A sun lattice's optical depths (nw, nv, nu) plus the depth upstream of each column "
+      "(nv, nu): depth + upstream[None], float32, in fresh memory.");
+
+  m.def(
       "lattice_transmittance",
       [](const FloatArray& depth, const py::tuple& frame, V3 lo, V3 cell,
          const std::array<int, 3>& dims, int threads) {

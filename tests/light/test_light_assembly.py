@@ -118,3 +118,14 @@ def test_light_grid_rejects_bad_input() -> None:
         _core.physical_grid(ext, phi4, sky, 0.0, 0.5, 1.5, 3.0)
     with pytest.raises(ValueError, match="extinction"):
         _core.physical_grid(ext[0], phi4, sky, 1.0, 0.5, 1.5, 3.0)
+
+
+def test_upstream_depth_is_added_to_every_layer() -> None:
+    rng = np.random.default_rng(2)
+    depth = rng.uniform(0, 40, (300, 70, 50)).astype(F32)  # over 2 MiB: the mapped path
+    up = rng.uniform(0, 5, (70, 50)).astype(F32)
+    for threads in (1, 2):
+        got = _core.add_upstream_depth(depth, up, threads)
+        assert got.shape == depth.shape and np.array_equal(got, depth + up[None])
+    with pytest.raises(ValueError, match="upstream"):
+        _core.add_upstream_depth(depth, up[1:])

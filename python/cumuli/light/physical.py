@@ -284,7 +284,9 @@ def physical_light(
     others = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
     if others:
         with _stage(timings, "upstream"):
-            depth = depth + _upstream_depth(others, scene, frame, threads)[None]
+            depth = _core.add_upstream_depth(
+                depth, _upstream_depth(others, scene, frame, threads), threads
+            )
     ext = field.values
     d, h, w = ext.shape
     with _stage(timings, "sun_transmittance"):
