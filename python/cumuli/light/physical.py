@@ -243,12 +243,15 @@ def physical_light(
     timings: dict[str, float] | None = None,
     gain_depth: float | None = None,
     forward: float | None = None,
+    upstream: list[Any] | None = None,
 ) -> PhysicalLight:
     """The :class:`PhysicalLight` of a drawable with a medium (a `Cloud`, a `VolumeCloud`, ...)
     under ``scene``'s sun and sky. ``timings``, a dict, receives the wall seconds of each of the
     :data:`STAGES` (added to what it holds: the benchmarks profile the light step with it).
     ``gain_depth``: the ``τg`` of :func:`lattice_gains` (None: :data:`GAIN_DEPTH`); ``forward``:
-    the weight of the diffusion's forward-scattered sun source (None: :data:`SUN_FORWARD`)."""
+    the weight of the diffusion's forward-scattered sun source (None: :data:`SUN_FORWARD`);
+    ``upstream``: the scene's drawables that shade it (None: :func:`upstream_of` its sun
+    lattice; :func:`physical_pass` passes those its memo key names)."""
     medium = registry.of(drawable).medium
     if medium is None:
         raise TypeError(f"no physical light pass for {type(drawable).__name__}")
@@ -281,7 +284,9 @@ def physical_light(
         frame, depth = own_sun_depth(drawable, scene, threads)
     # The other drawables' shadow: their optical depth upstream of every column, from those
     # whose box the sun's lattice can see upstream (the others cast nothing on it).
-    others = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
+    others = upstream
+    if others is None:
+        others = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
     if others:
         with _stage(timings, "upstream"):
             depth = _core.add_upstream_depth(
@@ -550,4 +555,6 @@ def physical_pass(drawable: Any, scene: Any, given: Any = None, threads: int = 0
     others = tuple(drawable_digest(d) for d in upstream)
     key = ("physical", drawable_digest(drawable), others, scene.noise.identity,
            scene.settings, scene.sun, sky)  # fmt: skip
-    return remember(key, lambda: physical_light(drawable, replace(scene, sky=sky), threads))
+    return remember(
+        key, lambda: physical_light(drawable, replace(scene, sky=sky), threads, upstream=upstream)
+    )
