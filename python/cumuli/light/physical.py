@@ -417,12 +417,12 @@ def own_sun_depth(drawable: Any, scene: Any, threads: int = 0) -> tuple[tuple, n
     lo, hi = (tuple(float(np.float32(v)) for v in b) for b in drawable.layer_box())
     frame = sun_frame(lo, hi, scene.sun.direction, n)
     step = float(min(march_step(drawable, s.light_step), (frame[4][2] - frame[3][2]) / (ALONG * n)))
-    clouds, volumes = medium_args([drawable], s)
     key = ("own sun depth", drawable_digest(drawable), scene.noise.identity, s, frame, step,
            SUN_DEPTH_CUT)  # fmt: skip
-    depth = remember(
-        key,
-        lambda: _read_only(
+
+    def march() -> np.ndarray:
+        clouds, volumes = medium_args([drawable], s)
+        return _read_only(
             _core.light_space_depth(
                 clouds,
                 volumes,
@@ -433,9 +433,9 @@ def own_sun_depth(drawable: Any, scene: Any, threads: int = 0) -> tuple[tuple, n
                 threads,
                 depth_cut=SUN_DEPTH_CUT,
             )
-        ),
-    )
-    return frame, depth
+        )
+
+    return frame, remember(key, march)
 
 
 def _upstream_depth(others: Any, scene: Any, frame: tuple, threads: int) -> np.ndarray:
