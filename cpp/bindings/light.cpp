@@ -1151,7 +1151,7 @@ void bind_physical_light(py::module_& m) {
         if (n_theta < 1 || n_theta > 64) throw py::value_error("sh_samples must be in [1, 64]");
         if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");
         const float* e = ext.data();
-        LargeVector<double> vis;
+        LargeVector<float> vis;
         {
           py::gil_scoped_release release;
           vis = sky_visibility(e, g, order, n_theta, step, threads, how);
@@ -1163,7 +1163,8 @@ void bind_physical_light(py::module_& m) {
       },
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("order"), py::arg("n_theta"),
       py::arg("step"), py::arg("threads") = 0, py::arg("method") = "march",
-      "The sky visibility's SH moments per voxel, (D, H, W, order²) float64: sky_irradiance "
+      "The sky visibility's SH moments per voxel, (D, H, W, order²) float32 (each summed in "
+      "double): sky_irradiance "
       "without the sky (sky_irradiance_from projects a sky onto them).");
 
   m.def(
@@ -1215,7 +1216,7 @@ void bind_physical_light(py::module_& m) {
 
   m.def(
       "sky_irradiance_from",
-      [](const DoubleArray& visibility, const FloatArray& sky_coeffs, int threads) {
+      [](const FloatArray& visibility, const FloatArray& sky_coeffs, int threads) {
         if (visibility.ndim() != 4)
           throw py::value_error("visibility must be a (D, H, W, order²) array");
         const py::ssize_t nc = visibility.shape(3);
@@ -1227,7 +1228,7 @@ void bind_physical_light(py::module_& m) {
         if (sky_coeffs.size() != 3 * nc)
           throw py::value_error("sky_coeffs must hold 3·order² values");
         const std::size_t voxels = static_cast<std::size_t>(visibility.size() / nc);
-        const double* v = visibility.data();
+        const float* v = visibility.data();
         const float* s = sky_coeffs.data();
         std::vector<float> out;
         {

@@ -1211,15 +1211,15 @@ def sky_irradiance(extinction: typing.Annotated[numpy.typing.ArrayLike, numpy.fl
     """
     Sky irradiance reaching each voxel unscattered (SH visibility × sky SH): (D, H, W, 3); method 'march' (a ray per voxel and product-quadrature direction, n_theta polar nodes, steps of `step` voxels) or 'lattice' (the 26 neighbour directions, τ exact by a recurrence over the lattice; voxels within 10 % of cubes, else 'march').
     """
-def sky_irradiance_from(visibility: typing.Annotated[numpy.typing.ArrayLike, numpy.float64], sky_coeffs: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], threads: typing.SupportsInt | typing.SupportsIndex = 0) -> numpy.typing.NDArray[numpy.float32]:
+def sky_irradiance_from(visibility: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], sky_coeffs: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], threads: typing.SupportsInt | typing.SupportsIndex = 0) -> numpy.typing.NDArray[numpy.float32]:
     """
     Sky irradiance (D, H, W, 3) from sky_visibility's moments and a sky's SH coefficients: the same values sky_irradiance gives.
     """
 def sky_sh(sky: typing.Any, order: typing.SupportsInt | typing.SupportsIndex, n_theta: typing.SupportsInt | typing.SupportsIndex) -> numpy.typing.NDArray[numpy.float32]:
     ...
-def sky_visibility(extinction: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], lo: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], hi: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], order: typing.SupportsInt | typing.SupportsIndex, n_theta: typing.SupportsInt | typing.SupportsIndex, step: typing.SupportsFloat | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex = 0, method: str = 'march') -> numpy.typing.NDArray[numpy.float64]:
+def sky_visibility(extinction: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], lo: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], hi: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], order: typing.SupportsInt | typing.SupportsIndex, n_theta: typing.SupportsInt | typing.SupportsIndex, step: typing.SupportsFloat | typing.SupportsIndex, threads: typing.SupportsInt | typing.SupportsIndex = 0, method: str = 'march') -> numpy.typing.NDArray[numpy.float32]:
     """
-    The sky visibility's SH moments per voxel, (D, H, W, order²) float64: sky_irradiance without the sky (sky_irradiance_from projects a sky onto them).
+    The sky visibility's SH moments per voxel, (D, H, W, order²) float32 (each summed in double): sky_irradiance without the sky (sky_irradiance_from projects a sky onto them).
     """
 def sphere_outside_frustum(arg0: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], arg1: typing.SupportsFloat | typing.SupportsIndex, arg2: dict) -> bool:
     """

@@ -59,10 +59,13 @@ def test_transmittance_rejects_bad_input() -> None:
 
 def test_sky_irradiance_is_the_same_on_any_thread_count() -> None:
     rng = np.random.default_rng(4)
-    vis = rng.normal(size=(5, 6, 7, 9))
+    vis = rng.normal(size=(5, 6, 7, 9)).astype(F32)
     coeffs = rng.normal(size=27).astype(F32)
     one = _core.sky_irradiance_from(vis, coeffs, 1)
-    want = np.maximum(0.0, np.einsum("dhwc,kc->dhwk", vis, coeffs.reshape(3, 9).astype(np.float64)))
+    want = np.maximum(
+        0.0,
+        np.einsum("dhwc,kc->dhwk", vis.astype(np.float64), coeffs.reshape(3, 9).astype(np.float64)),
+    )
     np.testing.assert_allclose(one, want, rtol=1e-6, atol=1e-6)
     for threads in (2, 3):
         assert np.array_equal(_core.sky_irradiance_from(vis, coeffs, threads), one)

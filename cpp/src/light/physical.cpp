@@ -788,8 +788,8 @@ constexpr float kLatticeMaxAspect = 1.1f;
 
 }  // namespace
 
-LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
-                                   float step_voxels, int threads, SkyRays rays) {
+LargeVector<float> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
+                                  float step_voxels, int threads, SkyRays rays) {
   g.validate();
   if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
   if (!(step_voxels > 0.0f)) throw std::invalid_argument("step must be > 0");
@@ -801,7 +801,7 @@ LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
   const glm::vec3 vs = g.voxel_size();
   const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
   const std::size_t nv = g.voxels();
-  LargeVector<double> out(nv * static_cast<std::size_t>(nc), 0.0);
+  LargeVector<float> out(nv * static_cast<std::size_t>(nc), 0.0f);
   const glm::vec3 inv_vs = 1.0f / vs;
   // Voxels with no medium within one voxel are never read where light scatters: they get the
   // unoccluded sky (V = 1: V_0 = √4π, the other coefficients 0).
@@ -828,9 +828,9 @@ LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int or
   }
   // V_m = Σ_k w_k y_m(ω_k) e^{−τ(x, ω_k)}: a voxel's visibility moments.
   const auto finish = [&](std::size_t v, const double* vis) {
-    for (int c = 0; c < nc; ++c) out[v * nc + c] = vis[c];
+    for (int c = 0; c < nc; ++c) out[v * nc + c] = static_cast<float>(vis[c]);
   };
-  const auto open_sky = [&](std::size_t v) { out[v * nc] = static_cast<double>(open); };
+  const auto open_sky = [&](std::size_t v) { out[v * nc] = open; };
   const float aspect = std::max(vs.x, std::max(vs.y, vs.z)) / std::min(vs.x, std::min(vs.y, vs.z));
   if (rays == SkyRays::Lattice && aspect <= kLatticeMaxAspect) {
     // τ of every voxel along each lattice direction by its recurrence, a few directions at a
@@ -979,16 +979,17 @@ std::vector<float> physical_grid(const float* ext, std::size_t voxels, const flo
   return out;
 }
 
-std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,
+std::vector<float> sky_irradiance_from(const float* visibility, std::size_t voxels,
                                        const float* sky_coeffs, int order, int threads) {
   if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
   const int nc = order * order;
   std::vector<float> out(voxels * 3);
   parallel_for(voxels, threads, [&](std::size_t v) {
-    const double* vis = visibility + v * nc;
+    const float* vis = visibility + v * nc;
     for (int ch = 0; ch < 3; ++ch) {
       double e = 0.0;
-      for (int c = 0; c < nc; ++c) e += static_cast<double>(sky_coeffs[ch * nc + c]) * vis[c];
+      for (int c = 0; c < nc; ++c)
+        e += static_cast<double>(sky_coeffs[ch * nc + c]) * static_cast<double>(vis[c]);
       out[v * 3 + ch] = static_cast<float>(std::max(0.0, e));
     }
   });
@@ -998,8 +999,7 @@ std::vector<float> sky_irradiance_from(const double* visibility, std::size_t vox
 std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
                                   int order, int n_theta, float step_voxels, int threads,
                                   SkyRays rays) {
-  const LargeVector<double> vis =
-      sky_visibility(ext, g, order, n_theta, step_voxels, threads, rays);
+  const LargeVector<float> vis = sky_visibility(ext, g, order, n_theta, step_voxels, threads, rays);
   return sky_irradiance_from(vis.data(), g.voxels(), sky_coeffs, order);
 }
 

@@ -105,10 +105,10 @@ enum class SkyRays { Lattice, March };
 // dropped), over the n_theta product quadrature. Lattice rays (n_theta and step_voxels unused)
 // are taken where the voxels' sides differ by at most 10 %, March rays otherwise.
 // The sky-independent half of sky_irradiance: each voxel's visibility moments V_m (voxels ×
-// order² doubles, voxel-major; V_0 = √4π and the others 0 where no medium lies within one voxel),
-// so that a changed sky or sun re-projects them without marching again.
-LargeVector<double> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
-                                   float step_voxels, int threads, SkyRays rays = SkyRays::March);
+// order² floats, voxel-major, each summed in double; V_0 = √4π and the others 0 where no medium
+// lies within one voxel), so that a changed sky or sun re-projects them without marching again.
+LargeVector<float> sky_visibility(const float* ext, const VolumeGrid& g, int order, int n_theta,
+                                  float step_voxels, int threads, SkyRays rays = SkyRays::March);
 // A drawable's physical light lattice, RGBA per voxel (`voxels` of them): A the diffuse sun, RGB
 // the sky, from the diffusion's fluence `phi` (4 channels: sun, sky RGB; 1: sun; nullptr: no
 // multiple scattering) and the sky irradiance `sky_e` (RGB; nullptr: no sky light):
@@ -121,7 +121,7 @@ std::vector<float> physical_grid(const float* ext, std::size_t voxels, const flo
 
 // E_sky = max(0, Σ_m L_m V_m) per voxel (RGB interleaved) from sky_visibility's moments (each
 // voxel's sum on one thread: the same on any thread count).
-std::vector<float> sky_irradiance_from(const double* visibility, std::size_t voxels,
+std::vector<float> sky_irradiance_from(const float* visibility, std::size_t voxels,
                                        const float* sky_coeffs, int order, int threads = 1);
 std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
                                   int order, int n_theta, float step_voxels, int threads,
