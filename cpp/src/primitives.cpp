@@ -23,6 +23,31 @@ void Ellipsoid::bounds(glm::vec3& lo, glm::vec3& hi) const {
   hi = centre + half;
 }
 
+// Ellipsoid::to_local and glm::dot written out in glm's order of operations.
+void min_q2(const Ellipsoid& e, bool unrotated, const float* x, const float* y, const float* z,
+            std::size_t count, float* q2) {
+  const glm::mat3& r = e.rotation;
+  const glm::vec3 c = e.centre, rad = e.radii;
+  if (unrotated) {
+    // Ellipsoid::to_local_given's shortcut, written out per point: the same |q|² bit for bit.
+    for (std::size_t i = 0; i < count; ++i) {
+      const float lx = (x[i] - c.x) / rad.x, ly = (y[i] - c.y) / rad.y, lz = (z[i] - c.z) / rad.z;
+      const float d = lx * lx + ly * ly + lz * lz;
+      q2[i] = std::min(q2[i], d);
+    }
+    return;
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    const float vx = x[i] - c.x, vy = y[i] - c.y, vz = z[i] - c.z;
+    // (Rᵀ·v)_a = R[a][0]·v.x + R[a][1]·v.y + R[a][2]·v.z, left to right, then ÷ radii_a.
+    const float lx = (r[0][0] * vx + r[0][1] * vy + r[0][2] * vz) / rad.x;
+    const float ly = (r[1][0] * vx + r[1][1] * vy + r[1][2] * vz) / rad.y;
+    const float lz = (r[2][0] * vx + r[2][1] * vy + r[2][2] * vz) / rad.z;
+    const float d = lx * lx + ly * ly + lz * lz;
+    q2[i] = std::min(q2[i], d);
+  }
+}
+
 bool intersect(const Ellipsoid& e, glm::vec3 origin, glm::vec3 dir, Interval& out) {
   const glm::mat3 rt = glm::transpose(e.rotation);
   const glm::vec3 o = (rt * (origin - e.centre)) / e.radii;

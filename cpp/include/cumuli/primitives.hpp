@@ -4,6 +4,8 @@
 // ray keeps its parameter t, so t values from different primitives can be compared and sorted.
 #pragma once
 
+#include <cstddef>
+
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/vec3.hpp>
@@ -33,6 +35,14 @@ struct Ellipsoid {
   // World-space axis-aligned bounds.
   void bounds(glm::vec3& lo, glm::vec3& hi) const;
 };
+
+// q2[i] = min(q2[i], |q|²) of `count` points (x[i], y[i], z[i]) against e (`unrotated` =
+// e.unrotated(), known to the caller): the same float operations as dot(l, l) with
+// l = e.to_local_given(p, unrotated), bit for bit, in a loop that vectorises across the points.
+// The light step's bulk density (extinction lattice, sun march) takes each primitive's smallest
+// |q|² this way.
+void min_q2(const Ellipsoid& e, bool unrotated, const float* x, const float* y, const float* z,
+            std::size_t count, float* q2);
 
 // A ray span [t_in, t_out] inside a primitive.
 struct Interval {

@@ -29,19 +29,19 @@ constexpr int kMaxCandidates = 256;
 constexpr double kSkyDepthCut = 6.0;
 
 // A ray's samples through one cloud, gathered before their density is known (one buffer per
-// thread, reused from ray to ray): each sample's ray parameter s, length and marched candidate,
-// the smallest |q|² of the candidates that cover it, and where it can hold density (inside its
-// owner primitive, or the metaball iso-surface), its point, |q| and fBm. Sized, not pushed to:
-// `count` samples, `dense_count` dense ones.
+// thread, reused from ray to ray): each sample's ray parameter s, length, marched candidate and
+// point (x, y, z), the smallest |q|² of the candidates that cover it, and where it can hold
+// density (inside its owner primitive, or the metaball iso-surface), its point, |q| and fBm.
+// Sized, not pushed to: `count` samples, `dense_count` dense ones.
 struct MarchSamples {
-  std::vector<float> s, len, q2;
+  std::vector<float> s, len, x, y, z, q2;
   std::vector<int> marched;
   std::vector<int> dense;  // index of the sample's point in pts / q / fbm, or −1 (no density)
   std::vector<float> pts, q, fbm;
   std::size_t count = 0, dense_count = 0;
   void reserve(std::size_t n) {
     if (s.size() >= n) return;
-    for (auto* v : {&s, &len, &q2, &q, &fbm}) v->resize(n);
+    for (auto* v : {&s, &len, &x, &y, &z, &q2, &q, &fbm}) v->resize(n);
     marched.resize(n);
     dense.resize(n);
     pts.resize(3 * n);
@@ -113,42 +113,32 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
   };
   // union_owner's rule for the laid-out samples: the owner of s is the covering candidate
   // (t_in ≤ s ≤ t_out) with the smallest |q|, and its |q| is the one eq. (2) needs. Taken a
-  // candidate at a time over the samples it covers (a run of them: s is sorted), the smallest
-  // |q|² of every sample is a loop the compiler vectorises, each lane rounding as the scalar
-  // path does (p = o + s·d, to_local_given, dot): the same bits as one owner per sample. A
-  // sample that rounding left outside every interval takes its marched candidate's |q|.
-  const auto q2_of = [&](int j, float s) {
-    const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[j].primitive)];
-    const glm::vec3 l = e.to_local_given(o + s * d, unrotated[j]);
-    return glm::dot(l, l);
-  };
+  // candidate at a time over the samples it covers (a run of them: s is sorted), min_q2 gives
+  // every sample its smallest |q|² in loops that vectorise, each lane rounding as one owner per
+  // sample would. A sample that rounding left outside every interval takes its marched
+  // candidate's |q|.
   const auto smallest_q2 = [&]() {
     const std::size_t count = m.count;
-    float* q2 = m.q2.data();
     const float* s = m.s.data();
+    float *x = m.x.data(), *y = m.y.data(), *z = m.z.data(), *q2 = m.q2.data();
+    for (std::size_t i = 0; i < count; ++i) {  // p = o + s·d, as glm forms it
+      x[i] = o.x + s[i] * d.x;
+      y[i] = o.y + s[i] * d.y;
+      z[i] = o.z + s[i] * d.z;
+    }
     std::fill(q2, q2 + count, INFINITY);
+    const auto take = [&](int j, std::size_t i0, std::size_t i1) {
+      min_q2(shape.primitives[static_cast<std::size_t>(cand[j].primitive)], unrotated[j], x + i0,
+             y + i0, z + i0, i1 - i0, q2 + i0);
+    };
     const float s_first = s[0], s_last = s[count - 1];
     for (int j = 0; j < n && cand[j].t_in <= s_last; ++j) {
       if (cand[j].t_out < s_first) continue;
-      const std::size_t i0 =
-          static_cast<std::size_t>(std::lower_bound(s, s + count, cand[j].t_in) - s);
-      const std::size_t i1 =
-          static_cast<std::size_t>(std::upper_bound(s, s + count, cand[j].t_out) - s);
-      const Ellipsoid& e = shape.primitives[static_cast<std::size_t>(cand[j].primitive)];
-      if (unrotated[j]) {
-        const glm::vec3 centre = e.centre, radii = e.radii;
-        for (std::size_t i = i0; i < i1; ++i) {
-          const float lx = (o.x + s[i] * d.x - centre.x) / radii.x;
-          const float ly = (o.y + s[i] * d.y - centre.y) / radii.y;
-          const float lz = (o.z + s[i] * d.z - centre.z) / radii.z;
-          q2[i] = std::min(q2[i], lx * lx + ly * ly + lz * lz);
-        }
-      } else {
-        for (std::size_t i = i0; i < i1; ++i) q2[i] = std::min(q2[i], q2_of(j, s[i]));
-      }
+      take(j, static_cast<std::size_t>(std::lower_bound(s, s + count, cand[j].t_in) - s),
+           static_cast<std::size_t>(std::upper_bound(s, s + count, cand[j].t_out) - s));
     }
     for (std::size_t i = 0; i < count; ++i)
-      if (q2[i] == INFINITY) q2[i] = q2_of(m.marched[i], s[i]);
+      if (q2[i] == INFINITY) take(m.marched[i], i, i + 1);
   };
   // Which samples can hold density, and their points: written at the next dense slot whether
   // dense or not (branch-free: the edge samples' tests are unpredictable).
@@ -157,13 +147,12 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
     if (attribute) {
       smallest_q2();
       for (std::size_t i = 0; i < m.count; ++i) {
-        const float s = m.s[i];
         const float q = std::sqrt(m.q2[i]);  // sqrt is monotonic: the root of the smallest |q|²
         const bool dense = q <= 1.0f;
         m.q[g] = q;
-        m.pts[3 * g] = o.x + s * d.x;
-        m.pts[3 * g + 1] = o.y + s * d.y;
-        m.pts[3 * g + 2] = o.z + s * d.z;
+        m.pts[3 * g] = m.x[i];
+        m.pts[3 * g + 1] = m.y[i];
+        m.pts[3 * g + 2] = m.z[i];
         m.dense[i] = dense ? static_cast<int>(g) : -1;
         g += dense ? 1 : 0;
       }
