@@ -21,12 +21,19 @@ lock = threading.Lock()
 #: ``store``; entries kept (two per drawable).
 MEDIA_MEMO_SIZE = 32
 media_store: OrderedDict[Any, Any] = OrderedDict()
+#: Small geometric facts about drawables (a drawable's extent along the sun's axes), many per
+#: scene, in a store of their own; entries kept.
+GEOMETRY_MEMO_SIZE = 4096
+geometry_store: OrderedDict[Any, Any] = OrderedDict()
 
 
-def remember(key: Any, make: Callable[[], Any], media: bool = False) -> Any:
+def remember(key: Any, make: Callable[[], Any], media: bool = False, geometry: bool = False) -> Any:
     """The value memoised under ``key``, made by ``make()`` when there is none (in
-    :data:`media_store` with ``media``)."""
-    where, size = (media_store, MEDIA_MEMO_SIZE) if media else (store, MEMO_SIZE)
+    :data:`media_store` with ``media``, :data:`geometry_store` with ``geometry``)."""
+    if geometry:
+        where, size = geometry_store, GEOMETRY_MEMO_SIZE
+    else:
+        where, size = (media_store, MEDIA_MEMO_SIZE) if media else (store, MEMO_SIZE)
     with lock:
         if key in where:
             where.move_to_end(key)
@@ -44,6 +51,7 @@ def clear() -> None:
     with lock:
         store.clear()
         media_store.clear()
+        geometry_store.clear()
 
 
 def content_digest(*arrays: np.ndarray) -> str:

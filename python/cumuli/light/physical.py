@@ -46,7 +46,6 @@ from __future__ import annotations
 
 import math
 import time
-from collections import OrderedDict
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
@@ -215,7 +214,8 @@ def lattice_gains(
 
     The camera sees the first mean free path of a thick cell, where the diffuse light is larger
     than the cell's mean fluence that the diffusion solves for; it sees the whole of a thin cell
-    (a fringe, a strand), whose mean is what it sees: no gain there."""
+    (a fringe, a strand), whose mean is what it sees: no gain there. The light step takes these
+    gains in ``_core.physical_grid``; this is their numpy reference (the same values)."""
     ext = np.asarray(extinction, np.float64)
     if ext.ndim != 3:
         raise ValueError(f"extinction must be a (D, H, W) lattice, got shape {ext.shape}")
@@ -364,28 +364,20 @@ def sun_frame(lo: Any, hi: Any, to_sun: Any, n: int) -> tuple:
     return _core.light_frame(lo3, hi3, to_sun, (ACROSS * n, ACROSS * n, ALONG * n))
 
 
-#: Drawables' extents along the sun's axes (:func:`_frame_extent`), least recently used dropped.
-_EXTENTS: OrderedDict[tuple, np.ndarray] = OrderedDict()
-_EXTENTS_SIZE = 4096
-
-
 def _frame_extent(drawable: Any, axes: np.ndarray) -> np.ndarray:
     """``(2, 3)``: the least and greatest frame coordinates (along the sun lattice's ``u, v, w``
-    axes, rows of ``axes``) of the corners of ``drawable``'s box; remembered by the drawable's
+    axes, rows of ``axes``) of the corners of ``drawable``'s box; memoised by the drawable's
     content and the axes, so that a scene's n clouds culling each other box-test in n², not
     compute n² boxes."""
-    key = (drawable_digest(drawable), axes.tobytes())
-    out = _EXTENTS.get(key)
-    if out is None:
+
+    def extent() -> np.ndarray:
         blo, bhi = drawable.layer_box()
         f = box_corners(blo, bhi) @ axes.T  # (8, 3) frame coordinates
-        out = np.stack([f.min(axis=0), f.max(axis=0)])
-        _EXTENTS[key] = out
-        while len(_EXTENTS) > _EXTENTS_SIZE:
-            _EXTENTS.popitem(last=False)
-    else:
-        _EXTENTS.move_to_end(key)
-    return out
+        return np.stack([f.min(axis=0), f.max(axis=0)])
+
+    return remember(
+        ("frame extent", drawable_digest(drawable), axes.tobytes()), extent, geometry=True
+    )
 
 
 def upstream_of(frame: tuple, drawables: Any) -> list[Any]:
