@@ -168,8 +168,9 @@ GroundParams ground_of(const py::object& obj) {
 
 PhysicalGrids physical_grids_of(const py::object& obj, std::vector<py::object>* keep) {
   const py::tuple t = obj.cast<py::tuple>();
-  if (t.size() != 5)
-    throw py::value_error("physical light must be (frame, depth, grid_lo, grid_hi, rgba)");
+  if (t.size() != 5 && t.size() != 6)
+    throw py::value_error(
+        "physical light must be (frame, depth, grid_lo, grid_hi, rgba[, upstream])");
   PhysicalGrids g;
   const py::tuple f = t[0].cast<py::tuple>();
   if (f.size() != 6) throw py::value_error("frame must be (u, v, w, lo, hi, res)");
@@ -184,15 +185,27 @@ PhysicalGrids physical_grids_of(const py::object& obj, std::vector<py::object>* 
   const FloatArray rgba = t[4].cast<FloatArray>();
   g.grid = grid_of(rgba, 0, t[2].cast<V3>(), t[3].cast<V3>(), "physical light", 1);
   if (rgba.shape(3) != 4) throw py::value_error("physical light lattice must be (D, H, W, 4)");
+  // The other media's depth upstream of each column, (nv, nu), or None.
+  const bool has_columns = t.size() == 6 && !t[5].is_none();
+  FloatArray columns;
+  if (has_columns) {
+    columns = t[5].cast<FloatArray>();
+    if (columns.ndim() != 2) throw py::value_error("upstream depth must be (nv, nu)");
+  }
   if (keep != nullptr) {
     // Viewed in place: `keep` holds the arrays (as cast, copies included) for the caller.
     keep->push_back(depth);
     keep->push_back(rgba);
     g.set_views(depth.data(), static_cast<std::size_t>(depth.size()), rgba.data(),
                 static_cast<std::size_t>(rgba.size()));
+    if (has_columns) {
+      keep->push_back(columns);
+      g.set_columns_view(columns.data(), static_cast<std::size_t>(columns.size()));
+    }
   } else {
     g.depth.assign(depth.data(), depth.data() + depth.size());
     g.rgba.assign(rgba.data(), rgba.data() + rgba.size());
+    if (has_columns) g.columns.assign(columns.data(), columns.data() + columns.size());
   }
   try {
     g.validate();

@@ -964,6 +964,15 @@ SunFrame frame_of(const py::tuple& t) {
   return f;
 }
 
+// A frame's per-column map `upstream` ((nv, nu) float32, held in `held`), or nullptr for None.
+const float* frame_columns(const py::object& upstream, const SunFrame& f, FloatArray& held) {
+  if (upstream.is_none()) return nullptr;
+  held = upstream.cast<FloatArray>();
+  if (held.ndim() != 2 || held.shape(0) != f.res[1] || held.shape(1) != f.res[0])
+    throw py::value_error("upstream must be (nv, nu), one value per column of the frame");
+  return held.data();
+}
+
 py::tuple frame_tuple(const SunFrame& f) {
   auto vec = [](glm::vec3 a) { return py::make_tuple(a.x, a.y, a.z); };
   return py::make_tuple(vec(f.u), vec(f.v), vec(f.w), vec(f.lo), vec(f.hi),
@@ -1043,12 +1052,15 @@ void bind_physical_light(py::module_& m) {
 
   m.def(
       "sample_frame",
-      [](const FloatArray& values, const py::tuple& frame, const FloatArray& points, int threads) {
+      [](const FloatArray& values, const py::tuple& frame, const FloatArray& points, int threads,
+         const py::object& upstream) {
         const SunFrame f = frame_of(frame);
         if (values.ndim() != 3 || values.shape(0) != f.res[2] || values.shape(1) != f.res[1] ||
             values.shape(2) != f.res[0])
           throw py::value_error("values must have the frame's shape (nw, nv, nu)");
         require_points(points, "points");
+        FloatArray held;
+        const float* columns = frame_columns(upstream, f, held);
         const py::ssize_t n = points.shape(0);
         auto out = new_array({n});
         float* o = out.mutable_data();
@@ -1057,40 +1069,20 @@ void bind_physical_light(py::module_& m) {
           py::gil_scoped_release release;
           parallel_for(static_cast<std::size_t>(n), threads, [&](std::size_t i) {
             const float* p = pts + 3 * i;
-            o[i] = sample_frame(v, f, glm::vec3(p[0], p[1], p[2]));
+            o[i] = sample_frame(v, f, glm::vec3(p[0], p[1], p[2]), columns);
           });
         }
         return out;
       },
       py::arg("values"), py::arg("frame"), py::arg("points"), py::arg("threads") = 0,
-      "Trilinear values of a light-frame lattice at (N, 3) world points.");
-
-  m.def(
-      "add_upstream_depth",
-      [](const FloatArray& depth, const FloatArray& upstream, int threads) {
-        if (depth.ndim() != 3 || upstream.ndim() != 2 || upstream.shape(0) != depth.shape(1) ||
-            upstream.shape(1) != depth.shape(2))
-          throw py::value_error("depth must be (nw, nv, nu) and upstream (nv, nu)");
-        const std::size_t plane = static_cast<std::size_t>(upstream.size());
-        const std::size_t layers = static_cast<std::size_t>(depth.shape(0));
-        const float *d = depth.data(), *u = upstream.data();
-        LargeVector<float> out(layers * plane);
-        {
-          py::gil_scoped_release release;
-          parallel_for(layers, threads, [&](std::size_t k) {
-            for (std::size_t i = 0; i < plane; ++i) out[k * plane + i] = d[k * plane + i] + u[i];
-          });
-        }
-        return adopt_array(std::move(out), {depth.shape(0), depth.shape(1), depth.shape(2)});
-      },
-      py::arg("depth"), py::arg("upstream"), py::arg("threads") = 0,
-      "A sun lattice's optical depths (nw, nv, nu) plus the depth upstream of each column "
-      "(nv, nu): depth + upstream[None], float32, in fresh memory.");
+      py::arg("upstream") = py::none(),
+      "Trilinear values of a light-frame lattice at (N, 3) world points, plus the bilinear value "
+      "of `upstream`, a (nv, nu) map of one value per column, where given.");
 
   m.def(
       "lattice_transmittance",
       [](const FloatArray& depth, const py::tuple& frame, V3 lo, V3 cell,
-         const std::array<int, 3>& dims, int threads) {
+         const std::array<int, 3>& dims, int threads, const py::object& upstream) {
         const SunFrame f = frame_of(frame);
         if (depth.ndim() != 3 || depth.shape(0) != f.res[2] || depth.shape(1) != f.res[1] ||
             depth.shape(2) != f.res[0])
@@ -1101,17 +1093,20 @@ void bind_physical_light(py::module_& m) {
           if (!std::isfinite(lo[a]) || !(cell[a] > 0.0f) || !std::isfinite(cell[a]))
             throw py::value_error("lo must be finite and cell finite and > 0");
         }
+        FloatArray held;
+        const float* columns = frame_columns(upstream, f, held);
         const float* v = depth.data();
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = lattice_transmittance(v, f, v3(lo), v3(cell), dims.data(), threads);
+          out = lattice_transmittance(v, f, v3(lo), v3(cell), dims.data(), threads, columns);
         }
         return adopt_array(std::move(out), {dims[2], dims[1], dims[0]});
       },
       py::arg("depth"), py::arg("frame"), py::arg("lo"), py::arg("cell"), py::arg("dims"),
-      py::arg("threads") = 0,
-      "e^-tau of a light-frame lattice of optical depths at the centres of a (W, H, D) lattice "
+      py::arg("threads") = 0, py::arg("upstream") = py::none(),
+      "e^-tau of a light-frame lattice of optical depths (plus `upstream`, a (nv, nu) map of "
+      "one depth per column, where given) at the centres of a (W, H, D) lattice "
       "(lo + (index + 1/2)*cell per axis, float32), shape (D, H, W): the sun's transmittance "
       "on a drawable's world lattice.");
 

@@ -123,12 +123,28 @@ def test_light_grid_rejects_bad_input() -> None:
         _core.physical_grid(ext[0], phi4, sky, 1.0, 0.5, 1.5, 3.0)
 
 
-def test_upstream_depth_is_added_to_every_layer() -> None:
+def test_upstream_map_reads_as_its_lattice_added_to_every_layer() -> None:
+    """A per-column map given as ``upstream`` reads as if it were added to every layer of the
+    sun lattice: sampled at any point, and in the transmittance on a world lattice."""
+    scene = cumulus_scene(settings=cu.RenderSettings(physical_resolution=16))
+    frame, depth = own_sun_depth(scene.clouds[0], scene, 2)
     rng = np.random.default_rng(2)
-    depth = rng.uniform(0, 40, (300, 70, 50)).astype(F32)  # over 2 MiB: the mapped path
-    up = rng.uniform(0, 5, (70, 50)).astype(F32)
+    up = rng.uniform(0, 5, depth.shape[1:]).astype(F32)
+    whole = depth + up[None]
+    lo, hi = scene.clouds[0].layer_box()
+    pts = rng.uniform(np.asarray(lo) - 1.0, np.asarray(hi) + 1.0, (4000, 3)).astype(F32)
     for threads in (1, 2):
-        got = _core.add_upstream_depth(depth, up, threads)
-        assert got.shape == depth.shape and np.array_equal(got, depth + up[None])
-    with pytest.raises(ValueError, match="upstream"):
-        _core.add_upstream_depth(depth, up[1:])
+        got = _core.sample_frame(depth, frame, pts, threads, upstream=up)
+        np.testing.assert_allclose(got, _core.sample_frame(whole, frame, pts), rtol=1e-5, atol=2e-5)
+    dims = (13, 7, 11)
+    lo32 = tuple(float(F32(v)) for v in lo)
+    cell = tuple(float(F32((hi[a] - lo[a]) / dims[a])) for a in range(3))
+    got = _core.lattice_transmittance(depth, frame, lo32, cell, dims, 2, upstream=up)
+    want = _core.lattice_transmittance(whole, frame, lo32, cell, dims, 2)
+    assert want.min() < 0.5 * want.max()  # the map and the cloud shade part of it
+    np.testing.assert_allclose(got, want, rtol=3e-5, atol=1e-7)
+    for bad in (up[1:], up[:, 1:], up[None]):
+        with pytest.raises(ValueError, match="upstream"):
+            _core.sample_frame(depth, frame, pts, upstream=bad)
+        with pytest.raises(ValueError, match="upstream"):
+            _core.lattice_transmittance(depth, frame, lo32, cell, dims, upstream=bad)

@@ -111,7 +111,7 @@ def test_the_deck_shades_the_other_kinds(deck: cu.CloudDeck) -> None:
     overcast = small_deck(coverage=1.0)
     alone = cu.prepare_light(scene([cumulus], "physical", sun=overhead))
     under = cu.prepare_light(scene([cumulus, overcast], "physical", sun=overhead))
-    extra = under.lights[0].sun_depth - alone.lights[0].sun_depth
+    extra = under.lights[0].total_depth() - alone.lights[0].total_depth()
     assert extra.min() > 1.0  # τ of the slab above it
 
 

@@ -12,6 +12,7 @@ import pytest
 import cumuli as cu
 from cumuli import _core
 from cumuli.light import physical
+from cumuli.light.onto_media import frame_nodes
 from cumuli.light.physical import OCTAVES, octave_sum, physical_light
 from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
 from cumuli.sky import sky_args
@@ -573,11 +574,19 @@ def test_clouds_shade_each_other() -> None:
     both = alone.replace(clouds=[first, upstream])
     a = cu.prepare_light(alone).lights[0]
     b = cu.prepare_light(both).lights[0]
-    assert a.sun_depth.shape == b.sun_depth.shape
-    extra = b.sun_depth - a.sun_depth
+    assert a.sun_depth.shape == b.sun_depth.shape and a.upstream is None
+    # The shaded cloud keeps its own lattice and a map of the other's depth per column.
+    np.testing.assert_array_equal(b.sun_depth, a.sun_depth)
+    assert b.upstream.shape == a.sun_depth.shape[1:]
+    extra = b.total_depth() - a.total_depth()
     assert (extra >= -1e-4).all() and extra.max() > 5  # some columns pass through the other cloud
     # The same all along each column (up to float32 rounding of the sums).
     np.testing.assert_allclose(extra.min(axis=0), extra.max(axis=0), atol=1e-3, rtol=1e-5)
+    # Every reader adds the map: sampled depth, and the transmittance the drawers see.
+    nodes = frame_nodes(b.frame, b.sun_depth.shape)
+    np.testing.assert_allclose(
+        b.sample_depth(nodes), b.total_depth().reshape(-1), rtol=1e-4, atol=1e-4
+    )
 
 
 def test_only_clouds_upstream_of_a_lattice_shade_it() -> None:
@@ -599,9 +608,10 @@ def test_only_clouds_upstream_of_a_lattice_shade_it() -> None:
     culled = physical_light(first, scene)
     only_upstream = physical_light(first, small_scene().replace(clouds=[first, upstream]))
     np.testing.assert_array_equal(culled.sun_depth, only_upstream.sun_depth)
+    np.testing.assert_array_equal(culled.upstream, only_upstream.upstream)
     np.testing.assert_array_equal(culled.grid, only_upstream.grid)
     alone = physical_light(first, small_scene())
-    assert (culled.sun_depth - alone.sun_depth).max() > 5
+    assert (culled.total_depth() - alone.total_depth()).max() > 5
     # The light step's memo keys a light by the clouds upstream of it: moving the cloud beside
     # reuses the first cloud's light, moving the upstream one relights it.
     cu.light.prepare.clear_memo()

@@ -307,7 +307,7 @@ SunFrame make_sun_frame(const Box& world_box, glm::vec3 to_sun, const int res[3]
   return f;
 }
 
-float sample_frame(const float* values, const SunFrame& f, glm::vec3 p) {
+float sample_frame(const float* values, const SunFrame& f, glm::vec3 p, const float* columns) {
   const glm::vec3 q = (f.to_frame(p) - f.lo) / (f.hi - f.lo) *
                       glm::vec3(static_cast<float>(f.res[0]), static_cast<float>(f.res[1]),
                                 static_cast<float>(f.res[2]));
@@ -325,11 +325,18 @@ float sample_frame(const float* values, const SunFrame& f, glm::vec3 p) {
   const float c11 = at(x0, y1, z1) + fx * (at(x1, y1, z1) - at(x0, y1, z1));
   const float c0 = c00 + fy * (c10 - c00);
   const float c1 = c01 + fy * (c11 - c01);
-  return c0 + fz * (c1 - c0);
+  const float value = c0 + fz * (c1 - c0);
+  if (columns == nullptr) return value;
+  // The same (u, v) corners and fractions, without z: the per-column map's bilinear value.
+  auto col = [&](int x, int y) { return columns[y * nu + x]; };
+  const float b0 = col(x0, y0) + fx * (col(x1, y0) - col(x0, y0));
+  const float b1 = col(x0, y1) + fx * (col(x1, y1) - col(x0, y1));
+  return value + (b0 + fy * (b1 - b0));
 }
 
 std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
-                                         glm::vec3 cell, const int dims[3], int threads) {
+                                         glm::vec3 cell, const int dims[3], int threads,
+                                         const float* columns) {
   f.validate();
   const std::size_t w = static_cast<std::size_t>(dims[0]), h = static_cast<std::size_t>(dims[1]),
                     d = static_cast<std::size_t>(dims[2]);
@@ -339,7 +346,7 @@ std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, 
     const float z = lo.z + (static_cast<float>(row / h) + 0.5f) * cell.z;
     for (std::size_t i = 0; i < w; ++i) {
       const float x = lo.x + (static_cast<float>(i) + 0.5f) * cell.x;
-      out[row * w + i] = std::exp(-sample_frame(depth, f, glm::vec3(x, y, z)));
+      out[row * w + i] = std::exp(-sample_frame(depth, f, glm::vec3(x, y, z), columns));
     }
   });
   return out;

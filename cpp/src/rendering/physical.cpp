@@ -70,6 +70,9 @@ void PhysicalGrids::validate() const {
   grid.validate();
   if (depth_size() != static_cast<std::size_t>(frame.res[0]) * frame.res[1] * frame.res[2])
     throw std::invalid_argument("sun depth lattice does not match its frame");
+  if (columns_data() != nullptr &&
+      columns_size() != static_cast<std::size_t>(frame.res[0]) * frame.res[1])
+    throw std::invalid_argument("upstream depth must be (nv, nu), one value per sun column");
   if (rgba_size() != grid.voxels() * 4)
     throw std::invalid_argument("light lattice must be (D, H, W, 4)");
 }
@@ -77,7 +80,7 @@ void PhysicalGrids::validate() const {
 glm::vec3 PhysicalGrids::source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance,
                                 float albedo) const {
   constexpr float kInv4Pi = 0.0795774715459477f;
-  const float tau = sample_frame(depth_data(), frame, p);
+  const float tau = sample_frame(depth_data(), frame, p, columns_data());
   float L[4];
   sample_trilinear(rgba_data(), grid, 4, p, L);
   const float sun = terms.sum(tau) + L[0] * kInv4Pi;

@@ -115,7 +115,12 @@ class PhysicalLight:
 
     ``frame`` ``(u, v, w, lo, hi, res)``: the sun's lattice (``w`` the way light travels; node
     ``(i, j, k)`` at frame coordinates ``lo + ((i, j, k) + ½)(hi − lo)/res``, frame coordinates
-    of ``p`` being ``(p·u, p·v, p·w)``); ``sun_depth`` ``(nw, nv, nu)`` its optical depths;
+    of ``p`` being ``(p·u, p·v, p·w)``); ``sun_depth`` ``(nw, nv, nu)`` its optical depths
+    through the drawable itself, and ``upstream`` ``(nv, nu)`` (or None) the optical depth of the
+    scene's other media upstream of each column of it, the same all along the column: the sun's
+    optical depth at a node is their sum (:meth:`total_depth`; the drawers and
+    :meth:`sample_depth` add them as they read, so that a shaded cloud keeps one lattice of its
+    own, shared with the shadow it casts, and a map, not a second lattice);
     ``grid`` ``(D, H, W, 4)`` over ``box``: the diffuse sunlight per unit sun irradiance
     (channel 0) and the diffuse sky light (RGB), both fluences already multiplied by the gain
     the drawers use; ``octaves`` how many scattering orders the drawers draw from ``τ_sun``;
@@ -130,11 +135,20 @@ class PhysicalLight:
     box: tuple[tuple[float, float, float], tuple[float, float, float]]
     octaves: int
     shaded_from: PhysicalLight | None = None
+    upstream: np.ndarray | None = None
 
     def sample_depth(self, points: Any) -> np.ndarray:
-        """``τ_sun`` at world ``(N, 3)`` points (trilinear in the sun's lattice)."""
+        """``τ_sun`` at world ``(N, 3)`` points (trilinear in the sun's lattice, plus the
+        ``upstream`` map's bilinear value)."""
         pts = np.ascontiguousarray(points, dtype=np.float32)
-        return _core.sample_frame(self.sun_depth, self.frame, pts)
+        return _core.sample_frame(self.sun_depth, self.frame, pts, upstream=self.upstream)
+
+    def total_depth(self) -> np.ndarray:
+        """``(nw, nv, nu)`` float32: the sun's optical depth at every node of its lattice, the
+        drawable's own plus the other media's upstream (a new array when there are any)."""
+        if self.upstream is None:
+            return self.sun_depth
+        return self.sun_depth + self.upstream[None]
 
 
 def medium_args(drawables: Any, settings: Any) -> tuple[list, list]:
@@ -287,16 +301,17 @@ def physical_light(
     others = upstream
     if others is None:
         others = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
+    upstream_depth = None
     if others:
         with _stage(timings, "upstream"):
-            depth = _core.add_upstream_depth(
-                depth, _upstream_depth(others, scene, frame, threads), threads
-            )
+            upstream_depth = _read_only(_upstream_depth(others, scene, frame, threads))
     ext = field.values
     d, h, w = ext.shape
     with _stage(timings, "sun_transmittance"):
         lo32, cell32 = _lattice_cells(lo, hi, (w, h, d))
-        sun_t = _core.lattice_transmittance(depth, frame, lo32, cell32, (w, h, d), threads)
+        sun_t = _core.lattice_transmittance(
+            depth, frame, lo32, cell32, (w, h, d), threads, upstream=upstream_depth
+        )
     sky_e = phi = None
     if s.sky_light:
         with _stage(timings, "sky"):
@@ -334,9 +349,8 @@ def physical_light(
     grid = _core.physical_grid(
         ext, phi, sky_e, _cell_size(lo, hi, ext.shape), depth_g, SUN_GAIN, SKY_GAIN, threads
     )
-    depth.setflags(write=False)
     grid.setflags(write=False)
-    return PhysicalLight(frame, depth, grid, (lo, hi), octaves)
+    return PhysicalLight(frame, depth, grid, (lo, hi), octaves, upstream=upstream_depth)
 
 
 def _read_only(fresh: np.ndarray) -> np.ndarray:

@@ -96,9 +96,10 @@ def occupancy_grid(
 
 
 def physical_core_tuple(light: PhysicalLight) -> tuple:
-    """A drawable's physical light as the core takes it."""
+    """A drawable's physical light as the core takes it (the core adds ``upstream``'s value
+    per column to the sun lattice's, as :meth:`PhysicalLight.sample_depth` does)."""
     lo, hi = light.box
-    return (light.frame, light.sun_depth, lo, hi, light.grid)
+    return (light.frame, light.sun_depth, lo, hi, light.grid, light.upstream)
 
 
 def cloud_core_dict(cloud: Cloud, grid: Any, kappa: float | None = None) -> dict[str, Any]:

@@ -76,7 +76,11 @@ def pack_physical(
         i[36:39] = goff[k]
         words[k] = f.view(np.uint32)
         (x, y, z), (nx, ny, nz) = doff[k], dshapes[k]
-        depth[z : z + nz, y : y + ny, x : x + nx] = light.sun_depth
+        block = depth[z : z + nz, y : y + ny, x : x + nx]
+        if light.upstream is None:
+            block[...] = light.sun_depth
+        else:  # the other media's shadow, per column, added as the atlas is filled
+            np.add(light.sun_depth, light.upstream[None], out=block)
         (x, y, z), (nx, ny, nz) = goff[k], gshapes[k]
         grid[z : z + nz, y : y + ny, x : x + nx] = light.grid
     return words.tobytes(), depth, grid

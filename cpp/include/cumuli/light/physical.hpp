@@ -54,14 +54,19 @@ struct SunFrame {
 // node on every side so that the outermost nodes lie on the enclosing box).
 SunFrame make_sun_frame(const Box& world_box, glm::vec3 to_sun, const int res[3]);
 
-// Trilinear value of a [w][v][u] lattice at world point p (texel centres, clamp to edge).
-float sample_frame(const float* values, const SunFrame& f, glm::vec3 p);
+// Trilinear value of a [w][v][u] lattice at world point p (texel centres, clamp to edge), plus,
+// when `columns` is given, the bilinear value of a [v][u] map of one value per column (the same
+// along the light: the optical depth of other media upstream of the lattice).
+float sample_frame(const float* values, const SunFrame& f, glm::vec3 p,
+                   const float* columns = nullptr);
 
 // e^{−τ} of a frame's optical depths `depth` at the centres of a dims[0] × dims[1] × dims[2]
 // (x, y, z) lattice, [z][y][x]: centre (i, j, k) at lo + (index + ½)·cell per axis, in float32
-// as written (the sun's transmittance on a drawable's world lattice).
+// as written (the sun's transmittance on a drawable's world lattice); `columns`, when given, the
+// per-column depths sample_frame adds.
 std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
-                                         glm::vec3 cell, const int dims[3], int threads);
+                                         glm::vec3 cell, const int dims[3], int threads,
+                                         const float* columns = nullptr);
 
 // What extinction a ray meets.
 struct CloudMedium {

@@ -65,7 +65,8 @@ struct OctaveTerms {
 // lattices run to tens of MB, which a copy per frame would spend a good part of the frame on).
 struct PhysicalGrids {
   SunFrame frame;
-  std::vector<float> depth;  // [w][v][u]
+  std::vector<float> depth;    // [w][v][u]
+  std::vector<float> columns;  // [v][u], or empty: depth upstream of each column, added to depth
   VolumeGrid grid;
   std::vector<float> rgba;  // [z][y][x][4]: F, S.rgb
 
@@ -76,7 +77,20 @@ struct PhysicalGrids {
     rgba_view_ = rgba_values;
     rgba_count_ = rgba_count;
   }
+  // The per-column map viewed where it lies (set_views first; `count` 0: none).
+  void set_columns_view(const float* values, std::size_t count) {
+    columns_view_ = values;
+    columns_count_ = count;
+  }
   const float* depth_data() const { return depth_view_ != nullptr ? depth_view_ : depth.data(); }
+  // The per-column map, or nullptr when there is none.
+  const float* columns_data() const {
+    if (columns_view_ != nullptr) return columns_view_;
+    return columns.empty() ? nullptr : columns.data();
+  }
+  std::size_t columns_size() const {
+    return columns_view_ != nullptr ? columns_count_ : columns.size();
+  }
   std::size_t depth_size() const { return depth_view_ != nullptr ? depth_count_ : depth.size(); }
   const float* rgba_data() const { return rgba_view_ != nullptr ? rgba_view_ : rgba.data(); }
   std::size_t rgba_size() const { return rgba_view_ != nullptr ? rgba_count_ : rgba.size(); }
@@ -91,6 +105,8 @@ struct PhysicalGrids {
   std::size_t depth_count_ = 0;
   const float* rgba_view_ = nullptr;
   std::size_t rgba_count_ = 0;
+  const float* columns_view_ = nullptr;
+  std::size_t columns_count_ = 0;
 };
 
 // Interleaved gradient noise in [0, 1) of pixel (row, col) for `seed`.
