@@ -1082,8 +1082,11 @@ void bind_physical_light(py::module_& m) {
   m.def(
       "lattice_transmittance",
       [](const FloatArray& depth, const py::tuple& frame, V3 lo, V3 cell,
-         const std::array<int, 3>& dims, int threads, const py::object& upstream) {
+         const std::array<int, 3>& dims, int threads, const py::object& upstream,
+         float depth_scale) {
         const SunFrame f = frame_of(frame);
+        if (!(depth_scale >= 0.0f) || !std::isfinite(depth_scale))
+          throw py::value_error("depth_scale must be finite and >= 0");
         if (depth.ndim() != 3 || depth.shape(0) != f.res[2] || depth.shape(1) != f.res[1] ||
             depth.shape(2) != f.res[0])
           throw py::value_error("depth must have the frame's shape (nw, nv, nu)");
@@ -1099,14 +1102,15 @@ void bind_physical_light(py::module_& m) {
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = lattice_transmittance(v, f, v3(lo), v3(cell), dims.data(), threads, columns);
+          out = lattice_transmittance(v, f, v3(lo), v3(cell), dims.data(), threads, columns,
+                                      depth_scale);
         }
         return adopt_array(std::move(out), {dims[2], dims[1], dims[0]});
       },
       py::arg("depth"), py::arg("frame"), py::arg("lo"), py::arg("cell"), py::arg("dims"),
-      py::arg("threads") = 0, py::arg("upstream") = py::none(),
-      "e^-tau of a light-frame lattice of optical depths (plus `upstream`, a (nv, nu) map of "
-      "one depth per column, where given) at the centres of a (W, H, D) lattice "
+      py::arg("threads") = 0, py::arg("upstream") = py::none(), py::arg("depth_scale") = 1.0f,
+      "e^-(depth_scale*tau) of a light-frame lattice of optical depths tau (plus `upstream`, a "
+      "(nv, nu) map of one depth per column, where given) at the centres of a (W, H, D) lattice "
       "(lo + (index + 1/2)*cell per axis, float32), shape (D, H, W): the sun's transmittance "
       "on a drawable's world lattice.");
 

@@ -5,7 +5,7 @@ reproduce them; ``physical_reference.json`` records the samples, the time and th
 noise). Compared on 4×4-pixel block averages of the cloud-covered blocks (mean alpha ≥ 0.5):
 mean cloud radiance within ±5 %, per-block relative error median ≤ 10 % and 90th percentile
 ≤ 25 %, transmittance mean |ΔT| ≤ 0.01 — on both backends (the goal of every reference view;
-measured +2.8 %, 9.3 %, 23.7 % and 0.006 with the constants fitted on this view, the back-lit
+measured +2.3 %, 8.5 %, 22.1 % and 0.006 with the constants fitted on this view, the back-lit
 and the metaball ones).
 """
 

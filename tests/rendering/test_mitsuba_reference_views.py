@@ -39,20 +39,20 @@ GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25, "transmitta
 #: LLVM 15.0.6, and the CPU twin agree to 0.001), plus a margin of about one point (0.003 for
 #: ΔT). Keyed by (view, metric); every other pair is held to GOAL. Measured with the constants
 #: fitted on the side-lit, back-lit and metaball views (``cumuli.light.physical.FIT_VIEWS``),
-#: the diffusion fed the forward-scattered sun's flux source, with the sun lattice of two nodes
-#: per cell along the light and the sky marched by runs of lanes: back-lit (fitted) median
-#: 11.0 %, p90 27.2 % (mean −0.4 % meets the goal); top-lit (held out) −13.5 % mean, median
-#: 14.0 %, p90 26.1 %; L-system (held out) +9.6 % mean, median 10.1 %, p90 30.0 %, ΔT 0.017.
-#: The sunset (held out) and the metaball meet the goal.
+#: the diffusion fed the forward-scattered sun's flux source and its sun source with the phase's
+#: forward peak taken as unscattered (δ-M), with the sun lattice of two nodes per cell along the
+#: light and the sky marched by runs of lanes: back-lit (fitted) median 10.6 %, p90 26.7 % (mean
+#: −0.0 % meets the goal); top-lit (held out) −12.6 % mean, median 12.2 %, p90 25.3 %; L-system
+#: (held out) +7.2 % mean, p90 28.3 %, ΔT 0.017 (median 8.1 % meets the goal). The sunset (held
+#: out) and the metaball meet the goal.
 GUARDS: dict[tuple[str, str], float] = {
-    ("backlit", "block_median"): 0.117,
-    ("backlit", "block_p90"): 0.281,
-    ("toplit", "mean_ratio"): 0.145,
-    ("toplit", "block_median"): 0.15,
-    ("toplit", "block_p90"): 0.272,
-    ("lsystem", "mean_ratio"): 0.106,
-    ("lsystem", "block_median"): 0.111,
-    ("lsystem", "block_p90"): 0.31,
+    ("backlit", "block_median"): 0.115,
+    ("backlit", "block_p90"): 0.277,
+    ("toplit", "mean_ratio"): 0.136,
+    ("toplit", "block_median"): 0.132,
+    ("toplit", "block_p90"): 0.263,
+    ("lsystem", "mean_ratio"): 0.082,
+    ("lsystem", "block_p90"): 0.293,
     ("lsystem", "transmittance"): 0.02,
 }
 

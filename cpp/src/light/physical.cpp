@@ -336,7 +336,7 @@ float sample_frame(const float* values, const SunFrame& f, glm::vec3 p, const fl
 
 std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
                                          glm::vec3 cell, const int dims[3], int threads,
-                                         const float* columns) {
+                                         const float* columns, float depth_scale) {
   f.validate();
   const std::size_t w = static_cast<std::size_t>(dims[0]), h = static_cast<std::size_t>(dims[1]),
                     d = static_cast<std::size_t>(dims[2]);
@@ -346,7 +346,8 @@ std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, 
     const float z = lo.z + (static_cast<float>(row / h) + 0.5f) * cell.z;
     for (std::size_t i = 0; i < w; ++i) {
       const float x = lo.x + (static_cast<float>(i) + 0.5f) * cell.x;
-      out[row * w + i] = std::exp(-sample_frame(depth, f, glm::vec3(x, y, z), columns));
+      const float tau = sample_frame(depth, f, glm::vec3(x, y, z), columns);
+      out[row * w + i] = std::exp(-(depth_scale == 1.0f ? tau : depth_scale * tau));
     }
   });
   return out;

@@ -21,8 +21,11 @@ maths):
 - **Multiple scattering through the cloud**: the diffusion approximation (Stam 1995) on the
   world lattice, fed by the sun's and the sky's first scattering, with Marshak's vacuum
   boundary: the light that reaches the shadowed side and the far side of the cloud. The sun's
-  collided light is forward-scattered: :data:`SUN_FORWARD` of its flux source, ``−∇·(3D·Q1)``
-  (Ishimaru 1978, §9.2), carries it deeper along the light before it diffuses. The camera
+  source takes the phase function's forward peak as unscattered (the δ-M similarity relation,
+  :func:`forward_peak_share`): the sun reaches a cell with ``e^{−(1 − f·ϖ)τ}`` and ``1 − f`` of
+  what collides there diffuses. Its collided light is forward-scattered: :data:`SUN_FORWARD` of
+  its flux source, ``−∇·(3D·Q1)`` (Ishimaru 1978, §9.2), carries it deeper along the light
+  before it diffuses. The camera
   sees the first mean free path of a cell that spans several, where the diffuse light is larger
   than the cell's mean, and the whole of a cell thinner than one: the fluence is read with a
   gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
@@ -59,6 +62,7 @@ from cumuli.light.digests import drawable_digest
 from cumuli.light.footprint import box_corners
 from cumuli.light.medium import cloud_extinction_scale, extinction_grid  # noqa: F401 (public)
 from cumuli.light.memo import remember
+from cumuli.light.phase import PEAK_COS, forward_peak_share, phase, phase_values  # noqa: F401
 from cumuli.settings import ACROSS, ALONG, SUPERSAMPLE
 from cumuli.sky import sky_args
 
@@ -67,18 +71,18 @@ from cumuli.sky import sky_args
 #: ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}`` (``β`` = :data:`OCTAVE_POISSON`; 0 gives the plain ``e^{−cⁿ·τ}``).
 OCTAVES = 2
 OCTAVE_A = 1.0
-OCTAVE_B = 0.88
-OCTAVE_C = 0.47
-OCTAVE_POISSON = 0.98
+OCTAVE_B = 0.84
+OCTAVE_C = 0.48
+OCTAVE_POISSON = 1.0
 #: Gains on the lattice's diffuse light, reached in optically thick cells: the sun's multiple
 #: scattering, and the sky's light (:func:`lattice_gains`).
-SUN_GAIN = 1.52
-SKY_GAIN = 3.2
+SUN_GAIN = 1.69
+SKY_GAIN = 3.25
 #: Optical thickness ``τg`` of a lattice cell over which the gains rise from 1 to their value.
-GAIN_DEPTH = 1.5
+GAIN_DEPTH = 1.55
 #: Weight of the forward-scattered sun's flux source in the diffusion (``−∇·(3D·Q1)``, the first
 #: moment of the collided sun light; 0: an isotropic source, 1: the whole of it).
-SUN_FORWARD = 0.57
+SUN_FORWARD = 0.54
 #: The views the constants above were fitted on (``benchmarks/fit_physical.py``); the other
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
@@ -309,9 +313,15 @@ def physical_light(
     d, h, w = ext.shape
     with _stage(timings, "sun_transmittance"):
         lo32, cell32 = _lattice_cells(lo, hi, (w, h, d))
+        # The diffusion's sun source (its only reader) with the phase's forward peak taken as
+        # unscattered: e^{−(1 − f·ϖ)τ}, times the (1 − f) of the collided light that diffuses.
+        peak = forward_peak_share(s) if s.multiple_scattering else 0.0
         sun_t = _core.lattice_transmittance(
-            depth, frame, lo32, cell32, (w, h, d), threads, upstream=upstream_depth
-        )
+            depth, frame, lo32, cell32, (w, h, d), threads, upstream=upstream_depth,
+            depth_scale=1.0 - peak * s.albedo,
+        )  # fmt: skip
+        if peak > 0.0:
+            sun_t *= np.float32(1.0 - peak)
     sky_e = phi = None
     if s.sky_light:
         with _stage(timings, "sky"):
@@ -505,30 +515,6 @@ def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[fl
         p = phase(settings, cos_theta, OCTAVE_B**i)
         out.append((OCTAVE_A**i * p, OCTAVE_C**i))
     return out
-
-
-def phase(settings: Any, cos_theta: float, g_scale: float = 1.0) -> float:
-    """The settings' phase function (the approximate Mie phase, HG or the two-lobe blend) with
-    its g's scaled."""
-    return float(phase_values(settings, np.array([cos_theta]), g_scale)[0])
-
-
-def phase_values(settings: Any, cos_theta: Any, g_scale: float = 1.0) -> np.ndarray:
-    """:func:`phase` at an array of cosines (float64; the Mie phase evaluated by the core)."""
-    c = np.asarray(cos_theta, np.float64)
-    if settings.phase == "mie":
-        flat = np.ascontiguousarray(c.ravel(), np.float32)
-        out = _core.approx_mie_phase(settings.droplet_diameter, flat, g_scale)
-        return np.asarray(out, np.float64).reshape(c.shape)
-
-    def hg(g: float) -> np.ndarray:
-        d = 1.0 + g * g - 2.0 * g * c
-        return (1.0 - g * g) / (4.0 * math.pi * d * np.sqrt(d))
-
-    if settings.phase == "dual_hg":
-        w = settings.hg_blend
-        return (1.0 - w) * hg(settings.hg_g * g_scale) + w * hg(settings.hg_g2 * g_scale)
-    return hg(settings.hg_g * g_scale)
 
 
 # --- the light pass of the media in the physical mode -------------------------------------

@@ -63,10 +63,11 @@ float sample_frame(const float* values, const SunFrame& f, glm::vec3 p,
 // e^{−τ} of a frame's optical depths `depth` at the centres of a dims[0] × dims[1] × dims[2]
 // (x, y, z) lattice, [z][y][x]: centre (i, j, k) at lo + (index + ½)·cell per axis, in float32
 // as written (the sun's transmittance on a drawable's world lattice); `columns`, when given, the
-// per-column depths sample_frame adds.
+// per-column depths sample_frame adds; `depth_scale` k: e^{−k·τ} (the δ-M similarity relation's
+// transmittance, with the phase's forward peak taken as unscattered).
 std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
                                          glm::vec3 cell, const int dims[3], int threads,
-                                         const float* columns = nullptr);
+                                         const float* columns = nullptr, float depth_scale = 1.0f);
 
 // What extinction a ray meets.
 struct CloudMedium {
