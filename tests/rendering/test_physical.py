@@ -491,6 +491,29 @@ def test_gl_physical_matches_cpu(gl_context) -> None:
         assert (diff.max(-1) > 5e-2).mean() <= 0.01
 
 
+def test_gl_and_cpu_add_the_other_clouds_shadow_alike(gl_context) -> None:
+    """A cloud shaded by another keeps the other's depth as a per-column map: the GL atlas adds
+    it as it is filled, the CPU drawer as it reads; both draw the same shaded cloud."""
+    first = small_cloud()
+    lo, hi = first.layer_box()
+    sun = np.asarray(SUN.direction)
+    upstream = first.translated(tuple(float(v) for v in sun * 1.2 * float(np.max(hi - lo))))
+    scene = small_scene().replace(clouds=[first, upstream])
+    lit = cu.prepare_light(scene)
+    assert lit.lights[0].upstream is not None and lit.lights[0].upstream.max() > 5
+    alone = cu.prepare_light(small_scene())
+    cam = camera_for(small_scene())
+    with cu.Renderer(context=gl_context) as r:
+        gl = r.render(lit, cam, 48, 36)
+        gl_alone = r.render(alone, cam, 48, 36)
+    cpu = cu.render_cpu(lit, cam, 48, 36)
+    diff = np.abs(gl - cpu)
+    assert diff.mean(axis=(0, 1)).max() <= 1e-3
+    assert (diff.max(-1) > 5e-2).mean() <= 0.01
+    # The shadow shows: the first cloud is darker under the other than alone.
+    assert gl[..., :3].mean() < 0.97 * gl_alone[..., :3].mean()
+
+
 @pytest.mark.gl
 def test_volume_renderer_draws_the_same_medium(gl_context) -> None:
     scene = small_scene()
