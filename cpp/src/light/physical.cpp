@@ -596,7 +596,7 @@ SKY_VEC_CLONES void add_visibility(float* acc, std::size_t nv, const float* tau,
 // the sample's fractional position, and their trilinear corners are kSkyLanes consecutive
 // lattice values — plain vector loads, no gathers. A ray runs in steps of dt to where it leaves
 // the box; its last sample, at the same spacing, weighs only the part of its step inside the box.
-constexpr int kSkyLanes = 8;
+constexpr int kSkyLanes = 16;
 
 // A lattice copied with a border of `pad` voxels that repeat its edge (clamp-to-edge reads need no
 // clamping), and kSlack spare values before and after it: a run's lanes that lie past the
@@ -690,17 +690,16 @@ __attribute__((target("avx2"), always_inline)) inline __m256 lerp(__m256 a, __m2
   return _mm256_add_ps(a, _mm256_mul_ps(f, _mm256_sub_ps(b, a)));  // a + f·(b − a), as in C++
 }
 
-// march_sky_run_portable with the eight lanes in AVX2 registers: the same IEEE operations lane
-// by lane (no FMA), so the same bits.
-__attribute__((target("avx2"))) void march_sky_run_avx2(const PaddedLattice& pad, const SkyRun& r,
-                                                        double* tau_out) {
-  static_assert(kSkyLanes == 8, "one AVX2 register of lanes");
+// march_sky_run_portable for the eight lanes from `base` in AVX2 registers: the same IEEE
+// operations lane by lane (no FMA), so the same bits.
+__attribute__((target("avx2"))) void march_sky_half_avx2(const PaddedLattice& pad, const SkyRun& r,
+                                                         int base, double* tau_out) {
   int steps = 0;
-  for (int l = 0; l < kSkyLanes; ++l) steps = std::max(steps, r.n[l]);
+  for (int l = base; l < base + 8; ++l) steps = std::max(steps, r.n[l]);
   const std::ptrdiff_t W = pad.w, WH = static_cast<std::ptrdiff_t>(pad.w) * pad.h;
-  const __m256i n = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r.n));
+  const __m256i n = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(r.n + base));
   const __m256i last = _mm256_sub_epi32(n, _mm256_set1_epi32(1));  // a lane's last sample
-  const __m256 last_w = _mm256_loadu_ps(r.last), dt = _mm256_set1_ps(r.dt);
+  const __m256 last_w = _mm256_loadu_ps(r.last + base), dt = _mm256_set1_ps(r.dt);
   const __m256d cut = _mm256_set1_pd(kSkyDepthCut);
   __m256d tau_lo = _mm256_setzero_pd(), tau_hi = _mm256_setzero_pd();
   for (int i = 0; i < steps; ++i) {
@@ -718,7 +717,7 @@ __attribute__((target("avx2"))) void march_sky_run_avx2(const PaddedLattice& pad
         _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm256_extracti128_si256(on_ray, 1))));
     if ((_mm256_movemask_pd(act_lo) | _mm256_movemask_pd(act_hi)) == 0) break;
     const SkySample smp = sky_sample(r, i, pad.w, pad.w * pad.h);
-    const float* a = pad.origin() + r.first + smp.offset;
+    const float* a = pad.origin() + r.first + smp.offset + base;
     const __m256 fx = _mm256_set1_ps(smp.fx), fy = _mm256_set1_ps(smp.fy),
                  fz = _mm256_set1_ps(smp.fz);
     const __m256 c00 = lerp(_mm256_loadu_ps(a), _mm256_loadu_ps(a + 1), fx);
@@ -734,8 +733,70 @@ __attribute__((target("avx2"))) void march_sky_run_avx2(const PaddedLattice& pad
         _mm256_and_pd(act_hi, _mm256_mul_pd(_mm256_cvtps_pd(_mm256_extractf128_ps(value, 1)),
                                             _mm256_cvtps_pd(_mm256_extractf128_ps(wgt, 1)))));
   }
-  _mm256_storeu_pd(tau_out, tau_lo);
-  _mm256_storeu_pd(tau_out + 4, tau_hi);
+  _mm256_storeu_pd(tau_out + base, tau_lo);
+  _mm256_storeu_pd(tau_out + base + 4, tau_hi);
+}
+
+__attribute__((target("avx2"))) void march_sky_run_avx2(const PaddedLattice& pad, const SkyRun& r,
+                                                        double* tau_out) {
+  static_assert(kSkyLanes % 8 == 0, "whole AVX2 registers of lanes");
+  for (int base = 0; base < kSkyLanes; base += 8) march_sky_half_avx2(pad, r, base, tau_out);
+}
+
+__attribute__((target("avx512f"), always_inline)) inline __m512 lerp(__m512 a, __m512 b, __m512 f) {
+  return _mm512_add_ps(a, _mm512_mul_ps(f, _mm512_sub_ps(b, a)));  // a + f·(b − a), as in C++
+}
+
+// Zero-masked conversion and extracts (the same values as the plain ones and the 512→256 cast,
+// about whose undefined pass-through registers GCC 12 warns).
+__attribute__((target("avx512f"), always_inline)) inline __m512d to_double(__m256 x) {
+  return _mm512_maskz_cvtps_pd(0xFF, x);
+}
+template <int half>
+__attribute__((target("avx512f"), always_inline)) inline __m256 half_of(__m512 x) {
+  return _mm256_castpd_ps(_mm512_maskz_extractf64x4_pd(0xF, _mm512_castps_pd(x), half));
+}
+
+// march_sky_run_portable with the sixteen lanes in AVX-512 registers: the same IEEE operations
+// lane by lane (no FMA: -ffp-contract=off), so the same bits; an inactive lane adds nothing.
+__attribute__((target("avx512f"))) void march_sky_run_avx512(const PaddedLattice& pad,
+                                                             const SkyRun& r, double* tau_out) {
+  static_assert(kSkyLanes == 16, "one AVX-512 register of lanes");
+  int steps = 0;
+  for (int l = 0; l < kSkyLanes; ++l) steps = std::max(steps, r.n[l]);
+  const std::ptrdiff_t W = pad.w, WH = static_cast<std::ptrdiff_t>(pad.w) * pad.h;
+  const __m512i n = _mm512_loadu_si512(r.n);
+  const __m512i last = _mm512_sub_epi32(n, _mm512_set1_epi32(1));  // a lane's last sample
+  const __m512 last_w = _mm512_loadu_ps(r.last), dt = _mm512_set1_ps(r.dt);
+  const __m512d cut = _mm512_set1_pd(kSkyDepthCut);
+  __m512d tau_lo = _mm512_setzero_pd(), tau_hi = _mm512_setzero_pd();
+  for (int i = 0; i < steps; ++i) {
+    const __m512i at = _mm512_set1_epi32(i);
+    const __mmask16 before_last = _mm512_cmpgt_epi32_mask(last, at);
+    const __mmask16 is_last = _mm512_cmpeq_epi32_mask(last, at);
+    const __m512 wgt = _mm512_mask_mov_ps(_mm512_maskz_mov_ps(before_last, dt), is_last, last_w);
+    const __mmask16 on_ray = _mm512_cmpgt_epi32_mask(n, at);
+    const __mmask8 act_lo = static_cast<__mmask8>(_mm512_cmp_pd_mask(tau_lo, cut, _CMP_LE_OQ) &
+                                                  static_cast<__mmask8>(on_ray & 0xFF));
+    const __mmask8 act_hi = static_cast<__mmask8>(_mm512_cmp_pd_mask(tau_hi, cut, _CMP_LE_OQ) &
+                                                  static_cast<__mmask8>(on_ray >> 8));
+    if ((act_lo | act_hi) == 0) break;
+    const SkySample smp = sky_sample(r, i, pad.w, pad.w * pad.h);
+    const float* a = pad.origin() + r.first + smp.offset;
+    const __m512 fx = _mm512_set1_ps(smp.fx), fy = _mm512_set1_ps(smp.fy),
+                 fz = _mm512_set1_ps(smp.fz);
+    const __m512 c00 = lerp(_mm512_loadu_ps(a), _mm512_loadu_ps(a + 1), fx);
+    const __m512 c10 = lerp(_mm512_loadu_ps(a + W), _mm512_loadu_ps(a + W + 1), fx);
+    const __m512 c01 = lerp(_mm512_loadu_ps(a + WH), _mm512_loadu_ps(a + WH + 1), fx);
+    const __m512 c11 = lerp(_mm512_loadu_ps(a + WH + W), _mm512_loadu_ps(a + WH + W + 1), fx);
+    const __m512 value = lerp(lerp(c00, c10, fy), lerp(c01, c11, fy), fz);
+    const __m512d p_lo = _mm512_mul_pd(to_double(half_of<0>(value)), to_double(half_of<0>(wgt)));
+    const __m512d p_hi = _mm512_mul_pd(to_double(half_of<1>(value)), to_double(half_of<1>(wgt)));
+    tau_lo = _mm512_mask_add_pd(tau_lo, act_lo, tau_lo, p_lo);
+    tau_hi = _mm512_mask_add_pd(tau_hi, act_hi, tau_hi, p_hi);
+  }
+  _mm512_storeu_pd(tau_out, tau_lo);
+  _mm512_storeu_pd(tau_out + 8, tau_hi);
 }
 #endif
 
@@ -775,6 +836,7 @@ SKY_VEC_CLONES void add_run_visibility(const double* tau, float w, const float* 
 // The lanes' τ by the kernel of the SIMD level in use (the same bits either way).
 void march_sky_run(const PaddedLattice& pad, const SkyRun& r, double* tau) {
 #ifdef CUMULI_X86_SKY
+  if (simd_level() == SimdLevel::Avx512) return march_sky_run_avx512(pad, r, tau);
   if (simd_level() != SimdLevel::Scalar) return march_sky_run_avx2(pad, r, tau);
 #endif
   march_sky_run_portable(pad, r, tau);
