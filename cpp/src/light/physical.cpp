@@ -821,17 +821,32 @@ SKY_VEC_CLONES void sky_run_rays(const float* cx, const float* cy, const float* 
   }
 }
 
-// vis[c][l] += w·e^{−τ[l]}·y_c: one direction's share of a run's visibility moments (w its
-// quadrature weight, y its basis values); e^{−τ} by exp_neg, in plain operations, so that the
-// lanes vectorise with the same bits on every instruction set.
-SKY_VEC_CLONES void add_run_visibility(const double* tau, float w, const float* y, int nc,
-                                       double (*vis)[kSkyLanes]) {
-  double vw[kSkyLanes];
+// vw[l] = w·e^{−τ[l]}: one direction's visibility per lane (w its quadrature weight); e^{−τ} by
+// exp_neg, in plain operations, so that the lanes vectorise with the same bits on every
+// instruction set.
+SKY_VEC_CLONES void direction_visibility(const double* tau, float w, double* vw) {
   for (int l = 0; l < kSkyLanes; ++l)
     vw[l] = static_cast<double>(exp_neg(static_cast<float>(tau[l]))) * static_cast<double>(w);
-  for (int c = 0; c < nc; ++c)
-    for (int l = 0; l < kSkyLanes; ++l) vis[c][l] += vw[l] * static_cast<double>(y[c]);
 }
+
+// vis[c][l] += vw[k][l]·y[k][c] for the nk directions of a block, in their order (each
+// coefficient's sums held in registers over the block rather than loaded and stored per
+// direction; the same sums, the same bits).
+SKY_VEC_CLONES void add_block_visibility(const double (*vw)[kSkyLanes], int nk, const float* y,
+                                         int nc, double (*vis)[kSkyLanes]) {
+  for (int c = 0; c < nc; ++c) {
+    double acc[kSkyLanes];
+    for (int l = 0; l < kSkyLanes; ++l) acc[l] = vis[c][l];
+    for (int k = 0; k < nk; ++k) {
+      const double yc = static_cast<double>(y[k * nc + c]);
+      for (int l = 0; l < kSkyLanes; ++l) acc[l] += vw[k][l] * yc;
+    }
+    for (int l = 0; l < kSkyLanes; ++l) vis[c][l] = acc[l];
+  }
+}
+
+// Directions whose visibilities add_block_visibility takes together.
+constexpr int kSkyBlock = 16;
 
 // The lanes' τ by the kernel of the SIMD level in use (the same bits either way).
 void march_sky_run(const PaddedLattice& pad, const SkyRun& r, double* tau) {
@@ -984,12 +999,18 @@ LargeVector<float> sky_visibility(const float* ext, const VolumeGrid& g, int ord
     SkyRun r;
     r.first = pad.index(run.x0, run.y, run.z);
     r.dt = dt;
+    double vw[kSkyBlock][kSkyLanes];  // a block of directions' w·e^{−τ} per lane
+    int in_block = 0;
     for (std::size_t k = 0; k < ndir; ++k) {
       r.du = directions[k].du;
       sky_run_rays(cx, cy, cz, marched, directions[k], dt, r);
       double tau[kSkyLanes];
       march_sky_run(pad, r, tau);
-      add_run_visibility(tau, quad.weights[k], &basis[k * nc], nc, vis);
+      direction_visibility(tau, quad.weights[k], vw[in_block]);
+      if (++in_block == kSkyBlock || k + 1 == ndir) {
+        add_block_visibility(vw, in_block, &basis[(k + 1 - in_block) * nc], nc, vis);
+        in_block = 0;
+      }
     }
     const std::size_t row = (static_cast<std::size_t>(run.z) * g.h + run.y) * g.w;
     for (int l = 0; l < kSkyLanes; ++l) {
