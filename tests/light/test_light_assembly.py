@@ -26,13 +26,21 @@ def _centres(lo: tuple, cell: tuple, dims: tuple[int, int, int]) -> np.ndarray:
     return np.stack([xx, yy, zz], -1).reshape(-1, 3)
 
 
-def test_transmittance_is_the_frame_read_at_the_lattice_centres() -> None:
+def _cloud_lattices(dims: tuple[int, int, int]) -> tuple[tuple, np.ndarray, tuple, tuple]:
+    """The default cloud's sun lattice at resolution 16, ``(frame, depth)``, and a world lattice
+    of ``dims`` (x, y, z) cells over its box as ``_core.lattice_transmittance`` takes it:
+    ``(lo, cell)`` in float32."""
     scene = cumulus_scene(settings=cu.RenderSettings(physical_resolution=16))
     frame, depth = own_sun_depth(scene.clouds[0], scene, 2)
     lo, hi = scene.clouds[0].layer_box()
-    dims = (13, 7, 11)
     lo32 = tuple(float(F32(v)) for v in lo)
     cell = tuple(float(F32((hi[a] - lo[a]) / dims[a])) for a in range(3))
+    return frame, depth, lo32, cell
+
+
+def test_transmittance_is_the_frame_read_at_the_lattice_centres() -> None:
+    dims = (13, 7, 11)
+    frame, depth, lo32, cell = _cloud_lattices(dims)
     got = _core.lattice_transmittance(depth, frame, lo32, cell, dims, 2)
     assert got.shape == (11, 7, 13) and got.dtype == np.float32
     tau = _core.sample_frame(depth, frame, _centres(lo32, cell, dims), 1).reshape(11, 7, 13)
@@ -126,19 +134,16 @@ def test_light_grid_rejects_bad_input() -> None:
 def test_upstream_map_reads_as_its_lattice_added_to_every_layer() -> None:
     """A per-column map given as ``upstream`` reads as if it were added to every layer of the
     sun lattice: sampled at any point, and in the transmittance on a world lattice."""
-    scene = cumulus_scene(settings=cu.RenderSettings(physical_resolution=16))
-    frame, depth = own_sun_depth(scene.clouds[0], scene, 2)
+    dims = (13, 7, 11)
+    frame, depth, lo32, cell = _cloud_lattices(dims)
     rng = np.random.default_rng(2)
     up = rng.uniform(0, 5, depth.shape[1:]).astype(F32)
     whole = depth + up[None]
-    lo, hi = scene.clouds[0].layer_box()
-    pts = rng.uniform(np.asarray(lo) - 1.0, np.asarray(hi) + 1.0, (4000, 3)).astype(F32)
+    lo, hi = np.asarray(lo32), np.asarray(lo32) + np.asarray(cell) * dims
+    pts = rng.uniform(lo - 1.0, hi + 1.0, (4000, 3)).astype(F32)
     for threads in (1, 2):
         got = _core.sample_frame(depth, frame, pts, threads, upstream=up)
         np.testing.assert_allclose(got, _core.sample_frame(whole, frame, pts), rtol=1e-5, atol=2e-5)
-    dims = (13, 7, 11)
-    lo32 = tuple(float(F32(v)) for v in lo)
-    cell = tuple(float(F32((hi[a] - lo[a]) / dims[a])) for a in range(3))
     got = _core.lattice_transmittance(depth, frame, lo32, cell, dims, 2, upstream=up)
     want = _core.lattice_transmittance(whole, frame, lo32, cell, dims, 2)
     assert want.min() < 0.5 * want.max()  # the map and the cloud shade part of it
@@ -151,12 +156,8 @@ def test_upstream_map_reads_as_its_lattice_added_to_every_layer() -> None:
 
 
 def test_depth_scale_scales_the_optical_depth() -> None:
-    scene = cumulus_scene(settings=cu.RenderSettings(physical_resolution=16))
-    frame, depth = own_sun_depth(scene.clouds[0], scene, 2)
-    lo, hi = scene.clouds[0].layer_box()
     dims = (9, 8, 7)
-    lo32 = tuple(float(F32(v)) for v in lo)
-    cell = tuple(float(F32((hi[a] - lo[a]) / dims[a])) for a in range(3))
+    frame, depth, lo32, cell = _cloud_lattices(dims)
     whole = _core.lattice_transmittance(depth, frame, lo32, cell, dims, 1).astype(np.float64)
     for k in (0.0, 0.55, 2.0):
         got = _core.lattice_transmittance(depth, frame, lo32, cell, dims, 2, depth_scale=k)
