@@ -347,7 +347,7 @@ std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, 
     for (std::size_t i = 0; i < w; ++i) {
       const float x = lo.x + (static_cast<float>(i) + 0.5f) * cell.x;
       const float tau = sample_frame(depth, f, glm::vec3(x, y, z), columns);
-      out[row * w + i] = std::exp(-(depth_scale == 1.0f ? tau : depth_scale * tau));
+      out[row * w + i] = std::exp(-(depth_scale * tau));  // 1·τ is τ exactly
     }
   });
   return out;
