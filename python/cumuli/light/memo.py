@@ -7,6 +7,7 @@ import hashlib
 import threading
 from collections import OrderedDict
 from collections.abc import Callable
+from concurrent.futures import Future
 from typing import Any
 
 import numpy as np
@@ -25,11 +26,18 @@ media_store: OrderedDict[Any, Any] = OrderedDict()
 #: scene, in a store of their own; entries kept.
 GEOMETRY_MEMO_SIZE = 4096
 geometry_store: OrderedDict[Any, Any] = OrderedDict()
+#: The values being made now, by key (in any store): what the other threads wait for.
+pending: dict[Any, Future] = {}
 
 
 def remember(key: Any, make: Callable[[], Any], media: bool = False, geometry: bool = False) -> Any:
     """The value memoised under ``key``, made by ``make()`` when there is none (in
-    :data:`media_store` with ``media``, :data:`geometry_store` with ``geometry``)."""
+    :data:`media_store` with ``media``, :data:`geometry_store` with ``geometry``).
+
+    Safe from several threads: a value being made by one thread is waited for by the others
+    that ask for it (the light step lights clouds side by side, and each reads the sun lattices
+    of the clouds upstream of it), not made twice. A ``make`` that raises leaves nothing behind:
+    the next caller tries again."""
     if geometry:
         where, size = geometry_store, GEOMETRY_MEMO_SIZE
     else:
@@ -38,11 +46,27 @@ def remember(key: Any, make: Callable[[], Any], media: bool = False, geometry: b
         if key in where:
             where.move_to_end(key)
             return where[key]
-    value = make()
+        making = pending.get(key)
+        if making is None:
+            making = pending[key] = Future()
+            mine = True
+        else:
+            mine = False
+    if not mine:
+        return making.result()
+    try:
+        value = make()
+    except BaseException as exc:
+        with lock:
+            del pending[key]
+        making.set_exception(exc)
+        raise
     with lock:
         where[key] = value
         while len(where) > size:
             where.popitem(last=False)
+        del pending[key]
+    making.set_result(value)
     return value
 
 

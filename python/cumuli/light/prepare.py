@@ -27,7 +27,9 @@ same scene again — every frame of a camera path — does not repeat the light 
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from typing import Any
 
@@ -40,6 +42,7 @@ from cumuli.light.between import onto_media, own_light_of, through_media
 from cumuli.light.digests import shadow_digest as _shadow_digest
 from cumuli.light.memo import clear as _memo_clear
 from cumuli.light.memo import remember as _remember
+from cumuli.light.physical import physical_pass
 from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
 from cumuli.scene import Scene
 
@@ -99,6 +102,37 @@ def _own_light(given: Any) -> Any:
     :func:`cumuli.light.between.own_light_of`."""
     unshadowed = getattr(given, "unshadowed", None)
     return unshadowed if unshadowed is not None else own_light_of(given)
+
+
+def _cores(threads: int) -> int:
+    """The cores ``threads`` asks for (0: all of them)."""
+    return threads if threads > 0 else max(1, os.cpu_count() or 1)
+
+
+def _side_by_side(
+    todo: list[int], kinds: list[Any], physical: bool, threads: int
+) -> tuple[list[int], list[int]]:
+    """``(side, alone)``: the clouds of ``todo`` whose light passes run side by side, one core
+    each, and those that run one after another on every core.
+
+    One cloud's physical light step keeps two cores only ~80 % busy (its stages are short
+    parallel loops between serial pieces), while separate clouds' steps share nothing but the
+    memo: lit side by side, a scene of many clouds takes ~1.6 / 2 of the time. The physical
+    pass of the media goes side by side in whole rounds of one cloud per core; a last round
+    with fewer clouds than cores (which would leave cores idle) runs on every core instead.
+    The light is the same either way (the passes do not depend on the thread count)."""
+    cores = _cores(threads)
+    media = [k for k in todo if physical and kinds[k].light_pass(True) is physical_pass]
+    side = media[: len(media) - len(media) % cores] if cores > 1 else []
+    return side, [k for k in todo if k not in set(side)]
+
+
+def _light_of(k: int, make: Any) -> Any:
+    """``make()``, its errors naming cloud ``k``."""
+    try:
+        return make()
+    except (TypeError, ValueError) as exc:
+        raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
 
 
 def prepare_light(
@@ -164,15 +198,23 @@ def prepare_light(
                 out[k] = light
     todo = [k for k in range(n) if out[k] is None]
     steps = _progress.bar(
-        todo, desc="light", total=len(todo), unit="cloud",
-        progress=progress if len(todo) > 1 else False,
-    )  # fmt: skip
-    for k in steps:
-        drawable = scene.clouds[k]
-        try:
-            with _progress.core(f"light of cloud {k}", progress):
-                out[k] = kinds[k].light_pass(physical)(drawable, scene, given[k], threads)
-        except (TypeError, ValueError) as exc:
-            raise type(exc)(f"scene.clouds[{k}]: {exc}") from None
+        desc="light", total=len(todo), unit="cloud", progress=progress if len(todo) > 1 else False
+    )
+    side, alone = _side_by_side(todo, kinds, physical, threads)
+    if side:
+        with ThreadPoolExecutor(max_workers=_cores(threads)) as pool:
+            running = [
+                pool.submit(kinds[k].light_pass(physical), scene.clouds[k], scene, given[k], 1)
+                for k in side
+            ]
+            for k, made in zip(side, running, strict=True):
+                out[k] = _light_of(k, made.result)
+                steps.update()
+    for k in alone:
+        light_pass = kinds[k].light_pass(physical)
+        with _progress.core(f"light of cloud {k}", progress):
+            out[k] = _light_of(k, lambda: light_pass(scene.clouds[k], scene, given[k], threads))  # noqa: B023
+        steps.update()
+    steps.close()
     out = onto_media(scene, through_media(scene, out, threads), threads)
     return LitScene(scene, tuple(out), scene_shadow(scene, threads, out))
