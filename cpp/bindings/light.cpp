@@ -1277,7 +1277,7 @@ void bind_physical_light(py::module_& m) {
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          std::vector<float> q = diffusion_sources(e, g, st, v3(to_sun), se, albedo);
+          std::vector<float> q = diffusion_sources(e, g, st, v3(to_sun), se, albedo, threads);
           add_sun_flux_source(q, channels, e, g, st, v3(to_sun), albedo, mean_cosine, forward);
           out = diffusion_fluence(e, g, q.data(), channels, p, threads);
         }

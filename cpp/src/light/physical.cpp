@@ -1097,25 +1097,28 @@ float boost(float x) {  // 2 sinh(x/2)/x, the thick-cell source factor (→ 1 fo
 }  // namespace
 
 std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
-                                     glm::vec3 to_sun, const float* sky_e, float albedo) {
-  const std::size_t nv = g.voxels();
+                                     glm::vec3 to_sun, const float* sky_e, float albedo,
+                                     int threads) {
+  const std::size_t slice = static_cast<std::size_t>(g.w) * g.h;
   const int ch = sky_e != nullptr ? 4 : 1;
-  std::vector<float> q(nv * ch, 0.0f);
+  std::vector<float> q(g.voxels() * ch, 0.0f);
   const glm::vec3 h = g.voxel_size();
   const glm::vec3 s = glm::normalize(to_sun);
   const float ell_sun =
       h.x * h.y * h.z /
       (std::abs(s.x) * h.y * h.z + std::abs(s.y) * h.x * h.z + std::abs(s.z) * h.x * h.y);
   const float ell_sky = 2.0f * std::min(h.x, std::min(h.y, h.z)) / 3.0f;
-  for (std::size_t v = 0; v < nv; ++v) {
-    const float sigma = ext[v];
-    if (!(sigma > 0.0f)) continue;
-    q[v * ch] = albedo * sigma * sun_t[v] * boost(sigma * ell_sun);
-    if (sky_e != nullptr) {
-      const float b = albedo * sigma * boost(sigma * ell_sky);
-      for (int c = 0; c < 3; ++c) q[v * ch + 1 + c] = b * sky_e[v * 3 + c];
+  parallel_for(static_cast<std::size_t>(g.d), threads, [&](std::size_t z) {
+    for (std::size_t v = z * slice; v < (z + 1) * slice; ++v) {
+      const float sigma = ext[v];
+      if (!(sigma > 0.0f)) continue;
+      q[v * ch] = albedo * sigma * sun_t[v] * boost(sigma * ell_sun);
+      if (sky_e != nullptr) {
+        const float b = albedo * sigma * boost(sigma * ell_sky);
+        for (int c = 0; c < 3; ++c) q[v * ch + 1 + c] = b * sky_e[v * 3 + c];
+      }
     }
-  }
+  });
   return q;
 }
 
@@ -1364,22 +1367,29 @@ void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* so
       if (medium[i]) out[i * channels + c] = static_cast<float>(std::max(0.0, xs[c][i]));
 }
 
-// The medium cells as a CellSystem (in lattice order) and each one's lattice index.
+// The medium cells as a CellSystem (in lattice order) and each one's lattice index; the rows
+// are built over z-slices in parallel (each slice's rows start at the count of medium cells
+// before it: the same system whatever the thread count).
 CellSystem medium_system(const DiffusionLattice& L, const float* ext, const DiffusionParams& p,
-                         std::vector<std::size_t>& cells) {
+                         int threads, std::vector<std::size_t>& cells) {
   const std::size_t n = L.n;
+  const std::size_t slice = static_cast<std::size_t>(L.W) * L.H;
   std::vector<std::int32_t> at(n, -1);
+  std::vector<std::size_t> first(static_cast<std::size_t>(L.Dd) + 1, 0);  // per slice
   cells.clear();
-  for (std::size_t i = 0; i < n; ++i)
+  for (std::size_t i = 0; i < n; ++i) {
+    if (i % slice == 0) first[i / slice] = cells.size();
     if (L.medium[i]) {
       at[i] = static_cast<std::int32_t>(cells.size());
       cells.push_back(i);
     }
+  }
   const auto none = static_cast<std::int32_t>(cells.size());
   CellSystem sys;
   sys.rows.resize(cells.size());
-  std::size_t k = 0;
-  for (int z = 0; z < L.Dd; ++z)
+  parallel_for(static_cast<std::size_t>(L.Dd), threads, [&](std::size_t zz) {
+    const int z = static_cast<int>(zz);
+    std::size_t k = first[zz];
     for (int y = 0; y < L.H; ++y)
       for (int x = 0; x < L.W; ++x) {
         const std::size_t i = (static_cast<std::size_t>(z) * L.H + y) * L.W + x;
@@ -1402,6 +1412,7 @@ CellSystem medium_system(const DiffusionLattice& L, const float* ext, const Diff
         }
         row.diag = diag;
       }
+  });
   return sys;
 }
 
@@ -1410,7 +1421,7 @@ CellSystem medium_system(const DiffusionLattice& L, const float* ext, const Diff
 void fluence_mic(const DiffusionLattice& L, const float* ext, const float* source, int channels,
                  const DiffusionParams& p, int threads, std::vector<float>& out) {
   std::vector<std::size_t> cells;
-  const CellSystem sys = medium_system(L, ext, p, cells);
+  const CellSystem sys = medium_system(L, ext, p, threads, cells);
   const MicFactor factor = mic_factor(sys);
   const std::size_t m = cells.size();
   // One channel's solve into xs[c] (m + 1 values); `from` (< 0: none) the channel whose solution

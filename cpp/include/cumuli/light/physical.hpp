@@ -152,8 +152,10 @@ struct DiffusionParams {
 // per unit volume (x = σℓ, ℓ its thickness along the light: h_x h_y h_z / Σ_a |d_a| A_a for the
 // sun, 2h/3 — the mean chord — for the sky), the albedo's share of which scatters:
 // Q = ϖ·T·2 sinh(x/2)/ℓ (→ ϖσT for thin cells), so coarse cells keep the light's energy.
+// Threads over z-slices (the values do not depend on the thread count).
 std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
-                                     glm::vec3 to_sun, const float* sky_e, float albedo);
+                                     glm::vec3 to_sun, const float* sky_e, float albedo,
+                                     int threads = 1);
 
 // Adds to the sun's channel of `q` (`channels` per voxel) the forward-scattered sun's flux
 // source −∇·(3D·Q1), Q1 = ϖσ·T·ḡ·ŝ the first moment of the collided source (ŝ the way the light
