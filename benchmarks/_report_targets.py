@@ -41,8 +41,10 @@ def targets_lines(folder: Path, handled: tuple[str, ...]) -> list[str]:
         found = list(find_targets(json.loads(path.read_text())))
         if not found:
             continue
-        date = json.loads(path.read_text()).get("machine", {}).get("date", "?")
-        lines += [f"### Targets of bench_{path.stem} (run {date})", "",
+        machine = json.loads(path.read_text()).get("machine", {})
+        date, cpu = machine.get("date", "?"), machine.get("cpu_model")
+        on = f", {cpu}, {machine.get('cores')} cores" if cpu else ""
+        lines += [f"### Targets of bench_{path.stem} (run {date}{on})", "",
                   "| target | limit | reached | met |", "|---|---|---|---|"]  # fmt: skip
         for name, t in found:
             met = {True: "yes", False: "**no**"}.get(t.get("met"), "n/a")

@@ -7,7 +7,8 @@ light and multiple scattering on) with 1, 2, 4, 8 and 16 clouds (--quick: 1, 2, 
 plane: *copies* (the cumulus translated) and *seeds* (``gaussian_cumulus(seed=1..n)``), 2 threads.
 
 Per (series, count): the whole light step as the renderer runs it (``cumuli.prepare_light`` with
-the light memo cleared before each repeat; median / min / max of the repeats, the two series
+the light memo cleared before each repeat, its clouds lit side by side in rounds of one per
+core; median / min / max of the repeats, the two series
 interleaved; the process CPU time beside it, which other load on a shared machine does not
 inflate) and its breakdown into the stages of `cumuli.light.physical.physical_light`
 (``STAGES``: the extinction lattice, the cloud's own optical depth on the sun's lattice, the

@@ -102,7 +102,9 @@ def machine_lines(data: dict[str, dict[str, Any]]) -> list[str]:
     for name, d in data.items():
         mm = d["machine"]
         quick = " (**quick mode**: smoke-test sizes, not results)" if d.get("quick") else ""
-        lines.append(f"- `{name}.json`: commit `{mm.get('commit')}`, {mm.get('date')}{quick}")
+        # Runs archived on different hosts of the same kind say which CPU each ran on.
+        cpu = f", on {mm.get('cpu_model')}" if mm.get("cpu_model") != m.get("cpu_model") else ""
+        lines.append(f"- `{name}.json`: commit `{mm.get('commit')}`, {mm.get('date')}{cpu}{quick}")
     if "frame_time" in first:
         lines.append(f"- Frame times: {first['frame_time']}")
     if first.get("size_note"):
