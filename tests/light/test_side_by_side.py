@@ -130,3 +130,33 @@ def test_a_failed_make_leaves_the_memo_to_try_again() -> None:
     assert not memo.pending
     assert memo.remember(("failing test",), lambda: 7) == 7
     memo.clear()
+
+
+def test_a_deck_and_clouds_side_by_side(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A deck over two cumuli (it shades them) and a volume: every medium kind of the physical
+    pass, lit side by side, gives the light of one after another."""
+    deck = cu.CloudDeck(
+        base=20.0, top=30.0, extent=(-40.0, -40.0, 40.0, 40.0), coverage=0.6, sigma_t=0.8,
+        detail_scale=8.0, map_scale=30.0, map_size=32, resolution=(24, 6, 24), seed=2,
+    )  # fmt: skip
+    volume = cu.VolumeCloud(
+        np.random.default_rng(3).random((8, 8, 8)).astype(np.float32),
+        ((-30.0, 0.0, -30.0), (-24.0, 6.0, -24.0)),
+    )
+    clouds = [
+        deck,
+        cu.gaussian_cumulus(seed=1),
+        cu.gaussian_cumulus(seed=2).translated((12, 0, 0)),
+        volume,
+    ]
+    scene = cu.Scene(clouds, sun=SUN, noise=cu.Noise(seed=7, size=32), settings=SETTINGS)
+    memo.clear()
+    together = prep.prepare_light(scene, threads=2, progress=False)
+    memo.clear()
+    _one_after_another(monkeypatch)
+    apart = prep.prepare_light(scene, threads=2, progress=False)
+    memo.clear()
+    for a, b in zip(together.lights, apart.lights, strict=True):
+        np.testing.assert_array_equal(a.grid, b.grid)
+        np.testing.assert_array_equal(a.total_depth(), b.total_depth())
+    assert together.lights[1].upstream is not None  # the deck shades the cumulus under it
