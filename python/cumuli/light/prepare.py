@@ -117,14 +117,17 @@ def _side_by_side(
 
     One cloud's physical light step keeps two cores only ~80 % busy (its stages are short
     parallel loops between serial pieces), while separate clouds' steps share nothing but the
-    memo: lit side by side, a scene of many clouds takes ~1.6 / 2 of the time. The physical
-    pass of the media goes side by side in whole rounds of one cloud per core; a last round
-    with fewer clouds than cores (which would leave cores idle) runs on every core instead.
-    The light is the same either way (the passes do not depend on the thread count)."""
+    memo (sixteen cumulus copies on two vCPUs: 847 → 774 ms). The physical pass of the media
+    goes side by side in whole rounds of one cloud per core; a last round with fewer clouds
+    than cores (which would leave cores idle) runs on every core instead. The light is the same
+    either way (the passes do not depend on the thread count)."""
     cores = _cores(threads)
-    media = [k for k in todo if physical and kinds[k].light_pass(True) is physical_pass]
-    side = media[: len(media) - len(media) % cores] if cores > 1 else []
-    return side, [k for k in todo if k not in set(side)]
+    if not physical or cores < 2:
+        return [], list(todo)
+    media = [k for k in todo if kinds[k].light_pass(True) is physical_pass]
+    side = media[: len(media) - len(media) % cores]
+    chosen = set(side)
+    return side, [k for k in todo if k not in chosen]
 
 
 def _light_of(k: int, make: Any) -> Any:
@@ -197,24 +200,24 @@ def prepare_light(
             for k, light in zip(idx, made, strict=True):
                 out[k] = light
     todo = [k for k in range(n) if out[k] is None]
-    steps = _progress.bar(
+    side, alone = _side_by_side(todo, kinds, physical, threads)
+    bar = _progress.bar(
         desc="light", total=len(todo), unit="cloud", progress=progress if len(todo) > 1 else False
     )
-    side, alone = _side_by_side(todo, kinds, physical, threads)
-    if side:
-        with ThreadPoolExecutor(max_workers=_cores(threads)) as pool:
-            running = [
-                pool.submit(kinds[k].light_pass(physical), scene.clouds[k], scene, given[k], 1)
-                for k in side
-            ]
-            for k, made in zip(side, running, strict=True):
-                out[k] = _light_of(k, made.result)
-                steps.update()
-    for k in alone:
-        light_pass = kinds[k].light_pass(physical)
-        with _progress.core(f"light of cloud {k}", progress):
-            out[k] = _light_of(k, lambda: light_pass(scene.clouds[k], scene, given[k], threads))  # noqa: B023
-        steps.update()
-    steps.close()
+    with bar as steps:
+        if side:
+            with ThreadPoolExecutor(max_workers=_cores(threads)) as pool:
+                running = [
+                    pool.submit(kinds[k].light_pass(physical), scene.clouds[k], scene, given[k], 1)
+                    for k in side
+                ]
+                for k, made in zip(side, running, strict=True):
+                    out[k] = _light_of(k, made.result)
+                    steps.update()
+        for k in alone:
+            light_pass = kinds[k].light_pass(physical)
+            with _progress.core(f"light of cloud {k}", progress):
+                out[k] = _light_of(k, lambda: light_pass(scene.clouds[k], scene, given[k], threads))  # noqa: B023
+            steps.update()
     out = onto_media(scene, through_media(scene, out, threads), threads)
     return LitScene(scene, tuple(out), scene_shadow(scene, threads, out))
