@@ -38,10 +38,11 @@ def targets_lines(folder: Path, handled: tuple[str, ...]) -> list[str]:
     for path in sorted(folder.glob("*.json")):
         if path.stem in handled:
             continue
-        found = list(find_targets(json.loads(path.read_text())))
+        data = json.loads(path.read_text())
+        found = list(find_targets(data))
         if not found:
             continue
-        machine = json.loads(path.read_text()).get("machine", {})
+        machine = data.get("machine", {})
         date, cpu = machine.get("date", "?"), machine.get("cpu_model")
         on = f", {cpu}, {machine.get('cores')} cores" if cpu else ""
         lines += [f"### Targets of bench_{path.stem} (run {date}{on})", "",
