@@ -5,9 +5,14 @@
 
 namespace cumuli::bind {
 
+glm::vec3 noise_offset_arg(const py::handle& value) {
+  if (value.is_none()) return glm::vec3(0.0f);
+  return vec3_arg(value, "noise_offset");
+}
+
 CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
                              const FloatArray& rotations, const std::string& model, float kappa,
-                             float phi) {
+                             float phi, glm::vec3 noise_offset) {
   require_points(centres, "centres");
   require_points(radii, "radii");
   const py::ssize_t n = centres.shape(0);
@@ -25,6 +30,10 @@ CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
   }
   cloud.density.kappa = kappa;
   cloud.density.phi = phi;
+  if (!(std::isfinite(noise_offset.x) && std::isfinite(noise_offset.y) &&
+        std::isfinite(noise_offset.z)))
+    throw py::value_error("noise_offset must be finite");
+  cloud.noise_offset = noise_offset;
   cloud.primitives.resize(static_cast<std::size_t>(n));
   const float* c = centres.data();
   const float* r = radii.data();

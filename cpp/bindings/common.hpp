@@ -41,10 +41,13 @@ inline py::array_t<float> new_array(const std::vector<py::ssize_t>& shape) {
   return py::array_t<float>(shape);
 }
 
-// Build a CloudShape from (N,3) centres, (N,3) radii, (N,3,3) rotations and density settings.
+// Build a CloudShape from (N,3) centres, (N,3) radii, (N,3,3) rotations and density settings;
+// `noise_offset` (x, y, z): where its fBm is read from, p − offset (finite).
 CloudShape cloud_from_arrays(const FloatArray& centres, const FloatArray& radii,
                              const FloatArray& rotations, const std::string& model, float kappa,
-                             float phi);
+                             float phi, glm::vec3 noise_offset = glm::vec3(0.0f));
+// The optional noise offset of a cloud given as a tuple or dict entry (None: zero).
+glm::vec3 noise_offset_arg(const py::handle& value);
 
 // --- particle clouds (Harris 2002) ------------------------------------------------------------
 

@@ -917,11 +917,13 @@ void medium_of(MediumArgs& m, const py::list& clouds, const py::list& volumes, c
   m.shapes.reserve(clouds.size());
   for (const auto& h : clouds) {
     const py::tuple t = h.cast<py::tuple>();
-    if (t.size() != 7)
-      throw py::value_error("a cloud is (centres, radii, rotations, model, kappa, phi, scale)");
+    if (t.size() != 7 && t.size() != 8)
+      throw py::value_error(
+          "a cloud is (centres, radii, rotations, model, kappa, phi, scale[, noise_offset])");
     m.shapes.push_back(cloud_from_arrays(t[0].cast<FloatArray>(), t[1].cast<FloatArray>(),
                                          t[2].cast<FloatArray>(), t[3].cast<std::string>(),
-                                         t[4].cast<float>(), t[5].cast<float>()));
+                                         t[4].cast<float>(), t[5].cast<float>(),
+                                         t.size() == 8 ? noise_offset_arg(t[7]) : glm::vec3(0.0f)));
   }
   for (std::size_t k = 0; k < clouds.size(); ++k) {
     const float scale = clouds[k].cast<py::tuple>()[6].cast<float>();

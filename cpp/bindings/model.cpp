@@ -86,9 +86,21 @@ const Names<Eq16Combine> kCombines = {{"sum", Eq16Combine::Sum}, {"product", Eq1
 void bind_model_params(py::module_& m) {
   py::class_<CloudShape>(m, "CloudShape",
                          "A 2018 cloud as the core takes it: primitives (centres (N, 3), radii "
-                         "(N, 3), rotations (N, 3, 3)) and density model, κ, φ.")
-      .def(py::init(&cloud_from_arrays), py::arg("centres"), py::arg("radii"), py::arg("rotations"),
-           py::arg("model"), py::arg("kappa"), py::arg("phi"))
+                         "(N, 3), rotations (N, 3, 3)) and density model, κ, φ; its fBm is read "
+                         "at p − noise_offset (a cloud that carries its noise with the wind).")
+      .def(py::init([](const FloatArray& centres, const FloatArray& radii,
+                       const FloatArray& rotations, const std::string& model, float kappa,
+                       float phi, const py::object& noise_offset) {
+             return cloud_from_arrays(centres, radii, rotations, model, kappa, phi,
+                                      noise_offset_arg(noise_offset));
+           }),
+           py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
+           py::arg("kappa"), py::arg("phi"), py::arg("noise_offset") = py::none())
+      .def_property_readonly("noise_offset",
+                             [](const CloudShape& c) {
+                               return py::make_tuple(c.noise_offset.x, c.noise_offset.y,
+                                                     c.noise_offset.z);
+                             })
       .def_property_readonly("n", [](const CloudShape& c) { return c.primitives.size(); })
       .def_property_readonly("kappa", [](const CloudShape& c) { return c.density.kappa; })
       .def_property_readonly("phi", [](const CloudShape& c) { return c.density.phi; });

@@ -35,8 +35,8 @@ py::object item(const py::dict& d, const char* key, std::size_t index) {
   return d[key];
 }
 
-// One cloud from a dict: centres, radii, rotations, model, kappa, phi, light [z, y, x],
-// light_lo, light_hi.
+// One cloud from a dict: centres, radii, rotations, model, kappa, phi, optional noise_offset,
+// light [z, y, x], light_lo, light_hi (or physical).
 RenderCloud cloud_from_dict(const py::handle& h, std::size_t index, std::vector<py::object>& keep) {
   if (!py::isinstance<py::dict>(h))
     throw py::type_error("clouds[" + std::to_string(index) + "] must be a dict");
@@ -47,7 +47,8 @@ RenderCloud cloud_from_dict(const py::handle& h, std::size_t index, std::vector<
     rc.shape = cloud_from_arrays(
         item(d, "centres", index).cast<FloatArray>(), item(d, "radii", index).cast<FloatArray>(),
         item(d, "rotations", index).cast<FloatArray>(), item(d, "model", index).cast<std::string>(),
-        item(d, "kappa", index).cast<float>(), item(d, "phi", index).cast<float>());
+        item(d, "kappa", index).cast<float>(), item(d, "phi", index).cast<float>(),
+        d.contains("noise_offset") ? noise_offset_arg(d["noise_offset"]) : glm::vec3(0.0f));
   } catch (const std::invalid_argument& e) {
     throw py::value_error(at + e.what());
   }

@@ -41,15 +41,18 @@ class FbmParams:
         ...
 class CloudShape:
     """
-    A 2018 cloud as the core takes it: primitives (centres (N, 3), radii (N, 3), rotations (N, 3, 3)) and density model, κ, φ.
+    A 2018 cloud as the core takes it: primitives (centres (N, 3), radii (N, 3), rotations (N, 3, 3)) and density model, κ, φ; its fBm is read at p − noise_offset (a cloud that carries its noise with the wind).
     """
-    def __init__(self, centres: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], radii: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], rotations: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], model: str, kappa: typing.SupportsFloat | typing.SupportsIndex, phi: typing.SupportsFloat | typing.SupportsIndex) -> None:
+    def __init__(self, centres: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], radii: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], rotations: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], model: str, kappa: typing.SupportsFloat | typing.SupportsIndex, phi: typing.SupportsFloat | typing.SupportsIndex, noise_offset: typing.Any = None) -> None:
         ...
     @property
     def kappa(self) -> float:
         ...
     @property
     def n(self) -> int:
+        ...
+    @property
+    def noise_offset(self) -> tuple[float, float, float]:
         ...
     @property
     def phi(self) -> float:

@@ -65,7 +65,8 @@ inline void flush(const RayContext& r) {
   if (r.density.constant >= 0.0f) {
     for (int i = 0; i < q.n; ++i) q.rho[i] = r.density.constant;
   } else {
-    r.density.noise->fbm_many(q.xyz, static_cast<std::size_t>(q.n), q.rho, r.density.fbm, 1);
+    const auto n = static_cast<std::size_t>(q.n);
+    r.density.noise->fbm_many(noise_points(r.cloud, q.xyz, n), n, q.rho, r.density.fbm, 1);
   }
   // The fBm value goes through DensitySource's constant hook, so cloud_density (eq. 2's
   // gating, or eqs. 19–21) sees exactly the number it would have computed itself.
@@ -697,7 +698,7 @@ LightStats light_grid_shared(const CloudShape& cloud, const DensitySource& densi
       if (density.constant >= 0.0f) {
         std::fill(rho.begin(), rho.begin() + static_cast<std::ptrdiff_t>(m), density.constant);
       } else if (m > 0) {
-        density.noise->fbm_many(xyz.data(), m, rho.data(), density.fbm, 1);
+        density.noise->fbm_many(noise_points(cloud, xyz.data(), m), m, rho.data(), density.fbm, 1);
       }
       if (spheroid) {
         spheroid_gate(q2s.data(), rho.data(), m, kappa);

@@ -178,7 +178,7 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
     more = lay_out();
     if (m.count == 0) break;
     gather_dense();
-    c.source.many(m.pts.data(), m.dense_count, m.fbm.data());
+    c.source.many(noise_points(shape, m.pts.data(), m.dense_count), m.dense_count, m.fbm.data());
     for (std::size_t i = 0; i < m.count; ++i) {
       const int g = m.dense[i];
       float rho = 0.0f;

@@ -73,6 +73,19 @@ void DensitySource::many(const float* points, std::size_t count, float* out) con
   noise->fbm_many(points, count, out, fbm, 1);
 }
 
+const float* noise_points(const CloudShape& cloud, const float* points, std::size_t count) {
+  const glm::vec3 o = cloud.noise_offset;
+  if (o == glm::vec3(0.0f)) return points;
+  thread_local std::vector<float> moved;
+  moved.resize(3 * count);
+  for (std::size_t i = 0; i < count; ++i) {
+    moved[3 * i] = points[3 * i] - o.x;
+    moved[3 * i + 1] = points[3 * i + 1] - o.y;
+    moved[3 * i + 2] = points[3 * i + 2] - o.z;
+  }
+  return moved.data();
+}
+
 DensitySample spheroid_density_given(float kappa, float q, float rho) {
   const float gamma = std::exp(-q / ((1.0f - kappa) + 2.0f * kappa * rho));
   if (!(rho < gamma)) return {0.0f, gamma};
@@ -83,7 +96,7 @@ DensitySample spheroid_density(const CloudShape& cloud, int j, glm::vec3 p,
                                const DensitySource& src) {
   const float q = cloud.primitives[static_cast<std::size_t>(j)].normalised_distance(p);
   if (q > 1.0f) return {};
-  return spheroid_density_given(cloud.density.kappa, q, src(p));
+  return spheroid_density_given(cloud.density.kappa, q, src(p - cloud.noise_offset));
 }
 
 bool metaball_inside(const CloudShape& cloud, glm::vec3 p) {
@@ -100,7 +113,7 @@ bool metaball_inside(const CloudShape& cloud, glm::vec3 p) {
 
 DensitySample metaball_density(const CloudShape& cloud, glm::vec3 p, const DensitySource& src) {
   if (!metaball_inside(cloud, p)) return {};
-  return {metaball_rho(cloud, src(p)), 1.0f};
+  return {metaball_rho(cloud, src(p - cloud.noise_offset)), 1.0f};
 }
 
 DensitySample cloud_density(const CloudShape& cloud, int j, glm::vec3 p, const DensitySource& src) {
@@ -257,7 +270,7 @@ std::vector<float> density_grid(const CloudShape& cloud, const DensitySource& sr
     }
     std::vector<float>& rho = buf.rho;
     rho.resize(n);
-    src.many(pts.data(), n, rho.data());
+    src.many(noise_points(cloud, pts.data(), n), n, rho.data());
     double sum = 0.0;
     for (std::size_t i = 0; i < n; ++i) {
       sum +=

@@ -154,7 +154,8 @@ ParticleArrays particle_fill(const CloudShape& shape, const ParticleFillParams& 
   });
   if (params.noise != nullptr) {
     std::vector<float> values(n);
-    params.noise->fbm_many(out.centres.data(), n, values.data(), params.fbm, threads);
+    params.noise->fbm_many(noise_points(shape, out.centres.data(), n), n, values.data(), params.fbm,
+                           threads);
     modulate_tau(out.tau, values, params.tau, params.tau_floor);
   }
   return out;

@@ -440,7 +440,7 @@ class RayMarcher {
       if (src_.constant >= 0.0f) {
         std::fill(b.rho, b.rho + count, src_.constant);
       } else {
-        src_.noise->fbm_many(b.pts, count, b.rho, src_.fbm, 1);
+        src_.noise->fbm_many(noise_points(shape, b.pts, count), count, b.rho, src_.fbm, 1);
       }
       for (int i = 0; i < b.size; ++i) {
         if (src_.constant < 0.0f) ++scratch.fbm;

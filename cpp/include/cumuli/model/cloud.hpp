@@ -27,6 +27,10 @@ struct DensityParams {
 struct CloudShape {
   std::vector<Ellipsoid> primitives;
   DensityParams density;
+  // Where the cloud's fBm is read: at p − noise_offset. Zero for a cloud whose noise is the
+  // world's (the paper's); a cloud moved by the wind carries its noise along (wind · time), so
+  // that it is the same medium wherever the wind takes it.
+  glm::vec3 noise_offset{0.0f};
 
   Box bounds() const;                 // union of the primitives' bounds
   glm::vec3 centre() const;           // centre of the bounds
@@ -52,6 +56,11 @@ struct DensitySource {
   // columns already).
   void many(const float* points, std::size_t count, float* out) const;
 };
+
+// The points at which a cloud's fBm is read, for `count` points (xyz interleaved): `points`
+// itself when the cloud carries no noise offset, else a per-thread copy moved by −noise_offset
+// (valid until the next call on the same thread).
+const float* noise_points(const CloudShape& cloud, const float* points, std::size_t count);
 
 // One density sample. `gamma` is eq. (2)'s γ (1 for metaballs), used by the render pass.
 struct DensitySample {
