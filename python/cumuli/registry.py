@@ -34,13 +34,16 @@ class Medium:
     than its own resolution); ``light_box(drawable)``: the box of its light array where the light
     value does not carry one (a volume's), else None; ``step(drawable)``: the step its medium is
     marched at by shadow and light rays, where it is at a scale of its own (None: the settings'
-    ``light_step``)."""
+    ``light_step``); ``moved(drawable) -> (still, offset)``: the drawable is ``still`` moved by
+    ``offset`` (world units) with its noise, the same medium elsewhere, so its own light is
+    ``still``'s moved (a 2018 cloud the wind carries; the default: itself, not moved)."""
 
     core_args: Callable[[Any, Any], tuple[list, list]]
     extinction: Callable[..., Any]
     own_lattice: Callable[[Any], tuple[int, int, int] | None] = lambda d: None
     light_box: Callable[[Any], Any] = lambda d: None
     step: Callable[[Any], float] | None = None
+    moved: Callable[[Any], tuple[Any, tuple[float, float, float]]] = lambda d: (d, (0.0, 0.0, 0.0))
 
 
 @dataclass(frozen=True)

@@ -16,7 +16,7 @@ float primitive_q(int j, vec3 p) {
 vec2 spheroid_density(CloudData c, int j, vec3 p) {
     float q = primitive_q(j, p);
     if (q > 1.0) return vec2(0.0);
-    float rho = fbm(p, u_exact);
+    float rho = fbm(p - c.noise.xyz, u_exact);
     float kappa = c.params.x;
     float gamma = exp(-q / ((1.0 - kappa) + 2.0 * kappa * rho));
     if (!(rho < gamma)) return vec2(0.0, gamma);
@@ -37,7 +37,7 @@ vec2 metaball_density(CloudData c, vec3 p) {
         if (field >= 1.0) break;
     }
     if (field < 1.0) return vec2(0.0);
-    return vec2(fbm(p, u_exact) * c.params.y * c.params.z, 1.0);  // (fbm·r̄²)·φ, as the C++
+    return vec2(fbm(p - c.noise.xyz, u_exact) * c.params.y * c.params.z, 1.0);  // (fbm·r̄²)·φ, as the C++
 }
 
 vec2 cloud_density(CloudData c, int j, vec3 p) {

@@ -16,6 +16,7 @@ struct CloudData {
     vec4 light_lo;   // xyz: light grid world box
     vec4 light_hi;
     vec4 params;     // x: κ, y: r̄² (eq. 20), z: φ (eq. 21; metaball density fbm·r̄²·φ)
+    vec4 noise;      // xyz: the noise offset a cloud moved by the wind carries (fbm(p − xyz))
     ivec4 info;      // x: first primitive, y: primitive count, z: model (0 spheroid, 1 metaball)
     ivec4 light;     // xyz: grid resolution (x, y, z); w: first z slice in the atlas
 };

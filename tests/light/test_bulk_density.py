@@ -21,7 +21,7 @@ FBM = {"octaves": 5, "gain": 0.5, "lacunarity": 2.0, "frequency": 1.0}
 
 
 def _shape(cloud: cu.Cloud) -> _core.CloudShape:
-    centres, radii, rotations, model, kappa, phi = cloud.core_args()
+    centres, radii, rotations, model, kappa, phi, _ = cloud.core_args()
     return _core.CloudShape(centres, radii, rotations, model, float(kappa), float(phi))
 
 

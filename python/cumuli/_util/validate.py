@@ -244,3 +244,21 @@ def uploadable(arr: np.ndarray, name: str, bound: float = FLOAT32_MAX) -> None:
         raise ValueError(f"{name} contains NaN or infinite values")
     if max(-lo, hi) > bound:
         raise ValueError(f"{name} holds a value of magnitude {max(-lo, hi):.3g}, beyond ±{bound:g}")
+
+
+def wind3(value: Any, name: str) -> tuple[float, float, float]:
+    """A wind given as ``(wx, wz)`` (horizontal, as a deck's) or ``(wx, wy, wz)``, as three
+    finite floats within ±MAX_COORD."""
+    bad = f"{name} must be (wx, wz) or (wx, wy, wz) numbers, got {value!r}"
+    if isinstance(value, (str, bytes)):
+        raise TypeError(bad)
+    try:
+        parts = [float(v) for v in value]
+    except (TypeError, ValueError):
+        raise TypeError(bad) from None
+    if len(parts) not in (2, 3):
+        raise TypeError(bad)
+    if len(parts) == 2:
+        parts = [parts[0], 0.0, parts[1]]
+    wx, wy, wz = (real(v, name, -MAX_COORD, MAX_COORD) for v in parts)
+    return (wx, wy, wz)

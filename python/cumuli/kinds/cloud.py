@@ -16,8 +16,16 @@ from cumuli.rendering.marcher_cpu import draw_clouds_cpu
 
 
 def digest(cloud: Cloud) -> tuple:
-    """What a 2018 cloud's light depends on: its primitives and density model."""
+    """What a 2018 cloud's light depends on: its primitives (where the wind has taken them) and
+    density model."""
     return ("cloud", primitives_digest(cloud), cloud.model, cloud.kappa, cloud.phi)
+
+
+def advance(cloud: Cloud, seconds: float) -> Cloud:
+    """The cloud ``seconds`` later: moved by its wind (itself when it has none)."""
+    if not any(cloud.wind):
+        return cloud
+    return cloud.at(cloud.time + seconds)
 
 
 KIND = registry.register(
@@ -39,7 +47,12 @@ KIND = registry.register(
         light=cloud_light,
         physical_light=physical_pass,
         digest=digest,
-        medium=registry.Medium(core_args=cloud_core_args, extinction=cloud_extinction),
+        medium=registry.Medium(
+            core_args=cloud_core_args,
+            extinction=cloud_extinction,
+            moved=lambda cloud: (cloud.still(), cloud.offset),
+        ),
+        advance=advance,
         gl_drawer=MarcherGL,
         cpu_drawer=draw_clouds_cpu,
         # The marcher orders its clouds per pixel itself, and draws the ground when alone.
@@ -49,4 +62,4 @@ KIND = registry.register(
     )
 )
 
-__all__: list[Any] = ["KIND", "digest"]
+__all__: list[Any] = ["KIND", "advance", "digest"]

@@ -59,10 +59,13 @@ def _f32(value: float) -> float:
 
 
 def primitives_digest(cloud: Cloud) -> str:
-    """A short hash of the cloud's primitive arrays (a grid belongs to these primitives)."""
+    """A short hash of the cloud's primitive arrays and, for a cloud the wind has moved, of its
+    offset (a grid belongs to these primitives, there)."""
     h = hashlib.blake2b(digest_size=16)
     for a in (cloud.centres, cloud.radii, cloud.rotations):
         h.update(np.ascontiguousarray(a, dtype=np.float32).tobytes())
+    if any(cloud.offset):
+        h.update(np.asarray(cloud.offset, np.float64).tobytes())
     return h.hexdigest()
 
 

@@ -85,11 +85,11 @@ def _cloud_grid(
     supersample: int,
     threads: int,
 ) -> np.ndarray:
-    centres, radii, rotations, model, kappa, phi = cloud.core_args()
+    centres, radii, rotations, model, kappa, phi, noise_offset = cloud.core_args()
     if settings.kappa is not None and model == "spheroid":
         kappa = settings.kappa
     rho = _core.density_grid(
-        _core.CloudShape(centres, radii, rotations, model, float(kappa), float(phi)),
+        _core.CloudShape(centres, radii, rotations, model, float(kappa), float(phi), noise_offset),
         noise._core, -1.0, _core.FbmParams(**settings.fbm_params()),
         tuple(map(float, box[0])), tuple(map(float, box[1])), shape, supersample, threads,
     )  # fmt: skip
@@ -157,11 +157,11 @@ def volume_extinction(
 def cloud_core_args(cloud: Cloud, settings: Any) -> tuple[list, list]:
     """A 2018 cloud's entry of the core's medium lists: its primitives, density model and the
     extinction per unit density of the mode (:func:`cloud_extinction_scale`)."""
-    centres, radii, rotations, model, kappa, phi = cloud.core_args()
+    centres, radii, rotations, model, kappa, phi, noise_offset = cloud.core_args()
     if settings.kappa is not None and model == "spheroid":
         kappa = settings.kappa
     scale = cloud_extinction_scale(settings)
-    return [(centres, radii, rotations, model, float(kappa), float(phi), scale)], []
+    return [(centres, radii, rotations, model, float(kappa), float(phi), scale, noise_offset)], []
 
 
 def volume_core_args(volume: VolumeCloud, settings: Any) -> tuple[list, list]:

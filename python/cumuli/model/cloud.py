@@ -9,8 +9,13 @@ stored on it.
 
 Clouds are values: `Cloud.translated`, `Cloud.scaled`, `Cloud.with_model` and `merge` return new
 clouds and append what they did to
-``params["transforms"]``, so that a saved cloud says how it was made. `Cloud.save` writes
-``.npz`` or ``.json`` atomically; `load_cloud` reads either back.
+``params["transforms"]``, so that a saved cloud says how it was made.
+
+The wind moves a cloud whole: a cloud with a ``wind`` (units per second) at ``time`` stands
+``offset = wind · time`` from its ``centres`` and carries its fBm (read at ``p − offset``): the
+same medium wherever the wind takes it, lit once for every time (`Cloud.at`: another time). A
+cloud moved by `Cloud.translated` keeps the world's noise, as the paper's: another medium.
+`Cloud.save` writes ``.npz`` or ``.json`` atomically; `load_cloud` reads either back.
 """
 
 from __future__ import annotations
@@ -55,8 +60,10 @@ _NPZ_LIMITS = {
 }
 
 
-#: Fields of a cloud's scene-file dict (`Cloud.to_dict`).
+#: Fields of a cloud's scene-file dict (`Cloud.to_dict`; ``wind`` and ``time`` only when set).
 _DICT_FIELDS = ("kind", "centres", "radii", "rotations", "model", "kappa", "phi", "params", "stats")
+#: What a cloud's wind may be: ``(wx, wz)`` (horizontal, as a `CloudDeck`'s) or ``(wx, wy, wz)``.
+_NO_WIND = (0.0, 0.0, 0.0)
 
 
 @dataclass(eq=False)
@@ -64,6 +71,8 @@ class Cloud:
     """A cloud: primitives, density model and provenance (``params``, ``stats``).
 
     The drawable of kind ``"cloud"``: the 2018 paper's ray marcher draws it (see ARCHITECTURE.md).
+    ``wind`` (``(wx, wz)`` or ``(wx, wy, wz)``, world units per second) and ``time`` (seconds)
+    move it, noise and all, by ``wind · time`` from its ``centres`` (the module's docstring).
     """
 
     #: Scene-file tag of this kind of drawable.
@@ -77,6 +86,8 @@ class Cloud:
     phi: float = 0.6
     stats: dict[str, Any] = field(default_factory=dict)
     params: dict[str, Any] = field(default_factory=dict)
+    wind: Sequence[float] = _NO_WIND  # kept as (wx, wy, wz)
+    time: float = 0.0
 
     def __setattr__(self, name: str, value: Any) -> None:
         if name not in _FIELD_NAMES:
@@ -136,8 +147,46 @@ class Cloud:
             raise ValueError(f"model must be one of {DENSITY_MODELS}, got {self.model!r}")
         self.kappa = check.real(self.kappa, "kappa", 0.0, 1.0)
         self.phi = check.real(self.phi, "phi", 0.0, lo_open=True)
+        self.wind = check.wind3(self.wind, "wind")
+        self.time = check.real(self.time, "time", -check.MAX_COORD, check.MAX_COORD)
+        off = self.offset
+        if not all(math.isfinite(v) and abs(v) <= check.MAX_COORD for v in off):
+            raise ValueError(f"wind · time must stay within ±{check.MAX_COORD:g}, got {off}")
+        moved = np.abs(self.centres.astype(np.float64) + np.array(off)) + half
+        if any(off) and not (moved < float(np.finfo(np.float32).max) / 4).all():
+            raise ValueError("centres ± radii moved by wind · time must stay inside float32 range")
 
     # --- derived geometry -------------------------------------------------------------------
+    @property
+    def offset(self) -> tuple[float, float, float]:
+        """``wind · time``: how far the wind has moved the cloud and its noise from ``centres``."""
+        return (self.wind[0] * self.time, self.wind[1] * self.time, self.wind[2] * self.time)
+
+    @property
+    def placed_centres(self) -> np.ndarray:
+        """The primitives' centres where the cloud is now (``centres`` moved by :attr:`offset`),
+        float32 ``(N, 3)``; ``centres`` itself for a cloud the wind has not moved."""
+        off = self.offset
+        if not any(off):
+            return self.centres
+        return (self.centres.astype(np.float64) + np.array(off)).astype(np.float32)
+
+    def at(self, time: float) -> Cloud:
+        """This cloud at another ``time``: moved by its wind, noise and all (its primitives,
+        density model, params and stats are shared, not copied)."""
+        fields = {name: getattr(self, name) for name in _FIELD_NAMES}
+        fields["time"] = check.real(time, "time", -check.MAX_COORD, check.MAX_COORD)
+        return Cloud(**fields)
+
+    def still(self) -> Cloud:
+        """This cloud at time 0 without its wind (its light, moved by :attr:`offset`, is this
+        cloud's: the light step computes it once for every time)."""
+        if self.wind == _NO_WIND and self.time == 0.0:
+            return self
+        fields = {name: getattr(self, name) for name in _FIELD_NAMES}
+        fields.update(wind=_NO_WIND, time=0.0)
+        return Cloud(**fields)
+
     @property
     def n(self) -> int:
         """Number of primitives."""
@@ -157,7 +206,8 @@ class Cloud:
         v = self.rotations * radii[:, None, :]  # v[n, k, j] = R_kj · r_j
         v = v * v
         half = np.sqrt((v[..., 0] + v[..., 1]) + v[..., 2])
-        return (self.centres - half).min(axis=0), (self.centres + half).max(axis=0)
+        centres = self.placed_centres
+        return (centres - half).min(axis=0), (centres + half).max(axis=0)
 
     @property
     def candidate_scale(self) -> float:
@@ -192,9 +242,14 @@ class Cloud:
         rr = (r[:, 0] * r[:, 0] + r[:, 1] * r[:, 1]) + r[:, 2] * r[:, 2]
         return float(np.cumsum(rr.astype(np.float64) / 3.0)[-1] / self.n)  # cumsum: in order
 
-    def core_args(self) -> tuple[np.ndarray, np.ndarray, np.ndarray, str, float, float]:
-        """The arguments the C++ core takes for a cloud."""
-        return (self.centres, self.radii, self.rotations, self.model, self.kappa, self.phi)
+    def core_args(
+        self,
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray, str, float, float, tuple[float, ...] | None]:
+        """The arguments the C++ core takes for a cloud (``_core.CloudShape``'s): its primitives
+        where it is now, its density model, and its noise offset (None: the world's noise)."""
+        off = self.offset
+        return (self.placed_centres, self.radii, self.rotations, self.model, self.kappa, self.phi,
+                off if any(off) else None)  # fmt: skip
 
     def density(
         self,
@@ -247,12 +302,15 @@ class Cloud:
             "phi": self.phi,
             "stats": dict(self.stats),
             "params": params,
+            "wind": self.wind,
+            "time": self.time,
         }
         fields.update(changes)
         return Cloud(**fields)
 
     def translated(self, offset: Sequence[float] | np.ndarray) -> Cloud:
-        """A copy moved by ``offset`` (world units)."""
+        """A copy moved by ``offset`` (world units); its noise stays the world's, as in the
+        paper (a cloud moved by its ``wind`` carries its noise instead: :meth:`at`)."""
         off = check.vec3(offset, "offset")
         centres = (self.centres.astype(np.float64) + np.array(off)).astype(np.float32)
         return self._derived({"translate": list(off)}, centres=centres)
@@ -265,7 +323,7 @@ class Cloud:
         """
         f = check.real(factor, "factor", 0.0, lo_open=True)
         pivot = check.vec3(about, "about") if about is not None else tuple(map(float, self.centre))
-        p = np.array(pivot)
+        p = np.array(pivot) - np.array(self.offset)  # the pivot among the primitives' centres
         centres = ((self.centres.astype(np.float64) - p) * f + p).astype(np.float32)
         radii = (self.radii.astype(np.float64) * f).astype(np.float32)
         if not (np.isfinite(centres).all() and np.isfinite(radii).all() and (radii > 0).all()):
@@ -293,8 +351,9 @@ class Cloud:
 
     # --- scene files --------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
-        """The cloud as JSON types for scene files: primitives, density model and parameters."""
-        return {
+        """The cloud as JSON types for scene files: primitives, density model and parameters
+        (and its ``wind`` and ``time`` when the wind moves it)."""
+        return self._motion() | {
             "kind": self.kind,
             "centres": self.centres.tolist(),
             "radii": self.radii.tolist(),
@@ -305,6 +364,13 @@ class Cloud:
             "params": jsonable(self.params),
             "stats": jsonable(self.stats),
         }
+
+    def _motion(self) -> dict[str, Any]:
+        """``wind`` and ``time`` as JSON types, when either is set (files of still clouds are
+        as they were)."""
+        if self.wind == _NO_WIND and self.time == 0.0:
+            return {}
+        return {"wind": list(self.wind), "time": self.time}
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "cloud") -> Cloud:
@@ -324,6 +390,8 @@ class Cloud:
             "phi",
             "params",
             "stats",
+            "wind",
+            "time",
         }
         unknown = sorted(set(data) - known)
         if unknown:
@@ -339,6 +407,8 @@ class Cloud:
             phi=data.get("phi", 0.6),
             params=dict(data.get("params") or {}),
             stats=dict(data.get("stats") or {}),
+            wind=data.get("wind", _NO_WIND),
+            time=data.get("time", 0.0),
         )
 
     # --- files --------------------------------------------------------------------------------
@@ -388,7 +458,7 @@ class Cloud:
             "phi": self.phi,
             "stats": self.stats,
             "params": self.params,
-        }
+        } | self._motion()
 
     def __repr__(self) -> str:
         lo, hi = self.bbox
@@ -426,6 +496,11 @@ def merge(clouds: Iterable[Cloud]) -> Cloud:
                 f"clouds[0] has model={first.model!r}, kappa={first.kappa}, phi={first.phi}: "
                 "convert with Cloud.with_model first"
             )
+        if (c.wind, c.time) != (first.wind, first.time):
+            raise ValueError(
+                f"clouds[{i}] has wind={c.wind}, time={c.time}; clouds[0] has wind={first.wind}, "
+                f"time={first.time}: one cloud carries one noise offset"
+            )
     total = sum(c.n for c in parts)
     if total > MAX_PRIMITIVES:
         raise ValueError(f"merged cloud would hold {total} primitives, more than {MAX_PRIMITIVES}")
@@ -441,6 +516,8 @@ def merge(clouds: Iterable[Cloud]) -> Cloud:
             "generator": "merge",
             "parts": [json.loads(json.dumps(c.params, default=json_default)) for c in parts],
         },
+        wind=first.wind,
+        time=first.time,
     )
 
 
@@ -489,6 +566,8 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             phi=meta["phi"],
             stats=dict(meta.get("stats") or {}),
             params=dict(meta.get("params") or {}),
+            wind=meta.get("wind", _NO_WIND),
+            time=meta.get("time", 0.0),
         )
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise ValueError(f"{path.name}: invalid cloud data: {exc}") from None

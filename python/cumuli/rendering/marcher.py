@@ -66,7 +66,7 @@ def pack_clouds(
     float32 order (`Cloud.layer_box`, `Cloud.centre`, `Cloud.mean_r2`).
     """
     prims: list[np.ndarray] = []
-    floats = np.zeros((max(len(clouds), 1), 24), np.float32)
+    floats = np.zeros((max(len(clouds), 1), 28), np.float32)
     ints = np.zeros((max(len(clouds), 1), 8), np.int32)
     first = 0
     z0 = 0
@@ -77,7 +77,7 @@ def pack_clouds(
     for k, (cloud, grid) in enumerate(zip(clouds, grids, strict=True)):
         n = cloud.n
         p = np.zeros((n, 20), np.float32)
-        p[:, 0:3] = cloud.centres
+        p[:, 0:3] = cloud.placed_centres
         p[:, 4:7] = cloud.radii
         for a in range(3):  # rotation columns = the ellipsoid's axes
             p[:, 8 + 4 * a : 11 + 4 * a] = cloud.rotations[:, :, a]
@@ -97,6 +97,7 @@ def pack_clouds(
         # Kept apart, so the shader computes (fbm·r̄²)·φ in the C++ order.
         floats[k, 21] = cloud.mean_r2
         floats[k, 22] = cloud.phi
+        floats[k, 24:27] = cloud.offset  # the noise the wind carries: fbm(p − offset)
         # w: the cloud's first z slice in the occupancy atlas (occupancy_atlas)
         ints[k, 0:4] = (first, n, 1 if cloud.model == "metaball" else 0, k * OCCUPANCY_RESOLUTION)
         ints[k, 4:8] = (w, h, d, z0)

@@ -90,7 +90,7 @@ def occupancy_grid(
     if not isinstance(cloud, Cloud):
         raise TypeError(f"cloud must be a cumuli.Cloud, got {type(cloud).__name__}")
     resolution = check.integer(resolution, "resolution", 1, 256)
-    centres, radii, rotations, model, _, _ = cloud.core_args()
+    centres, radii, rotations, model = cloud.core_args()[:4]
     cells, lo, hi = _core.occupancy_grid(centres, radii, rotations, model, resolution)
     return cells.astype(bool), (np.asarray(lo, np.float32), np.asarray(hi, np.float32))
 
@@ -108,9 +108,10 @@ def cloud_core_dict(cloud: Cloud, grid: Any, kappa: float | None = None) -> dict
 
     ``kappa`` overrides the cloud's own κ when given (``RenderSettings.kappa``).
     """
-    centres, radii, rotations, model, cloud_kappa, phi = cloud.core_args()
+    centres, radii, rotations, model, cloud_kappa, phi, noise_offset = cloud.core_args()
     if isinstance(grid, PhysicalLight):
         return {
+            "noise_offset": noise_offset,
             "centres": centres,
             "radii": radii,
             "rotations": rotations,
@@ -121,6 +122,7 @@ def cloud_core_dict(cloud: Cloud, grid: Any, kappa: float | None = None) -> dict
         }
     lo, hi = grid.box
     return {
+        "noise_offset": noise_offset,
         "centres": centres,
         "radii": radii,
         "rotations": rotations,
