@@ -45,6 +45,7 @@ from cumuli.light.grid import (
     primitives_digest,
 )
 from cumuli.light.memo import remember
+from cumuli.light.moved import moved_box
 from cumuli.model.cloud import Cloud
 from cumuli.noise import Noise
 from cumuli.sky import Sun
@@ -277,6 +278,13 @@ def cloud_light(cloud: Cloud, scene: Any, given: Any = None, threads: int = 0) -
         ):
             return given
     record = LightRecord.of(cloud, scene.noise, params)
+    still = cloud.still()
+    if still is not cloud:
+        # The wind carries the cloud with its noise: its grid is its still self's, moved (one
+        # light pass for every time of it).
+        grid = cloud_light(still, scene, None, threads)
+        box = moved_box(grid.box, cloud.offset)
+        return LightGrid(np.asarray(grid), box, grid.sun, record)
     return remember(
         ("cloud", record, sun),
         lambda: light_grid(cloud, scene.sun, scene.noise, params=params, threads=threads),

@@ -62,6 +62,7 @@ from cumuli.light.digests import drawable_digest
 from cumuli.light.footprint import box_corners
 from cumuli.light.medium import cloud_extinction_scale, extinction_grid  # noqa: F401 (public)
 from cumuli.light.memo import remember
+from cumuli.light.moved import moved, moved_box, moved_frame, moved_light
 from cumuli.light.phase import PEAK_COS, forward_peak_share, phase, phase_values  # noqa: F401
 from cumuli.settings import ACROSS, ALONG, SUPERSAMPLE
 from cumuli.sky import sky_args
@@ -284,22 +285,26 @@ def physical_light(
     n = s.physical_resolution
     lattice = medium.own_lattice(drawable)
     own = lattice is not None and max(lattice) <= n
+    # A drawable the wind carries with its noise is its still self moved: its own terms are the
+    # still one's (computed once for every time), only the shade of the others is where it is.
+    still, offset = moved(drawable)
     # What the sun and sky do not change (the extinction lattice, the sky's visibility moments)
     # is memoised apart: a moving sun or a changing sky relights only the terms they reach.
-    medium_key = ("physical medium", drawable_digest(drawable), scene.noise.identity, s,
+    medium_key = ("physical medium", drawable_digest(still), scene.noise.identity, s,
                   SUPERSAMPLE)  # fmt: skip
     with _stage(timings, "extinction"):
         field = remember(
             medium_key,
             lambda: _frozen(
-                extinction_grid(drawable, scene.noise, s, None if own else n, SUPERSAMPLE, threads)
+                extinction_grid(still, scene.noise, s, None if own else n, SUPERSAMPLE, threads)
             ),
             media=True,
         )
     lo, hi = field.box
     to_sun = scene.sun.direction
     with _stage(timings, "sun_depth"):
-        frame, depth = own_sun_depth(drawable, scene, threads)
+        still_frame, depth = own_sun_depth(still, scene, threads)
+    frame = moved_frame(still_frame, offset)
     # The other drawables' shadow: their optical depth upstream of every column, from those
     # whose box the sun's lattice can see upstream (the others cast nothing on it).
     others = upstream
@@ -317,7 +322,7 @@ def physical_light(
         # unscattered: e^{−(1 − f·ϖ)τ}, times the (1 − f) of the collided light that diffuses.
         peak = forward_peak_share(s) if s.multiple_scattering else 0.0
         sun_t = _core.lattice_transmittance(
-            depth, frame, lo32, cell32, (w, h, d), threads, upstream=upstream_depth,
+            depth, still_frame, lo32, cell32, (w, h, d), threads, upstream=upstream_depth,
             depth_scale=1.0 - peak * s.albedo,
         )  # fmt: skip
         if peak > 0.0:
@@ -360,7 +365,9 @@ def physical_light(
         ext, phi, sky_e, _cell_size(lo, hi, ext.shape), depth_g, SUN_GAIN, SKY_GAIN, threads
     )
     grid.setflags(write=False)
-    return PhysicalLight(frame, depth, grid, (lo, hi), octaves, upstream=upstream_depth)
+    return PhysicalLight(
+        frame, depth, grid, moved_box((lo, hi), offset), octaves, upstream=upstream_depth
+    )
 
 
 def _read_only(fresh: np.ndarray) -> np.ndarray:
@@ -427,11 +434,15 @@ def own_sun_depth(drawable: Any, scene: Any, threads: int = 0) -> tuple[tuple, n
     optical depth of the drawable alone at its nodes, marched until it passes
     :data:`SUN_DEPTH_CUT`; memoised, read-only. Every drawable's lattice has the same axes (they
     follow from the sun alone), so one drawable's lattice is also the shadow it casts on the
-    others (:func:`_upstream_depth`): each is marched once, whatever the clouds it shades."""
+    others (:func:`_upstream_depth`): each is marched once, whatever the clouds it shades. A
+    drawable the wind carries has its still self's lattice, moved (:func:`moved`)."""
+    still, offset = moved(drawable)
+    if offset is not None:
+        frame, depth = own_sun_depth(still, scene, threads)
+        return moved_frame(frame, offset), depth
     s = scene.settings
     n = s.physical_resolution
-    lo, hi = (tuple(float(np.float32(v)) for v in b) for b in drawable.layer_box())
-    frame = sun_frame(lo, hi, scene.sun.direction, n)
+    frame = _sun_frame_of(drawable, scene)
     step = float(min(march_step(drawable, s.light_step), (frame[4][2] - frame[3][2]) / (ALONG * n)))
     key = ("own sun depth", drawable_digest(drawable), scene.noise.identity, s, frame, step,
            SUN_DEPTH_CUT)  # fmt: skip
@@ -541,12 +552,23 @@ def physical_pass(drawable: Any, scene: Any, given: Any = None, threads: int = 0
     sky = light_sky(scene)
     # Only the media upstream of its sun lattice shade it (the culling of `physical_light`):
     # moving a cloud relights the clouds it shades, not every cloud of the scene.
-    lo, hi = drawable.layer_box()
-    frame = sun_frame(lo, hi, scene.sun.direction, scene.settings.physical_resolution)
+    still, offset = moved(drawable)
+    frame = moved_frame(_sun_frame_of(still, scene), offset)
     upstream = upstream_of(frame, [d for d in scene.clouds if d is not drawable])
+    # Nothing shades a drawable the wind carries: its light is its still self's, alone, moved;
+    # every time of it (and every copy of it) shares one light step.
+    lit = still if offset is not None and not upstream else drawable
     others = tuple(drawable_digest(d) for d in upstream)
-    key = ("physical", drawable_digest(drawable), others, scene.noise.identity,
+    key = ("physical", drawable_digest(lit), others, scene.noise.identity,
            scene.settings, scene.sun, sky)  # fmt: skip
-    return remember(
-        key, lambda: physical_light(drawable, replace(scene, sky=sky), threads, upstream=upstream)
+    light = remember(
+        key, lambda: physical_light(lit, replace(scene, sky=sky), threads, upstream=upstream)
     )
+    return moved_light(light, offset) if lit is still and offset is not None else light
+
+
+def _sun_frame_of(drawable: Any, scene: Any) -> tuple:
+    """The sun lattice over ``drawable``'s box (:func:`sun_frame`), as :func:`own_sun_depth`
+    places it."""
+    lo, hi = (tuple(float(np.float32(v)) for v in b) for b in drawable.layer_box())
+    return sun_frame(lo, hi, scene.sun.direction, scene.settings.physical_resolution)
