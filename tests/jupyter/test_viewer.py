@@ -80,6 +80,17 @@ def test_session_follows_time() -> None:
     assert s.duration == 1.0 and not np.array_equal(a, b)
 
 
+def test_a_cloud_in_the_wind_gives_the_scene_a_time_axis() -> None:
+    still = _scene()
+    base = still.clouds[0]
+    windy = still.replace(clouds=[cu.Cloud(base.centres, base.radii, wind=(3.0, 0.0))])
+    s = ViewerSession(windy, size=(24, 16), backend="cpu")
+    assert s.duration > 0
+    s.set(time=2.0)
+    assert s.scene_at_time().clouds[0].offset == (6.0, 0.0, 0.0)
+    assert ViewerSession(still, size=(24, 16), backend="cpu").duration == 0.0
+
+
 anywidget = pytest.importorskip("anywidget", reason="the widget needs anywidget (cumuli[jupyter])")
 
 

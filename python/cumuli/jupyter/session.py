@@ -50,7 +50,12 @@ def _weather_source(weather: Weather, base: Scene | None) -> Callable[[float], S
 
 
 def _animated(scene: Scene) -> bool:
-    return any(kind_of(d).advance is not None for d in scene.clouds)
+    """Whether a drawable of ``scene`` moves by itself (a deck, a 2018 cloud with a wind: its
+    kind's ``advance`` gives another drawable a second later)."""
+    return any(
+        (advance := kind_of(d).advance) is not None and advance(d, 1.0) is not d
+        for d in scene.clouds
+    )
 
 
 class ViewerSession:
