@@ -32,6 +32,11 @@ lattice's.
 of another sun already made (its extinction lattice and sky visibility memoised: a moving sun
 relights only the sun's terms), the median of the repeats, alternated, and their ratio.
 
+``wind``: a drifting sky — one cloud, then the sixteen seeds' field, each cloud given a wind
+(``WIND``, carrying its noise) — lit from nothing at time 0, then one second later with the
+first frame's light memoised: the wind relights nothing of a cloud's own, only the shade of the
+clouds upstream of it (the medians, and their ratio).
+
 Beside the times, ``mitsuba``: the error the light step gives against Mitsuba 3 — the CPU
 render of the reference scene of ``tests/references`` (side-lit default cumulus, 160×120)
 against its multiple-scattering reference, on the cloud-covered 4×4-pixel blocks: the median
@@ -73,6 +78,8 @@ REFERENCES = Path(__file__).resolve().parents[1] / "tests" / "references"
 
 THREADS = 2
 SPACING = 32.0
+#: The wind of the drifting sky (world units per second): along +x, a little across.
+WIND = (6.0, 0.0, 1.5)
 COUNTS = (1, 2, 4, 8, 16)
 QUICK_COUNTS = (1, 2, 4)
 SERIES = ("copies", "seeds")
@@ -237,6 +244,39 @@ def moving_sun(resolution: int | None, repeats: int) -> dict[str, Any]:
     return out
 
 
+def wind(resolution: int | None, repeats: int) -> dict[str, Any]:
+    """A drifting sky's next frame against its first (see the docstring): for one cloud and for
+    the sixteen-seed field, every cloud given a wind, the light step from nothing at time 0 and
+    the step at the next frame with the first frame's light memoised; medians, alternated."""
+    import time
+
+    out: dict[str, Any] = {}
+    for count in (1, 16):
+        sc = scene("seeds", count, resolution)
+        windy = [cu.Cloud(c.centres, c.radii, c.rotations, wind=WIND) for c in sc.clouds]
+        first, second = sc.replace(clouds=windy), sc.replace(clouds=[c.at(1.0) for c in windy])
+        cold, warm = [], []
+        for _ in range(max(repeats, 3)):
+            cu.light.prepare.clear_memo()
+            t = time.perf_counter()
+            cu.prepare_light(first, threads=THREADS, progress=False)
+            cold.append(time.perf_counter() - t)
+            t = time.perf_counter()
+            cu.prepare_light(second, threads=THREADS, progress=False)
+            warm.append(time.perf_counter() - t)
+        row = {
+            "first_frame_ms": 1e3 * float(np.median(cold)),
+            "next_frame_ms": 1e3 * float(np.median(warm)),
+        }
+        row["ratio"] = row["first_frame_ms"] / max(row["next_frame_ms"], 1e-9)
+        out[str(count)] = row
+        common.log(
+            f"wind, {count} cloud(s): first frame {row['first_frame_ms']:.1f} ms, next frame "
+            f"{row['next_frame_ms']:.1f} ms ({row['ratio']:.1f}x)"
+        )
+    return out
+
+
 def mitsuba_error() -> dict[str, float]:
     """The physical mode's error against the Mitsuba 3 reference (see the module docstring)."""
     sys.path.insert(0, str(REFERENCES))
@@ -340,6 +380,7 @@ def main(argv: list[str] | None = None) -> int:
     versions = noise_versions(resolution, repeats)
     rays = sky_rays(resolution, repeats)
     sun_moves = moving_sun(resolution, repeats)
+    drift = wind(resolution, repeats)
     error = mitsuba_error()
     common.log(
         "against Mitsuba 3: per-block error median {block_rel_median:.4f}, p90 "
@@ -363,6 +404,7 @@ def main(argv: list[str] | None = None) -> int:
         "noise_versions": versions,
         "sky_rays": rays,
         "moving_sun": sun_moves,
+        "wind": drift,
         "mitsuba": error,
         "targets": targets,
     }
