@@ -35,7 +35,8 @@ relights only the sun's terms), the median of the repeats, alternated, and their
 ``wind``: a drifting sky — one cloud, then the sixteen seeds' field, each cloud given a wind
 (``WIND``, carrying its noise) — lit from nothing at time 0, then one second later with the
 first frame's light memoised: the wind relights nothing of a cloud's own, only the shade of the
-clouds upstream of it (the medians, and their ratio).
+clouds upstream of it (the medians, and their ratio); and the copies series' sixteen copies
+drifted with their noise (`Cloud.drifted`: the same medium at each place) against one of them.
 
 Beside the times, ``mitsuba``: the error the light step gives against Mitsuba 3 — the CPU
 render of the reference scene of ``tests/references`` (side-lit default cumulus, 160×120)
@@ -87,17 +88,29 @@ TARGET_ONE_MS = 40.0
 TARGET_GROWTH = 16.0
 
 
+def places(count: int) -> list[tuple[float, float, float]]:
+    """``count`` offsets on a square grid in the horizontal plane, ``SPACING`` apart."""
+    side = math.ceil(math.sqrt(count))
+    out = []
+    for k in range(count):
+        row, col = divmod(k, side)
+        out.append(((col - (side - 1) / 2) * SPACING, 0.0, (row - (side - 1) / 2) * SPACING))
+    return out
+
+
 def scene(series: str, count: int, resolution: int | None) -> cu.Scene:
-    """``count`` clouds of ``series`` on a square grid in the horizontal plane."""
+    """``count`` clouds of ``series`` on a square grid in the horizontal plane (:func:`places`):
+    copies of the default cumulus (``"copies"``; ``"drifted"``: copies carrying their noise,
+    one medium at every place) or ``gaussian_cumulus(seed=1 + k)`` (``"seeds"``)."""
     settings = cu.RenderSettings() if resolution is None else cu.RenderSettings(
         physical_resolution=resolution
     )  # fmt: skip
     base = cumulus_scene(settings=settings)
-    side = math.ceil(math.sqrt(count))
     clouds = []
-    for k in range(count):
-        row, col = divmod(k, side)
-        offset = ((col - (side - 1) / 2) * SPACING, 0.0, (row - (side - 1) / 2) * SPACING)
+    for k, offset in enumerate(places(count)):
+        if series == "drifted":
+            clouds.append(base.clouds[0].drifted(offset))
+            continue
         cloud = base.clouds[0] if series == "copies" else cu.gaussian_cumulus(seed=1 + k)
         clouds.append(cloud.translated(offset))
     return base.replace(clouds=clouds)
@@ -274,6 +287,19 @@ def wind(resolution: int | None, repeats: int) -> dict[str, Any]:
             f"wind, {count} cloud(s): first frame {row['first_frame_ms']:.1f} ms, next frame "
             f"{row['next_frame_ms']:.1f} ms ({row['ratio']:.1f}x)"
         )
+    # Sixteen copies of one cloud drifted with their noise (the copies series' places): one
+    # cloud's own light step, then only the shade of the copies upstream of each.
+    drifted = scene("drifted", 16, resolution)
+    one = drifted.replace(clouds=drifted.clouds[:1])
+    timed = common.interleaved_repeats(
+        {"one": lambda: light_step(one), "sixteen": lambda: light_step(drifted)}, max(repeats, 3)
+    )
+    one_ms, all_ms = (1e3 * common.spread(timed[k][0])["median"] for k in ("one", "sixteen"))
+    out["drifted_copies"] = {"one_ms": one_ms, "sixteen_ms": all_ms, "ratio": all_ms / one_ms}
+    common.log(
+        f"sixteen copies drifted with their noise: {all_ms:.1f} ms, {all_ms / one_ms:.2f}x one "
+        f"({one_ms:.1f} ms)"
+    )
     return out
 
 

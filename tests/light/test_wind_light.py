@@ -123,3 +123,17 @@ def test_the_image_moves_with_the_cloud(windy, settings, backend) -> None:
         backend=backend,
     )  # fmt: skip
     assert np.abs(other - still).mean() > 10 * np.abs(later - still).mean() + 1e-4
+
+
+def test_copies_drifted_apart_are_lit_once(windy, counted) -> None:
+    """A field of copies of one cloud, each drifted with its noise, out of one another's light:
+    one cloud's light step for the field, each copy's light the first's moved."""
+    still = windy.still()
+    copies = [still.drifted((200.0 * k, 0.0, 0.0)) for k in range(4)]
+    lit = cu.prepare_light(_scene(copies))
+    assert counted == {"extinction": 1, "sun": 1, "visibility": 1}
+    for k, light in enumerate(lit.lights):
+        assert light.grid is lit.lights[0].grid
+        np.testing.assert_allclose(
+            np.subtract(light.box, lit.lights[0].box), [[200.0 * k, 0, 0]] * 2, atol=1e-9
+        )

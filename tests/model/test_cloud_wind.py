@@ -123,3 +123,31 @@ def test_scene_after_moves_clouds_with_a_wind_only(cumulus: cu.Cloud) -> None:
     assert later.clouds[0].offset == (8.0, 0.0, 0.0)
     assert later.clouds[1] is cumulus
     assert scene_after(later, -4.0).clouds[0].offset == (0.0, 0.0, 0.0)
+
+
+def test_a_drifted_copy_is_the_same_medium_elsewhere(cumulus: cu.Cloud) -> None:
+    copy = cumulus.drifted((10.0, 0.0, -4.0))
+    assert copy.offset == (10.0, 0.0, -4.0) and copy.params["transforms"][-1] == {
+        "drift": [10.0, 0.0, -4.0]
+    }
+    pts = _points(cumulus)
+    np.testing.assert_allclose(
+        copy.density(pts + np.float32([10.0, 0.0, -4.0]), NOISE)[0],
+        cumulus.density(pts, NOISE)[0],
+        atol=2e-5,
+    )
+    windy = cu.Cloud(copy.centres, copy.radii, wind=(1.0, 0.0), time=2.0, drift=copy.drift)
+    assert windy.offset == (12.0, 0.0, -4.0)  # drift + wind · time
+    back = cu.Cloud.from_dict(windy.to_dict())
+    assert (back.wind, back.time, back.drift) == (windy.wind, windy.time, windy.drift)
+    assert windy.still().offset == (0.0, 0.0, 0.0) and windy.still().drift == (0.0, 0.0, 0.0)
+    with pytest.raises(ValueError, match="one noise offset"):
+        cu.merge([copy, cumulus])
+
+
+def test_a_volume_file_of_a_drifting_cloud_is_the_still_ones_moved(cumulus, tmp_path) -> None:
+    copy = cumulus.drifted((6.0, 0.0, 0.0))
+    still = cu.read_volume(cu.write_volume(tmp_path / "still.vol", cumulus, NOISE, resolution=16))
+    moved = cu.read_volume(cu.write_volume(tmp_path / "moved.vol", copy, NOISE, resolution=16))
+    np.testing.assert_allclose(moved.density, still.density, rtol=1e-5, atol=1e-5)
+    np.testing.assert_allclose(np.subtract(moved.box, still.box), [[6, 0, 0], [6, 0, 0]], atol=1e-5)

@@ -12,9 +12,9 @@ clouds and append what they did to
 ``params["transforms"]``, so that a saved cloud says how it was made.
 
 The wind moves a cloud whole: a cloud with a ``wind`` (units per second) at ``time`` stands
-``offset = wind · time`` from its ``centres`` and carries its fBm (read at ``p − offset``): the
-same medium wherever the wind takes it, lit once for every time (`Cloud.at`: another time). A
-cloud moved by `Cloud.translated` keeps the world's noise, as the paper's: another medium.
+``offset = drift + wind · time`` from its ``centres`` and carries its fBm (read at
+``p − offset``): the same medium wherever it is taken, lit once for every time (`Cloud.at`) and
+every copy (`Cloud.drifted`). `Cloud.translated` keeps the world's noise, as the paper's.
 `Cloud.save` writes ``.npz`` or ``.json`` atomically; `load_cloud` reads either back.
 """
 
@@ -60,7 +60,7 @@ _NPZ_LIMITS = {
 }
 
 
-#: Fields of a cloud's scene-file dict (`Cloud.to_dict`; ``wind`` and ``time`` only when set).
+#: Fields of a cloud's scene-file dict (`Cloud.to_dict`; ``wind``, ``time``, ``drift`` when set).
 _DICT_FIELDS = ("kind", "centres", "radii", "rotations", "model", "kappa", "phi", "params", "stats")
 #: What a cloud's wind may be: ``(wx, wz)`` (horizontal, as a `CloudDeck`'s) or ``(wx, wy, wz)``.
 _NO_WIND = (0.0, 0.0, 0.0)
@@ -71,8 +71,9 @@ class Cloud:
     """A cloud: primitives, density model and provenance (``params``, ``stats``).
 
     The drawable of kind ``"cloud"``: the 2018 paper's ray marcher draws it (see ARCHITECTURE.md).
-    ``wind`` (``(wx, wz)`` or ``(wx, wy, wz)``, world units per second) and ``time`` (seconds)
-    move it, noise and all, by ``wind · time`` from its ``centres`` (the module's docstring).
+    ``wind`` (``(wx, wz)`` or ``(wx, wy, wz)``, world units per second), ``time`` (seconds) and
+    ``drift`` (world units) move it, noise and all, by ``drift + wind · time`` from its
+    ``centres`` (the module's docstring).
     """
 
     #: Scene-file tag of this kind of drawable.
@@ -88,6 +89,7 @@ class Cloud:
     params: dict[str, Any] = field(default_factory=dict)
     wind: Sequence[float] = _NO_WIND  # kept as (wx, wy, wz)
     time: float = 0.0
+    drift: Sequence[float] = _NO_WIND
 
     def __setattr__(self, name: str, value: Any) -> None:
         if name not in _FIELD_NAMES:
@@ -136,31 +138,30 @@ class Cloud:
                 f"rotations[{i}] is not orthonormal (|RᵀR − I| = {err[i]:.3g}): its columns must "
                 "be the ellipsoid's unit axes; put scale in radii"
             )
-        # Every primitive's world bounds must be float32-representable: the core and the shaders
-        # compute boxes in float32, and an overflowing one (3e38 ± 1e38) turns into inf/NaN.
+        self.wind = check.wind3(self.wind, "wind")
+        self.time = check.real(self.time, "time", -check.MAX_COORD, check.MAX_COORD)
+        self.drift = check.vec3(self.drift, "drift", bound=check.MAX_COORD)
+        off = self.offset
+        if not all(abs(v) <= check.MAX_COORD for v in off):
+            raise ValueError(f"drift + wind · time must stay within ±{check.MAX_COORD:g}: {off}")
+        # Every primitive's world bounds (where it is now) must be float32-representable: the
+        # core and the shaders compute boxes in float32, and an overflowing one turns into NaN.
         rot64 = self.rotations.astype(np.float64)
         half = np.sqrt(np.einsum("nkj,nj->nk", rot64**2, self.radii.astype(np.float64) ** 2))
-        reach = np.abs(self.centres.astype(np.float64)) + half
+        reach = np.abs(self.centres.astype(np.float64) + np.array(off)) + half
         if not (reach < float(np.finfo(np.float32).max) / 4).all():
             raise ValueError("centres ± radii must stay well inside the float32 range (< 8.5e37)")
         if self.model not in DENSITY_MODELS:
             raise ValueError(f"model must be one of {DENSITY_MODELS}, got {self.model!r}")
         self.kappa = check.real(self.kappa, "kappa", 0.0, 1.0)
         self.phi = check.real(self.phi, "phi", 0.0, lo_open=True)
-        self.wind = check.wind3(self.wind, "wind")
-        self.time = check.real(self.time, "time", -check.MAX_COORD, check.MAX_COORD)
-        off = self.offset
-        if not all(math.isfinite(v) and abs(v) <= check.MAX_COORD for v in off):
-            raise ValueError(f"wind · time must stay within ±{check.MAX_COORD:g}, got {off}")
-        moved = np.abs(self.centres.astype(np.float64) + np.array(off)) + half
-        if any(off) and not (moved < float(np.finfo(np.float32).max) / 4).all():
-            raise ValueError("centres ± radii moved by wind · time must stay inside float32 range")
 
     # --- derived geometry -------------------------------------------------------------------
     @property
     def offset(self) -> tuple[float, float, float]:
-        """``wind · time``: how far the wind has moved the cloud and its noise from ``centres``."""
-        return (self.wind[0] * self.time, self.wind[1] * self.time, self.wind[2] * self.time)
+        """``drift + wind · time``: how far the cloud and its noise are from ``centres``."""
+        (dx, dy, dz), (wx, wy, wz), t = self.drift, self.wind, self.time
+        return (dx + wx * t, dy + wy * t, dz + wz * t)
 
     @property
     def placed_centres(self) -> np.ndarray:
@@ -179,12 +180,12 @@ class Cloud:
         return Cloud(**fields)
 
     def still(self) -> Cloud:
-        """This cloud at time 0 without its wind (its light, moved by :attr:`offset`, is this
-        cloud's: the light step computes it once for every time)."""
-        if self.wind == _NO_WIND and self.time == 0.0:
+        """This cloud at its ``centres``, with the world's noise (its light, moved by
+        :attr:`offset`, is this cloud's: the light step computes it once for every place)."""
+        if not self._motion():
             return self
         fields = {name: getattr(self, name) for name in _FIELD_NAMES}
-        fields.update(wind=_NO_WIND, time=0.0)
+        fields.update(wind=_NO_WIND, time=0.0, drift=_NO_WIND)
         return Cloud(**fields)
 
     @property
@@ -304,16 +305,24 @@ class Cloud:
             "params": params,
             "wind": self.wind,
             "time": self.time,
+            "drift": self.drift,
         }
         fields.update(changes)
         return Cloud(**fields)
 
     def translated(self, offset: Sequence[float] | np.ndarray) -> Cloud:
         """A copy moved by ``offset`` (world units); its noise stays the world's, as in the
-        paper (a cloud moved by its ``wind`` carries its noise instead: :meth:`at`)."""
+        paper (:meth:`drifted` carries the noise along instead)."""
         off = check.vec3(offset, "offset")
         centres = (self.centres.astype(np.float64) + np.array(off)).astype(np.float32)
         return self._derived({"translate": list(off)}, centres=centres)
+
+    def drifted(self, offset: Sequence[float] | np.ndarray) -> Cloud:
+        """A copy moved by ``offset`` (world units) with its noise: the same medium elsewhere,
+        whose light is this one's moved (a field of copies is lit once)."""
+        off = check.vec3(offset, "offset")
+        drift = tuple(float(np.float64(a) + b) for a, b in zip(self.drift, off, strict=True))
+        return self._derived({"drift": list(off)}, drift=drift)
 
     def scaled(self, factor: float, about: Sequence[float] | None = None) -> Cloud:
         """A copy scaled uniformly by ``factor`` > 0 about ``about`` (default: the cloud's centre).
@@ -366,11 +375,10 @@ class Cloud:
         }
 
     def _motion(self) -> dict[str, Any]:
-        """``wind`` and ``time`` as JSON types, when either is set (files of still clouds are
-        as they were)."""
-        if self.wind == _NO_WIND and self.time == 0.0:
-            return {}
-        return {"wind": list(self.wind), "time": self.time}
+        """``wind``, ``time`` and ``drift`` as JSON types, those that are set (files of still
+        clouds are as they were)."""
+        motion = {"wind": list(self.wind), "time": self.time, "drift": list(self.drift)}
+        return {k: v for k, v in motion.items() if (any(v) if isinstance(v, list) else v)}
 
     @classmethod
     def from_dict(cls, data: Any, where: str = "cloud") -> Cloud:
@@ -380,19 +388,7 @@ class Cloud:
         missing = [k for k in ("centres", "radii") if k not in data]
         if missing:
             raise ValueError(f"{where} is missing field(s): {', '.join(missing)}")
-        known = {
-            "kind",
-            "centres",
-            "radii",
-            "rotations",
-            "model",
-            "kappa",
-            "phi",
-            "params",
-            "stats",
-            "wind",
-            "time",
-        }
+        known = {*_DICT_FIELDS, "wind", "time", "drift"}
         unknown = sorted(set(data) - known)
         if unknown:
             raise ValueError(f"{where} has unknown field(s): {', '.join(unknown)}")
@@ -409,6 +405,7 @@ class Cloud:
             stats=dict(data.get("stats") or {}),
             wind=data.get("wind", _NO_WIND),
             time=data.get("time", 0.0),
+            drift=data.get("drift", _NO_WIND),
         )
 
     # --- files --------------------------------------------------------------------------------
@@ -496,10 +493,11 @@ def merge(clouds: Iterable[Cloud]) -> Cloud:
                 f"clouds[0] has model={first.model!r}, kappa={first.kappa}, phi={first.phi}: "
                 "convert with Cloud.with_model first"
             )
-        if (c.wind, c.time) != (first.wind, first.time):
+        if (c.wind, c.time, c.drift) != (first.wind, first.time, first.drift):
             raise ValueError(
-                f"clouds[{i}] has wind={c.wind}, time={c.time}; clouds[0] has wind={first.wind}, "
-                f"time={first.time}: one cloud carries one noise offset"
+                f"clouds[{i}] has wind={c.wind}, time={c.time}, drift={c.drift}; clouds[0] has "
+                f"wind={first.wind}, time={first.time}, drift={first.drift}: one cloud carries "
+                "one noise offset"
             )
     total = sum(c.n for c in parts)
     if total > MAX_PRIMITIVES:
@@ -518,6 +516,7 @@ def merge(clouds: Iterable[Cloud]) -> Cloud:
         },
         wind=first.wind,
         time=first.time,
+        drift=first.drift,
     )
 
 
@@ -568,6 +567,7 @@ def load_cloud(path: str | os.PathLike[str]) -> Cloud:
             params=dict(meta.get("params") or {}),
             wind=meta.get("wind", _NO_WIND),
             time=meta.get("time", 0.0),
+            drift=meta.get("drift", _NO_WIND),
         )
     except (ValueError, TypeError, KeyError, IndexError) as exc:
         raise ValueError(f"{path.name}: invalid cloud data: {exc}") from None
