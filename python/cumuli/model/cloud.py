@@ -361,7 +361,7 @@ class Cloud:
     # --- scene files --------------------------------------------------------------------------
     def to_dict(self) -> dict[str, Any]:
         """The cloud as JSON types for scene files: primitives, density model and parameters
-        (and its ``wind`` and ``time`` when the wind moves it)."""
+        (and its ``wind``, ``time`` and ``drift`` when they are set)."""
         return self._motion() | {
             "kind": self.kind,
             "centres": self.centres.tolist(),
