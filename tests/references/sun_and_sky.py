@@ -96,6 +96,8 @@ def split_errors(images: dict[str, tuple[np.ndarray, np.ndarray]]) -> dict[str, 
     imgs = {part: mv.blocks(img[..., :3].mean(-1)) for part, (img, _) in images.items()}
     coverage = mv.blocks(next(iter(images.values()))[1][..., 3])
     mask = coverage >= mv.COVERED
+    if not mask.any():
+        raise ValueError("no block of the reference is covered: nothing to compare")
     whole = sum(refs.values())[mask]
     out = {}
     for part in images:
