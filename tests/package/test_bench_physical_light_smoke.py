@@ -72,3 +72,14 @@ def test_bench_physical_light_quick_writes_json_and_plot(
     assert abs(err["mean_ratio_minus_one"]) <= 0.10 and err["transmittance_mean_abs"] <= 0.01
     assert "against Mitsuba 3" in stdout
     assert "growth exponent" in stdout and "target per_default_cloud_ms" in stdout
+    # A drifting sky: the first frame and the next (its light reused), for one cloud and the
+    # largest field; the largest count of copies drifted with their noise against one.
+    drift = data["wind"]
+    for count in (1, data["counts"][-1]):
+        row = drift[str(count)]
+        assert row["first_frame_ms"] > 0 and row["next_frame_ms"] > 0
+        assert row["ratio"] == pytest.approx(row["first_frame_ms"] / row["next_frame_ms"])
+    copies = drift["drifted_copies"]
+    assert copies["count"] == data["counts"][-1]
+    assert copies["ratio"] == pytest.approx(copies["all_ms"] / copies["one_ms"])
+    assert "copies drifted with their noise" in stdout
