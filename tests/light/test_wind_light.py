@@ -137,3 +137,24 @@ def test_copies_drifted_apart_are_lit_once(windy, counted) -> None:
         np.testing.assert_allclose(
             np.subtract(light.box, lit.lights[0].box), [[200.0 * k, 0, 0]] * 2, atol=1e-9
         )
+
+
+@pytest.mark.parametrize("settings", [PHYSICAL, PAPER], ids=["physical", "paper"])
+def test_the_wind_keeps_a_clouds_impostor(windy, settings) -> None:
+    """Harris 2002's impostors: a cloud the wind moved (its light moved with it) keeps its
+    impostor, displayed moved with the cloud; a cloud translated through the world's noise is
+    another cloud."""
+    cam = cu.Camera(position=(0.0, 2.0, -60.0), target=(0.0, 0.0, 0.0), fov=40)
+    t = 2.0
+    off = np.asarray(windy.at(t).offset)
+    moved_cam = cu.Camera(tuple(np.add(cam.position, off)), tuple(off), fov=40)
+    cache = cu.ImpostorCache()
+    first = cu.render(_scene([windy], settings), cam, 64, 48, backend="cpu", impostors=cache)
+    later = cu.render(
+        _scene([windy.at(t)], settings), moved_cam, 64, 48, backend="cpu", impostors=cache
+    )
+    assert cache.history[-1]["updates"] == {}
+    np.testing.assert_allclose(later, first, atol=1e-5)
+    other = windy.still().translated(tuple(off))
+    cu.render(_scene([other], settings), moved_cam, 64, 48, backend="cpu", impostors=cache)
+    assert cache.history[-1]["updates"] == {"cloud": 1}

@@ -11,6 +11,7 @@ from cumuli.light.medium import cloud_core_args, cloud_extinction
 from cumuli.light.ndt import cloud_light
 from cumuli.light.physical import physical_pass
 from cumuli.model.cloud import Cloud
+from cumuli.rendering.impostor_units import cloud_translation
 from cumuli.rendering.marcher import MarcherGL
 from cumuli.rendering.marcher_cpu import draw_clouds_cpu
 
@@ -53,6 +54,7 @@ KIND = registry.register(
             moved=lambda cloud: (cloud.still(), cloud.offset),
         ),
         advance=advance,
+        translation=cloud_translation,
         gl_drawer=MarcherGL,
         cpu_drawer=draw_clouds_cpu,
         # The marcher orders its clouds per pixel itself, and draws the ground when alone.

@@ -155,6 +155,24 @@ class PhysicalLight:
             return self.sun_depth
         return self.sun_depth + self.upstream[None]
 
+    def same_as(self, other: Any) -> bool:
+        """Whether ``other`` shades alike wherever it is: the same sun axes, lattice sizes and
+        orders, equal lattices (the light of a cloud the wind moved shares them, moved). The
+        impostor cache asks it (a light moved with its cloud keeps the cloud's impostor)."""
+        if not isinstance(other, PhysicalLight) or self.octaves != other.octaves:
+            return False
+        (u, v, w, lo, hi, res), (u2, v2, w2, lo2, hi2, res2) = self.frame, other.frame
+        extent = np.subtract(hi, lo), np.subtract(hi2, lo2)
+        size = np.subtract(self.box[1], self.box[0]), np.subtract(other.box[1], other.box[0])
+        if (u, v, w, tuple(res)) != (u2, v2, w2, tuple(res2)):
+            return False
+        if not (np.allclose(*extent, rtol=1e-6) and np.allclose(*size, rtol=1e-6)):
+            return False
+        pairs = ((self.grid, other.grid), (self.sun_depth, other.sun_depth),
+                 (self.upstream, other.upstream))  # fmt: skip
+        return all(a is b or (a is not None and b is not None and a.shape == b.shape
+                              and np.array_equal(a, b)) for a, b in pairs)  # fmt: skip
+
 
 def medium_args(drawables: Any, settings: Any) -> tuple[list, list]:
     """The core's ``(clouds, volumes)`` lists of the drawables' extinction (their medium, each

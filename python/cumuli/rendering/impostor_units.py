@@ -9,9 +9,10 @@ its content is unchanged up to a translation (wind moves clouds without invalida
 impostors) and whether its light is unchanged.
 
 Pure translations are recognised per kind (its registered `translation`): a `ParticleCloud` or a
-`BillboardCloud` compares its arrays relative to its bounding sphere; a part compares its
-signature and moves with its anchor; other kinds compare a digest of their scene-file dict (a
-translated 2018 cloud samples other noise: a change).
+`BillboardCloud` compares its arrays relative to its bounding sphere; a 2018 cloud moved with
+its noise (by its wind, or drifted) compares its primitives and density model (one translated
+through the world's noise samples other noise: a change); a part compares its signature and
+moves with its anchor; other kinds compare a digest of their scene-file dict.
 """
 
 from __future__ import annotations
@@ -28,6 +29,7 @@ import numpy as np
 from cumuli import registry
 from cumuli.light.prepare import LitScene
 from cumuli.model.billboards import ARRAY_FIELDS, BillboardCloud
+from cumuli.model.cloud import Cloud
 from cumuli.model.particles import ParticleCloud
 
 _digests: weakref.WeakKeyDictionary[Any, str] = weakref.WeakKeyDictionary()
@@ -76,6 +78,18 @@ def particle_translation(old: ParticleCloud, new: ParticleCloud) -> np.ndarray |
     ):
         return None
     return _relative_points(old, new, "centres")
+
+
+def cloud_translation(old: Cloud, new: Cloud) -> np.ndarray | None:
+    """``new − old`` when ``new`` is ``old`` moved with its noise (the same primitives and
+    density model at another offset: its wind at another time, a drifted copy), else None."""
+    if (new.model, new.kappa, new.phi) != (old.model, old.kappa, old.phi):
+        return None
+    if not all(
+        np.array_equal(getattr(new, a), getattr(old, a)) for a in ("centres", "radii", "rotations")
+    ):
+        return None
+    return np.subtract(new.offset, old.offset)
 
 
 def billboard_translation(old: BillboardCloud, new: BillboardCloud) -> np.ndarray | None:
