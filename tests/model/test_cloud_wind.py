@@ -4,6 +4,8 @@ it (the noise is read at ``p − offset``), so it is the same medium wherever th
 
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 
@@ -151,3 +153,13 @@ def test_a_volume_file_of_a_drifting_cloud_is_the_still_ones_moved(cumulus, tmp_
     moved = cu.read_volume(cu.write_volume(tmp_path / "moved.vol", copy, NOISE, resolution=16))
     np.testing.assert_allclose(moved.density, still.density, rtol=1e-5, atol=1e-5)
     np.testing.assert_allclose(np.subtract(moved.box, still.box), [[6, 0, 0], [6, 0, 0]], atol=1e-5)
+
+
+def test_a_scene_file_keeps_its_clouds_motion(cumulus: cu.Cloud, tmp_path) -> None:
+    windy = cu.Cloud(cumulus.centres, cumulus.radii, wind=(2.0, 0.0), time=3.0, drift=(1, 0, 0))
+    path = tmp_path / "scene.json"
+    cu.Scene([windy, cumulus], noise=NOISE).save(path)
+    back = cu.load_scene(path)
+    assert back.clouds[0].offset == (7.0, 0.0, 0.0) and back.clouds[0].wind == (2.0, 0.0, 0.0)
+    assert back.clouds[1].offset == (0.0, 0.0, 0.0)
+    assert "wind" not in json.loads(path.read_text())["clouds"][1]
