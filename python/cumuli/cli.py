@@ -236,6 +236,10 @@ def _cmd_render(args: argparse.Namespace) -> int:
     from cumuli.scene import load_scene
 
     scene = load_scene(args.scene)
+    if args.after:
+        from cumuli.anim.frames import scene_after
+
+        scene = scene_after(scene, args.after)
     w, h = args.size
     output = Path(args.output)
     _check_output(output)
@@ -376,6 +380,14 @@ def build_parser() -> argparse.ArgumentParser:
     rend.add_argument("-o", "--output", required=True, type=Path, help="image (.png or .exr)")
     _size_args(rend, 1, 16384)
     rend.add_argument("--backend", choices=("gl", "cpu"), default="gl", help="default gl")
+    rend.add_argument(
+        "--after",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="render the scene this many seconds later: what moves by itself (a deck's wind, "
+        "a cloud's) moved on",
+    )
     rend.add_argument(
         "--alpha",
         action="store_true",

@@ -124,6 +124,30 @@ def test_bad_arguments_give_a_clear_error(
     assert list(tmp_path.iterdir()) == []
 
 
+def test_render_after_moves_the_windy_clouds(tmp_path: Path) -> None:
+    base = cu.gaussian_cumulus(n=8, seed=3)
+    windy = cu.Cloud(base.centres, base.radii, wind=(4.0, 0.0))
+    camera = cu.Camera((0.0, 2.0, -50.0), (0.0, 0.0, 0.0), fov=40)
+    scene = cu.Scene([windy], noise=cu.Noise(seed=2, size=32), camera=camera)
+    scene.save(tmp_path / "s.json")
+    res = run("render", "s.json", "-o", "later.exr", "--size", "40x30", "--backend", "cpu",
+              "--after", "2.5", cwd=tmp_path)  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    later = cu.read_image(tmp_path / "later.exr")
+    want = cu.render(scene.replace(clouds=[windy.at(2.5)]), camera, 40, 30, backend="cpu")
+    np.testing.assert_allclose(later[..., :3], want[..., :3], atol=1e-5)
+    assert np.abs(later - cu.read_image(_render_now(tmp_path))).max() > 1e-3  # it moved
+    res = run("render", "s.json", "-o", "x.png", "--after", "nan", cwd=tmp_path)
+    assert res.returncode == 1 and "seconds" in res.stderr and not (tmp_path / "x.png").exists()
+
+
+def _render_now(folder: Path) -> Path:
+    res = run("render", "s.json", "-o", "now.exr", "--size", "40x30", "--backend", "cpu",
+              cwd=folder)  # fmt: skip
+    assert res.returncode == 0, res.stderr
+    return folder / "now.exr"
+
+
 def test_demo_writes_out_png_by_default_and_quiet_prints_nothing(tmp_path: Path) -> None:
     res = run("demo", "--noise", "--size", "40x20", "--quiet", cwd=tmp_path)
     assert res.returncode == 0, res.stderr
