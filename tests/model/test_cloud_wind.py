@@ -39,6 +39,7 @@ def test_wind_moves_the_cloud_and_its_place_not_its_centres(cumulus: cu.Cloud) -
     assert moved.still().wind == (0.0, 0.0, 0.0) and moved.still().time == 0.0
     assert cumulus.still() is cumulus
     assert cumulus.placed_centres is cumulus.centres
+    assert "wind=[2.0, 0.0, -1.0], time=3.0" in repr(moved) and "wind" not in repr(cumulus)
 
 
 def test_the_wind_carries_the_noise_translation_does_not(cumulus: cu.Cloud) -> None:

@@ -459,9 +459,10 @@ class Cloud:
 
     def __repr__(self) -> str:
         lo, hi = self.bbox
+        motion = "".join(f", {k}={v}" for k, v in self._motion().items())
         return (
             f"Cloud(n={self.n}, model={self.model!r}, bbox=({lo.round(2).tolist()}, "
-            f"{hi.round(2).tolist()}))"
+            f"{hi.round(2).tolist()}){motion})"
         )
 
 
