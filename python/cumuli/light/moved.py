@@ -24,7 +24,9 @@ def moved(drawable: Any) -> tuple[Any, tuple[float, float, float] | None]:
     if medium is None:
         return drawable, None
     still, offset = medium.moved(drawable)
-    return still, (tuple(map(float, offset)) if any(offset) else None)
+    if not any(offset):  # a wind at time 0: the drawable is where it is
+        return drawable, None
+    return still, tuple(map(float, offset))
 
 
 def moved_frame(frame: tuple, offset: Any) -> tuple:

@@ -278,11 +278,10 @@ def cloud_light(cloud: Cloud, scene: Any, given: Any = None, threads: int = 0) -
         ):
             return given
     record = LightRecord.of(cloud, scene.noise, params)
-    still = cloud.still()
-    if still is not cloud:
+    if any(cloud.offset):
         # The wind carries the cloud with its noise: its grid is its still self's, moved (one
         # light pass for every time of it).
-        grid = cloud_light(still, scene, None, threads)
+        grid = cloud_light(cloud.still(), scene, None, threads)
         box = moved_box(grid.box, cloud.offset)
         return LightGrid(np.asarray(grid), box, grid.sun, record)
     return remember(

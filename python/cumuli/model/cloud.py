@@ -20,6 +20,7 @@ every copy (`Cloud.drifted`). `Cloud.translated` keeps the world's noise, as the
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import json
 import math
@@ -173,20 +174,21 @@ class Cloud:
         return (self.centres.astype(np.float64) + np.array(off)).astype(np.float32)
 
     def at(self, time: float) -> Cloud:
-        """This cloud at another ``time``: moved by its wind, noise and all (its primitives,
-        density model, params and stats are shared, not copied)."""
+        """This cloud at another ``time``, moved by its wind (arrays, params, stats shared)."""
         fields = {name: getattr(self, name) for name in _FIELD_NAMES}
         fields["time"] = check.real(time, "time", -check.MAX_COORD, check.MAX_COORD)
         return Cloud(**fields)
 
     def still(self) -> Cloud:
         """This cloud at its ``centres``, with the world's noise (its light, moved by
-        :attr:`offset`, is this cloud's: the light step computes it once for every place)."""
+        :attr:`offset`, is this cloud's: the light step computes it once for every place); its
+        arrays, params and stats are shared, as :meth:`at`'s."""
         if not self._motion():
             return self
-        fields = {name: getattr(self, name) for name in _FIELD_NAMES}
-        fields.update(wind=_NO_WIND, time=0.0, drift=_NO_WIND)
-        return Cloud(**fields)
+        still = copy.copy(self)  # fields already checked: a light step asks several times
+        for name, value in (("wind", _NO_WIND), ("time", 0.0), ("drift", _NO_WIND)):
+            object.__setattr__(still, name, value)
+        return still
 
     @property
     def n(self) -> int:

@@ -109,26 +109,19 @@ def cloud_core_dict(cloud: Cloud, grid: Any, kappa: float | None = None) -> dict
     ``kappa`` overrides the cloud's own κ when given (``RenderSettings.kappa``).
     """
     centres, radii, rotations, model, cloud_kappa, phi, noise_offset = cloud.core_args()
-    if isinstance(grid, PhysicalLight):
-        return {
-            "noise_offset": noise_offset,
-            "centres": centres,
-            "radii": radii,
-            "rotations": rotations,
-            "model": model,
-            "kappa": float(cloud_kappa if kappa is None else kappa),
-            "phi": float(phi),
-            "physical": physical_core_tuple(grid),
-        }
-    lo, hi = grid.box
-    return {
-        "noise_offset": noise_offset,
+    shape = {
         "centres": centres,
         "radii": radii,
         "rotations": rotations,
         "model": model,
         "kappa": float(cloud_kappa if kappa is None else kappa),
         "phi": float(phi),
+        "noise_offset": noise_offset,
+    }
+    if isinstance(grid, PhysicalLight):
+        return shape | {"physical": physical_core_tuple(grid)}
+    lo, hi = grid.box
+    return shape | {
         "light": np.ascontiguousarray(grid, dtype=np.float32),
         "light_lo": check.vec3(lo, "light box lo"),
         "light_hi": check.vec3(hi, "light box hi"),
