@@ -36,7 +36,9 @@ relights only the sun's terms), the median of the repeats, alternated, and their
 (``WIND``, carrying its noise) — lit from nothing at time 0, then one second later with the
 first frame's light memoised: the wind relights nothing of a cloud's own, only the shade of the
 clouds upstream of it (the medians, and their ratio); and the copies series' sixteen copies
-drifted with their noise (`Cloud.drifted`: the same medium at each place) against one of them.
+drifted with their noise (`Cloud.drifted`: the same medium at each place) against one of them,
+and sixteen translated copies of one `VolumeCloud` (a volume's light does not depend on where it
+stands: one light step, moved to each copy) against one of them.
 
 Beside the times, ``mitsuba``: the error the light step gives against Mitsuba 3 — the CPU
 render of the reference scene of ``tests/references`` (side-lit default cumulus, 160×120)
@@ -84,6 +86,9 @@ WIND = (6.0, 0.0, 1.5)
 COUNTS = (1, 2, 4, 8, 16)
 QUICK_COUNTS = (1, 2, 4)
 SERIES = ("copies", "seeds")
+#: The lattice of the volume whose translated copies ``wind`` lights (an endless animation's
+#: database volumes are 16³–64³).
+VOLUME_SIZE = 48
 TARGET_ONE_MS = 40.0
 TARGET_GROWTH = 16.0
 
@@ -303,7 +308,29 @@ def wind(resolution: int | None, repeats: int, most: int) -> dict[str, Any]:
         f"{most} copies drifted with their noise: {all_ms:.1f} ms, {all_ms / one_ms:.2f}x one "
         f"({one_ms:.1f} ms)"
     )
+    out["volume_copies"] = volume_copies(resolution, repeats, most)
     return out
+
+
+def volume_copies(resolution: int | None, repeats: int, most: int) -> dict[str, Any]:
+    """``most`` translated copies of one `VolumeCloud` (the default cumulus's extinction on a
+    ``VOLUME_SIZE``³ lattice) on the grid of :func:`places` against one of them: a volume's light
+    does not depend on where it stands, so the copies share one light step."""
+    base = scene("copies", 1, resolution)
+    field = cu.density_volume(base.clouds[0], base.noise, base.settings, VOLUME_SIZE)
+    volume = cu.VolumeCloud(np.asarray(field.values), box=field.box, sigma_t=1.0)
+    many = base.replace(clouds=[volume.translated(p) for p in places(most)])
+    one = base.replace(clouds=[volume])
+    timed = common.interleaved_repeats(
+        {"one": lambda: light_step(one), "all": lambda: light_step(many)}, max(repeats, 3)
+    )
+    one_ms, all_ms = (1e3 * common.spread(timed[k][0])["median"] for k in ("one", "all"))
+    common.log(
+        f"{most} translated copies of a {VOLUME_SIZE}^3 volume: {all_ms:.1f} ms, "
+        f"{all_ms / one_ms:.2f}x one ({one_ms:.1f} ms)"
+    )
+    return {"count": most, "size": VOLUME_SIZE, "one_ms": one_ms, "all_ms": all_ms,
+            "ratio": all_ms / one_ms}  # fmt: skip
 
 
 def mitsuba_error() -> dict[str, float]:

@@ -36,7 +36,8 @@ class Medium:
     marched at by shadow and light rays, where it is at a scale of its own (None: the settings'
     ``light_step``); ``moved(drawable) -> (still, offset)``: the drawable is ``still`` moved by
     ``offset`` (world units) with its noise, the same medium elsewhere, so its own light is
-    ``still``'s moved (a 2018 cloud the wind carries; the default: itself, not moved)."""
+    ``still``'s moved (a 2018 cloud the wind carries; a volume, whose light does not depend on
+    where it stands, is its copy at the origin moved; the default: itself, not moved)."""
 
     core_args: Callable[[Any, Any], tuple[list, list]]
     extinction: Callable[..., Any]

@@ -83,3 +83,8 @@ def test_bench_physical_light_quick_writes_json_and_plot(
     assert copies["count"] == data["counts"][-1]
     assert copies["ratio"] == pytest.approx(copies["all_ms"] / copies["one_ms"])
     assert "copies drifted with their noise" in stdout
+    # Translated copies of one volume (one light step, moved to each) against one of them.
+    volumes = drift["volume_copies"]
+    assert volumes["count"] == data["counts"][-1] and volumes["size"] > 0
+    assert volumes["ratio"] == pytest.approx(volumes["all_ms"] / volumes["one_ms"])
+    assert "translated copies of a" in stdout

@@ -3,6 +3,10 @@ sky light per voxel, ray marched on the GPU (its C++ twin on the CPU)."""
 
 from __future__ import annotations
 
+import copy
+
+import numpy as np
+
 from cumuli import registry
 from cumuli.light.medium import volume_core_args, volume_extinction
 from cumuli.light.memo import content_digest
@@ -28,11 +32,29 @@ def own_lattice(volume: VolumeCloud) -> tuple[int, int, int] | None:
     return tuple(volume.shape[::-1]) if volume.reconstruction == "linear" else None
 
 
+def at_origin(volume: VolumeCloud) -> tuple[VolumeCloud, tuple[float, float, float]]:
+    """``(still, offset)``: the volume is ``still``, the same volume with its box's low corner at
+    the origin, moved by ``offset`` (the low corner). A volume's medium is its lattice over its
+    box, so its light does not depend on where it stands (the sharp-volume erosion, anchored in
+    the world, is the draw's, not the light's): the physical light step lights every translated
+    copy of a volume once, at the origin, and moves the light (:attr:`registry.Medium.moved`).
+    The still volume's size is the box's rounded to float32, the core's precision, so that
+    copies moved by any offset share it; its arrays are shared."""
+    lo, hi = volume.box
+    if not any(lo):
+        return volume, (0.0, 0.0, 0.0)
+    still = copy.copy(volume)  # fields already checked: the light step asks several times
+    size = tuple(float(np.float32(h - low)) for low, h in zip(lo, hi, strict=True))
+    object.__setattr__(still, "box", ((0.0, 0.0, 0.0), size))
+    return still, tuple(float(v) for v in lo)
+
+
 MEDIUM = registry.Medium(
     core_args=volume_core_args,
     extinction=volume_extinction,
     own_lattice=own_lattice,
     light_box=lambda v: v.box,
+    moved=at_origin,
 )
 
 KIND = registry.register(
@@ -57,4 +79,4 @@ KIND = registry.register(
     )
 )
 
-__all__ = ["KIND", "MEDIUM", "digest", "own_lattice"]
+__all__ = ["KIND", "MEDIUM", "at_origin", "digest", "own_lattice"]
