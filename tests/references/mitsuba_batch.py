@@ -31,8 +31,9 @@ import numpy as np
 BLOCK, COVERED = 4, 0.5
 
 
-def build(mi, spec, kind: str, spp: int) -> object:
-    """The Mitsuba scene of one image of a description: ``ms`` or ``T``."""
+def build(mi, spec, kind: str, spp: int, max_depth: int = 512) -> object:
+    """The Mitsuba scene of one image of a description: ``ms`` or ``T`` (``max_depth`` the
+    path's vertices for ``ms``: 2 is single scattering)."""
     lo, hi = spec["box"][0], spec["box"][1]
     centre, half = (lo + hi) / 2, (hi - lo) / 2
     cam = spec["camera"]
@@ -46,7 +47,7 @@ def build(mi, spec, kind: str, spp: int) -> object:
     grid = mi.VolumeGrid(np.ascontiguousarray(spec["sigma_t"][..., None], np.float32))
     scene = {
         "type": "scene",
-        "integrator": {"type": "volpath", "max_depth": 1 if transmittance else 512,
+        "integrator": {"type": "volpath", "max_depth": 1 if transmittance else int(max_depth),
                        "rr_depth": 512},
         "medium_0": {
             "type": "cube",

@@ -169,7 +169,9 @@ def block_errors(img: np.ndarray, ref: np.ndarray) -> dict[str, float]:
     }
 
 
-def phase_table(scene: cu.Scene, nodes: int = PHASE_NODES) -> tuple[np.ndarray, float]:
+def phase_table(
+    scene: cu.Scene, nodes: int = PHASE_NODES, keep_peak: bool = False
+) -> tuple[np.ndarray, float]:
     """cumuli's phase function as Mitsuba's ``tabphase``, its forward peak treated as unscattered.
 
     Returns ``(table, f)``: ``nodes`` values uniform in cos θ over [−1, 1] (forward = +1), each
@@ -179,19 +181,23 @@ def phase_table(scene: cu.Scene, nodes: int = PHASE_NODES) -> tuple[np.ndarray, 
     cone's share goes straight on (``σt' = σt(1 − f·ϖ)``, ``ϖ' = ϖ(1 − f)/(1 − f·ϖ)``; the
     δ-M similarity relation): the same light everywhere except within the cone's angle of the
     sun's direction, and none of the fireflies that the Mie phase's diffraction peak (a tenth of
-    its light within 0.3°) gives a path tracer's sun connections."""
+    its light within 0.3°) gives a path tracer's sun connections. ``keep_peak``: the whole
+    phase, its cone kept (``f`` is still its share): the medium as it is, for single scattering
+    (whose sun connections never fall in the cone on these views)."""
     c = np.linspace(-1.0, 1.0, nodes)
     h = c[1] - c[0]
     lo, hi = np.maximum(c - h / 2, -1.0), np.minimum(c + h / 2, 1.0)
-    out = np.empty(nodes)
+    out, whole = np.empty(nodes), np.empty(nodes)
     peak = c > PEAK_COS - 2 * h
     for cells, k in ((~peak, 16), (peak, 4096)):
         t = (np.arange(k) + 0.5) / k
         pts = lo[cells, None] + (hi - lo)[cells, None] * t[None, :]
         vals = phase_values(scene.settings, pts)
         out[cells] = np.where(pts < PEAK_COS, vals, 0.0).mean(axis=1)
+        if keep_peak:
+            whole[cells] = vals.mean(axis=1)
     f = 1.0 - 2 * np.pi * float(np.sum((out[1:] + out[:-1]) / 2 * h))
-    return out / (1.0 - f), f
+    return (whole if keep_peak else out / (1.0 - f)), f
 
 
 def export_spec(name: str, path: Path) -> None:
