@@ -75,3 +75,29 @@ def exact_impostors_agree() -> Callable[..., tuple[np.ndarray, cu.ImpostorCache,
     """``exact_impostors_agree(renderer, scene, cameras, w, h)``: GL and C++ frames through
     impostor caches asserted to agree; returns ``(last GL frame, GL cache, C++ cache)``."""
     return _exact_impostors_agree
+
+
+@pytest.fixture
+def counted(monkeypatch: pytest.MonkeyPatch) -> Iterator[dict[str, int]]:
+    """Calls of the physical light step's own stages (extinction lattice, sun lattice, sky
+    visibility), from an empty memo: what a light step computed rather than reused."""
+    from cumuli import _core
+    from cumuli.light import memo
+    from cumuli.light import physical as phys
+
+    calls = {"extinction": 0, "sun": 0, "visibility": 0}
+    originals = (phys.extinction_grid, _core.light_space_depth, _core.sky_visibility)
+
+    def counter(name: str, fn: Callable) -> Callable:
+        def wrapped(*a, **k):
+            calls[name] += 1
+            return fn(*a, **k)
+
+        return wrapped
+
+    monkeypatch.setattr(phys, "extinction_grid", counter("extinction", originals[0]))
+    monkeypatch.setattr(_core, "light_space_depth", counter("sun", originals[1]))
+    monkeypatch.setattr(_core, "sky_visibility", counter("visibility", originals[2]))
+    memo.clear()
+    yield calls
+    memo.clear()

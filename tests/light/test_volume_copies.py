@@ -10,7 +10,6 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli import _core
 from cumuli.kinds.volume import at_origin
 from cumuli.light import memo
 from cumuli.light import physical as phys
@@ -26,27 +25,6 @@ def _blob(detail: float = 0.0) -> cu.VolumeCloud:
     lumpy = 1.0 - (x * x + 1.4 * y * y + z * z) + 0.15 * np.sin(5 * x) * np.cos(4 * z)
     density = (3.0 * np.clip(lumpy, 0.0, None)).astype(np.float32)
     return cu.VolumeCloud(density, box=BOX, detail=detail)
-
-
-@pytest.fixture
-def counted(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
-    """Calls of the light step's own stages (extinction lattice, sun lattice, sky visibility)."""
-    calls = {"extinction": 0, "sun": 0, "visibility": 0}
-    originals = (phys.extinction_grid, _core.light_space_depth, _core.sky_visibility)
-
-    def counter(name: str, fn):
-        def wrapped(*a, **k):
-            calls[name] += 1
-            return fn(*a, **k)
-
-        return wrapped
-
-    monkeypatch.setattr(phys, "extinction_grid", counter("extinction", originals[0]))
-    monkeypatch.setattr(_core, "light_space_depth", counter("sun", originals[1]))
-    monkeypatch.setattr(_core, "sky_visibility", counter("visibility", originals[2]))
-    memo.clear()
-    yield calls
-    memo.clear()
 
 
 def _scene(drawables, settings=PHYSICAL) -> cu.Scene:

@@ -10,9 +10,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
-from cumuli import _core
 from cumuli.light import memo
-from cumuli.light import physical as phys
 
 SUN = cu.Sun(direction=(0.45, 0.75, 0.5))
 NOISE = cu.Noise(seed=7, size=32)
@@ -25,27 +23,6 @@ WIND = (1.5, 0.0, -0.5)
 def windy() -> cu.Cloud:
     base = cu.gaussian_cumulus(seed=1)
     return cu.Cloud(base.centres, base.radii, base.rotations, wind=WIND)
-
-
-@pytest.fixture
-def counted(monkeypatch: pytest.MonkeyPatch) -> dict[str, int]:
-    """Calls of the light step's own stages (extinction lattice, sun lattice, sky visibility)."""
-    calls = {"extinction": 0, "sun": 0, "visibility": 0}
-    originals = (phys.extinction_grid, _core.light_space_depth, _core.sky_visibility)
-
-    def counter(name: str, fn):
-        def wrapped(*a, **k):
-            calls[name] += 1
-            return fn(*a, **k)
-
-        return wrapped
-
-    monkeypatch.setattr(phys, "extinction_grid", counter("extinction", originals[0]))
-    monkeypatch.setattr(_core, "light_space_depth", counter("sun", originals[1]))
-    monkeypatch.setattr(_core, "sky_visibility", counter("visibility", originals[2]))
-    memo.clear()
-    yield calls
-    memo.clear()
 
 
 def _scene(clouds, settings=PHYSICAL) -> cu.Scene:
