@@ -93,9 +93,8 @@ def test_a_shaded_copy_computes_only_the_shade(counted) -> None:
     assert light.upstream is not None and light.upstream.max() > 0.5
     # The copy's extinction, sun lattice and sky visibility were the first volume's, and so were
     # the shader's (another copy of it): only the shade is new.
-    assert counted["extinction"] - before["extinction"] == 0
-    assert counted["visibility"] - before["visibility"] == 0
-    assert counted["sun"] - before["sun"] == 0
+    new = {k: counted[k] - before[k] for k in counted}
+    assert new == {"extinction": 0, "sun": 0, "visibility": 0}
     memo.clear()
     back = cu.prepare_light(_scene([volume, shader])).lights[0]
     np.testing.assert_allclose(light.upstream, back.upstream, rtol=1e-4, atol=1e-4)

@@ -59,9 +59,8 @@ def test_shaded_by_another_only_the_shade_is_new(windy, counted) -> None:
     assert moved.upstream is not None and moved.upstream.max() > 0.5
     # The windy cloud's extinction, sun lattice and sky visibility were the still one's; the
     # shading cloud's were new (one each).
-    assert counted["extinction"] - before["extinction"] == 1
-    assert counted["visibility"] - before["visibility"] == 1
-    assert counted["sun"] - before["sun"] == 1
+    new = {k: counted[k] - before[k] for k in counted}
+    assert new == {"extinction": 1, "sun": 1, "visibility": 1}
     memo.clear()
     back = cu.prepare_light(_scene([windy, shader])).lights[0]
     np.testing.assert_allclose(moved.upstream, back.upstream, rtol=1e-4, atol=1e-4)
