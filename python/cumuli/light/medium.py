@@ -224,3 +224,56 @@ def density_volume(
     if noise is None and getattr(type(cloud), "kind", None) == "cloud":
         raise ValueError("noise is required for a cumuli.Cloud (its density is fBm)")
     return extinction_grid(cloud, noise, settings, resolution, 1, threads)  # type: ignore[arg-type]
+
+
+def medium_args(drawables: Any, settings: Any) -> tuple[list, list]:
+    """The core's ``(clouds, volumes)`` lists of the drawables' extinction (their medium, each
+    kind's :attr:`cumuli.registry.Medium.core_args`): the 2018 clouds' density times
+    :func:`cloud_extinction_scale`, a lattice's ``sigma_t·density``."""
+    clouds: list = []
+    volumes: list = []
+    for d in drawables:
+        # Particle clouds and billboards keep their own light models (Harris 2002, Torchelsen &
+        # Musse 2005): they have no extinction field; their shadows on the media are added after
+        # the light passes (cumuli.light.between.onto_media).
+        medium = registry.of(d).medium
+        if medium is not None:
+            c, v = medium.core_args(d, settings)
+            clouds += c
+            volumes += v
+    return clouds, volumes
+
+
+def fbm_args(settings: Any) -> tuple[int, float, float, float]:
+    return settings.octaves, settings.gain, settings.lacunarity, settings.frequency
+
+
+def march_step(drawable: Any, step: float) -> float:
+    """The step a drawable's medium is marched at where ``step`` is asked: its own
+    (:attr:`cumuli.registry.Medium.step`: a lattice at a scale of its own, like a deck kilometres
+    wide) or ``step``."""
+    medium = registry.of(drawable).medium
+    own = None if medium is None or medium.step is None else medium.step(drawable)
+    return float(step) if own is None else float(own)
+
+
+def optical_depth(
+    drawables: Any, scene: Any, points: np.ndarray, direction: Any, step: float, threads: int
+) -> np.ndarray | None:
+    """``τ`` ``(N,)`` from world ``points`` towards ``direction`` through the media of
+    ``drawables``, in segments of at most ``step`` (or a medium's own, :func:`march_step`)
+    sampled at their midpoints; None when none is a medium. Media marched at the same step share
+    one C++ call; the optical depths of the others add."""
+    groups: dict[float, list[Any]] = {}
+    for d in drawables:
+        if registry.of(d).medium is not None:
+            groups.setdefault(march_step(d, step), []).append(d)
+    tau = None
+    for at, group in groups.items():
+        clouds, volumes = medium_args(group, scene.settings)
+        part = _core.medium_optical_depth(
+            clouds, volumes, scene.noise._core, *fbm_args(scene.settings), points, direction,
+            at, threads,
+        )  # fmt: skip
+        tau = part if tau is None else tau + part
+    return tau

@@ -55,7 +55,7 @@ def media_transmittance(
     scene: Any, points: np.ndarray, direction: Any, threads: int = 0
 ) -> np.ndarray | None:
     """``exp(−τ)`` ``(N,)`` float32 from ``(N, 3)`` float32 points towards ``direction`` through
-    the scene's media (its 2018 clouds and volumes, :func:`cumuli.light.physical.medium_args`),
+    the scene's media (its 2018 clouds and volumes, :func:`cumuli.light.medium.medium_args`),
     in segments of at most ``settings.light_step`` sampled at their midpoints; None when the
     scene has none."""
     tau = optical_depth(scene.clouds, scene, points, direction, scene.settings.light_step, threads)
