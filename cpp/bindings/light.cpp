@@ -1294,6 +1294,33 @@ void bind_physical_light(py::module_& m) {
       "flux source (0: an isotropic source); solver: the conjugate gradients' preconditioner, "
       "'mic' (modified incomplete Cholesky over the medium cells) or 'jacobi' (the diagonal, "
       "over the whole lattice).");
+  m.def(
+      "diffusion_anisotropy",
+      [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& phi, float albedo,
+         float mean_cosine, int threads) {
+        const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
+        if (phi.ndim() != 4 || phi.shape(0) != g.d || phi.shape(1) != g.h || phi.shape(2) != g.w ||
+            phi.shape(3) < 1 || phi.shape(3) > 8)
+          throw py::value_error("phi must have shape (D, H, W, C) over the extinction's lattice");
+        if (!(albedo >= 0.0f && albedo <= 1.0f)) throw py::value_error("albedo must be in [0, 1]");
+        if (!(mean_cosine > -1.0f && mean_cosine < 1.0f))
+          throw py::value_error("mean_cosine must be in (-1, 1)");
+        DiffusionParams p;
+        p.albedo = albedo;
+        p.mean_cosine = mean_cosine;
+        const int channels = static_cast<int>(phi.shape(3));
+        std::vector<float> out;
+        {
+          py::gil_scoped_release release;
+          out = diffusion_anisotropy(ext.data(), g, phi.data(), channels, p, threads);
+        }
+        return adopt_array(std::move(out), {g.d, g.h, g.w, 3});
+      },
+      py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("phi"), py::arg("albedo"),
+      py::arg("mean_cosine"), py::arg("threads") = 0,
+      "The anisotropy r = 3E/phi of channel 0 of a diffusion solution phi (D, H, W, C): "
+      "(D, H, W, 3), E = -D grad phi the diffuse flux (Marshak's leak at the medium's faces), "
+      "|r| <= 3; the empty cells next to the medium hold their medium neighbours' mean.");
 }
 
 }  // namespace cumuli::bind

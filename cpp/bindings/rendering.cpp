@@ -208,6 +208,7 @@ void bind_render_params(py::module_& m) {
       .def_readwrite("oct_b", &PhysicalParams::oct_b)
       .def_readwrite("oct_c", &PhysicalParams::oct_c)
       .def_readwrite("oct_poisson", &PhysicalParams::oct_poisson)
+      .def_readwrite("oct_first", &PhysicalParams::oct_first)
       .def(
           "octave_sum",
           [](const PhysicalParams& p, float cos_theta, const FloatArray& tau) {

@@ -17,6 +17,7 @@ uniform vec4 u_phys_mie_p;        // its g_HG, g_D, α, w_D
 uniform int u_phys_octaves;       // scattering orders drawn
 uniform vec3 u_phys_abc;          // octave constants a, b, c
 uniform float u_phys_poisson;     // β of the Poisson weights (0: plain octaves)
+uniform float u_phys_first;       // order 0's depth scale, 1 − f·ϖ (the δ-M sun)
 uniform int u_phys_seed;          // jitter seed
 uniform float u_phys_min_t;       // the ray stops below this transmittance
 
@@ -27,7 +28,8 @@ float phys_phase(float c, float scale) {
     return (1.0 - u_phys_g.z) * p1 + u_phys_g.z * hg_phase(u_phys_g.y * scale, c);
 }
 
-// Weights aⁱ·phase(bⁱ·g, c) and depth scales cⁱ of the drawn orders; returns their count.
+// Weights aⁱ·phase(bⁱ·g, c) and depth scales cⁱ of the drawn orders (order 0's the δ-M
+// sun's, u_phys_first); returns their count.
 int octave_terms(float c, out float w[MAX_OCTAVES], out float k[MAX_OCTAVES]) {
     int n = clamp(u_phys_octaves, 1, MAX_OCTAVES);
     float a = 1.0, b = 1.0, s = 1.0;
@@ -36,7 +38,7 @@ int octave_terms(float c, out float w[MAX_OCTAVES], out float k[MAX_OCTAVES]) {
         k[i] = 0.0;
         if (i >= n) continue;
         w[i] = a * phys_phase(c, b);
-        k[i] = s;
+        k[i] = i == 0 ? u_phys_first : s;
         a *= u_phys_abc.x;
         b *= u_phys_abc.y;
         s *= u_phys_abc.z;

@@ -40,19 +40,18 @@ GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25, "transmitta
 #: ΔT). Keyed by (view, metric); every other pair is held to GOAL. Measured with the constants
 #: fitted on the side-lit, back-lit and metaball views (``cumuli.light.physical.FIT_VIEWS``),
 #: the diffusion fed the forward-scattered sun's flux source and its sun source with the phase's
-#: forward peak taken as unscattered (δ-M), with the sun lattice of two nodes per cell along the
-#: light and the sky marched by runs of lanes: back-lit (fitted) median 10.6 %, p90 26.7 % (mean
-#: −0.0 % meets the goal); top-lit (held out) −12.6 % mean, median 12.2 %, p90 25.3 %; L-system
-#: (held out) +7.2 % mean, p90 28.3 %, ΔT 0.017 (median 8.1 % meets the goal). The sunset (held
-#: out) and the metaball meet the goal.
+#: forward peak taken as unscattered (δ-M), single scattering reached by the δ-M sun, and the
+#: diffuse sun light seen through its flux (``cumuli.light.view``): back-lit (fitted) median
+#: 10.7 %, p90 26.1 % (mean +0.3 % meets the goal); top-lit (held out) −11.0 % mean, median
+#: 11.5 % (p90 23.8 % meets the goal); L-system (held out) +9.0 % mean, p90 29.3 %, ΔT 0.017
+#: (median 9.5 % meets the goal). The sunset (held out) and the metaball meet the goal.
 GUARDS: dict[tuple[str, str], float] = {
-    ("backlit", "block_median"): 0.115,
-    ("backlit", "block_p90"): 0.277,
-    ("toplit", "mean_ratio"): 0.136,
-    ("toplit", "block_median"): 0.132,
-    ("toplit", "block_p90"): 0.263,
-    ("lsystem", "mean_ratio"): 0.082,
-    ("lsystem", "block_p90"): 0.293,
+    ("backlit", "block_median"): 0.117,
+    ("backlit", "block_p90"): 0.271,
+    ("toplit", "mean_ratio"): 0.12,
+    ("toplit", "block_median"): 0.125,
+    ("lsystem", "mean_ratio"): 0.10,
+    ("lsystem", "block_p90"): 0.303,
     ("lsystem", "transmittance"): 0.02,
 }
 

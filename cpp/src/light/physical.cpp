@@ -1501,4 +1501,69 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
   return out;
 }
 
+std::vector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, const float* phi,
+                                        int channels, const DiffusionParams& p, int threads) {
+  g.validate();
+  if (channels < 1 || channels > 8) throw std::invalid_argument("channels must be in [1, 8]");
+  const DiffusionLattice L(ext, g, p);
+  const std::size_t n = L.n;
+  std::vector<float> out(n * 3, 0.0f);
+  auto at = [&](std::size_t i) { return static_cast<double>(phi[i * channels]); };
+  // The flux through the face of medium cell i on side ±1 of axis a, along +a.
+  auto face = [&](std::size_t i, const int c[3], int a, int side) {
+    const int cc = c[a] + side;
+    const bool inside = cc >= 0 && cc < L.dims[a];
+    const std::size_t j = side > 0 ? i + L.stride[a] : i - L.stride[a];
+    const double ha = L.h[a];
+    if (inside && L.medium[j]) {
+      const double dh = L.conductance(side > 0 ? i : j, side > 0 ? j : i, a) * ha;
+      return -dh * (side > 0 ? at(j) - at(i) : at(i) - at(j));
+    }
+    const double d = L.D[i];
+    return side * 2.0 * d * at(i) / (ha + 4.0 * d);  // Marshak's leak, outward
+  };
+  parallel_for(static_cast<std::size_t>(L.Dd), threads, [&](std::size_t zz) {
+    const int z = static_cast<int>(zz);
+    for (int y = 0; y < L.H; ++y)
+      for (int x = 0; x < L.W; ++x) {
+        const std::size_t i = (static_cast<std::size_t>(z) * L.H + y) * L.W + x;
+        const double f = at(i);
+        if (!L.medium[i] || !(f > 0.0)) continue;
+        const int c[3] = {x, y, z};
+        double r[3], norm = 0.0;
+        for (int a = 0; a < 3; ++a) {
+          r[a] = 3.0 * 0.5 * (face(i, c, a, -1) + face(i, c, a, 1)) / f;
+          norm += r[a] * r[a];
+        }
+        const double cap = std::sqrt(norm) > 3.0 ? 3.0 / std::sqrt(norm) : 1.0;
+        for (int a = 0; a < 3; ++a) out[i * 3 + a] = static_cast<float>(r[a] * cap);
+      }
+  });
+  // Empty cells next to the medium: their medium neighbours' mean (read from the medium cells
+  // only, written to the empty ones).
+  parallel_for(static_cast<std::size_t>(L.Dd), threads, [&](std::size_t zz) {
+    const int z = static_cast<int>(zz);
+    for (int y = 0; y < L.H; ++y)
+      for (int x = 0; x < L.W; ++x) {
+        const std::size_t i = (static_cast<std::size_t>(z) * L.H + y) * L.W + x;
+        if (L.medium[i]) continue;
+        const int c[3] = {x, y, z};
+        float acc[3] = {0.0f, 0.0f, 0.0f};
+        int count = 0;
+        for (int a = 0; a < 3; ++a)
+          for (int side = -1; side <= 1; side += 2) {
+            const int cc = c[a] + side;
+            if (cc < 0 || cc >= L.dims[a]) continue;
+            const std::size_t j = side > 0 ? i + L.stride[a] : i - L.stride[a];
+            if (!L.medium[j]) continue;
+            for (int k = 0; k < 3; ++k) acc[k] += out[j * 3 + k];
+            ++count;
+          }
+        if (count > 0)
+          for (int k = 0; k < 3; ++k) out[i * 3 + k] = acc[k] / static_cast<float>(count);
+      }
+  });
+  return out;
+}
+
 }  // namespace cumuli

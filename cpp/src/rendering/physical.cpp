@@ -23,6 +23,8 @@ void PhysicalParams::validate() const {
   for (float c : {oct_a, oct_b, oct_c})
     if (!(c >= 0.0f && c <= 1.0f))
       throw std::invalid_argument("octave constants must be in [0, 1]");
+  if (!(oct_first > 0.0f && oct_first <= 1.0f))
+    throw std::invalid_argument("oct_first must be in (0, 1]");
   if (!(oct_poisson >= 0.0f && oct_poisson <= 16.0f))
     throw std::invalid_argument("oct_poisson must be in [0, 16]");
   if (jitter_seed < 0 || jitter_seed > 1023)
@@ -43,7 +45,7 @@ OctaveTerms::OctaveTerms(const PhysicalParams& p, float cos_theta)
   float a = 1.0f, b = 1.0f, c = 1.0f;
   for (int i = 0; i < n; ++i) {
     weight[i] = a * p.phase(cos_theta, b);
-    scale[i] = c;
+    scale[i] = i == 0 ? p.oct_first : c;
     a *= p.oct_a;
     b *= p.oct_b;
     c *= p.oct_c;

@@ -16,8 +16,9 @@ maths):
   the phase function's ``g`` scaled by ``bⁿ``, its sun light weighted by the Poisson law of
   ``n`` collisions on a path of optical depth ``β·τ``, ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}``
   (:data:`OCTAVE_A`, :data:`OCTAVE_B`, :data:`OCTAVE_C`, ``β`` = :data:`OCTAVE_POISSON`): thin
-  fringes draw little high-order light, the cloud's depths most of theirs, and order 0 is exact
-  single scattering (:func:`octave_sum`, the drawers' numpy reference).
+  fringes draw little high-order light, the cloud's depths most of theirs, and order 0 is
+  single scattering, reached by the δ-M sun (:func:`first_order_depth_scale`; :func:`octave_sum`,
+  the drawers' numpy reference).
 - **Multiple scattering through the cloud**: the diffusion approximation (Stam 1995) on the
   world lattice, fed by the sun's and the sky's first scattering, with Marshak's vacuum
   boundary: the light that reaches the shadowed side and the far side of the cloud. The sun's
@@ -29,7 +30,9 @@ maths):
   sees the first mean free path of a cell that spans several, where the diffuse light is larger
   than the cell's mean, and the whole of a cell thinner than one: the fluence is read with a
   gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
-  ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`).
+  ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`),
+  and through its flux: ``anisotropy`` ``r = 3E/φ``, applied per frame for the camera
+  (:mod:`cumuli.light.view`, :data:`FLUX_LIMIT`).
 - **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
   quadrature with 2·:data:`SKY_SAMPLES`² directions; :data:`SKY_RAYS`) times the sky's SH
   projection gives the sky irradiance reaching each voxel unscattered; with multiple
@@ -60,7 +63,14 @@ from cumuli import _core, registry
 from cumuli.ground import ground_radiance_unshadowed
 from cumuli.light.digests import drawable_digest
 from cumuli.light.footprint import box_corners
-from cumuli.light.medium import cloud_extinction_scale, extinction_grid  # noqa: F401 (public)
+from cumuli.light.medium import (  # noqa: F401 (public)
+    cloud_extinction_scale,
+    extinction_grid,
+    fbm_args,
+    march_step,
+    medium_args,
+    optical_depth,
+)  # fmt: skip
 from cumuli.light.memo import remember
 from cumuli.light.moved import moved, moved_box, moved_frame, moved_light
 from cumuli.light.phase import PEAK_COS, forward_peak_share, phase, phase_values  # noqa: F401
@@ -72,18 +82,21 @@ from cumuli.sky import sky_args
 #: ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}`` (``β`` = :data:`OCTAVE_POISSON`; 0 gives the plain ``e^{−cⁿ·τ}``).
 OCTAVES = 2
 OCTAVE_A = 1.0
-OCTAVE_B = 0.84
-OCTAVE_C = 0.48
-OCTAVE_POISSON = 1.0
+OCTAVE_B = 0.815
+OCTAVE_C = 0.498
+OCTAVE_POISSON = 0.983
 #: Gains on the lattice's diffuse light, reached in optically thick cells: the sun's multiple
 #: scattering, and the sky's light (:func:`lattice_gains`).
-SUN_GAIN = 1.69
-SKY_GAIN = 3.25
+SUN_GAIN = 1.277
+SKY_GAIN = 3.385
 #: Optical thickness ``τg`` of a lattice cell over which the gains rise from 1 to their value.
-GAIN_DEPTH = 1.55
+GAIN_DEPTH = 1.762
 #: Weight of the forward-scattered sun's flux source in the diffusion (``−∇·(3D·Q1)``, the first
 #: moment of the collided sun light; 0: an isotropic source, 1: the whole of it).
-SUN_FORWARD = 0.54
+SUN_FORWARD = 0.55
+#: How far the camera's view of the diffuse sun light may lean on its flux: the drawers read
+#: ``φ·(1 + ḡ·clamp(r·d, ±FLUX_LIMIT))``, ``r = 3E/φ`` (:mod:`cumuli.light.view`).
+FLUX_LIMIT = 0.447
 #: The views the constants above were fitted on (``benchmarks/fit_physical.py``); the other
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
@@ -131,7 +144,10 @@ class PhysicalLight:
     the drawers use; ``octaves`` how many scattering orders the drawers draw from ``τ_sun``;
     ``shaded_from``: the drawable's own light when this one also holds the shadows of the
     scene's particle clouds and billboards (the light step's `onto_media`; a copy given back is
-    replaced by it, so nothing is shaded twice), else None.
+    replaced by it, so nothing is shaded twice), else None; ``anisotropy`` ``(D, H, W, 3)`` (or
+    None without multiple scattering) ``r = 3E/φ`` of the sun's diffuse light
+    (``_core.diffusion_anisotropy``), which :mod:`cumuli.light.view` turns into the camera's view
+    of it; ``seen_from``: on such a view, the light it was made from (else None).
     """
 
     frame: tuple
@@ -141,6 +157,8 @@ class PhysicalLight:
     octaves: int
     shaded_from: PhysicalLight | None = None
     upstream: np.ndarray | None = None
+    anisotropy: np.ndarray | None = None
+    seen_from: PhysicalLight | None = None
 
     def sample_depth(self, points: Any) -> np.ndarray:
         """``τ_sun`` at world ``(N, 3)`` points (trilinear in the sun's lattice, plus the
@@ -159,7 +177,10 @@ class PhysicalLight:
         """Whether ``other`` shades alike wherever it is: the same sun axes, lattice sizes and
         orders, equal lattices (the light of a cloud the wind moved shares them, moved). The
         impostor cache asks it (a light moved with its cloud keeps the cloud's impostor)."""
-        if not isinstance(other, PhysicalLight) or self.octaves != other.octaves:
+        if not isinstance(other, PhysicalLight):
+            return False
+        self, other = self.seen_from or self, other.seen_from or other  # their camera's view aside
+        if self.octaves != other.octaves:
             return False
         (u, v, w, lo, hi, res), (u2, v2, w2, lo2, hi2, res2) = self.frame, other.frame
         extent = np.subtract(hi, lo), np.subtract(hi2, lo2)
@@ -172,59 +193,6 @@ class PhysicalLight:
                  (self.upstream, other.upstream))  # fmt: skip
         return all(a is b or (a is not None and b is not None and a.shape == b.shape
                               and np.array_equal(a, b)) for a, b in pairs)  # fmt: skip
-
-
-def medium_args(drawables: Any, settings: Any) -> tuple[list, list]:
-    """The core's ``(clouds, volumes)`` lists of the drawables' extinction (their medium, each
-    kind's :attr:`cumuli.registry.Medium.core_args`): the 2018 clouds' density times
-    :func:`cloud_extinction_scale`, a lattice's ``sigma_t·density``."""
-    clouds: list = []
-    volumes: list = []
-    for d in drawables:
-        # Particle clouds and billboards keep their own light models (Harris 2002, Torchelsen &
-        # Musse 2005): they have no extinction field; their shadows on the media are added after
-        # the light passes (cumuli.light.between.onto_media).
-        medium = registry.of(d).medium
-        if medium is not None:
-            c, v = medium.core_args(d, settings)
-            clouds += c
-            volumes += v
-    return clouds, volumes
-
-
-def fbm_args(settings: Any) -> tuple[int, float, float, float]:
-    return settings.octaves, settings.gain, settings.lacunarity, settings.frequency
-
-
-def march_step(drawable: Any, step: float) -> float:
-    """The step a drawable's medium is marched at where ``step`` is asked: its own
-    (:attr:`cumuli.registry.Medium.step`: a lattice at a scale of its own, like a deck kilometres
-    wide) or ``step``."""
-    medium = registry.of(drawable).medium
-    own = None if medium is None or medium.step is None else medium.step(drawable)
-    return float(step) if own is None else float(own)
-
-
-def optical_depth(
-    drawables: Any, scene: Any, points: np.ndarray, direction: Any, step: float, threads: int
-) -> np.ndarray | None:
-    """``τ`` ``(N,)`` from world ``points`` towards ``direction`` through the media of
-    ``drawables``, in segments of at most ``step`` (or a medium's own, :func:`march_step`)
-    sampled at their midpoints; None when none is a medium. Media marched at the same step share
-    one C++ call; the optical depths of the others add."""
-    groups: dict[float, list[Any]] = {}
-    for d in drawables:
-        if registry.of(d).medium is not None:
-            groups.setdefault(march_step(d, step), []).append(d)
-    tau = None
-    for at, group in groups.items():
-        clouds, volumes = medium_args(group, scene.settings)
-        part = _core.medium_optical_depth(
-            clouds, volumes, scene.noise._core, *fbm_args(scene.settings), points, direction,
-            at, threads,
-        )  # fmt: skip
-        tau = part if tau is None else tau + part
-    return tau
 
 
 #: The stages :func:`physical_light` times when asked (``timings``), in the order they run.
@@ -345,7 +313,7 @@ def physical_light(
         )  # fmt: skip
         if peak > 0.0:
             sun_t *= np.float32(1.0 - peak)
-    sky_e = phi = None
+    sky_e = phi = aniso = None
     if s.sky_light:
         with _stage(timings, "sky"):
             visibility = remember(
@@ -377,6 +345,9 @@ def physical_light(
                 forward=weight_f,
                 solver=DIFFUSION_SOLVER,
             )
+        with _stage(timings, "diffusion"):
+            aniso = _core.diffusion_anisotropy(ext, lo, hi, phi, s.albedo, s.mean_cosine, threads)
+            aniso.setflags(write=False)
     # A: G_sun·φ_sun; RGB: G_sky·(E_sky + φ_sky), the gains of lattice_gains (E_sky alone
     # without multiple scattering).
     grid = _core.physical_grid(
@@ -384,8 +355,9 @@ def physical_light(
     )
     grid.setflags(write=False)
     return PhysicalLight(
-        frame, depth, grid, moved_box((lo, hi), offset), octaves, upstream=upstream_depth
-    )
+        frame, depth, grid, moved_box((lo, hi), offset), octaves, upstream=upstream_depth,
+        anisotropy=aniso,
+    )  # fmt: skip
 
 
 def _read_only(fresh: np.ndarray) -> np.ndarray:
@@ -529,10 +501,27 @@ def octave_sum(settings: Any, tau: Any, cos_theta: Any, octaves: int) -> np.ndar
     weight = np.ones_like(t)
     for n in range(octaves):
         p = phase_values(settings, c, OCTAVE_B**n)
-        out += OCTAVE_A**n * p * weight * np.exp(-(OCTAVE_C**n) * t)
+        scale = first_order_depth_scale(settings) if n == 0 else OCTAVE_C**n
+        out += OCTAVE_A**n * p * weight * np.exp(-scale * t)
         if OCTAVE_POISSON > 0.0:
             weight = weight * (OCTAVE_POISSON * t) / (n + 1)
     return out
+
+
+#: Whether order 0 (single scattering) reaches a point with the δ-M sun, ``e^{−(1 − f·ϖ)τ}``.
+FIRST_ORDER_DELTA_M = True
+
+
+def first_order_depth_scale(settings: Any) -> float:
+    """Order 0's optical-depth scale: ``1 − f·ϖ`` (:func:`forward_peak_share`), the δ-M sun.
+
+    The phase's forward peak scatters light on along the sun's ray: the sun light that has
+    only been forward-peak scattered still reaches the point, so single scattering out of the
+    peak sees ``e^{−(1 − f·ϖ)τ}``, not ``e^{−τ}`` (the δ-M similarity relation, as the
+    diffusion's source)."""
+    if not FIRST_ORDER_DELTA_M:
+        return 1.0
+    return float(1.0 - forward_peak_share(settings) * float(settings.albedo))
 
 
 def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[float, float]]:
@@ -542,7 +531,7 @@ def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[fl
     out = []
     for i in range(octaves):
         p = phase(settings, cos_theta, OCTAVE_B**i)
-        out.append((OCTAVE_A**i * p, OCTAVE_C**i))
+        out.append((OCTAVE_A**i * p, first_order_depth_scale(settings) if i == 0 else OCTAVE_C**i))
     return out
 
 

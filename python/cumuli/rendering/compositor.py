@@ -2,7 +2,8 @@
 "Compositor").
 
 A render is three steps: the checks that need no light, the light step
-(:func:`cumuli.prepare_light`, skipped for a :class:`cumuli.LitScene`), and the draw. A scene
+(:func:`cumuli.prepare_light`, skipped for a :class:`cumuli.LitScene`; its camera-dependent part,
+:func:`cumuli.light.view.seen_from`, per frame), and the draw. A scene
 whose drawables one drawer can draw in a single pass over the sky — only 2018 clouds (the
 marcher orders them per pixel itself), or a single drawable — is drawn so, bit-identical to that
 drawer on its own. Otherwise every drawable is drawn as a premultiplied layer ``(colour, 1 − T)``
@@ -29,6 +30,7 @@ from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _thread_default, check_context, default_context
 from cumuli.ground import ground_args
 from cumuli.light.prepare import LitScene, prepare_light
+from cumuli.light.view import seen_from
 from cumuli.model.volume import DEFAULT_DETAIL, VolumeCloud
 from cumuli.rendering.air import finish
 from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
@@ -44,8 +46,7 @@ TILE = 1024
 MAX_PIXELS = 1 << 26
 #: Most bytes the layers of one layered render may take (one (H, W, 4) float32 layer per call).
 MAX_LAYER_BYTES = 1 << 31
-#: Largest image edge of the CPU backend.
-MAX_EDGE = 1 << 14
+MAX_EDGE = 1 << 14  #: Largest image edge of the CPU backend.
 BACKENDS = ("gl", "cpu")
 
 
@@ -61,10 +62,9 @@ def _one_drawer(kinds: set[str]) -> bool:
 
 def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     """The draw calls of ``scene``: one ``(kind, indices)`` over the sky when one pass can draw
-    everything (an empty scene draws the sky with the marcher; grouped kinds sharing a drawer,
-    like billboard clouds and fields, count as one; a scene with a ground needs a drawer that
-    draws the ground), else one per drawable. With solids, every drawable is its own layer (each
-    composites with the solids by its own box)."""
+    everything (an empty scene draws the sky with the marcher; grouped kinds sharing a drawer
+    count as one; a ground needs a drawer that draws it), else one per drawable (so with solids,
+    each composited with them by its own box)."""
     kinds = scene.kinds
     if not kinds:
         return [("cloud", [])]
@@ -73,7 +73,7 @@ def plan(scene: Scene) -> list[tuple[str, list[int]]]:
     return [(kind, [k]) for k, kind in enumerate(kinds)]
 
 
-def _union_box(scene: Scene, indices: Sequence[int]) -> np.ndarray:
+def _union_box(scene: Scene, indices: Sequence[int]) -> np.ndarray:  # of drawables' layer boxes
     boxes = np.array([scene.clouds[k].layer_box() for k in indices], np.float32)
     return np.stack([boxes[:, 0].min(axis=0), boxes[:, 1].max(axis=0)])
 
@@ -101,6 +101,7 @@ def compose(
     """Draw ``lit`` with ``painter`` (:mod:`cumuli.rendering.painters`) and composite the layers,
     the solids and the ground over the sky (see the module doc); ``impostors`` an
     :class:`~cumuli.rendering.impostor_cache.ImpostorCache` draws every layer through it."""
+    lit = seen_from(lit, camera)
     scene = lit.scene
     calls = plan(scene)
     if impostors is None and single_pass(scene):
@@ -485,7 +486,7 @@ def render_cpu(
     lit = prepare_light(plain, threads=threads, progress=progress) if lit is None else lit
     with _progress.core("render (cpu)", progress):
         if return_stats:
-            return march_with_stats(lit, camera, width, height, threads)
+            return march_with_stats(seen_from(lit, camera), camera, width, height, threads)
         return compose(lit, camera, width, height, CPUPainter(threads), threads, impostors)
 
 

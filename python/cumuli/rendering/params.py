@@ -77,6 +77,7 @@ def physical_params(settings: RenderSettings, octaves: int) -> _core.PhysicalPar
     # read at call time: the fitting script (benchmarks/fit_physical.py) varies them
     p.oct_a, p.oct_b, p.oct_c = _physical.OCTAVE_A, _physical.OCTAVE_B, _physical.OCTAVE_C
     p.oct_poisson = _physical.OCTAVE_POISSON
+    p.oct_first = _physical.first_order_depth_scale(settings)
     p.jitter_seed = int(settings.jitter_seed)
     p.min_transmittance = MIN_TRANSMITTANCE
     return p
@@ -157,6 +158,7 @@ def physical_uniforms(params: _core.PhysicalParams) -> dict[str, Any]:
         "u_phys_octaves": p.octaves,
         "u_phys_abc": (p.oct_a, p.oct_b, p.oct_c),
         "u_phys_poisson": p.oct_poisson,
+        "u_phys_first": p.oct_first,
         "u_phys_seed": p.jitter_seed,
         "u_phys_min_t": p.min_transmittance,
     }

@@ -170,4 +170,14 @@ void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, 
 std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
                                      int channels, const DiffusionParams& p, int threads);
 
+// The anisotropy r = 3E/φ of channel 0 of a diffusion solution `phi` (`channels` per voxel, as
+// diffusion_fluence returns it), 3 per voxel (x, y, z): E = −D∇φ the diffuse flux, from the
+// same face fluxes as the solve (between medium cells −D_face·Δφ/h, through a face to an empty
+// cell or the lattice's edge Marshak's 2Dφ/(h + 4D) outward), averaged over a cell's two faces
+// on each axis. The diffuse radiance is (φ + 3E·ω)/4π (P1), and light scattered towards ω is
+// φ·(1 + ḡ·r·ω)/4π. |r| ≤ 3 (|E| ≤ φ); empty cells next to the medium hold the mean of their
+// medium neighbours' (as the fluence's boundary values), the rest 0.
+std::vector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, const float* phi,
+                                        int channels, const DiffusionParams& p, int threads);
+
 }  // namespace cumuli

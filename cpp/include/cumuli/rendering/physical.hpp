@@ -41,6 +41,8 @@ struct PhysicalParams {
   int octaves = 4;  // scattering orders drawn (1: single scattering)
   float oct_a = 0.5f, oct_b = 0.5f, oct_c = 0.5f;
   float oct_poisson = 0.0f;  // β of the Poisson weights, in [0, 16] (0: plain octaves)
+  // Order 0's depth scale: 1 − f·ϖ with f the phase's forward-peak share (the δ-M sun), 1: e^{−τ}.
+  float oct_first = 1.0f;
   int jitter_seed = 0;
   float min_transmittance = 1e-4f;  // the ray stops below it
 
