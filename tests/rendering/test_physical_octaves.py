@@ -39,7 +39,8 @@ def test_poisson_octaves_are_their_formula(poisson: float) -> None:
         for n in range(3):
             p = phase_values(s, np.array([c]), phys.OCTAVE_B**n)[0]
             weight = (poisson * tau) ** n / math.factorial(n) if poisson else 1.0
-            want += phys.OCTAVE_A**n * p * weight * np.exp(-(phys.OCTAVE_C**n) * tau)
+            k = phys.first_order_depth_scale(s) if n == 0 else phys.OCTAVE_C**n  # δ-M order 0
+            want += phys.OCTAVE_A**n * p * weight * np.exp(-k * tau)
         np.testing.assert_allclose(got, want, rtol=1e-12)
 
 

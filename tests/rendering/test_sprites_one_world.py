@@ -11,7 +11,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.light import sprite_physical
-from cumuli.light.physical import phase_values
+from cumuli.light.physical import first_order_depth_scale, phase_values
 from cumuli.model import seedbox_presets
 from cumuli.rendering.particle_layers import draw_particle_clouds_cpu
 from cumuli.rendering.particles import draw_particles_cpu
@@ -117,7 +117,8 @@ def test_the_octaves_are_the_media_phase_in_full_sun() -> None:
     np.testing.assert_allclose(full, single)
     deep = sprite_physical.sun_octaves(settings, zero + 2.0, cos, 4)
     deep_single = sprite_physical.sun_octaves(settings, zero + 2.0, cos, 1)
-    np.testing.assert_allclose(deep_single, phase_values(settings, cos) * np.exp(-2.0))
+    k = first_order_depth_scale(settings)  # single scattering reached by the δ-M sun
+    np.testing.assert_allclose(deep_single, phase_values(settings, cos) * np.exp(-2.0 * k))
     assert (deep > deep_single).all()  # inside, the higher orders add light
 
 
