@@ -184,3 +184,13 @@ def test_oct_first_is_checked() -> None:
     p.oct_first = 0.0
     with pytest.raises(ValueError, match="oct_first"):
         p.octave_sum(0.0, np.zeros(2, np.float32))
+
+
+def test_a_view_given_back_to_the_light_step_is_the_light_it_was_made_from() -> None:
+    """``prepare_light(scene, lights=...)`` with a camera's view takes the light underneath, so
+    the next camera's view is made from it, not from the last camera's."""
+    scene = _scene()
+    lit = cu.prepare_light(scene)
+    seen = view.seen_from(lit, _camera(scene, 1.0))
+    again = cu.prepare_light(scene, lights=list(seen.lights))
+    assert again.lights[0] is lit.lights[0]

@@ -555,6 +555,7 @@ def physical_pass(drawable: Any, scene: Any, given: Any = None, threads: int = 0
             )
         # A light shaded by particles and billboards (a copy, whose registry entry is gone):
         # the drawable's own light underneath; the light step shades it again as the scene is.
+        given = given.seen_from or given  # a camera's view: the light it was made from
         return given.shaded_from or given
     sky = light_sky(scene)
     # Only the media upstream of its sun lattice shade it (the culling of `physical_light`):
