@@ -74,6 +74,36 @@ def test_occupancy_grid_is_conservative(model, seed):
     assert in_empty.sum() > 1000  # the test looked at empty cells
 
 
+@pytest.mark.parametrize("seed", [4, 5])
+@pytest.mark.parametrize("resolution", [7, 16, 33])
+def test_spheroid_grid_is_its_bound_over_every_cell_and_primitive(seed, resolution):
+    """The core visits only the cells each primitive's bounds can meet; the grid is still the
+    bound's, tested for every cell and every primitive: a cell is occupied when some primitive's
+    world bounds meet it and |q| at its centre, less its half-diagonal over r_min, is ≤ 1 (both
+    with the core's relative margin 1e-3)."""
+    cloud = _random_cloud("spheroid", seed, n=20)
+    cells, (lo, hi) = cu.occupancy_grid(cloud, resolution)
+    lo64, hi64 = lo.astype(np.float64), hi.astype(np.float64)
+    size = (hi64 - lo64) / resolution
+    ix = np.stack(np.meshgrid(*[np.arange(resolution)] * 3, indexing="ij"), -1)  # [z, y, x]
+    centre = lo64 + (ix[..., ::-1] + 0.5) * size  # (x, y, z) of each cell
+    half_diag = 0.5 * np.linalg.norm(size)
+    m = 1e-3
+    occupied = np.zeros(cells.shape, bool)
+    for c, r, rot in zip(cloud.centres, cloud.radii, cloud.rotations, strict=True):
+        half = np.sqrt(((rot * r[None, :]) ** 2).sum(axis=1)).astype(np.float32)
+        b_lo, b_hi = (c - half).astype(np.float64), (c + half).astype(np.float64)
+        meets = (
+            (centre - 0.5 * size <= b_hi + m * size) & (centre + 0.5 * size >= b_lo - m * size)
+        ).all(-1)
+        q = np.einsum("ji,...j->...i", rot.astype(np.float64), centre - c) / r
+        inv_rmin = np.float32(1.0) / np.float32(r.min())
+        lower = np.linalg.norm(q, axis=-1) - half_diag * float(inv_rmin)
+        occupied |= meets & (lower <= 1.0 + m)
+    assert 0.0 < occupied.mean() < 0.9
+    np.testing.assert_array_equal(cells, occupied)
+
+
 def test_occupancy_grid_bad_input():
     with pytest.raises(TypeError, match="cloud"):
         cu.occupancy_grid("cloud")
