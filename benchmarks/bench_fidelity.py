@@ -10,13 +10,14 @@ dense metaball cloud, a thin L-system cloud; 160×120, the physical default with
   ``cumuli.light.prepare.clear_memo`` before each repeat) and the draw alone (a `LitScene`
   from ``prepare_light``), median of the repeats;
 - **Mitsuba's error at n samples** per pixel: from the reference run's ladder (independent
-  images at 1, 2, 4, … spp against the converged image, ``views.json``);
+  images at 1, 2, 4, … 32 spp against the converged image, ``views.json``);
 - **Mitsuba's time at n samples**: measured here (``scalar_rgb``, the scene loaded once, a
-  render at 1 and at 2 spp: ``t(n) = t₁ + (n − 1)·(t₂ − t₁)``), for the references' medium
+  render at 1 and at 4 spp: ``t(n) = t₁ + (n − 1)·(t₄ − t₁)/3``), for the references' medium
   (the Mie phase's forward peak as unscattered light, which spares Mitsuba work);
-- **the samples Mitsuba needs to reach cumuli's error**: a straight line through the ladder's
-  errors on log-log axes (least squares), solved for cumuli's error — extrapolated (and said so)
-  beyond the ladder; never less than 1 spp (Mitsuba renders no fewer);
+- **the samples Mitsuba needs to reach cumuli's error**: interpolated on log-log axes between
+  the ladder's two counts around cumuli's error; beyond the ladder, a straight line through its
+  errors on log-log axes (least squares), solved for cumuli's error and said to be
+  extrapolated; never less than 1 spp (Mitsuba renders no fewer);
 - **the equal-quality speed-up**: Mitsuba's time at those samples over cumuli's whole time and
   over its draw alone, for the block median (the targets) and the block p90.
 
@@ -52,16 +53,27 @@ METRICS = ("block_median", "block_p90", "pixel_median")
 
 
 def spp_needed(ladder: dict[str, dict[str, float]], metric: str, error: float) -> dict[str, Any]:
-    """Samples per pixel at which Mitsuba's ``metric`` reaches ``error``: the log-log line
-    through the ladder, solved; ``extrapolated`` when outside the ladder's range."""
+    """Samples per pixel at which Mitsuba's ``metric`` reaches ``error``: within the ladder's
+    errors, interpolated on log-log axes between the two counts around it (the errors taken as
+    their running minimum, so that they fall with the samples); outside them, the least-squares
+    log-log line through the whole ladder, solved, and ``extrapolated``."""
     spp = np.array(sorted(int(k) for k in ladder), np.float64)
     err = np.array([ladder[str(int(n))][metric] for n in spp], np.float64)
     slope, intercept = np.polyfit(np.log(spp), np.log(err), 1)
-    n = math.exp((math.log(error) - intercept) / slope) if slope < 0 else math.inf
+    falling = np.minimum.accumulate(err)
+    inside = bool(falling.min() <= error <= falling.max())
+    if inside:
+        # A run of equal errors counts from its first count (np.interp wants them distinct).
+        first = np.concatenate([[True], falling[1:] < falling[:-1]])
+        n = math.exp(
+            float(np.interp(-math.log(error), -np.log(falling[first]), np.log(spp[first])))
+        )
+    else:
+        n = math.exp((math.log(error) - intercept) / slope) if slope < 0 else math.inf
     return {
         "spp": n,
         "slope": float(slope),
-        "extrapolated": bool(not err.min() <= error <= err.max()),
+        "extrapolated": not inside,
         "ladder_spp": spp.astype(int).tolist(),
         "ladder_error": err.tolist(),
     }
@@ -101,12 +113,12 @@ def mitsuba_times(name: str, quick: bool) -> dict[str, Any]:
         spec["sigma_t"] = np.load(path.with_name(str(spec["field"])))["sigma_t"]
     scene = mb.build(mi, spec, "ms", 1)
     t = {}
-    for n in (1,) if quick else (1, 2):
+    for n in (1,) if quick else (1, 4):
         t0 = time.perf_counter()
         mb.render(mi, scene, n, 90_000 + n)
         t[n] = time.perf_counter() - t0
-    per_spp = t[2] - t[1] if 2 in t and t[2] > t[1] else t[1]
-    return {"available": True, "variant": "scalar_rgb", "t1_s": t[1], "t2_s": t.get(2),
+    per_spp = (t[4] - t[1]) / 3 if 4 in t and t[4] > t[1] else t[1]
+    return {"available": True, "variant": "scalar_rgb", "t1_s": t[1], "t4_s": t.get(4),
             "per_spp_s": per_spp}  # fmt: skip
 
 

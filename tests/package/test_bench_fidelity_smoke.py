@@ -5,8 +5,16 @@ from __future__ import annotations
 
 import json
 import math
+import sys
 from collections.abc import Callable
 from pathlib import Path
+
+import pytest
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
+sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "tests" / "references"))
+
+import bench_fidelity  # noqa: E402
 
 
 def test_bench_fidelity_quick_writes_json_and_plot(
@@ -27,7 +35,7 @@ def test_bench_fidelity_quick_writes_json_and_plot(
         for metric in ("block_median", "block_p90", "pixel_median"):
             eq = view["equal_quality"][metric]
             assert eq["cumuli_error"] == err[metric]
-            assert eq["slope"] < 0 and eq["ladder_spp"][:3] == [1, 2, 4]
+            assert eq["slope"] < 0 and eq["ladder_spp"] == [1, 2, 4, 8, 16, 32]
             assert eq["spp"] > 0 and not math.isnan(eq["spp"])
             if view["mitsuba"]["available"]:
                 assert eq["mitsuba_s"] >= view["mitsuba"]["t1_s"] > 0
@@ -36,3 +44,26 @@ def test_bench_fidelity_quick_writes_json_and_plot(
         t = data["targets"][name]
         assert t["met"] is None and t["reached"] is None  # --quick measures no target
     assert "target speedup_whole" in stdout and "Mitsuba needs" in stdout
+
+
+def _ladder(errors: dict[int, float]) -> dict[str, dict[str, float]]:
+    return {str(n): {"block_median": e} for n, e in errors.items()}
+
+
+def test_spp_needed_interpolates_within_the_ladder_and_extrapolates_beyond_it() -> None:
+    power = _ladder({n: 0.2 * n**-0.5 for n in (1, 2, 4, 8, 16, 32)})
+    # On a power law the log-log interpolation is exact, at the counts and between them.
+    for n in (1.0, 3.0, 16.0, 24.0):
+        got = bench_fidelity.spp_needed(power, "block_median", 0.2 * n**-0.5)
+        assert got["spp"] == pytest.approx(n, rel=1e-9) and got["extrapolated"] is False
+    assert bench_fidelity.spp_needed(power, "block_median", 0.2)["spp"] == pytest.approx(1.0)
+    # Beyond the ladder: the fitted line (slope −½ here), said to be extrapolated.
+    far = bench_fidelity.spp_needed(power, "block_median", 0.2 * 128**-0.5)
+    assert far["extrapolated"] is True and far["spp"] == pytest.approx(128.0, rel=1e-6)
+    assert far["slope"] == pytest.approx(-0.5)
+    # A count whose error is noisier than the one before counts as that one (running minimum).
+    bumpy = _ladder({1: 0.2, 2: 0.1, 4: 0.12, 8: 0.05})
+    assert bench_fidelity.spp_needed(bumpy, "block_median", 0.1)["spp"] == pytest.approx(2.0)
+    assert bench_fidelity.spp_needed(bumpy, "block_median", 0.075)["spp"] == pytest.approx(
+        2.0 * 4.0 ** (math.log(0.1 / 0.075) / math.log(0.1 / 0.05))
+    )

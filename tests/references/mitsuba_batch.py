@@ -14,6 +14,10 @@ hours. For each ``<view>.npz`` of ``--specs`` it writes ``<view>.npz`` into ``--
 - ``ladder``: independent images at 1, 2, 4, … ``--ladder-max`` samples (Mitsuba's error
   against its own converged image at each count, for ``benchmarks/bench_fidelity.py``).
 
+With ``--ladder-only`` it renders only ladder images, at ``--ladder-min`` … ``--ladder-max``
+samples (each with the seed a whole run gives that count), into ``<view>.ladder.npz``:
+``mitsuba_views.py ladder`` adds their errors to a committed reference's ladder.
+
 Each output is rewritten after every pair of chunks (atomically) with the halves' sums, and a
 rerun resumes from it: an interrupted run keeps what it rendered.
 """
@@ -113,6 +117,30 @@ def save(path: Path, **arrays) -> None:
     os.replace(tmp, path)
 
 
+def ladder_seed(spp: int) -> int:
+    """The seed of the ladder image at ``spp`` (a power of two) samples."""
+    return 10_000 + int(np.log2(spp))
+
+
+def render_ladder(mi, spec_path: Path, out: Path, args: argparse.Namespace) -> None:
+    """Only the ladder images at ``--ladder-min`` … ``--ladder-max`` samples, into
+    ``<view>.ladder.npz`` (with the seconds each took)."""
+    spec = dict(np.load(spec_path))
+    spec["sigma_t"] = np.load(spec_path.with_name(str(spec["field"])))["sigma_t"]
+    name = spec_path.stem
+    counts = [2**i for i in range(int(np.log2(args.ladder_min)), int(np.log2(args.ladder_max)) + 1)]
+    scene = build(mi, spec, "ms", counts[0])
+    images, seconds = [], []
+    for n in counts:
+        t0 = time.time()
+        images.append(render(mi, scene, n, ladder_seed(n)))
+        seconds.append(time.time() - t0)
+        print(f"{name}: ladder {n} spp in {seconds[-1]:.1f} s", flush=True)
+    save(out / f"{name}.ladder.npz", ladder=np.stack(images).astype(np.float32),
+         ladder_spp=np.array(counts), seconds=np.array(seconds), variant=mi.variant(),
+         mitsuba=mi.__version__)  # fmt: skip
+
+
 def render_view(mi, spec_path: Path, out: Path, args: argparse.Namespace) -> None:
     spec = dict(np.load(spec_path))
     spec["sigma_t"] = np.load(spec_path.with_name(str(spec["field"])))["sigma_t"]
@@ -131,7 +159,7 @@ def render_view(mi, spec_path: Path, out: Path, args: argparse.Namespace) -> Non
         ladder, sums = list(st["ladder"]), [st["a"], st["b"]]
         counts, seconds, k = [int(st["na"]), int(st["nb"])], float(st["seconds"]), int(st["k"])
     else:
-        ladder = [render(mi, scene, n, 10_000 + i) for i, n in enumerate(ladder_spp)]
+        ladder = [render(mi, scene, n, ladder_seed(n)) for n in ladder_spp]
         sums = [np.zeros_like(ladder[0]), np.zeros_like(ladder[0])]
         counts, seconds, k = [0, 0], 0.0, 0
     noise = np.inf
@@ -168,6 +196,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--max-spp", type=int, default=16384)
     parser.add_argument("--t-spp", type=int, default=1024)
     parser.add_argument("--ladder-max", type=int, default=256)
+    parser.add_argument("--ladder-min", type=int, default=1)
+    parser.add_argument("--ladder-only", action="store_true", help="only the ladder images")
     parser.add_argument("--budget", type=float, default=120.0, help="seconds per view (ms)")
     args = parser.parse_args(argv)
     import mitsuba as mi
@@ -183,13 +213,13 @@ def main(argv: list[str] | None = None) -> int:
     for spec_path in sorted(Path(args.specs).glob("[!f]*.npz")):
         if names is None or spec_path.stem in names:
             try:
-                render_view(mi, spec_path, out, args)
+                (render_ladder if args.ladder_only else render_view)(mi, spec_path, out, args)
             except Exception as exc:  # noqa: BLE001 - e.g. no OptiX for a GPU variant
                 if mi.variant() == "scalar_rgb":
                     raise
                 print(f"{mi.variant()} failed ({exc}); scalar_rgb from here", flush=True)
                 mi.set_variant("scalar_rgb")
-                render_view(mi, spec_path, out, args)
+                (render_ladder if args.ladder_only else render_view)(mi, spec_path, out, args)
     return 0
 
 

@@ -18,6 +18,13 @@ Regenerate (any machine with Mitsuba; a GPU makes it minutes)::
     python tests/references/mitsuba_views.py export --out specs/
     python tests/references/mitsuba_batch.py --specs specs/ --out renders/ --variant cuda_ad_rgb
     python tests/references/mitsuba_views.py collect --renders renders/
+
+Longer ladders for committed references (Mitsuba's error at more samples, without rendering
+the reference again)::
+
+    python tests/references/mitsuba_batch.py --specs specs/ --out renders/ --ladder-only \
+        --ladder-min 8 --ladder-max 32
+    python tests/references/mitsuba_views.py ladder --renders renders/
 """
 
 from __future__ import annotations
@@ -268,6 +275,29 @@ def collect(renders: Path) -> dict:
     return record
 
 
+def add_ladder(renders: Path) -> dict:
+    """Add the errors of ``mitsuba_batch.py --ladder-only``'s images (``<view>.ladder.npz``)
+    to the committed views' ladders in ``views.json`` (against the committed reference)."""
+    record_path = HERE / "views.json"
+    record = json.loads(record_path.read_text())
+    for name in record:
+        src = renders / f"{name}.ladder.npz"
+        if not src.exists() or not view_file(name).exists():
+            continue
+        r = np.load(src)
+        rgba = cu.read_image(view_file(name))
+        ladder = record[name]["ladder"]
+        for spp, img, sec in zip(r["ladder_spp"], r["ladder"], r["seconds"], strict=True):
+            test = np.concatenate([img, rgba[..., 3:]], -1)
+            ladder[str(int(spp))] = block_errors(test, rgba) | {
+                "seconds": float(sec),
+                "variant": str(r["variant"]),
+            }
+        record[name]["ladder"] = dict(sorted(ladder.items(), key=lambda kv: int(kv[0])))
+    record_path.write_text(json.dumps(record, indent=1, default=float) + "\n")
+    return record
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     sub = parser.add_subparsers(dest="command", required=True)
@@ -276,8 +306,12 @@ def main(argv: list[str] | None = None) -> int:
     ex.add_argument("--views", default=",".join(VIEWS))
     co = sub.add_parser("collect", help="write the EXRs and views.json from the renders")
     co.add_argument("--renders", required=True)
+    la = sub.add_parser("ladder", help="add --ladder-only renders to the views' ladders")
+    la.add_argument("--renders", required=True)
     args = parser.parse_args(argv)
-    if args.command == "export":
+    if args.command == "ladder":
+        add_ladder(Path(args.renders))
+    elif args.command == "export":
         out = Path(args.out)
         out.mkdir(parents=True, exist_ok=True)
         for name in args.views.split(","):
