@@ -51,6 +51,7 @@ void bind_light(py::module_& m);
 void bind_volume_light(py::module_& m);
 void bind_physical_light(py::module_& m);
 void bind_march(py::module_& m);
+void bind_camera_candidates(py::module_& m);
 void bind_volume_march(py::module_& m);
 void bind_composite(py::module_& m);
 void bind_particles(py::module_& m);
@@ -112,6 +113,7 @@ PYBIND11_MODULE(_core, m) {
   cumuli::bind::bind_volume_light(m);
   cumuli::bind::bind_physical_light(m);
   cumuli::bind::bind_march(m);
+  cumuli::bind::bind_camera_candidates(m);
   cumuli::bind::bind_volume_march(m);
   cumuli::bind::bind_composite(m);
   cumuli::bind::bind_anim(m);

@@ -2,6 +2,7 @@
 // reference marcher (rendering/marcher.hpp, `render_cpu`), the volume marcher
 // (rendering/volume.hpp), the shared sprite rasteriser (rendering/sprites.hpp) — the compositor
 // (rendering/compositor.hpp) and the impostor maths of Harris 2002 (rendering/impostors.hpp).
+#include "cumuli/candidates.hpp"
 #include "cumuli/rendering/marcher.hpp"
 #include "cumuli/rendering/occupancy.hpp"
 
@@ -394,6 +395,50 @@ void bind_march(py::module_& m) {
       "A cloud's occupancy grid for empty-space skipping (RENDER_CONTRACT): (cells [z, y, x] "
       "uint8, 1 where density may be > 0, 0 where it is certainly 0; lo; hi), over the cloud's "
       "candidate box.");
+}
+
+void bind_camera_candidates(py::module_& m) {
+  m.def(
+      "camera_candidates",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+         const std::string& model, std::tuple<float, float, float> origin, const FloatArray& dirs,
+         int capacity) {
+        require_points(dirs, "dirs");
+        if (capacity < 1 || capacity > 4096)
+          throw py::value_error("capacity must be in [1, 4096], got " + std::to_string(capacity));
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, 0.5f, 1.0f);
+        const glm::vec3 o(std::get<0>(origin), std::get<1>(origin), std::get<2>(origin));
+        const py::ssize_t n = dirs.shape(0);
+        py::array_t<float> fan({n, static_cast<py::ssize_t>(capacity), py::ssize_t{3}});
+        py::array_t<float> each({n, static_cast<py::ssize_t>(capacity), py::ssize_t{3}});
+        std::fill_n(fan.mutable_data(), fan.size(), -1.0f);
+        std::fill_n(each.mutable_data(), each.size(), -1.0f);
+        const float* d = dirs.data();
+        {
+          py::gil_scoped_release release;
+          const CandidateFan f(cloud, o);
+          std::vector<Candidate> a(static_cast<std::size_t>(capacity)), b(a.size());
+          for (py::ssize_t i = 0; i < n; ++i) {
+            const glm::vec3 dir(d[3 * i], d[3 * i + 1], d[3 * i + 2]);
+            const int na = f.collect(dir, 0.0f, INFINITY, a.data(), capacity);
+            const int nb = collect_candidates(cloud, o, dir, 0.0f, INFINITY, b.data(), capacity);
+            float* fa = fan.mutable_data(i);
+            float* fb = each.mutable_data(i);
+            for (int k = 0; k < na; ++k)
+              std::tie(fa[3 * k], fa[3 * k + 1], fa[3 * k + 2]) =
+                  std::make_tuple(static_cast<float>(a[k].primitive), a[k].t_in, a[k].t_out);
+            for (int k = 0; k < nb; ++k)
+              std::tie(fb[3 * k], fb[3 * k + 1], fb[3 * k + 2]) =
+                  std::make_tuple(static_cast<float>(b[k].primitive), b[k].t_in, b[k].t_out);
+          }
+        }
+        return py::make_tuple(fan, each);
+      },
+      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
+      py::arg("origin"), py::arg("dirs"), py::arg("capacity") = 64,
+      "The candidates (primitive, t_in, t_out; −1 past the last) of rays from one origin, by "
+      "the camera's fan (culled by cones, the marchers' path) and by testing every primitive: "
+      "(fan, each), each (n, capacity, 3) float32. For tests: the two must agree bit for bit.");
 }
 
 void bind_volume_march(py::module_& m) {

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include <glm/common.hpp>
+#include <glm/geometric.hpp>
 
 namespace cumuli {
 
@@ -99,14 +100,36 @@ CandidateFan::CandidateFan(const CloudShape& cloud, glm::vec3 origin) {
     // intersect()'s terms that do not depend on the direction, the same expressions.
     const glm::mat3 rt = glm::transpose(e.rotation);
     const glm::vec3 o = (rt * (origin - e.centre)) / e.radii;
-    terms_.push_back(Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, e.unrotated()});
+    // The cull cone, in double: half-angle asin(R/L) of the bounding sphere (R the largest grown
+    // radius, L the distance to its centre) plus a slack. The exact test below accepts rays up
+    // to ~√ε (3.5e-4 rad) beyond the unit sphere in the primitive's frame (its b² − a·c cancels
+    // for a far origin), which the frame's stretch widens by at most r_max/r_min in the world;
+    // the slack is 6× that. An origin in or near the sphere is never culled.
+    const double r_max = std::max(e.radii.x, std::max(e.radii.y, e.radii.z));
+    const double r_min = std::min(e.radii.x, std::min(e.radii.y, e.radii.z));
+    const glm::dvec3 v = glm::dvec3(e.centre) - glm::dvec3(origin);
+    const double len = glm::length(v);
+    const double slack = 2e-3 * r_max / std::max(r_min, 1e-30);
+    float cos_cull = -2.0f;  // never culled
+    glm::vec3 axis(0.0f);
+    if (std::isfinite(slack) && len > r_max * (1.0 + 1e-2) && std::isfinite(len)) {
+      const double angle = std::asin(r_max / len) + slack;
+      if (angle < 3.0) {
+        cos_cull = static_cast<float>(std::cos(angle) - 1e-6);
+        axis = glm::vec3(v / len);
+      }
+    }
+    terms_.push_back(
+        Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, e.unrotated(), axis, cos_cull});
   }
 }
 
 int CandidateFan::collect(glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
                           bool sorted) const {
+  const float dir_len = glm::length(dir);
   auto hit = [&](std::size_t j, Interval& iv) {
     const Term& e = terms_[j];
+    if (glm::dot(dir, e.axis) < e.cos_cull * dir_len) return false;  // surely a miss
     // The rest of intersect(), operation by operation.
     const glm::vec3 d = (e.rt * dir) / e.radii;
     const float a = glm::dot(d, d);

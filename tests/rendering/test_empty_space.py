@@ -241,3 +241,53 @@ def test_gl_skipping_is_exact_and_matches_cpu(renderer, name, lighting):
     gl_fast = renderer.render(fast, cam, W, H)
     assert_image_close(gl_fast, off, **only(mean_abs=2e-3))
     assert np.abs(gl_fast.astype(np.float64) - cu.render_cpu(fast, cam, W, H)).mean() <= 1e-3
+
+
+def _grazing_directions(cloud: cu.Cloud, origin: np.ndarray, rng, n: int) -> np.ndarray:
+    """Random directions, half of them aimed at points on the primitives' grown surfaces (the
+    rays the cull must not lose) and a few of those nudged by 1e-4 rad either way."""
+    dirs = rng.normal(size=(n, 3))
+    j = rng.integers(0, cloud.n, n // 2)
+    u = rng.normal(size=(n // 2, 3))
+    u /= np.linalg.norm(u, axis=1, keepdims=True)
+    surface = cloud.centres[j] + np.einsum("nij,nj->ni", cloud.rotations[j], u * cloud.radii[j])
+    aim = surface - origin
+    aim /= np.linalg.norm(aim, axis=1, keepdims=True)
+    aim += rng.normal(scale=1e-4, size=aim.shape)
+    dirs[: n // 2] = aim
+    return (dirs / np.linalg.norm(dirs, axis=1, keepdims=True)).astype(np.float32)
+
+
+@pytest.mark.parametrize("model", ["spheroid", "metaball"])
+@pytest.mark.parametrize("distance", [0.0, 6.0, 40.0, 3000.0])
+def test_camera_fan_culls_no_candidate(model, distance):
+    """The camera rays' candidates (the fan culls each primitive by a cone around its bounding
+    sphere) are those of testing every primitive, bit for bit: origins inside the cloud, near,
+    far and very far, elongated primitives and rays grazing their surfaces."""
+    rng = np.random.default_rng(int(distance) + 7)
+    cloud = _random_cloud(model, 8, n=40)
+    radii = cloud.radii * np.array([6.0, 1.0, 0.2], np.float32)  # up to 30:1 elongation
+    cloud = cu.Cloud(cloud.centres, radii, cloud.rotations, model=model)
+    direction = rng.normal(size=3)
+    origin = (direction / np.linalg.norm(direction) * distance).astype(np.float32)
+    dirs = _grazing_directions(cloud, origin, rng, 20_000)
+    centres, radii, rotations, model_name = cloud.core_args()[:4]
+    fan, each = _core.camera_candidates(
+        centres, radii, rotations, model_name, tuple(map(float, origin)), dirs, 64
+    )
+    np.testing.assert_array_equal(fan, each)
+    hits = (each[:, :, 0] >= 0).sum(axis=1)
+    assert (hits > 0).mean() > 0.3  # the rays met primitives ...
+    if distance >= 40.0:
+        assert (hits < cloud.n).all() and (hits == 0).sum() > 1000  # ... and far ones were culled
+
+
+def test_camera_candidates_bad_input():
+    cloud = _random_cloud("spheroid", 1)
+    centres, radii, rotations, model_name = cloud.core_args()[:4]
+    with pytest.raises(ValueError, match="capacity"):
+        _core.camera_candidates(
+            centres, radii, rotations, model_name, (0, 0, 0), np.ones((2, 3)), 0
+        )
+    with pytest.raises((ValueError, TypeError), match="dirs"):
+        _core.camera_candidates(centres, radii, rotations, model_name, (0, 0, 0), np.ones((2, 2)))

@@ -77,6 +77,10 @@ class CandidateFan {
     glm::vec3 centre;
     glm::vec3 unscaled;  // the primitive's own radii (|q| is the primitive's, not the grown one's)
     bool identity;       // the rotation is exactly the identity
+    // The cone from the origin around the grown primitive's bounding sphere, widened well beyond
+    // the exact test's rounding: a direction d with d·axis < cos_cull·|d| surely misses.
+    glm::vec3 axis;
+    float cos_cull;
   };
   std::vector<Term> terms_;
 };
