@@ -7,6 +7,9 @@ SH sky and multiple scattering) and in the physical mode, the ground's shadow ma
 on GL and on the C++ twin at 320 × 200 (160 × 100 quick). The shadow map (256², 64² quick) is
 timed twice in one run: with the deck's own march step (half a lattice cell, ``Medium.step``)
 and with the settings' ``light_step`` (0.1 units, what every medium used before), as a ratio.
+The wind: the light step (light and ground shadow, physical) of the deck blown at 15 m/s, a
+first frame from nothing against each next second's frame (the wind carries the whole deck: its
+time-0 light and shadow, moved), as a ratio.
 Writes ``deck.json`` and ``deck.png`` under ``benchmarks/out/`` (or ``--out``).
 """
 
@@ -77,6 +80,24 @@ def main(argv: list[str] | None = None) -> int:
         times["shadow_light_step"] = common.time_repeats(shadow, 1 if quick else 2, warmup=0)[0]
     finally:
         registry_table["deck"] = kind
+    # The wind: a first frame from nothing, then one second later each time (nothing relit).
+    windy = dataclasses.replace(deck, wind=(15.0, 0.0))
+
+    def windy_scene(t: float) -> cu.Scene:
+        return own.replace(clouds=[windy.at(t)])
+
+    def first_frame() -> None:
+        clear_memo()
+        cu.prepare_light(windy_scene(0.0), progress=False)
+
+    times["wind_first_frame"] = common.time_repeats(first_frame, repeats)[0]
+    clock = [0.0]
+
+    def next_frame() -> None:
+        clock[0] += 1.0
+        cu.prepare_light(windy_scene(clock[0]), progress=False)
+
+    times["wind_next_frame"] = common.time_repeats(next_frame, repeats)[0]
     lit = {mode: cu.prepare_light(sc, progress=False) for mode, sc in scenes.items()}
     with cu.Renderer() as renderer:
         for mode in lit:
@@ -94,6 +115,8 @@ def main(argv: list[str] | None = None) -> int:
         common.log(f"{name}: {1e3 * s['median']:.1f} ms (min {1e3 * s['min']:.1f})")
     ratio = spreads["shadow_light_step"]["median"] / spreads["shadow_own_step"]["median"]
     common.log(f"shadow map: the deck's own step is {ratio:.1f}x faster than light_step")
+    wind = spreads["wind_first_frame"]["median"] / spreads["wind_next_frame"]["median"]
+    common.log(f"wind: a next frame's light step is {wind:.0f}x faster than the first's")
     data = {
         "benchmark": "deck",
         "quick": quick,
@@ -102,7 +125,10 @@ def main(argv: list[str] | None = None) -> int:
         "image": [width, height],
         "shadow_resolution": shadow_resolution,
         "seconds": spreads,
-        "ratios": {"shadow_light_step_over_own_step": ratio},
+        "ratios": {
+            "shadow_light_step_over_own_step": ratio,
+            "wind_first_frame_over_next_frame": wind,
+        },
     }
     common.write_json(args.out / "deck.json", data)
     plt = common.pyplot()

@@ -117,18 +117,46 @@ def test_full_coverage_without_detail_is_density_times_the_profile() -> None:
         np.testing.assert_allclose(lat, np.broadcast_to(want[None, :, None], lat.shape), atol=1e-6)
 
 
+def _centres(d: cu.CloudDeck) -> np.ndarray:
+    xs, ys, zs = d.lattice_centres()
+    z, y, x = np.meshgrid(zs, ys, xs, indexing="ij")
+    return np.stack([x, y, z], axis=-1).reshape(-1, 3)
+
+
 def test_the_lattice_is_the_density_at_its_texel_centres() -> None:
-    d = deck(coverage=0.5, wind=(3.0, 1.0), time=50.0)
+    d = deck(coverage=0.5, wind=(3.0, 1.0))
     lat = d.density_lattice()
     nx, ny, nz = d.resolution
     assert lat.shape == (nz, ny, nx) and lat.dtype == np.float32 and lat.flags.c_contiguous
-    xs, ys, zs = d.lattice_centres()
-    z, y, x = np.meshgrid(zs, ys, xs, indexing="ij")
-    pts = np.stack([x, y, z], axis=-1).reshape(-1, 3)
-    np.testing.assert_array_equal(lat, d.density_at(pts).reshape(lat.shape))
+    np.testing.assert_array_equal(lat, d.density_at(_centres(d)).reshape(lat.shape))
     assert lat.max() > 0
     assert d.density_lattice() is lat  # memoised: the deck is immutable
     assert not lat.flags.writeable
+
+
+def test_a_drifted_deck_is_its_still_self_moved() -> None:
+    """The wind carries the whole deck: its slab moves by the offset, its lattice is the time-0
+    one (the same array), and its density at the moved centres is that lattice to rounding."""
+    d = deck(coverage=0.5, wind=(3.0, 1.0))
+    later = d.at(50.0)
+    ox, oz = later.offset
+    assert later.still() is d and d.still() is d and d.at(80.0).still() is d
+    assert later.density_lattice() is d.density_lattice()
+    assert later.to_volume().density is d.to_volume().density
+    for a, b in zip(later.box, d.box, strict=True):
+        np.testing.assert_allclose(np.subtract(a, b), [ox, 0.0, oz], atol=1e-9)
+    np.testing.assert_allclose(
+        np.subtract(later.layer_box(), d.layer_box()), [[ox, 0, oz]] * 2, atol=1e-3
+    )
+    np.testing.assert_array_equal(later.to_volume().box, later.box)
+    got = later.density_at(_centres(later)).reshape(d.density_lattice().shape)
+    np.testing.assert_allclose(got, d.density_lattice(), atol=2e-3)
+    assert (got > 0).mean() > 0.05
+    # A deck made at a time (a scene file's) has the same still self, made once.
+    made = deck(coverage=0.5, wind=(3.0, 1.0), time=50.0)
+    assert made.still().time == 0.0 and made.still() is made.still()
+    np.testing.assert_array_equal(made.density_lattice(), d.density_lattice())
+    assert deck(coverage=0.5, time=50.0).still().time == 50.0  # no wind: nothing moved
 
 
 def test_seeds_and_threads() -> None:

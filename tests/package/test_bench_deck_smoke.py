@@ -25,10 +25,12 @@ def test_bench_deck_quick_writes_json(tmp_path: Path) -> None:
     data = json.loads((tmp_path / "deck.json").read_text())
     assert data["benchmark"] == "deck" and data["quick"] is True
     assert data["lattice"] == [64, 12, 64] and data["machine"]["gl_renderer"]
-    stages = {"bake", "light_paper", "light_physical", "shadow_own_step", "shadow_light_step"}
+    stages = {"bake", "light_paper", "light_physical", "shadow_own_step", "shadow_light_step",
+              "wind_first_frame", "wind_next_frame"}  # fmt: skip
     draws = {f"draw_{m}_{b}" for m in ("paper", "physical") for b in ("gl", "cpu")}
     assert set(data["seconds"]) == stages | draws
     for entry in data["seconds"].values():
         assert entry["median"] > 0 and entry["n"] >= 1
     assert data["ratios"]["shadow_light_step_over_own_step"] > 0
+    assert data["ratios"]["wind_first_frame_over_next_frame"] > 0
     assert (tmp_path / "deck.png").stat().st_size > 0

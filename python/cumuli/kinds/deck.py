@@ -34,8 +34,17 @@ def digest(deck: CloudDeck) -> tuple:
 
 def light(deck: CloudDeck, scene: Any, given: Any = None, threads: int = 0) -> Any:
     """The paper mode's light of a deck: the volume light of its lattice under the scene's sun
-    and sky (Iwasaki 2011, §3.1–3.2)."""
-    return volume_light(deck.to_volume(threads), scene, given, threads)
+    and sky (Iwasaki 2011, §3.1–3.2). A light per voxel, so a deck the wind has moved has its
+    time-0 self's (:meth:`CloudDeck.still`), computed once for every time."""
+    return volume_light(deck.still().to_volume(threads), scene, given, threads)
+
+
+def moved(deck: CloudDeck) -> tuple[CloudDeck, tuple[float, float, float]]:
+    """``(still, offset)``: the wind carries the whole deck, so a deck at any time is its time-0
+    self moved by ``(ox, 0, oz)`` (:attr:`registry.Medium.moved`: the physical light step
+    lights it once and moves the light)."""
+    ox, oz = deck.offset
+    return deck.still(), (ox, 0.0, oz)
 
 
 def step(deck: CloudDeck) -> float:
@@ -52,6 +61,7 @@ MEDIUM = registry.Medium(
     own_lattice=lambda deck: tuple(deck.to_volume().shape[::-1]),
     light_box=lambda deck: deck.box,
     step=step,
+    moved=moved,
 )
 
 KIND = registry.register(
@@ -72,4 +82,4 @@ KIND = registry.register(
     )
 )
 
-__all__ = ["KIND", "MEDIUM", "digest", "light"]
+__all__ = ["KIND", "MEDIUM", "digest", "light", "moved"]

@@ -42,6 +42,7 @@ from cumuli.light.between import onto_media, own_light_of, through_media
 from cumuli.light.digests import shadow_digest as _shadow_digest
 from cumuli.light.memo import clear as _memo_clear
 from cumuli.light.memo import remember as _remember
+from cumuli.light.moved import moved
 from cumuli.light.physical import physical_pass
 from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
 from cumuli.scene import Scene
@@ -85,6 +86,16 @@ def scene_shadow(
     buffers (their shadow maps) it reuses."""
     if scene.ground is None:
         return None
+    drift = _common_drift(scene)
+    if drift is not None:
+        # Everything that shades the ground is its still self moved by one horizontal offset:
+        # the shadow is the still scene's, moved (a drifting deck's is computed once).
+        still_scene, (ox, oz) = drift
+        still = scene_shadow(still_scene, threads)
+        if still is None:
+            return None
+        x0, z0, x1, z1 = still.extent
+        return ShadowMap(still.values, (x0 + ox, z0 + oz, x1 + ox, z1 + oz), still.height)
     height = scene.ground.height
     extent = default_extent(scene, height)
     if extent is None:
@@ -94,6 +105,25 @@ def scene_shadow(
            scene.settings, tuple(scene.sprite_settings.light_dict().items()),
            scene.billboard_shading, scene.sun.direction, height)  # fmt: skip
     return _remember(key, lambda: compute_shadow(scene, extent, (n, n), height, threads, lights))
+
+
+def _common_drift(scene: Scene) -> tuple[Scene, tuple[float, float]] | None:
+    """``(still scene, (ox, oz))`` when every drawable of ``scene`` is its still self moved by
+    the same horizontal offset (:func:`cumuli.light.moved.moved`: a deck or 2018 clouds the
+    same wind carries, volumes off the origin); None otherwise."""
+    if not scene.clouds:
+        return None
+    stills, offsets = [], set()
+    for drawable in scene.clouds:
+        still, offset = moved(drawable)
+        if offset is None or offset[1] != 0.0:
+            return None
+        stills.append(still)
+        offsets.add(offset)
+    if len(offsets) != 1:
+        return None
+    ox, _, oz = offsets.pop()
+    return scene.replace(clouds=tuple(stills)), (ox, oz)
 
 
 def _own_light(given: Any) -> Any:

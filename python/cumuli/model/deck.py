@@ -32,11 +32,14 @@ The model, at a world point ``(x, y, z)`` with ``s(a, b, t)`` the smoothstep
 So the layer exists where coverage is high; where it is lower only the profile's core survives
 (a stratocumulus' tops sink and its cells round off over the map's lows), the fBm eats its edges,
 0 ≤ ρ ≤ density, and ρ = 0 wherever c = 0. The fBm moves with the map: the deck at time t is the
-deck at time 0 translated by the wind offset.
+deck at time 0 translated by the wind offset — the whole layer, its slab included (a weather
+system the wind carries): its box is ``extent`` moved by ``(ox, oz)``, its baked lattice the time-0
+lattice, and its light the time-0 light moved (the light step lights a drifting deck once).
 """
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import functools
 import math
@@ -213,7 +216,9 @@ class CloudDeck:
     [0, 1] over ``extent``; ``cloud_type`` (one of :data:`CLOUD_TYPES`) picks the vertical
     profile; ``density`` is the peak density; ``detail`` in [0, 1] how much the fBm (``octaves``,
     first-octave features ``detail_scale`` apart, lattice from ``seed``) erodes; the map and the
-    fBm move by ``wind · time`` (``wind = (wx, wz)`` in world units per second); the lattice is
+    fBm move by ``wind · time`` (``wind = (wx, wz)`` in world units per second), and with them the
+    whole slab (the deck at ``time`` is the deck at time 0 translated: :meth:`still`); ``extent``
+    is where the slab is at time 0. The noise lattice is
     ``seed``'s in ``noise_version`` (:data:`cumuli.noise.NOISE_VERSIONS`: the default, 2, for a new
     deck; scene files written before noise versions existed read as 1). ``sigma_t`` is
     the extinction per world unit at density 1, what the volume marcher multiplies the density
@@ -297,6 +302,18 @@ class CloudDeck:
         """``(ox, oz) = wind · time``: how far the map and the fBm have moved."""
         return (self.wind[0] * self.time, self.wind[1] * self.time)
 
+    def still(self) -> CloudDeck:
+        """This deck at time 0: this one is it translated by ``(ox, 0, oz)`` (:attr:`offset`),
+        the same medium, so it has the same lattice and light, moved. Itself when the wind has
+        not moved it; made once and shared by every :meth:`at` of one deck."""
+        if self.offset == (0.0, 0.0):
+            return self
+        if "still" not in self._cache:
+            still = dataclasses.replace(self, time=0.0)
+            still._cache["map"] = self.coverage_map()
+            self._cache["still"] = still
+        return self._cache["still"]
+
     @property
     def detail_fbm(self) -> tuple[int, float, float, float]:
         """The detail fBm's ``(octaves, gain, lacunarity, frequency)``."""
@@ -353,8 +370,9 @@ class CloudDeck:
         return self.layer_box()
 
     def layer_box(self) -> tuple[np.ndarray, np.ndarray]:
-        """The slab ``(x0, base, z0)``–``(x1, top, z1)`` (float32): all of the deck lies in it."""
-        x0, z0, x1, z1 = self.extent
+        """The slab ``(x0, base, z0)``–``(x1, top, z1)`` (float32), moved by the wind's
+        :attr:`offset`: all of the deck lies in it."""
+        x0, z0, x1, z1 = self._moved_extent()
         return (
             np.array([x0, self.base, z0], dtype=np.float32),
             np.array([x1, self.top, z1], dtype=np.float32),
@@ -362,9 +380,14 @@ class CloudDeck:
 
     @property
     def box(self) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
-        """The slab as float ``(lo, hi)`` (the baked volume's box)."""
-        x0, z0, x1, z1 = self.extent
+        """The slab as float ``(lo, hi)`` (the baked volume's box), moved by the wind."""
+        x0, z0, x1, z1 = self._moved_extent()
         return ((x0, self.base, z0), (x1, self.top, z1))
+
+    def _moved_extent(self) -> tuple[float, float, float, float]:
+        """``extent`` moved by the wind's offset: where the slab is at this time."""
+        (x0, z0, x1, z1), (ox, oz) = self.extent, self.offset
+        return (x0 + ox, z0 + oz, x1 + ox, z1 + oz)
 
     def density_at(self, points: Any, threads: int = 0) -> np.ndarray:
         """ρ at ``(N, 3)`` world points: ``(N,)`` float32 (C++, the same on any thread count)."""
@@ -376,8 +399,9 @@ class CloudDeck:
 
     def lattice_centres(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """The baked lattice's texel centres ``(xs, ys, zs)`` (float32), as the core makes them:
-        ``lo + (i + ½)(hi − lo)/n`` in float64 from the float32 heights, rounded once."""
-        x0, z0, x1, z1 = self.extent
+        ``lo + (i + ½)(hi − lo)/n`` in float64 from the float32 heights, rounded once, over the
+        slab where the wind has moved it (the time-0 lattice's centres moved)."""
+        x0, z0, x1, z1 = self._moved_extent()
         nx, ny, nz = self.resolution
         base, top = float(np.float32(self.base)), float(np.float32(self.top))
         return (
@@ -388,8 +412,12 @@ class CloudDeck:
 
     def density_lattice(self, threads: int = 0) -> np.ndarray:
         """ρ at the texel centres of the ``(nz, ny, nx)`` lattice over the slab: read-only
-        float32 ``[z, y, x]`` (C++, parallel over z-slices, the same on any thread count; kept)."""
+        float32 ``[z, y, x]`` (C++, parallel over z-slices, the same on any thread count; kept).
+        A deck the wind has moved has its time-0 lattice, bit for bit (the same array: its
+        :meth:`still`'s); its centres moved, the density there equals it to float rounding."""
         threads = check.threads(threads)
+        if self.still() is not self:
+            return self.still().density_lattice(threads)
         if "lattice" not in self._cache:
             out = _core.deck_lattice(
                 self._shape(), self.coverage_map(), self.noise._core, self.resolution, threads
@@ -401,7 +429,13 @@ class CloudDeck:
     def to_volume(self, threads: int = 0) -> VolumeCloud:
         """The baked deck: a :class:`VolumeCloud` of :meth:`density_lattice` over the slab with
         this deck's ``sigma_t``, read trilinearly without the volumes' detail (made once per
-        deck: every stage reads the deck through it)."""
+        deck: every stage reads the deck through it). A deck the wind has moved has its time-0
+        volume's arrays over its moved box."""
+        if "volume" not in self._cache and self.still() is not self:
+            volume = copy.copy(self.still().to_volume(threads))  # checked fields: shared arrays
+            object.__setattr__(volume, "box", self.box)
+            object.__setattr__(volume, "params", {"deck": self.cloud_type, "time": self.time})
+            self._cache["volume"] = volume
         if "volume" not in self._cache:
             self._cache["volume"] = VolumeCloud(
                 density=self.density_lattice(threads),
@@ -415,10 +449,14 @@ class CloudDeck:
         return self._cache["volume"]
 
     def at(self, time: float) -> CloudDeck:
-        """This deck at another ``time`` (the wind has moved its map and fBm); it shares the
-        weather map, which does not depend on the time."""
+        """This deck at another ``time`` (the wind has moved it, slab, map and fBm); it shares
+        the weather map, which does not depend on the time, and the time-0 deck (:meth:`still`:
+        its lattice and volume, made once for every time)."""
         deck = dataclasses.replace(self, time=check.real(time, "time"))
         deck._cache["map"] = self.coverage_map()
+        still = self.still()
+        if deck.offset != (0.0, 0.0):
+            deck._cache["still"] = still
         return deck
 
     # --- scene files --------------------------------------------------------------------------
