@@ -35,7 +35,9 @@ def test_bench_fidelity_quick_writes_json_and_plot(
         for metric in ("block_median", "block_p90", "pixel_median"):
             eq = view["equal_quality"][metric]
             assert eq["cumuli_error"] == err[metric]
-            assert eq["slope"] < 0 and eq["ladder_spp"] == [1, 2, 4, 8, 16, 32]
+            ladder = eq["ladder_spp"]  # every power of two from 1 to at least 64
+            assert eq["slope"] < 0 and ladder == [2**k for k in range(len(ladder))]
+            assert ladder[-1] >= 64
             assert eq["spp"] > 0 and not math.isnan(eq["spp"])
             if view["mitsuba"]["available"]:
                 assert eq["mitsuba_s"] >= view["mitsuba"]["t1_s"] > 0
