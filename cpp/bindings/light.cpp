@@ -1297,7 +1297,7 @@ void bind_physical_light(py::module_& m) {
   m.def(
       "diffusion_anisotropy",
       [](const FloatArray& ext, V3 lo, V3 hi, const FloatArray& phi, float albedo,
-         float mean_cosine, int threads) {
+         float mean_cosine, int threads, const py::object& sun_t, V3 to_sun, float forward) {
         const VolumeGrid g = grid_of(ext, 0, lo, hi, "extinction");
         if (phi.ndim() != 4 || phi.shape(0) != g.d || phi.shape(1) != g.h || phi.shape(2) != g.w ||
             phi.shape(3) < 1 || phi.shape(3) > 8)
@@ -1309,18 +1309,36 @@ void bind_physical_light(py::module_& m) {
         p.albedo = albedo;
         p.mean_cosine = mean_cosine;
         const int channels = static_cast<int>(phi.shape(3));
+        FloatArray sun;  // (a default FloatArray is an empty array, not a null handle)
+        const bool has_sun = !sun_t.is_none();
+        if (has_sun) {
+          sun = sun_t.cast<FloatArray>();
+          if (sun.size() != static_cast<py::ssize_t>(g.voxels()))
+            throw py::value_error("sun_t must have the extinction's shape");
+        }
+        if (!(forward >= 0.0f && forward <= 4.0f))
+          throw py::value_error("forward must be in [0, 4]");
+        const glm::vec3 sd = v3(to_sun);
+        if (has_sun && forward != 0.0f &&
+            !(glm::length(sd) > 0.0f && std::isfinite(sd.x) && std::isfinite(sd.y) &&
+              std::isfinite(sd.z)))
+          throw py::value_error("to_sun must be a finite, non-zero vector");
         std::vector<float> out;
         {
           py::gil_scoped_release release;
-          out = diffusion_anisotropy(ext.data(), g, phi.data(), channels, p, threads);
+          out = diffusion_anisotropy(ext.data(), g, phi.data(), channels, p, threads,
+                                     has_sun ? sun.data() : nullptr, sd, forward);
         }
         return adopt_array(std::move(out), {g.d, g.h, g.w, 3});
       },
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("phi"), py::arg("albedo"),
-      py::arg("mean_cosine"), py::arg("threads") = 0,
+      py::arg("mean_cosine"), py::arg("threads") = 0, py::arg("sun_t").none(true) = py::none(),
+      py::arg("to_sun") = V3{0.0f, 1.0f, 0.0f}, py::arg("forward") = 0.0f,
       "The anisotropy r = 3E/phi of channel 0 of a diffusion solution phi (D, H, W, C): "
       "(D, H, W, 3), E = -D grad phi the diffuse flux (Marshak's leak at the medium's faces), "
-      "|r| <= 3; the empty cells next to the medium hold their medium neighbours' mean.");
+      "plus forward*3D*Q1, the forward-scattered flux of diffusion_light's sun source (with "
+      "sun_t, the same sun_t, to_sun and forward as that call); |r| <= 3; the empty cells next "
+      "to the medium hold their medium neighbours' mean.");
 }
 
 }  // namespace cumuli::bind

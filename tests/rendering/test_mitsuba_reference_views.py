@@ -41,17 +41,16 @@ GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25, "transmitta
 #: fitted on the side-lit, back-lit and metaball views (``cumuli.light.physical.FIT_VIEWS``),
 #: the diffusion fed the forward-scattered sun's flux source and its sun source with the phase's
 #: forward peak taken as unscattered (δ-M), single scattering reached by the δ-M sun, and the
-#: diffuse sun light seen through its flux (``cumuli.light.view``): back-lit (fitted) median
-#: 10.7 %, p90 26.1 % (mean +0.3 % meets the goal); top-lit (held out) −11.0 % mean, median
-#: 11.5 % (p90 23.8 % meets the goal); L-system (held out) +9.0 % mean, p90 29.3 %, ΔT 0.017
-#: (median 9.5 % meets the goal). The sunset (held out) and the metaball meet the goal.
+#: diffuse sun light seen through its flux, the forward-scattered part of it included
+#: (``cumuli.light.view``): back-lit (fitted) median 10.7 %, p90 25.5 % (mean +0.3 % meets the
+#: goal); top-lit (held out) −9.3 % mean, median 10.4 % (p90 22.1 % meets the goal); L-system
+#: (held out) ΔT 0.017 (mean −2.0 %, median 5.7 %, p90 15.5 % meet the goal). The sunset (held
+#: out) and the metaball meet the goal.
 GUARDS: dict[tuple[str, str], float] = {
     ("backlit", "block_median"): 0.117,
-    ("backlit", "block_p90"): 0.271,
-    ("toplit", "mean_ratio"): 0.12,
-    ("toplit", "block_median"): 0.125,
-    ("lsystem", "mean_ratio"): 0.10,
-    ("lsystem", "block_p90"): 0.303,
+    ("backlit", "block_p90"): 0.265,
+    ("toplit", "mean_ratio"): 0.103,
+    ("toplit", "block_median"): 0.114,
     ("lsystem", "transmittance"): 0.02,
 }
 

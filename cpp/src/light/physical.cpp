@@ -1122,6 +1122,26 @@ std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, cons
   return q;
 }
 
+namespace {
+
+// weight·3D·|Q1| per cell (0 outside the medium): Q1 = ϖσ·T·ḡ the first moment of the collided
+// sun light per unit irradiance, D = 1/(3σt') — the forward-scattered flux the diffusion's
+// source −∇·(3D·Q1) carries, and a part of the diffuse flux E = −D∇φ + 3D·Q1.
+std::vector<float> sun_flux_strength(const float* ext, std::size_t n, const unsigned char* medium,
+                                     const float* sun_t, float albedo, float mean_cosine,
+                                     float weight) {
+  std::vector<float> f(n, 0.0f);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!medium[i]) continue;
+    const float st = ext[i];
+    const float stp = (1.0f - albedo) * st + albedo * st * (1.0f - mean_cosine);
+    f[i] = weight * albedo * st * sun_t[i] * mean_cosine / std::max(stp, 1e-12f);
+  }
+  return f;
+}
+
+}  // namespace
+
 void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, const VolumeGrid& g,
                          const float* sun_t, glm::vec3 to_sun, float albedo, float mean_cosine,
                          float weight) {
@@ -1135,16 +1155,10 @@ void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, 
   const float hmin = std::min(h[0], std::min(h[1], h[2]));
   const glm::vec3 dir = -glm::normalize(to_sun);  // the way the light travels
   const float s[3] = {dir.x, dir.y, dir.z};
-  // f = 3D·|Q1| per cell (0 outside the medium): Q1 = ϖσ·T·ḡ per unit irradiance.
-  std::vector<float> f(n, 0.0f);
   std::vector<unsigned char> medium(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const float st = ext[i];
-    medium[i] = st * hmin > kMediumThickness;
-    if (!medium[i]) continue;
-    const float stp = (1.0f - albedo) * st + albedo * st * (1.0f - mean_cosine);
-    f[i] = weight * albedo * st * sun_t[i] * mean_cosine / std::max(stp, 1e-12f);
-  }
+  for (std::size_t i = 0; i < n; ++i) medium[i] = ext[i] * hmin > kMediumThickness;
+  const std::vector<float> f =
+      sun_flux_strength(ext, n, medium.data(), sun_t, albedo, mean_cosine, weight);
   const std::size_t stride[3] = {1, static_cast<std::size_t>(W), static_cast<std::size_t>(W) * H};
   const int dims[3] = {W, H, Dd};
   for (std::size_t i = 0; i < n; ++i) {
@@ -1502,13 +1516,20 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
 }
 
 std::vector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, const float* phi,
-                                        int channels, const DiffusionParams& p, int threads) {
+                                        int channels, const DiffusionParams& p, int threads,
+                                        const float* sun_t, glm::vec3 to_sun, float forward) {
   g.validate();
   if (channels < 1 || channels > 8) throw std::invalid_argument("channels must be in [1, 8]");
   const DiffusionLattice L(ext, g, p);
   const std::size_t n = L.n;
   std::vector<float> out(n * 3, 0.0f);
   auto at = [&](std::size_t i) { return static_cast<double>(phi[i * channels]); };
+  // The forward-scattered flux's strength per cell and the way the light travels (none: 0).
+  const bool streams = sun_t != nullptr && forward != 0.0f;
+  const std::vector<float> fwd =
+      streams ? sun_flux_strength(ext, n, L.medium.data(), sun_t, p.albedo, p.mean_cosine, forward)
+              : std::vector<float>();
+  const glm::vec3 dir = streams ? -glm::normalize(to_sun) : glm::vec3(0.0f);
   // The flux through the face of medium cell i on side ±1 of axis a, along +a.
   auto face = [&](std::size_t i, const int c[3], int a, int side) {
     const int cc = c[a] + side;
@@ -1517,7 +1538,8 @@ std::vector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, c
     const double ha = L.h[a];
     if (inside && L.medium[j]) {
       const double dh = L.conductance(side > 0 ? i : j, side > 0 ? j : i, a) * ha;
-      return -dh * (side > 0 ? at(j) - at(i) : at(i) - at(j));
+      const double stream = streams ? 0.5 * (static_cast<double>(fwd[i]) + fwd[j]) * dir[a] : 0.0;
+      return -dh * (side > 0 ? at(j) - at(i) : at(i) - at(j)) + stream;
     }
     const double d = L.D[i];
     return side * 2.0 * d * at(i) / (ha + 4.0 * d);  // Marshak's leak, outward

@@ -31,8 +31,9 @@ maths):
   than the cell's mean, and the whole of a cell thinner than one: the fluence is read with a
   gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
   ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`),
-  and through its flux: ``anisotropy`` ``r = 3E/φ``, applied per frame for the camera
-  (:mod:`cumuli.light.view`, :data:`FLUX_LIMIT`).
+  and through its flux: ``anisotropy`` ``r = 3E/φ``, ``E = −D∇φ + SUN_FORWARD·3D·Q1`` (the P1
+  flux with the source's first moment: the forward-scattered light streams on along the sun's
+  way), applied per frame for the camera (:mod:`cumuli.light.view`, :data:`FLUX_LIMIT`).
 - **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
   quadrature with 2·:data:`SKY_SAMPLES`² directions; :data:`SKY_RAYS`) times the sky's SH
   projection gives the sky irradiance reaching each voxel unscattered; with multiple
@@ -82,21 +83,21 @@ from cumuli.sky import sky_args
 #: ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}`` (``β`` = :data:`OCTAVE_POISSON`; 0 gives the plain ``e^{−cⁿ·τ}``).
 OCTAVES = 2
 OCTAVE_A = 1.0
-OCTAVE_B = 0.815
-OCTAVE_C = 0.498
-OCTAVE_POISSON = 0.983
+OCTAVE_B = 0.827
+OCTAVE_C = 0.506
+OCTAVE_POISSON = 0.964
 #: Gains on the lattice's diffuse light, reached in optically thick cells: the sun's multiple
 #: scattering, and the sky's light (:func:`lattice_gains`).
-SUN_GAIN = 1.277
-SKY_GAIN = 3.385
+SUN_GAIN = 1.311
+SKY_GAIN = 3.446
 #: Optical thickness ``τg`` of a lattice cell over which the gains rise from 1 to their value.
-GAIN_DEPTH = 1.762
+GAIN_DEPTH = 1.807
 #: Weight of the forward-scattered sun's flux source in the diffusion (``−∇·(3D·Q1)``, the first
 #: moment of the collided sun light; 0: an isotropic source, 1: the whole of it).
-SUN_FORWARD = 0.55
+SUN_FORWARD = 0.584
 #: How far the camera's view of the diffuse sun light may lean on its flux: the drawers read
 #: ``φ·(1 + ḡ·clamp(r·d, ±FLUX_LIMIT))``, ``r = 3E/φ`` (:mod:`cumuli.light.view`).
-FLUX_LIMIT = 0.447
+FLUX_LIMIT = 0.459
 #: The views the constants above were fitted on (``benchmarks/fit_physical.py``); the other
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
@@ -346,7 +347,10 @@ def physical_light(
                 solver=DIFFUSION_SOLVER,
             )
         with _stage(timings, "diffusion"):
-            aniso = _core.diffusion_anisotropy(ext, lo, hi, phi, s.albedo, s.mean_cosine, threads)
+            aniso = _core.diffusion_anisotropy(
+                ext, lo, hi, phi, s.albedo, s.mean_cosine, threads, sun_t=sun_t, to_sun=to_sun,
+                forward=weight_f,
+            )  # fmt: skip
             aniso.setflags(write=False)
     # A: G_sun·φ_sun; RGB: G_sky·(E_sky + φ_sky), the gains of lattice_gains (E_sky alone
     # without multiple scattering).

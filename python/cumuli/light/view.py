@@ -3,11 +3,13 @@ depends on where the camera is, applied per frame to the light step's camera-ind
 
 The diffusion solves for the fluence ``φ``, the diffuse light summed over every direction; the
 radiance it stands for is not the same every way. Its first moment is the diffuse flux
-``E = −D∇φ``, and to first order (the P1 approximation, Ishimaru 1978, §9.2) the radiance is
-``(φ + 3E·ω)/4π``: at a cloud's shadowed side, where the light leaves, more of it runs outwards
-than inwards. Scattered once more by a phase function of mean cosine ``ḡ`` towards the camera,
-direction ``d``, it gives ``φ·(1 + ḡ·r·d)/4π`` with ``r = 3E/φ`` the light step's
-``PhysicalLight.anisotropy``. P1 overstates the anisotropy where the light streams (a thin
+``E = −D∇φ + 3D·Q1`` (``Q1`` the first moment of the collided sun light, times the diffusion's
+``SUN_FORWARD``), and to first order (the P1 approximation, Ishimaru 1978, §9.2) the radiance
+is ``(φ + 3E·ω)/4π``: at a cloud's shadowed side, where the light leaves, more of it runs
+outwards than inwards, and where the light has not yet diffused (thin strands, a lit surface)
+it streams on away from the sun. Scattered once more by a phase function of mean cosine ``ḡ``
+towards the camera, direction ``d``, it gives ``φ·(1 + ḡ·r·d)/4π`` with ``r = 3E/φ`` the light
+step's ``PhysicalLight.anisotropy``. P1 overstates the anisotropy where the light streams (a thin
 strand, the first mean free path), so the term is clamped to ``±``
 :data:`~cumuli.light.physical.FLUX_LIMIT`, a constant fitted with the others against Mitsuba 3
 (docs/fidelity.md).

@@ -177,7 +177,15 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
 // on each axis. The diffuse radiance is (φ + 3E·ω)/4π (P1), and light scattered towards ω is
 // φ·(1 + ḡ·r·ω)/4π. |r| ≤ 3 (|E| ≤ φ); empty cells next to the medium hold the mean of their
 // medium neighbours' (as the fluence's boundary values), the rest 0.
+// With `sun_t` (the diffusion's sun transmittance, as add_sun_flux_source takes it) and a
+// forward weight, E also holds the forward-scattered flux that source carries, weight·3D·Q1 on
+// the faces between medium cells (E = −D∇φ + 3D·Q1, the P1 flux with a first-moment source):
+// where the collided light has not yet diffused — thin strands, the first mean free paths — it
+// streams on along the light.
 std::vector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, const float* phi,
-                                        int channels, const DiffusionParams& p, int threads);
+                                        int channels, const DiffusionParams& p, int threads,
+                                        const float* sun_t = nullptr,
+                                        glm::vec3 to_sun = glm::vec3(0.0f, 1.0f, 0.0f),
+                                        float forward = 0.0f);
 
 }  // namespace cumuli
