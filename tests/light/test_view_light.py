@@ -103,7 +103,8 @@ def test_the_forward_scattered_flux_streams_along_the_light() -> None:
 def test_the_light_step_streams_the_flux_of_its_own_sun_source(monkeypatch) -> None:
     """The physical light step hands the anisotropy the same sun transmittance, sun and forward
     weight as its diffusion's source (so the flux it reads is the flux that source carries), and
-    a particle proxy, whose source is isotropic, streams nothing."""
+    with no flux source (``forward`` 0, as a particle or billboard proxy's light step asks) it
+    streams nothing."""
     calls: dict[str, dict] = {}
     real_light, real_aniso = _core.diffusion_light, _core.diffusion_anisotropy
 
