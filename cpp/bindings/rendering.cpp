@@ -210,6 +210,8 @@ void bind_render_params(py::module_& m) {
       .def_readwrite("oct_c", &PhysicalParams::oct_c)
       .def_readwrite("oct_poisson", &PhysicalParams::oct_poisson)
       .def_readwrite("oct_first", &PhysicalParams::oct_first)
+      .def_readwrite("view_scale", &PhysicalParams::view_scale)
+      .def_readwrite("view_diffuse", &PhysicalParams::view_diffuse)
       .def(
           "octave_sum",
           [](const PhysicalParams& p, float cos_theta, const FloatArray& tau) {
@@ -488,7 +490,8 @@ void bind_composite(py::module_& m) {
       [](const FloatArray& layers, const FloatArray& boxes, const py::handle& camera_position,
          const py::handle& camera_target, const py::handle& camera_up, float fov,
          const py::object& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
-         int threads, const py::object& solid, const py::object& ground) {
+         int threads, const py::object& solid, const py::object& ground,
+         const py::object& view_scales) {
         if (layers.ndim() != 4 || layers.shape(3) != 4)
           throw py::value_error("layers must have shape (L, H, W, 4)");
         const py::ssize_t n = layers.shape(0), height = layers.shape(1), width = layers.shape(2);
@@ -518,6 +521,16 @@ void bind_composite(py::module_& m) {
               Box{glm::vec3(b[6 * k], b[6 * k + 1], b[6 * k + 2]),
                   glm::vec3(b[6 * k + 3], b[6 * k + 4], b[6 * k + 5])};
         }
+        if (!view_scales.is_none()) {
+          const auto v = view_scales.cast<FloatArray>();
+          if (v.ndim() != 1 || v.shape(0) != n)
+            throw py::value_error("view_scales must have shape (L,), one per layer");
+          for (py::ssize_t k = 0; k < n; ++k) {
+            if (!(v.data()[k] > 0.0f && v.data()[k] <= 1.0f))
+              throw py::value_error("view_scales must be in (0, 1]");
+            list[static_cast<std::size_t>(k)].view_scale = v.data()[k];
+          }
+        }
         try {
           cam.validate();
         } catch (const std::invalid_argument& e) {
@@ -544,11 +557,12 @@ void bind_composite(py::module_& m) {
       py::arg("layers"), py::arg("boxes"), py::arg("camera_position"), py::arg("camera_target"),
       py::arg("camera_up"), py::arg("fov"), py::arg("sky"), py::arg("sun_direction"),
       py::arg("sun_radiance"), py::arg("threads") = 0, py::arg("solid") = py::none(),
-      py::arg("ground") = py::none(),
+      py::arg("ground") = py::none(), py::arg("view_scales") = py::none(),
       "Composite premultiplied layers (L, H, W, 4) over the sky, front to back per pixel by the "
       "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top. "
       "solid (H, W, 4): rgb and view depth of opaque solids (+inf where none), which hide the "
-      "layers entered behind them.");
+      "layers entered behind them. view_scales (L,) in (0, 1]: what lies behind layer k shows "
+      "through (1 − A_k)^v_k of it (the physical mode's δ-M view of a medium; None: all 1).");
 
   m.def(
       "finish_physical",

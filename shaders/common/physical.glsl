@@ -18,6 +18,8 @@ uniform int u_phys_octaves;       // scattering orders drawn
 uniform vec3 u_phys_abc;          // octave constants a, b, c
 uniform float u_phys_poisson;     // β of the Poisson weights (0: plain octaves)
 uniform float u_phys_first;       // order 0's depth scale, 1 − f·ϖ (the δ-M sun)
+uniform float u_phys_view;        // the radiance's depth scale along the view, 1 − f·ϖ (δ-M view)
+uniform float u_phys_diffuse;     // the diffuse light's share of the view's emission, 1 − f
 uniform int u_phys_seed;          // jitter seed
 uniform float u_phys_min_t;       // the ray stops below this transmittance
 
@@ -103,7 +105,7 @@ vec3 phys_source(PhysicalCloud c, vec3 p, float w[MAX_OCTAVES], float k[MAX_OCTA
     float tau = atlas_lookup(u_depth_atlas, c.foff.xyz, c.fres.xyz, q, exact).r;
     vec3 g = (p - c.glo.xyz) / (c.ghi.xyz - c.glo.xyz) * vec3(c.gres.xyz);
     vec4 L = atlas_lookup(u_grid_atlas, c.goff.xyz, c.gres.xyz, g, exact);
-    float sun = octave_sum(w, k, n, tau);
-    sun += L.x * INV_4PI;
-    return u_phys_albedo * (sun_irradiance * sun + L.yzw * INV_4PI);
+    float d = u_phys_diffuse * INV_4PI;
+    float sun = octave_sum(w, k, n, tau) + L.x * d;
+    return u_phys_albedo * (sun_irradiance * sun + L.yzw * d);
 }

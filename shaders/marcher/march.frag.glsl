@@ -248,6 +248,7 @@ void main() {
 
     vec3 colour = vec3(0.0);
     float T = 1.0;
+    float T_view = 1.0;  // the radiance's transmittance (the physical mode's δ-M view; else T)
     int samples = 0;
     bool done = false;
     for (int h = 0; h < hits && !done; ++h) {
@@ -282,10 +283,13 @@ void main() {
                 if (rho > 0.0) {
                     float sigma = u_phys_extinction * rho;
                     float at = exp(-sigma * step);
+                    // The radiance sees σ·u_phys_view (the δ-M view); each unit of σ emits S.
+                    float av = exp(-sigma * u_phys_view * step);
                     vec3 S = phys_source(pc, p, ow, ok, no, u_sun_radiance, u_exact);
-                    colour += T * (1.0 - at) * S;
+                    colour += T_view * ((1.0 - av) / u_phys_view) * S;
                     T *= at;
-                    if (T < u_phys_min_t) { done = true; break; }
+                    T_view *= av;
+                    if (T_view < u_phys_min_t) { done = true; break; }
                 }
                 t += step;
             }
@@ -336,6 +340,11 @@ void main() {
         }
 #endif
     }
-    vec3 rgb = u_with_sky ? colour + T * background(o, dir, u_sun_dir, u_sun_radiance) : colour;
+#ifdef PHYSICAL
+    float T_behind = T_view;
+#else
+    float T_behind = T;
+#endif
+    vec3 rgb = u_with_sky ? colour + T_behind * background(o, dir, u_sun_dir, u_sun_radiance) : colour;
     frag = vec4(rgb, 1.0 - T);
 }

@@ -117,6 +117,7 @@ void main() {
 
   vec3 colour = vec3(0.0);
   float T = 1.0;
+  float T_view = 1.0;  // the radiance's transmittance (the physical mode's δ-M view; else T)
   // Slab test (C++: intersect(Box, ...)).
   vec3 inv = 1.0 / d;
   vec3 ta = (u_box_min - u_cam_pos) * inv;
@@ -140,15 +141,19 @@ void main() {
     int no = octave_terms(dot(d, u_sun_dir), ow, ok);
     int row = int(u_resolution.y) - 1 - int(gl_FragCoord.y);
     float xi = phys_jitter(row, int(gl_FragCoord.x));
-    for (int k = 0; k < n && T >= u_phys_min_t; ++k) {
+    for (int k = 0; k < n && T_view >= u_phys_min_t; ++k) {
       vec3 x = u_cam_pos + (t0 + (float(k) + xi) * h) * d;
       float rho = density_at(x);
       if (!(rho > 0.0)) continue;
       rho = eroded(rho, x);
       if (!(rho > 0.0)) continue;
       float dtau = exp(-u_sigma_t * rho * h);
-      colour += T * (1.0 - dtau) * phys_source(phys[0], x, ow, ok, no, u_sun_radiance, u_exact_light);
+      // The radiance sees σ·u_phys_view (the δ-M view); each unit of σ emits the source.
+      float dview = exp(-u_sigma_t * rho * u_phys_view * h);
+      colour += T_view * ((1.0 - dview) / u_phys_view) *
+                phys_source(phys[0], x, ow, ok, no, u_sun_radiance, u_exact_light);
       T *= dtau;
+      T_view *= dview;
     }
 #else
     float phase = hg_phase(u_g, dot(d, u_sun_dir));
@@ -162,8 +167,9 @@ void main() {
       colour += T * (1.0 - dtau) * S;
       T *= dtau;
     }
+    T_view = T;
 #endif
   }
-  vec3 rgb = u_with_sky ? colour + T * sky(d, u_sun_dir, u_sun_radiance) : colour;
+  vec3 rgb = u_with_sky ? colour + T_view * sky(d, u_sun_dir, u_sun_radiance) : colour;
   frag_colour = vec4(rgb, 1.0 - T);
 }

@@ -40,17 +40,15 @@ GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25, "transmitta
 #: ΔT). Keyed by (view, metric); every other pair is held to GOAL. Measured with the constants
 #: fitted on the side-lit, back-lit and metaball views (``cumuli.light.physical.FIT_VIEWS``),
 #: the diffusion fed the forward-scattered sun's flux source and its sun source with the phase's
-#: forward peak taken as unscattered (δ-M), single scattering reached by the δ-M sun, and the
-#: diffuse sun light seen through its flux, the forward-scattered part of it included
-#: (``cumuli.light.view``): back-lit (fitted) median 10.7 %, p90 25.5 % (mean +0.3 % meets the
-#: goal); top-lit (held out) −9.3 % mean, median 10.4 % (p90 22.1 % meets the goal); L-system
-#: (held out) ΔT 0.017 (mean −2.0 %, median 5.7 %, p90 15.5 % meet the goal). The sunset (held
-#: out) and the metaball meet the goal.
+#: forward peak taken as unscattered (δ-M), single scattering reached by the δ-M sun, the
+#: diffuse sun light seen through its flux, and the camera's rays taking the same peak as
+#: unscattered (the δ-M view, ``cumuli.light.physical.view_depth_scale``): top-lit (held out)
+#: −8.2 % mean (median 9.3 %, p90 20.5 % meet the goal); L-system (held out) ΔT 0.017 (the
+#: 3×3 resolve's softening and the point-sampled pixels against Mitsuba's pixel-area box;
+#: mean −1.5 %, median 4.6 %, p90 11.8 % meet the goal). The back-lit, sunset and metaball
+#: views meet the goal.
 GUARDS: dict[tuple[str, str], float] = {
-    ("backlit", "block_median"): 0.117,
-    ("backlit", "block_p90"): 0.265,
-    ("toplit", "mean_ratio"): 0.103,
-    ("toplit", "block_median"): 0.114,
+    ("toplit", "mean_ratio"): 0.092,
     ("lsystem", "transmittance"): 0.02,
 }
 

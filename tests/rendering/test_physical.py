@@ -13,7 +13,13 @@ import cumuli as cu
 from cumuli import _core
 from cumuli.light import physical
 from cumuli.light.onto_media import frame_nodes
-from cumuli.light.physical import OCTAVES, octave_sum, physical_light
+from cumuli.light.physical import (
+    OCTAVES,
+    octave_sum,
+    physical_light,
+    view_depth_scale,
+    view_diffuse_share,
+)
 from cumuli.light.view import seen_from
 from cumuli.rendering.marcher_cpu import MIN_TRANSMITTANCE
 from cumuli.sky import sky_args
@@ -349,6 +355,7 @@ def numpy_physical(lit: cu.LitScene, cam: cu.Camera, w: int, h: int) -> np.ndarr
     e_sun = np.asarray(scene.sun.radiance, F)
     blo, bhi = (np.asarray(b, np.float64) for b in cloud.layer_box())
     step = s.step_for(float(np.linalg.norm(o - cloud.centre)))
+    view, diffuse = view_depth_scale(s), view_diffuse_share(s)
     sky = scene.sky
     out = np.zeros((h, w, 4), np.float64)
     for i in range(h):
@@ -360,7 +367,7 @@ def numpy_physical(lit: cu.LitScene, cam: cu.Camera, w: int, h: int) -> np.ndarr
             inv = 1 / np.where(d == 0, 1e-30, d)
             ta, tb = (blo - o) * inv, (bhi - o) * inv
             t0, t1 = max(np.minimum(ta, tb).max(), 0), np.maximum(ta, tb).min()
-            colour, T = np.zeros(3), 1.0
+            colour, T, T_view = np.zeros(3), 1.0, 1.0
             if t1 >= t0:
                 cands = []
                 for k in range(cloud.n):
@@ -390,21 +397,49 @@ def numpy_physical(lit: cu.LitScene, cam: cu.Camera, w: int, h: int) -> np.ndarr
                         rho = cloud.density(p[None].astype(F), scene.noise, **s.fbm_params())[0][0]
                         if rho > 0:
                             at = math.exp(-s.extinction_scale * rho * step)
+                            # the δ-M view: the radiance sees σ·(1 − f·ϖ), diffuse light 1 − f
+                            av = math.exp(-s.extinction_scale * rho * view * step)
                             tau = light.sample_depth(p[None])[0]
                             g = _trilinear(light.grid, *light.box, p.astype(F))
                             oct_ = float(octave_sum(s, tau, c_, light.octaves))
-                            sun_part = oct_ + g[0] / (4 * math.pi)
-                            src = s.albedo * (e_sun * sun_part + g[1:] / (4 * math.pi))
-                            colour += T * (1 - at) * src
+                            sun_part = oct_ + diffuse * g[0] / (4 * math.pi)
+                            src = s.albedo * (e_sun * sun_part + diffuse * g[1:] / (4 * math.pi))
+                            colour += T_view * (1 - av) / view * src
                             T *= at
-                            if T < MIN_TRANSMITTANCE:
+                            T_view *= av
+                            if T_view < MIN_TRANSMITTANCE:
                                 done = True
                                 break
                         t += step
                     tu = t
-            out[i, j, :3] = colour + T * sky.colour(d[None].astype(F), scene.sun)[0]
+            out[i, j, :3] = colour + T_view * sky.colour(d[None].astype(F), scene.sun)[0]
             out[i, j, 3] = 1 - T
     return out.astype(F)
+
+
+@pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
+def test_what_lies_behind_shows_through_the_delta_m_view(backend: str) -> None:
+    """The camera's rays take the phase's forward peak as unscattered: the background shows
+    through a cloud by ``T^v`` (``v = 1 − f·ϖ``), not by its coverage's ``T = 1 − α``."""
+    s = PHYS.replace(sky_light=False)
+    other_sky = cu.Sky(zenith=(0.9, 0.5, 0.1), horizon=(0.3, 0.9, 0.2), ground=(0.1, 0.1, 0.6))
+    a, b = small_scene(s), small_scene(s, sky=other_sky)
+    cam = camera_for(a)
+    img_a, img_b = (cu.render(x, cam, 64, 48, backend=backend) for x in (a, b))
+    bg_a, bg_b = (cu.render(x.replace(clouds=[]), cam, 64, 48, backend=backend) for x in (a, b))
+    v = view_depth_scale(s)
+    assert v == pytest.approx(1.0 - physical.forward_peak_share(s) * s.albedo)
+    assert 0.4 < v < 0.7 and view_diffuse_share(s) == pytest.approx(
+        1 - physical.forward_peak_share(s)
+    )
+    T = 1.0 - img_a[..., 3]
+    np.testing.assert_allclose(img_b[..., 3], img_a[..., 3])  # the sky is not in the cloud's light
+    partial = (T > 0.05) & (T < 0.95)
+    assert partial.sum() > 20
+    seen = (img_a - img_b)[..., :3][partial]
+    behind = (bg_a - bg_b)[..., :3][partial]
+    np.testing.assert_allclose(seen, (T[partial] ** v)[:, None] * behind, atol=2e-3)
+    assert np.abs(seen - T[partial][:, None] * behind).max() > 0.02  # not the coverage's T
 
 
 def test_cpu_marcher_matches_its_numpy_twin() -> None:

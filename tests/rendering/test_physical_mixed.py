@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 import cumuli as cu
+from cumuli.light.physical import view_depth_scale
 from cumuli.model.particles import particle_cumulus
 from cumuli.testing import assert_image_close, only
 
@@ -67,3 +68,24 @@ def test_the_cumulus_shades_the_ground_in_the_mixed_scene() -> None:
     darker = (unshaded[..., :3] - shaded[..., :3]).sum(-1)
     assert darker.max() > 0.05
     assert darker.min() > -1e-5
+
+
+def test_a_cumulus_looks_the_same_beside_a_particle_cloud() -> None:
+    """One world: composited as a layer beside a particle cloud, the marched cumulus shows the
+    sky behind its fringes through the same δ-M view as when it is marched alone."""
+    settings = cu.RenderSettings(physical_resolution=24, resolve=False, air_extinction=0.0)
+    cumulus = cu.gaussian_cumulus(centre=(-6, 0, 0), seed=1)
+    far = particle_cumulus((30, 0, 0), 200, seed=2, radius=(0.8, 1.6))
+    alone = cu.Scene([cumulus], noise=cu.Noise(seed=7), sun=SUN, settings=settings)
+    both = alone.replace(clouds=[cumulus, far])
+    a = cu.render(alone, CAMERA, 96, 72, backend="cpu")
+    b = cu.render(both, CAMERA, 96, 72, backend="cpu")
+    side = np.s_[:, 48:]  # the cumulus's half of the picture (+x, the particles', is on the left)
+    fringe = (a[side][..., 3] > 0.05) & (a[side][..., 3] < 0.95)
+    assert fringe.sum() > 10
+    np.testing.assert_allclose(b[side], a[side], atol=2e-3)
+    # ... and not through its coverage's 1 − α: that would darken its fringes.
+    sky = cu.render(alone.replace(clouds=[]), CAMERA, 96, 72, backend="cpu")[side][..., :3]
+    alpha = a[side][..., 3:]
+    gap = ((1 - alpha) ** view_depth_scale(settings) - (1 - alpha)) * sky
+    assert gap[fringe].max() > 0.02

@@ -347,3 +347,24 @@ def test_marched_cloud_impostors_stop_at_a_solid_inside() -> None:
     assert cache.history[-1]["updates"] == {"clip": 1}
     cu.render_cpu(away, CAMERA, W, H, impostors=cache)
     assert cache.history[-1]["updates"] == {}
+
+
+def test_a_medium_layer_shows_what_lies_behind_through_its_delta_m_view() -> None:
+    """A layer's ``view_scale`` v: the background behind coverage A shows through (1 − A)^v
+    (the physical mode's δ-M view of a medium), the coverage stays A; bad scales are refused."""
+    from cumuli import _core
+
+    cam = ((0, 0, -5), (0, 0, 0), (0, 1, 0), 40.0)
+    layer = np.zeros((1, 4, 4, 4), np.float32)
+    layer[..., 3] = 0.5  # half covering, no radiance of its own
+    boxes = np.array([[[-9, -9, -9], [9, 9, 9]]], np.float32)
+    args = (*cam, sky_args(cu.Sky()), (0, 1, 0), (1, 1, 1), 0)
+    sky = _core.composite_layers(np.zeros_like(layer), boxes, *args)[..., :3]
+    plain = _core.composite_layers(layer, boxes, *args)
+    viewed = _core.composite_layers(layer, boxes, *args, None, None, np.array([0.55], np.float32))
+    np.testing.assert_allclose(plain[..., :3], 0.5 * sky, rtol=1e-6)
+    np.testing.assert_allclose(viewed[..., :3], 0.5**0.55 * sky, rtol=1e-5)
+    np.testing.assert_array_equal(viewed[..., 3], plain[..., 3])
+    for bad in ([0.0], [1.5], [float("nan")], [0.5, 0.5]):
+        with pytest.raises(ValueError, match="view_scales"):
+            _core.composite_layers(layer, boxes, *args, None, None, np.array(bad, np.float32))

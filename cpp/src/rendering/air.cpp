@@ -117,7 +117,10 @@ struct AirPass {
     const double d[3] = {dir.x, dir.y, dir.z};
     glm::vec3 rgb(px[0], px[1], px[2]);
     const float alpha = std::clamp(px[3], 0.0f, 1.0f);
-    const float clear = 1.0f - alpha;
+    // The background's share of the pixel: (1 − α)^{view_scale}, the δ-M view's transmittance
+    // (the clouds' forward peak carries what lies behind on), and the clouds' the rest.
+    const float clear = std::pow(1.0f - alpha, air.phase.view_scale);
+    const float cover = 1.0f - clear;
     float front = 0.0f;
     if (fading) {
       const double k = air.extinction;
@@ -135,7 +138,7 @@ struct AirPass {
         const double depth = cloud_depth(boxes, origin, d);
         front = fade(k, std::isnan(depth) ? 0.0 : depth);
         const glm::vec3 clouds = rgb - clear * bg;  // the clouds' own (premultiplied) radiance
-        faded = clouds + front * (alpha * horizon - clouds) + clear * faded;
+        faded = clouds + front * (cover * horizon - clouds) + clear * faded;
       }
       rgb = faded;
     }
@@ -144,7 +147,7 @@ struct AirPass {
                        d[1] * static_cast<double>(sun.direction.y) +
                        d[2] * static_cast<double>(sun.direction.z);
       const double p = aureole_phase(air.phase, std::min(c, rim));
-      const float share = clear + alpha * front;
+      const float share = clear + cover * front;
       for (int k = 0; k < 3; ++k) rgb[k] += static_cast<float>(p * glow_rgb[k]) * share;
     }
     px[0] = rgb.x;

@@ -1,6 +1,7 @@
 #include "cumuli/rendering/compositor.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 #include <stdexcept>
 #include <utility>
@@ -41,18 +42,24 @@ void composite_layers(const std::vector<Layer>& layers, const CameraParams& came
                                             dir.z * rays.forward.z)
                                   : kNoSolid;
         glm::vec3 colour(0.0f);
-        float T = 1.0f;
+        float T = 1.0f;       // the coverage's
+        float T_view = 1.0f;  // what lies behind is seen through (the δ-M view of media)
         for (const auto& h : hits) {
           if (h.first >= t_solid) break;
-          const float* l = layers[h.second].rgba + px * 4;
-          colour += T * glm::vec3(l[0], l[1], l[2]);
-          T *= 1.0f - l[3];
+          const Layer& layer = layers[h.second];
+          const float* l = layer.rgba + px * 4;
+          colour += T_view * glm::vec3(l[0], l[1], l[2]);
+          const float clear = 1.0f - l[3];
+          T *= clear;
+          T_view *=
+              layer.view_scale == 1.0f ? clear : std::pow(std::max(clear, 0.0f), layer.view_scale);
         }
         if (t_solid < kNoSolid) {
-          colour += T * glm::vec3(s[0], s[1], s[2]);
+          colour += T_view * glm::vec3(s[0], s[1], s[2]);
           T = 0.0f;
+          T_view = 0.0f;
         }
-        const glm::vec3 rgb = colour + T * background(sky, sun, ground, rays.origin, dir);
+        const glm::vec3 rgb = colour + T_view * background(sky, sun, ground, rays.origin, dir);
         float* o = out + px * 4;
         o[0] = rgb.x;
         o[1] = rgb.y;

@@ -276,10 +276,10 @@ class RayMarcher {
           break;
       }
     }
-    const glm::vec3 rgb =
-        scene_.with_sky
-            ? st.colour + st.T * background(scene_.sky, scene_.sun, scene_.ground, origin, dir)
-            : st.colour;
+    const glm::vec3 rgb = scene_.with_sky ? st.colour + (settings_.physical ? st.T_view : st.T) *
+                                                            background(scene_.sky, scene_.sun,
+                                                                       scene_.ground, origin, dir)
+                                          : st.colour;
     steps = st.steps;
     return glm::vec4(rgb, 1.0f - st.T);
   }
@@ -288,6 +288,7 @@ class RayMarcher {
   struct State {
     glm::vec3 colour{0.0f};
     float T = 1.0f;
+    float T_view = 1.0f;  // the radiance's transmittance (the physical mode's δ-M view; else T)
     int steps = 0;
     float cos_theta = 0.0f;
     float phase = 0.0f;
@@ -451,11 +452,16 @@ class RayMarcher {
         const glm::vec3 p(b.pts[3 * i], b.pts[3 * i + 1], b.pts[3 * i + 2]);
         const float sigma = ph.extinction_scale * d.rho;
         const float a = std::exp(-sigma * step);
+        // The radiance sees σ·view_scale (the δ-M view); each unit of σ still emits S:
+        // ∫₀^Δ e^{−σ'x}·σ·S dx = (1 − e^{−σ'Δ})·S/view_scale.
+        const float a_view = std::exp(-sigma * ph.view_scale * step);
         if (!terms) terms.emplace(ph, st.cos_theta);
-        const glm::vec3 S = rc.physical.source(p, *terms, scene_.sun.radiance, ph.albedo);
-        st.colour += st.T * (1.0f - a) * S;
+        const glm::vec3 S =
+            rc.physical.source(p, *terms, scene_.sun.radiance, ph.albedo, ph.view_diffuse);
+        st.colour += st.T_view * ((1.0f - a_view) / ph.view_scale) * S;
         st.T *= a;
-        if (st.T < ph.min_transmittance) {
+        st.T_view *= a_view;
+        if (st.T_view < ph.min_transmittance) {
           st.steps = b.steps[i];
           scratch.skipped = b.skipped[i];
           b.size = 0;

@@ -25,6 +25,8 @@ void PhysicalParams::validate() const {
       throw std::invalid_argument("octave constants must be in [0, 1]");
   if (!(oct_first > 0.0f && oct_first <= 1.0f))
     throw std::invalid_argument("oct_first must be in (0, 1]");
+  if (!(view_scale > 0.0f && view_scale <= 1.0f))
+    throw std::invalid_argument("view_scale must be in (0, 1]");
   if (!(oct_poisson >= 0.0f && oct_poisson <= 16.0f))
     throw std::invalid_argument("oct_poisson must be in [0, 16]");
   if (jitter_seed < 0 || jitter_seed > 1023)
@@ -80,13 +82,14 @@ void PhysicalGrids::validate() const {
 }
 
 glm::vec3 PhysicalGrids::source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance,
-                                float albedo) const {
+                                float albedo, float diffuse) const {
   constexpr float kInv4Pi = 0.0795774715459477f;
   const float tau = sample_frame(depth_data(), frame, p, columns_data());
   float L[4];
   sample_trilinear(rgba_data(), grid, 4, p, L);
-  const float sun = terms.sum(tau) + L[0] * kInv4Pi;
-  return albedo * (sun_irradiance * sun + glm::vec3(L[1], L[2], L[3]) * kInv4Pi);
+  const float d = diffuse * kInv4Pi;
+  const float sun = terms.sum(tau) + L[0] * d;
+  return albedo * (sun_irradiance * sun + glm::vec3(L[1], L[2], L[3]) * d);
 }
 
 float jitter(int row, int col, int seed) {

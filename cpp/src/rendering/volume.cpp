@@ -98,6 +98,7 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
     const glm::vec3 d = glm::normalize(cam.forward + sx * cam.right + sy * cam.up);
     glm::vec3 colour(0.0f);
     float T = 1.0f;
+    float T_view = 1.0f;  // the radiance's transmittance (the physical mode's δ-M view; else T)
     Interval span;
     const float t_solid = p.solids.empty() ? kNoSolid : nearest_solid(p.solids, cam.position, d);
     const bool hit = intersect(g.box, cam.position, 1.0f / d, span);
@@ -110,7 +111,7 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
       if (p.physical) {
         const OctaveTerms terms(p.phys, glm::dot(d, p.sun.direction));
         const float xi = jitter(row, col, p.phys.jitter_seed);
-        for (int k = 0; k < n && T >= p.phys.min_transmittance; ++k) {
+        for (int k = 0; k < n && T_view >= p.phys.min_transmittance; ++k) {
           const glm::vec3 x = cam.position + (t0 + (static_cast<float>(k) + xi) * h) * d;
           float rho =
               p.cubic ? sample_cubic_bspline(density, g, x) : sample_trilinear(density, g, x);
@@ -118,8 +119,12 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
           rho = erode_density(rho, x, p);
           if (!(rho > 0.0f)) continue;
           const float dtau = std::exp(-p.sigma_t * rho * h);
-          colour += T * (1.0f - dtau) * p.grids->source(x, terms, p.sun.radiance, p.phys.albedo);
+          // The radiance sees σ·view_scale (the δ-M view); each unit of σ emits the source.
+          const float dview = std::exp(-p.sigma_t * rho * p.phys.view_scale * h);
+          colour += T_view * ((1.0f - dview) / p.phys.view_scale) *
+                    p.grids->source(x, terms, p.sun.radiance, p.phys.albedo, p.phys.view_diffuse);
           T *= dtau;
+          T_view *= dview;
         }
       }
       const float phase = henyey_greenstein(p.g, glm::dot(d, p.sun.direction));
@@ -135,8 +140,9 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
         colour += T * (1.0f - dtau) * S;
         T *= dtau;
       }
+      if (!p.physical) T_view = T;
     }
-    const glm::vec3 rgb = p.with_sky ? colour + T * sky_radiance(p.sky, p.sun, d) : colour;
+    const glm::vec3 rgb = p.with_sky ? colour + T_view * sky_radiance(p.sky, p.sun, d) : colour;
     float* px = &img[i * 4];
     px[0] = rgb.x;
     px[1] = rgb.y;

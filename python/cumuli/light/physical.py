@@ -40,6 +40,11 @@ maths):
   scattering on, it and its diffusion are read with the gain of the same form up to
   :data:`SKY_GAIN`.
 
+The drawers see all of it through the **δ-M view**: the camera's rays take the same forward
+peak as unscattered, so what lies behind a stretch of cloud reaches the camera with
+``e^{−(1 − f·ϖ)τ}`` (:func:`view_depth_scale`) and the diffuse lattice light is emitted with the
+share ``1 − f`` (:func:`view_diffuse_share`); the coverage (alpha) stays ``1 − e^{−τ}``.
+
 The constants are fitted against Mitsuba 3 on the reference views of :data:`FIT_VIEWS` and
 tested on the others, :data:`HELD_OUT_VIEWS` (``tests/references/fit_physical.py`` reproduces
 the fit; docs/fidelity.md has the errors on every view).
@@ -82,22 +87,22 @@ from cumuli.sky import sky_args
 #: order ``n`` scatters ``aⁿ`` of the light with the phase's g scaled by ``bⁿ``, weighted by
 #: ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}`` (``β`` = :data:`OCTAVE_POISSON`; 0 gives the plain ``e^{−cⁿ·τ}``).
 OCTAVES = 2
-OCTAVE_A = 1.0
-OCTAVE_B = 0.827
-OCTAVE_C = 0.506
-OCTAVE_POISSON = 0.964
+OCTAVE_A = 0.983
+OCTAVE_B = 1.0
+OCTAVE_C = 0.546
+OCTAVE_POISSON = 0.893
 #: Gains on the lattice's diffuse light, reached in optically thick cells: the sun's multiple
 #: scattering, and the sky's light (:func:`lattice_gains`).
-SUN_GAIN = 1.311
-SKY_GAIN = 3.446
+SUN_GAIN = 1.375
+SKY_GAIN = 3.588
 #: Optical thickness ``τg`` of a lattice cell over which the gains rise from 1 to their value.
-GAIN_DEPTH = 1.807
+GAIN_DEPTH = 1.771
 #: Weight of the forward-scattered sun's flux source in the diffusion (``−∇·(3D·Q1)``, the first
 #: moment of the collided sun light; 0: an isotropic source, 1: the whole of it).
-SUN_FORWARD = 0.584
+SUN_FORWARD = 0.561
 #: How far the camera's view of the diffuse sun light may lean on its flux: the drawers read
 #: ``φ·(1 + ḡ·clamp(r·d, ±FLUX_LIMIT))``, ``r = 3E/φ`` (:mod:`cumuli.light.view`).
-FLUX_LIMIT = 0.459
+FLUX_LIMIT = 0.439
 #: The views the constants above were fitted on (``benchmarks/fit_physical.py``); the other
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball")
@@ -526,6 +531,31 @@ def first_order_depth_scale(settings: Any) -> float:
     if not FIRST_ORDER_DELTA_M:
         return 1.0
     return float(1.0 - forward_peak_share(settings) * float(settings.albedo))
+
+
+#: Whether the camera's rays see the δ-M view (:func:`view_depth_scale`).
+VIEW_DELTA_M = True
+
+
+def view_depth_scale(settings: Any) -> float:
+    """The camera ray's optical-depth scale for radiance: ``1 − f·ϖ`` (the δ-M view).
+
+    Light scattered into the phase's forward peak (within 2.6°) goes on to the camera with the
+    light that was not scattered: what lies behind a stretch of cloud — the sky, the ground,
+    the cloud's own deeper light — reaches the camera with ``e^{−(1 − f·ϖ)τ}``, not ``e^{−τ}``.
+    The coverage (alpha, ``1 − e^{−τ}``) is the cloud's geometric one."""
+    if not VIEW_DELTA_M:
+        return 1.0
+    return float(1.0 - forward_peak_share(settings) * float(settings.albedo))
+
+
+def view_diffuse_share(settings: Any) -> float:
+    """The diffuse light's share of what a stretch of cloud sends the camera: ``1 − f`` in the
+    δ-M view (the forward peak's share of the scattered diffuse light goes on along the ray, and
+    the view's ``e^{−(1 − f·ϖ)τ}`` carries it), 1 without."""
+    if not VIEW_DELTA_M:
+        return 1.0
+    return float(1.0 - forward_peak_share(settings))
 
 
 def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[float, float]]:

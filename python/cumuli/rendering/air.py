@@ -6,7 +6,10 @@ the core, threaded; :func:`add_air` is its numpy reference.
 - **Aerial perspective.** Along a view ray the air's extinction ``k = air_extinction`` (per
   world unit) hides what lies at distance ``t`` by ``1 − exp(−k·t)`` and puts the sky's horizon
   radiance in its place. A pixel of coverage ``α`` is its clouds' radiance ``C`` (premultiplied)
-  over its background ``B`` (:func:`background`, the renderers' own, recomputed here): ``C``
+  over its background ``B`` (:func:`background`, the renderers' own, recomputed here), seen
+  through the clouds' δ-M view, ``(1 − α)^v`` with ``v`` =
+  :func:`cumuli.light.physical.view_depth_scale` (the drawers' own; ``α`` is the geometric
+  coverage ``1 − e^{−τ}``), the clouds covering the rest, ``α_v = 1 − (1 − α)^v``: ``C``
   fades with the clouds' distance ``D`` (:func:`cloud_depth`), ``B`` with its own ``t_bg``
   (:func:`background_distance`: the ground plane's distance where the ray meets it, else the
   path through a layer of hazy air ``air_height`` thick, ``air_height/|d.y|``, so that the sky
@@ -15,7 +18,7 @@ the core, threaded; :func:`add_air` is its numpy reference.
 - **Aureole.** The haze's droplets scatter the sun's light forward with the clouds' phase
   function: ``E_sun · haze · p(c)`` (``c`` the cosine between the ray and the sun, held at the
   disc's rim inside the disc), added in full where the background shows and, in front of a
-  cloud, in the share of the air in front of it, ``α·(1 − exp(−k·D))``.
+  cloud, in the share of the air in front of it, ``α_v·(1 − exp(−k·D))``.
 
 The pass runs before the resolve pass, on the raw image whose background is exactly
 :func:`background`.
@@ -28,7 +31,7 @@ from typing import Any
 
 import numpy as np
 
-from cumuli.light.physical import phase_values
+from cumuli.light.physical import phase_values, view_depth_scale
 
 
 def _aureole_at(scene: Any, dirs: np.ndarray) -> np.ndarray | None:
@@ -211,7 +214,10 @@ def add_air(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None) -> n
     flat = image.reshape(-1, 4)
     rgb = np.ascontiguousarray(flat[:, :3], np.float32)
     alpha = np.clip(flat[:, 3], 0.0, 1.0)
-    clear = 1.0 - alpha
+    # The background's share: (1 − α)^{view scale}, the δ-M view's transmittance (the clouds'
+    # forward peak carries what lies behind on to the camera); the clouds' share the rest.
+    clear = (1.0 - alpha) ** np.float32(view_depth_scale(s))
+    cover = 1.0 - clear
     front = np.zeros_like(alpha)
     if fading:
         k = s.air_extinction
@@ -227,14 +233,14 @@ def add_air(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None) -> n
         # Everywhere: the background faded by its distance (where nothing covers the pixel,
         # exactly the pixel); where something does, its clouds faded by theirs on top.
         faded = bg + behind * (horizon - bg)
-        a, c = alpha[covered, None], clear[covered, None]
+        a, c = cover[covered, None], clear[covered, None]
         f = front[covered, None]
         clouds = rgb[covered] - c * bg[covered]  # the clouds' own (premultiplied) radiance
         faded[covered] = clouds + f * (a * horizon - clouds) + c * faded[covered]
         rgb = faded
     if glowing:
         glow = _aureole_at(scene, dirs)
-        glow *= (clear + alpha * front)[:, None]
+        glow *= (clear + cover * front)[:, None]
         rgb = rgb + glow
     out = np.concatenate([rgb, flat[:, 3:]], axis=1).astype(np.float32)
     return out.reshape(image.shape)

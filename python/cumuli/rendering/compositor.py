@@ -29,6 +29,7 @@ from cumuli._util import validate as check
 from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _thread_default, check_context, default_context
 from cumuli.ground import ground_args
+from cumuli.light.physical import view_depth_scale
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.light.view import seen_from
 from cumuli.model.volume import DEFAULT_DETAIL, VolumeCloud
@@ -110,12 +111,14 @@ def compose(
         return finish(image, scene, camera, lit.shadow, threads)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
+        kinds = []  # impostors are images: their layers composite by their coverage
     else:
-        layer_list, box_list = [], []
+        layer_list, box_list, kinds = [], [], []
         for kind, indices in calls:
             if indices:
                 layer_list.append(painter.layer(lit, kind, indices, camera, width, height, False))
                 box_list.append(_union_box(scene, indices))
+                kinds.append(kind)
     layers = np.stack(layer_list) if layer_list else np.zeros((0, height, width, 4), np.float32)
     boxes = np.array(box_list, np.float32).reshape(-1, 2, 3)
     solid = painter.solids(lit, camera, width, height) if scene.solids else None
@@ -124,8 +127,18 @@ def compose(
         sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
         solid,
         ground_args(scene.ground, scene.sky, lit.shadow),
+        view_scales(scene, kinds) if kinds else None,
     )  # fmt: skip
     return finish(image, scene, camera, lit.shadow, threads)
+
+
+def view_scales(scene: Scene, kinds: Sequence[str]) -> np.ndarray:
+    """Each layer's view scale for the compositor: in the physical mode a medium's (a 2018
+    cloud, a volume, a deck: drawn by the marchers) is the δ-M view's ``1 − f·ϖ``
+    (:func:`cumuli.light.physical.view_depth_scale`), what lies behind it showing through
+    ``(1 − A)^v``, as within one march; a sprite layer's (particles, billboards) is 1."""
+    v = view_depth_scale(scene.settings) if scene.settings.physical else 1.0
+    return np.array([v if _kind(k).medium else 1.0 for k in kinds], np.float32)
 
 
 def _lit(scene: Any) -> tuple[LitScene | None, Scene]:

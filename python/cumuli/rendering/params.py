@@ -78,6 +78,8 @@ def physical_params(settings: RenderSettings, octaves: int) -> _core.PhysicalPar
     p.oct_a, p.oct_b, p.oct_c = _physical.OCTAVE_A, _physical.OCTAVE_B, _physical.OCTAVE_C
     p.oct_poisson = _physical.OCTAVE_POISSON
     p.oct_first = _physical.first_order_depth_scale(settings)
+    p.view_scale = _physical.view_depth_scale(settings)
+    p.view_diffuse = _physical.view_diffuse_share(settings)
     p.jitter_seed = int(settings.jitter_seed)
     p.min_transmittance = MIN_TRANSMITTANCE
     return p
@@ -159,6 +161,8 @@ def physical_uniforms(params: _core.PhysicalParams) -> dict[str, Any]:
         "u_phys_abc": (p.oct_a, p.oct_b, p.oct_c),
         "u_phys_poisson": p.oct_poisson,
         "u_phys_first": p.oct_first,
+        "u_phys_view": p.view_scale,
+        "u_phys_diffuse": p.view_diffuse,
         "u_phys_seed": p.jitter_seed,
         "u_phys_min_t": p.min_transmittance,
     }

@@ -20,14 +20,18 @@ namespace cumuli {
 struct Layer {
   const float* rgba = nullptr;
   Box box;
+  // What lies behind the layer shows through (1 − A)^view_scale of it: the physical mode's δ-M
+  // view of a medium (its forward peak carries the light behind on), 1: its coverage's 1 − A.
+  float view_scale = 1.0f;
 };
 
-// out (height·width·4): rgb = Σ_k T_k·C_k + T·background(d), alpha = 1 − T (the background is
+// out (height·width·4): rgb = Σ_k T_k·C_k + T_v·background(d), alpha = 1 − T (the background is
 // the ground where the ray meets an enabled ground, else the sky: ground.hpp), with T_k the product
-// of (1 − A_j) over the layers j the ray enters before k (entry max(t_in, 0), ties in layer order)
-// and T over all of them. A layer whose box the ray misses (or that lies behind the camera)
-// contributes nothing at that pixel. `solid` (height·width·4: rgb, view depth) may be null.
-// The result does not depend on the thread count.
+// of (1 − A_j)^{v_j} over the layers j the ray enters before k (entry max(t_in, 0), ties in layer
+// order; v_j their view_scale), T_v over all of them and T the product of their (1 − A_j). A layer
+// whose box the ray misses (or that lies behind the camera) contributes nothing at that pixel.
+// `solid` (height·width·4: rgb, view depth) may be null. The result does not depend on the thread
+// count.
 void composite_layers(const std::vector<Layer>& layers, const CameraParams& camera, int width,
                       int height, const SkyParams& sky, const SunParams& sun,
                       const GroundParams& ground, float* out, int threads,

@@ -43,6 +43,12 @@ struct PhysicalParams {
   float oct_poisson = 0.0f;  // β of the Poisson weights, in [0, 16] (0: plain octaves)
   // Order 0's depth scale: 1 − f·ϖ with f the phase's forward-peak share (the δ-M sun), 1: e^{−τ}.
   float oct_first = 1.0f;
+  // The camera ray's optical-depth scale for radiance: 1 − f·ϖ (the δ-M view: the forward peak
+  // carries what lies behind on to the camera), 1: e^{−τ}. The coverage (alpha) keeps e^{−τ}.
+  float view_scale = 1.0f;
+  // The diffuse light's share of the view's emission: 1 − f (the δ-M view: its forward peak
+  // scatters the diffuse light on along the ray, not towards the camera anew), 1: all of it.
+  float view_diffuse = 1.0f;
   int jitter_seed = 0;
   float min_transmittance = 1e-4f;  // the ray stops below it
 
@@ -98,9 +104,10 @@ struct PhysicalGrids {
   std::size_t rgba_size() const { return rgba_view_ != nullptr ? rgba_count_ : rgba.size(); }
 
   void validate() const;  // throws std::invalid_argument
-  // The scattered radiance per unit σt·Δ... : ϖ·(E_sun·(octaves + F/4π) + S/4π).
-  glm::vec3 source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance,
-                   float albedo) const;
+  // The scattered radiance per unit σt·Δ... : ϖ·(E_sun·(octaves + d·F/4π) + d·S/4π), d the
+  // diffuse light's share (PhysicalParams::view_diffuse).
+  glm::vec3 source(glm::vec3 p, const OctaveTerms& terms, glm::vec3 sun_irradiance, float albedo,
+                   float diffuse = 1.0f) const;
 
  private:
   const float* depth_view_ = nullptr;
