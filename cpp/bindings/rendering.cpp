@@ -487,8 +487,7 @@ void bind_volume_march(py::module_& m) {
 void bind_composite(py::module_& m) {
   m.def(
       "composite_layers",
-      [](const FloatArray& layers, const FloatArray& boxes, const py::handle& camera_position,
-         const py::handle& camera_target, const py::handle& camera_up, float fov,
+      [](const FloatArray& layers, const FloatArray& boxes, const CameraParams& camera,
          const py::object& sky, const py::handle& sun_direction, const py::handle& sun_radiance,
          int threads, const py::object& solid, const py::object& ground,
          const py::object& view_scales) {
@@ -501,11 +500,7 @@ void bind_composite(py::module_& m) {
         if (boxes.ndim() != 3 || boxes.shape(0) != n || boxes.shape(1) != 2 || boxes.shape(2) != 3)
           throw py::value_error("boxes must have shape (L, 2, 3), one (lo, hi) per layer");
         if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
-        CameraParams cam;
-        cam.position = vec3_arg(camera_position, "camera position");
-        cam.target = vec3_arg(camera_target, "camera target");
-        cam.up = vec3_arg(camera_up, "camera up");
-        cam.fov = finite(fov, "fov");
+        const CameraParams& cam = camera;
         SunParams sun;
         const glm::vec3 sd = vec3_arg(sun_direction, "sun direction");
         if (!(glm::dot(sd, sd) > 0.0f)) throw py::value_error("sun direction must not be zero");
@@ -554,10 +549,10 @@ void bind_composite(py::module_& m) {
         }
         return out;
       },
-      py::arg("layers"), py::arg("boxes"), py::arg("camera_position"), py::arg("camera_target"),
-      py::arg("camera_up"), py::arg("fov"), py::arg("sky"), py::arg("sun_direction"),
-      py::arg("sun_radiance"), py::arg("threads") = 0, py::arg("solid") = py::none(),
-      py::arg("ground") = py::none(), py::arg("view_scales") = py::none(),
+      py::arg("layers"), py::arg("boxes"), py::arg("camera"), py::arg("sky"),
+      py::arg("sun_direction"), py::arg("sun_radiance"), py::arg("threads") = 0,
+      py::arg("solid") = py::none(), py::arg("ground") = py::none(),
+      py::arg("view_scales") = py::none(),
       "Composite premultiplied layers (L, H, W, 4) over the sky, front to back per pixel by the "
       "ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top. "
       "solid (H, W, 4): rgb and view depth of opaque solids (+inf where none), which hide the "

@@ -962,7 +962,7 @@ def cloud_density(cloud: CloudShape, points: typing.Annotated[numpy.typing.Array
     """
     Density (rho, gamma) of a cloud at points (eq. 2 or eqs. 19-21).
     """
-def composite_layers(layers: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], boxes: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], camera_position: typing.Any, camera_target: typing.Any, camera_up: typing.Any, fov: typing.SupportsFloat | typing.SupportsIndex, sky: typing.Any, sun_direction: typing.Any, sun_radiance: typing.Any, threads: typing.SupportsInt | typing.SupportsIndex = 0, solid: typing.Any = None, ground: typing.Any = None, view_scales: typing.Any = None) -> numpy.typing.NDArray[numpy.float32]:
+def composite_layers(layers: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], boxes: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], camera: CameraParams, sky: typing.Any, sun_direction: typing.Any, sun_radiance: typing.Any, threads: typing.SupportsInt | typing.SupportsIndex = 0, solid: typing.Any = None, ground: typing.Any = None, view_scales: typing.Any = None) -> numpy.typing.NDArray[numpy.float32]:
     """
     Composite premultiplied layers (L, H, W, 4) over the sky, front to back per pixel by the ray's entry into each layer's box (L, 2, 3): an (H, W, 4) float32 image, row 0 on top. solid (H, W, 4): rgb and view depth of opaque solids (+inf where none), which hide the layers entered behind them. view_scales (L,) in (0, 1]: what lies behind layer k shows through (1 − A_k)^v_k of it (the physical mode's δ-M view of a medium; None: all 1).
     """

@@ -10,6 +10,7 @@ import pytest
 
 import cumuli as cu
 from cumuli.rendering.painters import CPUPainter
+from cumuli.rendering.params import camera_params
 from cumuli.rendering.solids import composite_split, draw_solids_cpu
 from cumuli.sky import sky_args
 from cumuli.testing import assert_image_close, only
@@ -326,7 +327,8 @@ def test_bad_impostor_and_composite_arrays() -> None:
                                 *cam, 8, 8)  # fmt: skip
     with pytest.raises(ValueError, match="solid must have shape"):
         _core.composite_layers(np.zeros((1, 4, 4, 4), np.float32), np.zeros((1, 2, 3), np.float32),
-                               *cam, sky_args(cu.Sky()), (0, 1, 0), (1, 1, 1), 0,
+                               camera_params(cu.Camera(*cam)), sky_args(cu.Sky()), (0, 1, 0),
+                               (1, 1, 1), 0,
                                np.zeros((3, 3, 4), np.float32))  # fmt: skip
 
 
@@ -358,7 +360,7 @@ def test_a_medium_layer_shows_what_lies_behind_through_its_delta_m_view() -> Non
     layer = np.zeros((1, 4, 4, 4), np.float32)
     layer[..., 3] = 0.5  # half covering, no radiance of its own
     boxes = np.array([[[-9, -9, -9], [9, 9, 9]]], np.float32)
-    args = (*cam, sky_args(cu.Sky()), (0, 1, 0), (1, 1, 1), 0)
+    args = (camera_params(cu.Camera(*cam)), sky_args(cu.Sky()), (0, 1, 0), (1, 1, 1), 0)
     sky = _core.composite_layers(np.zeros_like(layer), boxes, *args)[..., :3]
     plain = _core.composite_layers(layer, boxes, *args)
     viewed = _core.composite_layers(layer, boxes, *args, None, None, np.array([0.55], np.float32))

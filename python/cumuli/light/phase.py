@@ -79,3 +79,28 @@ class _PhaseOnly:
     hg_g: float
     hg_g2: float
     hg_blend: float
+
+
+#: Whether the camera's rays see the δ-M view (:func:`view_depth_scale`).
+VIEW_DELTA_M = True
+
+
+def view_depth_scale(settings: Any) -> float:
+    """The camera ray's optical-depth scale for radiance: ``1 − f·ϖ`` (the δ-M view).
+
+    Light scattered into the phase's forward peak (within 2.6°) goes on to the camera with the
+    light that was not scattered: what lies behind a stretch of cloud — the sky, the ground,
+    the cloud's own deeper light — reaches the camera with ``e^{−(1 − f·ϖ)τ}``, not ``e^{−τ}``.
+    The coverage (alpha, ``1 − e^{−τ}``) is the cloud's geometric one."""
+    if not VIEW_DELTA_M:
+        return 1.0
+    return float(1.0 - forward_peak_share(settings) * float(settings.albedo))
+
+
+def view_diffuse_share(settings: Any) -> float:
+    """The diffuse light's share of what a stretch of cloud sends the camera: ``1 − f`` in the
+    δ-M view (the forward peak's share of the scattered diffuse light goes on along the ray, and
+    the view's ``e^{−(1 − f·ϖ)τ}`` carries it), 1 without."""
+    if not VIEW_DELTA_M:
+        return 1.0
+    return float(1.0 - forward_peak_share(settings))

@@ -53,6 +53,7 @@ from cumuli.light.prepare import LitScene
 from cumuli.model.atlas import SpriteAtlas
 from cumuli.model.billboard_field import BillboardField
 from cumuli.model.billboards import BillboardCloud
+from cumuli.rendering.params import camera_params
 from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
 from cumuli.sky import sky_args
 
@@ -337,8 +338,7 @@ def finish(layer: np.ndarray, lit: LitScene, camera: Camera, threads: int = 0) -
     C++ compositor (one layer, a box every ray enters), as both backends do."""
     scene = lit.scene
     return _core.composite_layers(
-        layer[None], _EVERYWHERE, camera.position, camera.target,
-        camera.up, float(camera.fov), sky_args(scene.sky), scene.sun.direction,
+        layer[None], _EVERYWHERE, camera_params(camera), sky_args(scene.sky), scene.sun.direction,
         scene.sun.radiance, threads,
     )  # fmt: skip
 

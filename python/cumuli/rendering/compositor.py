@@ -28,6 +28,7 @@ from cumuli._util import progress as _progress
 from cumuli._util import validate as check
 from cumuli.camera import Camera
 from cumuli.gl.context import GLContext, _thread_default, check_context, default_context
+from cumuli.gl.tiles import Tiles
 from cumuli.ground import ground_args
 from cumuli.light.physical import view_depth_scale
 from cumuli.light.prepare import LitScene, prepare_light
@@ -36,6 +37,7 @@ from cumuli.model.volume import DEFAULT_DETAIL, VolumeCloud
 from cumuli.rendering.air import finish
 from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
 from cumuli.rendering.painters import CPUPainter, GLPainter
+from cumuli.rendering.params import camera_params
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
 from cumuli.settings import RenderSettings
@@ -123,8 +125,8 @@ def compose(
     boxes = np.array(box_list, np.float32).reshape(-1, 2, 3)
     solid = painter.solids(lit, camera, width, height) if scene.solids else None
     image = _core.composite_layers(
-        layers, boxes, camera.position, camera.target, camera.up, float(camera.fov),
-        sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
+        layers, boxes, camera_params(camera), sky_args(scene.sky), scene.sun.direction,
+        scene.sun.radiance, check.threads(threads),
         solid,
         ground_args(scene.ground, scene.sky, lit.shadow),
         view_scales(scene, kinds) if kinds else None,
@@ -196,77 +198,6 @@ def _check_layers(scene: Scene, width: int, height: int) -> None:
 
 
 # --------------------------------------------------------------------------------------------
-class Tiles:
-    """Draws a full-screen pass tile by tile into a reused RGBA32F framebuffer and reads it back
-    with row 0 on top (each fragment computes its whole-image pixel from ``u_tile_origin`` and
-    ``u_tile_height``, so tiling changes nothing). Times the draws with the context's query."""
-
-    def __init__(self, gl: GLContext, tile: int) -> None:
-        self.gl = gl
-        self.tile = tile
-        self._fbo: Any = None
-        self._tex: Any = None
-        self._size = (0, 0)
-        #: GPU time of the last draw's tiles in nanoseconds; None when a draw could not be timed.
-        self.last_gpu_ns: int | None = None
-        #: The progress setting of the render in progress (a bar over the tiles).
-        self.progress: bool | None = None
-
-    def _framebuffer(self, w: int, h: int) -> Any:
-        if self._size != (w, h):
-            self.release()
-            self._tex = self.gl.ctx.texture((w, h), 4, dtype="f4")
-            self._fbo = self.gl.ctx.framebuffer(color_attachments=[self._tex])
-            self._size = (w, h)
-        return self._fbo
-
-    def draw(self, vao: Any, set_uniform: Callable[[str, Any], None], width: int, height: int):
-        import moderngl
-
-        out = np.empty((height, width, 4), np.float32)
-        tw, th = min(self.tile, width), min(self.tile, height)
-        fbo = self._framebuffer(tw, th)
-        fbo.use()
-        query = self.gl.timer_query()
-        total: int | None = 0
-        tiles = [(y0, x0) for y0 in range(0, height, th) for x0 in range(0, width, tw)]
-        steps = _progress.bar(
-            tiles, desc="render (gl)", unit="tile",
-            progress=self.progress if len(tiles) > 1 else False,
-        )  # fmt: skip
-        for y0, x0 in steps:  # y0: top row of the tile
-            h = min(th, height - y0)
-            w = min(tw, width - x0)
-            fbo.viewport = (0, 0, w, h)
-            set_uniform("u_tile_origin", (x0, y0))
-            set_uniform("u_tile_height", h)
-            with query:
-                vao.render(mode=moderngl.TRIANGLES, vertices=3)
-                # Software rasterisers (llvmpipe) defer the draw until a flush, so without
-                # this the query would time the submission, not the work.
-                self.gl.ctx.finish()
-            elapsed = int(query.elapsed)
-            # 2³²−1: a query that could not be timed (moderngl reads 32 bits: a tile longer
-            # than 4.29 s; a context's first timed draw on llvmpipe, which GLContext warms up).
-            if total is not None and 0 <= elapsed < 0xFFFFFFFF:
-                total += elapsed
-            else:
-                total = None
-            data = fbo.read(viewport=(0, 0, w, h), components=4, dtype="f4")
-            tile = np.frombuffer(data, np.float32).reshape(h, w, 4)
-            out[y0 : y0 + h, x0 : x0 + w] = tile[::-1]
-        self.last_gpu_ns = total
-        return out
-
-    def release(self) -> None:
-        if not self.gl.closed:
-            for obj in (self._fbo, self._tex):
-                if obj is not None:
-                    obj.release()
-        self._fbo = self._tex = None
-        self._size = (0, 0)
-
-
 class Renderer:
     """A GL renderer of scenes of every kind; use as a context manager or call :meth:`close`.
 

@@ -38,6 +38,7 @@ from cumuli.gl.sprites import (
 from cumuli.light import sprite_physical
 from cumuli.light.particles import light_directions
 from cumuli.light.prepare import LitScene
+from cumuli.rendering.params import camera_params
 from cumuli.rendering.particles import _check_light as check_light
 from cumuli.rendering.particles import particle_sprites
 from cumuli.rendering.solids import SolidsGL, draw_solids_cpu, solid_depth
@@ -194,8 +195,8 @@ def over_sky(
     else:
         box = np.zeros((1, 2, 3), np.float32)
     return _core.composite_layers(
-        layer[None], box, camera.position, camera.target, camera.up, float(camera.fov),
-        sky_args(scene.sky), scene.sun.direction, scene.sun.radiance, check.threads(threads),
+        layer[None], box, camera_params(camera), sky_args(scene.sky), scene.sun.direction,
+        scene.sun.radiance, check.threads(threads),
     )  # fmt: skip
 
 
