@@ -308,7 +308,8 @@ void bind_march(py::module_& m) {
       "render_cpu",
       [](const Viewport& view, const py::list& clouds, const SunParams& sun, const SkyParams& sky,
          const MarchSettings& settings, const Noise* noise, int threads, bool with_sky,
-         const py::object& solids, const py::object& ground, bool return_stats) -> py::object {
+         const py::object& solids, const py::object& ground, bool return_stats,
+         const py::object& mask) -> py::object {
         try {
           view.validate();
         } catch (const std::invalid_argument& e) {
@@ -339,11 +340,25 @@ void bind_march(py::module_& m) {
           throw py::value_error(e.what());
         }
 
+        // The pixels to march (an (H, W) array, nonzero where marched), or all of them.
+        py::array_t<std::uint8_t, py::array::c_style> pixels;
+        if (!mask.is_none()) {
+          const py::array given = py::array::ensure(mask);
+          if (!given || given.ndim() != 2 || given.shape(0) != height || given.shape(1) != width)
+            throw py::value_error("mask must be an (H, W) array of the image's size");
+          if (given.dtype().kind() != 'b' && given.dtype().kind() != 'u' &&
+              given.dtype().kind() != 'i')
+            throw py::type_error("mask must be a boolean or integer array");
+          pixels = py::array_t<std::uint8_t, py::array::c_style>(
+              py::module_::import("numpy").attr("not_equal")(given, 0));
+        }
+        const std::uint8_t* marched = mask.is_none() ? nullptr : pixels.data();
         auto out = new_array({height, width, 4});
         float* dst = out.mutable_data();
         if (!return_stats) {
           py::gil_scoped_release release;
-          render_image(scene, s, view.camera, width, height, dst, threads);
+          render_image(scene, s, view.camera, width, height, dst, threads, nullptr, nullptr,
+                       marched);
           return std::move(out);
         }
         py::array_t<std::uint32_t> map(
@@ -352,7 +367,8 @@ void bind_march(py::module_& m) {
         MarchStats stats;
         {
           py::gil_scoped_release release;
-          render_image(scene, s, view.camera, width, height, dst, threads, &stats, map_dst);
+          render_image(scene, s, view.camera, width, height, dst, threads, &stats, map_dst,
+                       marched);
         }
         py::dict d;
         d["fbm_evaluations"] = stats.fbm_evaluations;
@@ -364,14 +380,15 @@ void bind_march(py::module_& m) {
       py::arg("view"), py::arg("clouds"), py::arg("sun"), py::arg("sky"), py::arg("settings"),
       py::arg("noise").none(true), py::arg("threads") = 0, py::arg("with_sky") = true,
       py::arg("solids") = py::none(), py::arg("ground") = py::none(),
-      py::arg("return_stats") = false,
+      py::arg("return_stats") = false, py::arg("mask") = py::none(),
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image of the "
       "Viewport, row 0 at the top. Each cloud is a dict with centres, radii, rotations, model, "
       "kappa, phi, light ([z, y, x]) and light_lo / light_hi (or physical). settings: a "
       "MarchSettings (density_constant >= 0 replaces fBm, for tests; physical selects the "
       "physical mode with its PhysicalParams). with_sky=False gives the premultiplied layer "
       "(colour, 1 − T); solids (n, 4) (centre, radius) stop every ray at the nearest solid; "
-      "return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}).");
+      "return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}); mask (H, W) "
+      "marches only the pixels where it is nonzero (the others are 0).");
 
   m.def(
       "occupancy_grid",
@@ -564,7 +581,7 @@ void bind_composite(py::module_& m) {
       [](const FloatArray& image, const CameraParams& camera, const SkyParams& sky,
          const SunParams& sun_params, const py::object& ground, const FloatArray& boxes,
          const std::tuple<float, float, float>& air_terms, const PhysicalParams& phase,
-         bool resolve, int threads) {
+         bool resolve, int threads, const py::object& unfiltered) {
         if (image.ndim() != 3 || image.shape(2) != 4)
           throw py::value_error("image must have shape (H, W, 4)");
         const py::ssize_t height = image.shape(0), width = image.shape(1);
@@ -590,23 +607,37 @@ void bind_composite(py::module_& m) {
         } catch (const std::invalid_argument& e) {
           throw py::value_error(e.what());
         }
+        // Pixels the tent skips (an (H, W) array, nonzero where skipped), or none.
+        py::array_t<std::uint8_t, py::array::c_style> skipped;
+        if (!unfiltered.is_none()) {
+          const py::array given = py::array::ensure(unfiltered);
+          if (!given || given.ndim() != 2 || given.shape(0) != height || given.shape(1) != width)
+            throw py::value_error("unfiltered must be an (H, W) array of the image's size");
+          const char kind = given.dtype().kind();
+          if (kind != 'b' && kind != 'u' && kind != 'i')
+            throw py::type_error("unfiltered must be a boolean or integer array");
+          skipped = py::array_t<std::uint8_t, py::array::c_style>(
+              py::module_::import("numpy").attr("not_equal")(given, 0));
+        }
+        const std::uint8_t* keep = unfiltered.is_none() ? nullptr : skipped.data();
         auto out = new_array({height, width, 4});
         float* dst = out.mutable_data();
         std::copy(image.data(), image.data() + image.size(), dst);
         {
           py::gil_scoped_release release;
           finish_physical(dst, static_cast<int>(width), static_cast<int>(height), camera, sky, sun,
-                          gp, list, air, threads);
+                          gp, list, air, threads, keep);
         }
         return out;
       },
       py::arg("image"), py::arg("camera"), py::arg("sky"), py::arg("sun"), py::arg("ground"),
       py::arg("boxes"), py::arg("air"), py::arg("phase"), py::arg("resolve"),
-      py::arg("threads") = 0,
+      py::arg("threads") = 0, py::arg("unfiltered") = py::none(),
       "The physical mode's finishing passes on a finished (H, W, 4) image (a new array): the air "
       "(air = (air_extinction, air_height, haze): aerial perspective, and the aureole with "
       "phase's phase function; boxes (n, 2, 3): the drawables' layer boxes for the clouds' "
-      "depth), then the 3x3 tent resolve when resolve is true.");
+      "depth), then the 3x3 tent resolve when resolve is true, except at the pixels where "
+      "unfiltered (H, W) is nonzero (the edge pass's supersampled pixels).");
 
   m.def(
       "draw_solids",

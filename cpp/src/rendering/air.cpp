@@ -170,7 +170,8 @@ void tent_row(const float* src, float* dst, int width) {
 
 void finish_physical(float* rgba, int width, int height, const CameraParams& camera,
                      const SkyParams& sky, const SunParams& sun, const GroundParams& ground,
-                     const std::vector<Box>& boxes, const AirParams& air, int threads) {
+                     const std::vector<Box>& boxes, const AirParams& air, int threads,
+                     const std::uint8_t* unfiltered) {
   if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
   camera.validate();
   air.validate();
@@ -195,8 +196,11 @@ void finish_physical(float* rgba, int width, int height, const CameraParams& cam
       const float* down =
           rows.data() + (r + 1 < static_cast<std::size_t>(height) ? r + 1 : r) * row_floats;
       float* dst = rgba + r * row_floats;
+      const std::uint8_t* keep =
+          unfiltered != nullptr ? unfiltered + r * static_cast<std::size_t>(width) : nullptr;
       for (std::size_t i = 0; i < row_floats; ++i)
-        dst[i] = 0.25f * up[i] + 0.5f * mid[i] + 0.25f * down[i];
+        if (keep == nullptr || keep[i / 4] == 0)
+          dst[i] = 0.25f * up[i] + 0.5f * mid[i] + 0.25f * down[i];
     }
   });
 }

@@ -519,7 +519,7 @@ class RayMarcher {
 
 void render_image(const MarchScene& scene, const MarchSettings& settings,
                   const CameraParams& camera, int width, int height, float* out, int threads,
-                  MarchStats* stats, std::uint32_t* fbm_map) {
+                  MarchStats* stats, std::uint32_t* fbm_map, const std::uint8_t* mask) {
   if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
   settings.validate();
   camera.validate();
@@ -565,6 +565,12 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
       std::uint64_t row_steps = 0;
       const std::uint64_t fbm0 = scratch.fbm, skipped0 = scratch.skipped;
       for (int c = 0; c < width; ++c) {
+        const std::size_t i = r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c);
+        if (mask != nullptr && mask[i] == 0) {
+          std::fill(out + i * 4, out + i * 4 + 4, 0.0f);
+          if (fbm_map != nullptr) fbm_map[i] = 0;
+          continue;
+        }
         const glm::vec3 dir = rays.direction(static_cast<int>(r), c);
         const float xi = settings.physical || settings.jitter
                              ? jitter(static_cast<int>(r), c, settings.phys.jitter_seed)
@@ -573,7 +579,6 @@ void render_image(const MarchScene& scene, const MarchSettings& settings,
         int steps = 0;
         const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi, steps);
         row_steps += static_cast<std::uint64_t>(steps);
-        const std::size_t i = r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c);
         if (fbm_map != nullptr) fbm_map[i] = static_cast<std::uint32_t>(scratch.fbm - before);
         float* o = out + i * 4;
         o[0] = px.x;

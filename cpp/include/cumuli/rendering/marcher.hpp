@@ -152,9 +152,12 @@ struct MarchStats {
 // The (height, width, 4) float32 RGBA image, row 0 at the top, on `threads` threads (0 = all).
 // The result does not depend on the thread count. `out` holds height·width·4 floats. When
 // `stats` is given it receives the totals, and `fbm_map` (height·width counts, if given) the
-// fBm evaluations of each pixel.
+// fBm evaluations of each pixel. With `mask` (height·width bytes) only the pixels whose byte is
+// nonzero are marched; the others are written 0 (the edge pass of the physical mode marches
+// only its outline pixels' sub-pixels).
 void render_image(const MarchScene& scene, const MarchSettings& settings,
                   const CameraParams& camera, int width, int height, float* out, int threads,
-                  MarchStats* stats = nullptr, std::uint32_t* fbm_map = nullptr);
+                  MarchStats* stats = nullptr, std::uint32_t* fbm_map = nullptr,
+                  const std::uint8_t* mask = nullptr);
 
 }  // namespace cumuli
