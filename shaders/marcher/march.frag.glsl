@@ -57,6 +57,10 @@ uniform float u_min_t;        // the paper mode's early exit: stop once T < u_mi
 uniform bool u_jitter;        // the paper mode's samples at ξ·Δ (the pixel's jitter), not Δ/2
 uniform int u_jitter_seed;    // its pattern's seed
 uniform bool u_with_sky;      // false: the premultiplied layer (colour, 1 − T) for the compositor
+// The physical mode's edge pass (cumuli.rendering.edges): only the pixels whose u_pixel_mask texel
+// (the image's W × H, row 0 on top) is nonzero are marched; the others are 0.
+uniform bool u_masked;
+uniform usampler2D u_pixel_mask;
 
 out vec4 frag;
 
@@ -195,6 +199,10 @@ void main() {
     // Pixel (row i from the top, column j) of the whole image.
     ivec2 pixel = pixel_of_fragment();
     int i = pixel.x, j = pixel.y;
+    if (u_masked && texelFetch(u_pixel_mask, ivec2(j, i), 0).r == 0u) {
+        frag = vec4(0.0);
+        return;
+    }
     vec3 dir = camera_ray(pixel);
     vec3 o = u_cam_pos;
 

@@ -246,12 +246,16 @@ def add_air(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None) -> n
     return out.reshape(image.shape)
 
 
-def finish(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None, threads: int = 0) -> Any:
+def finish(
+    image: np.ndarray, scene: Any, camera: Any, shadow: Any = None, threads: int = 0,
+    unfiltered: np.ndarray | None = None,
+) -> Any:  # fmt: skip
     """``image`` seen through the air, then resolved (``resolve(add_air(image, …), scene)``) in
     one threaded pass of the core (``_core.finish_physical``): the same formulas per pixel as
     :func:`add_air` and :func:`cumuli.rendering.resolve.tent_filter`, which stay their numpy
     reference (the tent is bit for bit the same; the air agrees to float rounding). ``image``
-    itself when neither applies (the paper mode)."""
+    itself when neither applies (the paper mode). The pixels of ``unfiltered`` (``(H, W)``
+    bool, the edge pass's supersampled pixels) see the air but not the tent."""
     from cumuli import _core
     from cumuli.ground import ground_args
     from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
@@ -271,5 +275,5 @@ def finish(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None, threa
     return _core.finish_physical(
         np.ascontiguousarray(image, np.float32), camera_params(camera), sky_params(scene.sky),
         sun_params(scene.sun), ground_args(scene.ground, scene.sky, shadow), boxes, air,
-        physical_params(s, 1), bool(resolving), int(threads),
+        physical_params(s, 1), bool(resolving), int(threads), unfiltered,
     )  # fmt: skip

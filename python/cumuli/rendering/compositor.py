@@ -35,6 +35,7 @@ from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.light.view import seen_from
 from cumuli.model.volume import DEFAULT_DETAIL, VolumeCloud
 from cumuli.rendering.air import finish
+from cumuli.rendering.edges import SUB, supersample_edges
 from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
 from cumuli.rendering.painters import CPUPainter, GLPainter
 from cumuli.rendering.params import camera_params
@@ -92,6 +93,13 @@ def single_pass(scene: Scene) -> bool:
     return one and (scene.ground is None or _kind(kinds[0]).draws_ground)
 
 
+def _edge_pass(scene: Scene, kind: str, indices: Sequence[int]) -> bool:
+    """Whether a single pass of ``kind`` gets the edge pass (:mod:`cumuli.rendering.edges`):
+    the 2018 marcher's clouds in the physical mode with its resolve pass."""
+    s = scene.settings
+    return kind == "cloud" and bool(indices) and s.physical and s.resolve and not scene.solids
+
+
 def compose(
     lit: LitScene,
     camera: Camera,
@@ -110,7 +118,12 @@ def compose(
     if impostors is None and single_pass(scene):
         kind, indices = calls[0]
         image = painter.layer(lit, kind, indices, camera, width, height, True)
-        return finish(image, scene, camera, lit.shadow, threads)
+        edges = None
+        if _edge_pass(scene, kind, indices):
+            image, edges = supersample_edges(
+                image, lambda m: painter.marched(lit, indices, camera, SUB * width, SUB * height, m)
+            )
+        return finish(image, scene, camera, lit.shadow, threads, edges)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
         kinds = []  # impostors are images: their layers composite by their coverage

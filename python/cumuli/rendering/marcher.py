@@ -210,9 +210,11 @@ class MarcherGL:
         width: int,
         height: int,
         with_sky: bool,
+        mask: np.ndarray | None = None,
     ) -> np.ndarray:
         """The clouds ``indices`` of ``lit`` over the sky (``with_sky``) or as a premultiplied
-        layer ``(colour, 1 − T)``: ``(height, width, 4)`` float32, row 0 on top."""
+        layer ``(colour, 1 − T)``: ``(height, width, 4)`` float32, row 0 on top. With ``mask``
+        (``(height, width)``, nonzero where marched) the other pixels are 0."""
         scene = lit.scene
         physical = scene.settings.physical
         clouds = [scene.clouds[k] for k in indices]
@@ -270,6 +272,16 @@ class MarcherGL:
             occ_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             occ_tex.use(location=5)
             self._set("u_occupancy", 5)
+            self._set("u_masked", mask is not None)
+            # Always on its own unit: samplers of different types may not share one (unit 0
+            # holds the lattice), even when the shader does not read this one.
+            self._set("u_pixel_mask", 6)
+            if mask is not None:
+                marched = np.ascontiguousarray(np.asarray(mask) != 0, np.uint8)
+                mask_tex = ctx.texture((width, height), 1, marched.tobytes(), dtype="u1")
+                scratch.append(mask_tex)
+                mask_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+                mask_tex.use(location=6)
             self._set_uniforms(scene, len(clouds), camera, width, height, with_sky)
             return self.tiles.draw(self.vao, self._set, width, height)
         finally:

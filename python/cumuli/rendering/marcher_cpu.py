@@ -202,7 +202,8 @@ def draw_clouds_cpu(
     height: int,
     with_sky: bool,
     threads: int = 0,
+    mask: np.ndarray | None = None,
 ) -> np.ndarray:
     """The CPU twin of :meth:`cumuli.rendering.marcher.MarcherGL.draw`."""
     args = render_cpu_args(lit, camera, width, height, threads, indices, with_sky)
-    return _core.render_cpu(**args)
+    return _core.render_cpu(**args, mask=mask)

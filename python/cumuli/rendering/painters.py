@@ -20,6 +20,7 @@ from cumuli.camera import Camera
 from cumuli.light.prepare import LitScene
 from cumuli.rendering import particle_layers
 from cumuli.rendering.impostor_gl import ImpostorDisplayGL, quad_planes
+from cumuli.rendering.marcher_cpu import draw_clouds_cpu
 from cumuli.rendering.solids import SolidsGL, draw_solids_cpu
 
 
@@ -43,6 +44,14 @@ class CPUPainter:
         height: int, with_sky: bool,
     ) -> np.ndarray:  # fmt: skip
         return _kind(kind).cpu_drawer(lit, indices, camera, width, height, with_sky, self.threads)
+
+    def marched(
+        self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
+        mask: np.ndarray,
+    ) -> np.ndarray:  # fmt: skip
+        """The 2018 clouds ``indices`` over the sky, marching only the pixels of ``mask`` (the
+        edge pass, :mod:`cumuli.rendering.edges`)."""
+        return draw_clouds_cpu(lit, indices, camera, width, height, True, self.threads, mask)
 
     def solids(self, lit: LitScene, camera: Camera, width: int, height: int) -> np.ndarray:
         scene = lit.scene
@@ -91,6 +100,21 @@ class GLPainter:
         height: int, with_sky: bool,
     ) -> np.ndarray:  # fmt: skip
         return self.renderer.drawer(kind).draw(lit, indices, camera, width, height, with_sky)
+
+    def marched(
+        self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
+        mask: np.ndarray,
+    ) -> np.ndarray:  # fmt: skip
+        """As :meth:`CPUPainter.marched`, on the GL marcher."""
+        drawer = self.renderer.drawer("cloud")
+        tiles = self.renderer.tiles
+        first = tiles.last_gpu_ns  # the main pass's time: the render's is both passes'
+        image = drawer.draw(lit, indices, camera, width, height, True, mask=mask)
+        if first is None or tiles.last_gpu_ns is None:
+            tiles.last_gpu_ns = None
+        else:
+            tiles.last_gpu_ns += first
+        return image
 
     def solids(self, lit: LitScene, camera: Camera, width: int, height: int) -> np.ndarray:
         drawer = self.renderer.extra("solids", lambda gl, tiles: SolidsGL(gl, tiles))

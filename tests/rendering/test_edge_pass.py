@@ -1,0 +1,135 @@
+"""The physical mode's edge pass: the outline's pixels marched again with 2×2 rays and kept out
+of the resolve's tent, on both backends; the rest of the image and the paper mode unchanged."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import cumuli as cu
+from cumuli import _core
+from cumuli.rendering.edges import EDGE_RANGE, SUB, edge_mask, supersample_edges
+from cumuli.rendering.marcher_cpu import render_cpu_args
+from cumuli.rendering.resolve import tent_filter
+
+W, H = 48, 36
+
+
+def small_scene(**settings) -> tuple[cu.Scene, cu.Camera]:
+    cloud = cu.gaussian_cumulus(seed=3, n=40)
+    scene = cu.Scene(
+        [cloud], sun=cu.Sun(direction=(0.4, 0.7, 0.3), intensity=6.0),
+        settings=cu.RenderSettings(haze=0.0, air_extinction=0.0, physical_resolution=16,
+                                   **settings),
+    )  # fmt: skip
+    lo, hi = (np.asarray(b) for b in cloud.bbox)
+    centre = 0.5 * (lo + hi)
+    size = float(np.max(hi - lo))
+    cam = cu.Camera(position=centre + (0.0, 0.1 * size, -1.6 * size), target=centre, fov=45)
+    return scene, cam
+
+
+def test_the_edge_mask_marks_the_pixels_beside_a_step_in_coverage() -> None:
+    alpha = np.zeros((5, 8), np.float32)
+    alpha[:, 4:] = 1.0
+    mask = edge_mask(alpha)
+    # Columns 3 and 4 see both sides of the step in their 3×3 neighbourhood; no others do.
+    assert mask[:, [3, 4]].all() and not mask[:, [0, 1, 2, 5, 6, 7]].any()
+    # A span at the threshold is not an edge; just above it is.
+    assert not edge_mask(np.where(alpha > 0, EDGE_RANGE, 0.0)).any()
+    assert edge_mask(np.where(alpha > 0, EDGE_RANGE + 1e-3, 0.0)).any()
+
+
+def test_the_cpu_marcher_marches_only_the_masked_pixels() -> None:
+    scene, cam = small_scene(resolve=False)
+    args = render_cpu_args(scene, cam, W, H)
+    full = _core.render_cpu(**args)
+    mask = np.zeros((H, W), bool)
+    mask[10:20, 5:40:3] = True
+    part = _core.render_cpu(**args, mask=mask)
+    np.testing.assert_array_equal(part[mask], full[mask])
+    assert not part[~mask].any()
+    with pytest.raises(ValueError, match="mask must be an"):
+        _core.render_cpu(**args, mask=np.ones((H, W + 1), bool))
+    with pytest.raises(TypeError, match="mask must be a boolean"):
+        _core.render_cpu(**args, mask=np.ones((H, W), np.float32))
+
+
+@pytest.mark.gl
+def test_the_gl_marcher_marches_only_the_masked_pixels() -> None:
+    from cumuli.light.prepare import prepare_light
+    from cumuli.rendering.compositor import shared_renderer
+
+    scene, cam = small_scene(resolve=False)
+    lit = prepare_light(scene)
+    drawer = shared_renderer().drawer("cloud")
+    full = drawer.draw(lit, [0], cam, W, H, True)
+    mask = np.zeros((H, W), bool)
+    mask[10:20, 5:40:3] = True
+    part = drawer.draw(lit, [0], cam, W, H, True, mask=mask)
+    np.testing.assert_allclose(part[mask], full[mask], atol=1e-5)
+    assert not part[~mask].any()
+
+
+def test_finish_keeps_the_unfiltered_pixels_out_of_the_tent() -> None:
+    from cumuli.rendering.air import finish
+
+    scene, cam = small_scene()
+    rng = np.random.default_rng(1)
+    image = rng.random((H, W, 4), dtype=np.float32)
+    keep = rng.random((H, W)) < 0.2
+    out = finish(image, scene, cam, unfiltered=keep)
+    tented = tent_filter(image)
+    np.testing.assert_array_equal(out[keep], image[keep])
+    np.testing.assert_array_equal(out[~keep], tented[~keep])
+    with pytest.raises(ValueError, match="unfiltered must be an"):
+        finish(image, scene, cam, unfiltered=keep[:-1])
+
+
+@pytest.mark.parametrize("backend", ["cpu", pytest.param("gl", marks=pytest.mark.gl)])
+def test_a_physical_render_supersamples_its_outline(backend: str) -> None:
+    scene, cam = small_scene()
+    img = cu.render(scene, cam, W, H, backend=backend)
+    raw_scene = scene.replace(settings=scene.settings.replace(resolve=False))
+    raw = cu.render(raw_scene, cam, W, H, backend=backend)
+    fine = cu.render(raw_scene, cam, SUB * W, SUB * H, backend=backend)
+    box = fine.reshape(H, SUB, W, SUB, 4).mean(axis=(1, 3))
+    edges = edge_mask(raw[..., 3])
+    assert 0.02 < edges.mean() < 0.5  # the cloud's outline, not the whole image
+    # The outline: the mean of the pixel's 2×2 rays, untouched by the tent.
+    np.testing.assert_allclose(img[edges], box[edges], atol=2e-5)
+    # Elsewhere: the tent over the image of one ray per pixel, with the outline's new values.
+    expected = tent_filter(np.where(edges[..., None], box, raw).astype(np.float32))
+    np.testing.assert_allclose(img[~edges], expected[~edges], atol=2e-5)
+
+
+def test_supersample_edges_leaves_an_image_without_edges_alone() -> None:
+    flat = np.full((6, 5, 4), 0.5, np.float32)
+
+    def march(mask: np.ndarray) -> np.ndarray:
+        raise AssertionError("nothing to march")
+
+    out, edges = supersample_edges(flat, march)
+    assert out is flat and edges is None
+
+
+def test_the_paper_mode_has_no_edge_pass() -> None:
+    scene, cam = small_scene(lighting="paper")
+    calls: list[int] = []
+
+    import cumuli.rendering.painters as painters
+
+    original = painters.CPUPainter.marched
+
+    def spy(self, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
+        calls.append(1)
+        return original(self, *args, **kwargs)
+
+    painters.CPUPainter.marched = spy  # type: ignore[method-assign]
+    try:
+        cu.render(scene, cam, W, H, backend="cpu")
+        assert not calls
+        cu.render(small_scene()[0], cam, W, H, backend="cpu")
+        assert calls  # the physical mode's render does call it
+    finally:
+        painters.CPUPainter.marched = original  # type: ignore[method-assign]
