@@ -117,9 +117,10 @@ def test_backlit_cloud_has_a_silver_lining() -> None:
     img = cu.render_cpu(scene, cam, 80, 60)
     rim, body = rim_and_body(img)
     assert rim > 1.5 * body  # thin edges glow against the sun; the body is in its own shade
-    # The HG(0.6) phase it replaces draws a weaker rim (9.4 against 7.0 when written).
+    # The HG(0.6) phase it replaces draws a weaker rim (9.4 against 7.0 when written; 8.4
+    # against 7.5 since the edge pass marches the rim's pixels with 2×2 rays).
     hg_rim, hg_body = rim_and_body(cu.render_cpu(backlit_scene("hg")[0], cam, 80, 60))
-    assert rim / body > 1.2 * (hg_rim / hg_body)
+    assert rim / body > 1.1 * (hg_rim / hg_body)
 
 
 @pytest.mark.gl
@@ -168,6 +169,7 @@ def test_the_haze_draws_an_aureole_around_the_hidden_sun() -> None:
 
 
 def test_the_resolve_pass_averages_the_jitter_out() -> None:
+    from cumuli.rendering.edges import edge_mask
     from cumuli.rendering.resolve import tent_filter
 
     flat = np.full((5, 7, 4), 0.3, np.float32)
@@ -189,9 +191,12 @@ def test_the_resolve_pass_averages_the_jitter_out() -> None:
             )  # fmt: skip
             for k in (0, 7)
         )
-        return float(np.abs(a[..., :3] - b[..., :3]).mean())
+        # Away from the outline, whose pixels the edge pass marches with 2×2 rays and keeps
+        # out of the tent (cumuli.rendering.edges).
+        inner = ~edge_mask(a[..., 3])
+        return float(np.abs(a[..., :3] - b[..., :3])[inner].mean())
 
-    assert noise(True) < 0.75 * noise(False)  # 0.62 when written
+    assert noise(True) < 0.75 * noise(False)  # 0.62 when written (over every pixel)
     paper = scene.replace(settings=cu.RenderSettings(lighting="paper"))
     img = cu.render_cpu(paper, cam, 16, 12)
     np.testing.assert_array_equal(cu.rendering.resolve.resolve(img, paper), img)
