@@ -132,6 +132,22 @@ SunParams sun_of(const SunParams& sun) {
   return out;
 }
 
+// An optional (height, width) boolean or integer array `given` as bytes, 1 where nonzero (a
+// pixel mask of the image); empty when `given` is None. `name` is the argument in the errors.
+py::array_t<std::uint8_t, py::array::c_style> pixel_mask(const py::object& given_obj,
+                                                         py::ssize_t height, py::ssize_t width,
+                                                         const char* name) {
+  if (given_obj.is_none()) return {};
+  const py::array given = py::array::ensure(given_obj);
+  if (!given || given.ndim() != 2 || given.shape(0) != height || given.shape(1) != width)
+    throw py::value_error(std::string(name) + " must be an (H, W) array of the image's size");
+  const char kind = given.dtype().kind();
+  if (kind != 'b' && kind != 'u' && kind != 'i')
+    throw py::type_error(std::string(name) + " must be a boolean or integer array");
+  return py::array_t<std::uint8_t, py::array::c_style>(
+      py::module_::import("numpy").attr("not_equal")(given, 0));
+}
+
 }  // namespace
 
 const Names<MarchMode> kMarchModes = {{"paper", MarchMode::Paper}, {"union", MarchMode::Union}};
@@ -340,18 +356,8 @@ void bind_march(py::module_& m) {
           throw py::value_error(e.what());
         }
 
-        // The pixels to march (an (H, W) array, nonzero where marched), or all of them.
-        py::array_t<std::uint8_t, py::array::c_style> pixels;
-        if (!mask.is_none()) {
-          const py::array given = py::array::ensure(mask);
-          if (!given || given.ndim() != 2 || given.shape(0) != height || given.shape(1) != width)
-            throw py::value_error("mask must be an (H, W) array of the image's size");
-          if (given.dtype().kind() != 'b' && given.dtype().kind() != 'u' &&
-              given.dtype().kind() != 'i')
-            throw py::type_error("mask must be a boolean or integer array");
-          pixels = py::array_t<std::uint8_t, py::array::c_style>(
-              py::module_::import("numpy").attr("not_equal")(given, 0));
-        }
+        // The pixels to march (nonzero where marched), or all of them.
+        const auto pixels = pixel_mask(mask, height, width, "mask");
         const std::uint8_t* marched = mask.is_none() ? nullptr : pixels.data();
         auto out = new_array({height, width, 4});
         float* dst = out.mutable_data();
@@ -607,18 +613,8 @@ void bind_composite(py::module_& m) {
         } catch (const std::invalid_argument& e) {
           throw py::value_error(e.what());
         }
-        // Pixels the tent skips (an (H, W) array, nonzero where skipped), or none.
-        py::array_t<std::uint8_t, py::array::c_style> skipped;
-        if (!unfiltered.is_none()) {
-          const py::array given = py::array::ensure(unfiltered);
-          if (!given || given.ndim() != 2 || given.shape(0) != height || given.shape(1) != width)
-            throw py::value_error("unfiltered must be an (H, W) array of the image's size");
-          const char kind = given.dtype().kind();
-          if (kind != 'b' && kind != 'u' && kind != 'i')
-            throw py::type_error("unfiltered must be a boolean or integer array");
-          skipped = py::array_t<std::uint8_t, py::array::c_style>(
-              py::module_::import("numpy").attr("not_equal")(given, 0));
-        }
+        // Pixels the tent skips (nonzero where skipped), or none.
+        const auto skipped = pixel_mask(unfiltered, height, width, "unfiltered");
         const std::uint8_t* keep = unfiltered.is_none() ? nullptr : skipped.data();
         auto out = new_array({height, width, 4});
         float* dst = out.mutable_data();
