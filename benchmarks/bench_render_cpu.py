@@ -98,6 +98,7 @@ def hd_frame(quick: bool, repeats: int) -> dict[str, Any]:
             "fbm_bulk_share": stats.fbm_evaluations * per_eval / frame["median"],
         }
     own = default_scene().noise.version  # the scene as it is
+    out["stages"] = hd_stages(lit[own], camera, width, height, repeats)
     other = 3 - own
     reached = out["versions"][str(own)]["wall_s"]["median"] if not quick else None
     beside = out["versions"][str(other)]["wall_s"]["median"] if not quick else None
@@ -107,6 +108,51 @@ def hd_frame(quick: bool, repeats: int) -> dict[str, Any]:
         f"{HD_THREADS} threads, default scene (noise version {own}), light step excluded",
         **{f"reached_noise_version_{other}": beside},
     )  # fmt: skip
+    return out
+
+
+def hd_stages(lit: Any, camera: Any, width: int, height: int, repeats: int) -> dict[str, Any]:
+    """What bounds the 1080p frame: the compositor's single pass split into its stages, each
+    timed alone on `HD_THREADS` threads (median of ``repeats``) — the march of every pixel, the
+    edge pass (the outline found, its 2×2 rays marched, their means), the finish (resolve and
+    air) — with the march's samples and its wall time per sample and thread."""
+    import numpy as np
+
+    from cumuli.rendering.compositor import finish, seen_from
+    from cumuli.rendering.edges import SUB, edge_mask, supersample_edges
+    from cumuli.rendering.painters import CPUPainter
+
+    seen = seen_from(lit, camera)
+    scene = seen.scene
+    indices = list(range(len(scene.clouds)))
+    painter = CPUPainter(HD_THREADS)
+
+    def march() -> np.ndarray:
+        return painter.layer(seen, "cloud", indices, camera, width, height, True)
+
+    def sub(mask: np.ndarray) -> np.ndarray:
+        return painter.marched(seen, indices, camera, SUB * width, SUB * height, mask)
+
+    image = march()
+    edged, edges = supersample_edges(image, sub)
+    stages = {
+        "march": march,
+        "edge_pass": lambda: supersample_edges(image, sub),
+        "finish": lambda: finish(edged, scene, camera, seen.shadow, HD_THREADS, edges),
+    }
+    timed = common.interleaved_repeats(stages, repeats, settle=0)
+    _, stats = cu.render_cpu(lit, camera, width, height, HD_THREADS, return_stats=True)
+    out: dict[str, Any] = {name: common.spread(wall) for name, (wall, _) in timed.items()}
+    march_s = out["march"]["median"]
+    out["march_samples"] = int(stats.steps)
+    out["march_ns_per_sample_thread"] = march_s * HD_THREADS / max(int(stats.steps), 1) * 1e9
+    out["edge_pixels"] = int(edge_mask(image[..., 3]).sum())
+    out["covered_pixels"] = int((image[..., 3] > 1e-3).sum())
+    out["note"] = (
+        "the march's time is its samples times their shading (light lattices, octaves, fBm); "
+        "the edge pass marches 4 rays in each outline pixel, the outline's rays being a "
+        "cloud's longest"
+    )
     return out
 
 
@@ -256,6 +302,14 @@ def main(argv: list[str] | None = None) -> int:
             f"hd {hd['image']} noise version {version}: {v['wall_s']['median']:.3f} s, "
             f"{v['fbm_evaluations']} fBm evaluations ({v['fbm_bulk_s']:.3f} s in the bulk kernel)"
         )
+    st = hd["stages"]
+    common.log(
+        "hd stages: march {:.3f} s ({} samples, {:.0f} ns per sample and thread), edge pass "
+        "{:.3f} s ({} outline pixels), finish {:.3f} s".format(
+            st["march"]["median"], st["march_samples"], st["march_ns_per_sample_thread"],
+            st["edge_pass"]["median"], st["edge_pixels"], st["finish"]["median"],
+        )
+    )  # fmt: skip
     common.log(common.show_target("hd_1080p_2_threads_s", hd["target"], " s"))
     common.log(f"wrote {path}")
 
