@@ -114,7 +114,7 @@ def hd_frame(quick: bool, repeats: int) -> dict[str, Any]:
 def hd_stages(lit: Any, camera: Any, width: int, height: int, repeats: int) -> dict[str, Any]:
     """What bounds the 1080p frame: the compositor's single pass split into its stages, each
     timed alone on `HD_THREADS` threads (median of ``repeats``) — the march of every pixel, the
-    edge pass (the outline found, its 2×2 rays marched, their means), the finish (resolve and
+    edge pass (the outline found, its two rays per pixel marched, their means), the finish (resolve and
     air) — with the march's samples and its wall time per sample and thread."""
     import numpy as np
 
@@ -150,7 +150,7 @@ def hd_stages(lit: Any, camera: Any, width: int, height: int, repeats: int) -> d
     out["covered_pixels"] = int((image[..., 3] > 1e-3).sum())
     out["note"] = (
         "the march's time is its samples times their shading (light lattices, octaves, fBm); "
-        "the edge pass marches 4 rays in each outline pixel, the outline's rays being a "
+        "the edge pass marches 2 rays in each outline pixel, the outline's rays being a "
         "cloud's longest"
     )
     return out

@@ -57,10 +57,12 @@ uniform float u_min_t;        // the paper mode's early exit: stop once T < u_mi
 uniform bool u_jitter;        // the paper mode's samples at ξ·Δ (the pixel's jitter), not Δ/2
 uniform int u_jitter_seed;    // its pattern's seed
 uniform bool u_with_sky;      // false: the premultiplied layer (colour, 1 − T) for the compositor
-// The physical mode's edge pass (cumuli.rendering.edges): only the pixels whose u_pixel_mask texel
-// (the image's W × H, row 0 on top) is nonzero are marched; the others are 0.
-uniform bool u_masked;
-uniform usampler2D u_pixel_mask;
+// The physical mode's edge pass (cumuli.rendering.edges): the draw covers a compact list of the
+// pixels to march, not the image; fragment (i, j) of the list marches the image pixel (row, col)
+// in texel (j, i) of u_pixel_list, and a texel of row −1 (the list's padding) gives 0. Every
+// fragment of the draw is a ray that counts: none waits on its neighbours' masked-out ones.
+uniform bool u_listed;
+uniform isampler2D u_pixel_list;
 
 out vec4 frag;
 
@@ -198,11 +200,14 @@ int attribute_sample(int n, float s, vec3 p, int fallback) {
 void main() {
     // Pixel (row i from the top, column j) of the whole image.
     ivec2 pixel = pixel_of_fragment();
-    int i = pixel.x, j = pixel.y;
-    if (u_masked && texelFetch(u_pixel_mask, ivec2(j, i), 0).r == 0u) {
-        frag = vec4(0.0);
-        return;
+    if (u_listed) {
+        pixel = texelFetch(u_pixel_list, ivec2(pixel.y, pixel.x), 0).xy;
+        if (pixel.x < 0) {
+            frag = vec4(0.0);
+            return;
+        }
     }
+    int i = pixel.x, j = pixel.y;
     vec3 dir = camera_ray(pixel);
     vec3 o = u_cam_pos;
 

@@ -1,5 +1,6 @@
-"""The physical mode's edge pass: the outline's pixels marched again with 2×2 rays and kept out
-of the resolve's tent, on both backends; the rest of the image and the paper mode unchanged."""
+"""The physical mode's edge pass: the outline's pixels marched again with two rays (the
+sub-pixels on their diagonal, in an image twice the size) and kept out of the resolve's tent, on
+both backends; the rest of the image and the paper mode unchanged."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import pytest
 
 import cumuli as cu
 from cumuli import _core
-from cumuli.rendering.edges import EDGE_RANGE, SUB, edge_mask, supersample_edges
+from cumuli.rendering.edges import EDGE_RANGE, RAYS, SUB, edge_mask, supersample_edges
 from cumuli.rendering.marcher_cpu import render_cpu_args
 from cumuli.rendering.resolve import tent_filter
 
@@ -56,9 +57,16 @@ def test_the_cpu_marcher_marches_only_the_masked_pixels() -> None:
 
 
 @pytest.mark.gl
-def test_the_gl_marcher_marches_only_the_masked_pixels() -> None:
+@pytest.mark.parametrize("list_width", [1024, 7])
+def test_the_gl_marcher_marches_only_the_masked_pixels(
+    list_width: int, monkeypatch: pytest.MonkeyPatch
+) -> None:
     from cumuli.light.prepare import prepare_light
+    from cumuli.rendering import marcher
     from cumuli.rendering.compositor import shared_renderer
+
+    # The masked pixels are drawn as a list; 7 wide, it wraps over rows and ends in padding.
+    monkeypatch.setattr(marcher, "LIST_WIDTH", list_width)
 
     scene, cam = small_scene(resolve=False)
     lit = prepare_light(scene)
@@ -93,10 +101,11 @@ def test_a_physical_render_supersamples_its_outline(backend: str) -> None:
     raw_scene = scene.replace(settings=scene.settings.replace(resolve=False))
     raw = cu.render(raw_scene, cam, W, H, backend=backend)
     fine = cu.render(raw_scene, cam, SUB * W, SUB * H, backend=backend)
-    box = fine.reshape(H, SUB, W, SUB, 4).mean(axis=(1, 3))
+    blocks = fine.reshape(H, SUB, W, SUB, 4)
+    box = np.mean([blocks[:, dy, :, dx] for dy, dx in RAYS], axis=0)
     edges = edge_mask(raw[..., 3])
     assert 0.02 < edges.mean() < 0.5  # the cloud's outline, not the whole image
-    # The outline: the mean of the pixel's 2×2 rays, untouched by the tent.
+    # The outline: the mean of the pixel's diagonal rays, untouched by the tent.
     np.testing.assert_allclose(img[edges], box[edges], atol=2e-5)
     # Elsewhere: the tent over the image of one ray per pixel, with the outline's new values.
     expected = tent_filter(np.where(edges[..., None], box, raw).astype(np.float32))
@@ -133,3 +142,21 @@ def test_the_paper_mode_has_no_edge_pass() -> None:
         assert calls  # the physical mode's render does call it
     finally:
         painters.CPUPainter.marched = original  # type: ignore[method-assign]
+
+
+def test_return_stats_counts_the_edge_pass_in_its_pixels() -> None:
+    from cumuli.light.prepare import prepare_light
+    from cumuli.light.view import seen_from
+
+    scene, cam = small_scene()
+    lit = prepare_light(scene)
+    image, stats = cu.render_cpu(lit, cam, W, H, return_stats=True)
+    np.testing.assert_array_equal(image, cu.render_cpu(lit, cam, W, H))
+    first_image, first = _core.render_cpu(
+        **render_cpu_args(seen_from(lit, cam), cam, W, H), return_stats=True
+    )
+    edges = edge_mask(first_image[..., 3])
+    extra = stats.fbm_map.astype(np.int64) - first["fbm_map"]
+    assert stats.fbm_evaluations == int(stats.fbm_map.sum())
+    assert not extra[~edges].any() and extra[edges].sum() > 0
+    assert stats.steps > int(first["steps"])

@@ -117,10 +117,10 @@ def test_backlit_cloud_has_a_silver_lining() -> None:
     img = cu.render_cpu(scene, cam, 80, 60)
     rim, body = rim_and_body(img)
     assert rim > 1.5 * body  # thin edges glow against the sun; the body is in its own shade
-    # The HG(0.6) phase it replaces draws a weaker rim (9.4 against 7.0 when written; 8.4
-    # against 7.5 since the edge pass marches the rim's pixels with 2×2 rays).
+    # The HG(0.6) phase it replaces draws a weaker rim (rim / body 9.4 against 7.0 when
+    # written; 7.3 against 5.9 since the edge pass marches the rim's pixels with two rays).
     hg_rim, hg_body = rim_and_body(cu.render_cpu(backlit_scene("hg")[0], cam, 80, 60))
-    assert rim / body > 1.1 * (hg_rim / hg_body)
+    assert rim / body > 1.2 * (hg_rim / hg_body)
 
 
 @pytest.mark.gl
@@ -191,7 +191,7 @@ def test_the_resolve_pass_averages_the_jitter_out() -> None:
             )  # fmt: skip
             for k in (0, 7)
         )
-        # Away from the outline, whose pixels the edge pass marches with 2×2 rays and keeps
+        # Away from the outline, whose pixels the edge pass marches with two rays and keeps
         # out of the tent (cumuli.rendering.edges).
         inner = ~edge_mask(a[..., 3])
         return float(np.abs(a[..., :3] - b[..., :3])[inner].mean())

@@ -36,8 +36,8 @@ from cumuli.light.view import seen_from
 from cumuli.model.volume import DEFAULT_DETAIL, VolumeCloud
 from cumuli.rendering.air import finish
 from cumuli.rendering.edges import SUB, supersample_edges
-from cumuli.rendering.marcher_cpu import check_stats_scene, march_with_stats
-from cumuli.rendering.painters import CPUPainter, GLPainter
+from cumuli.rendering.marcher_cpu import check_stats_scene, combined_stats
+from cumuli.rendering.painters import CountingCPUPainter, CPUPainter, GLPainter
 from cumuli.rendering.params import camera_params
 from cumuli.rendering.volume import MAX_IMAGE, camera_rays
 from cumuli.scene import Scene
@@ -423,7 +423,7 @@ def render_cpu(
     chunks of rows; a progress bar shows when it takes more than a few seconds
     (``progress=False``: none). ``return_stats=True`` (2018 clouds only, no solids or
     impostors: the marcher's single pass) returns ``(image, MarchStats)``: the same image and
-    the marcher's work (fBm evaluations, steps)."""
+    the marcher's work (fBm evaluations, steps), the edge pass's rays included."""
     from cumuli.rendering.impostor_cache import ImpostorCache
 
     lit, plain = _lit(scene)
@@ -443,7 +443,9 @@ def render_cpu(
     lit = prepare_light(plain, threads=threads, progress=progress) if lit is None else lit
     with _progress.core("render (cpu)", progress):
         if return_stats:
-            return march_with_stats(seen_from(lit, camera), camera, width, height, threads)
+            counting = CountingCPUPainter(threads)
+            image = compose(lit, camera, width, height, counting, threads)
+            return image, combined_stats(counting.passes, width, height)
         return compose(lit, camera, width, height, CPUPainter(threads), threads, impostors)
 
 

@@ -119,6 +119,22 @@ def occupancy_atlas(clouds: Sequence[Cloud], skip: bool) -> np.ndarray:
     return np.concatenate([occupancy_grid(c)[0] for c in clouds]).astype(np.uint8) * np.uint8(255)
 
 
+#: Width of the edge pass's pixel list (cumuli.rendering.edges): its draw is this wide.
+LIST_WIDTH = 1024
+
+
+def pixel_list(rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, int, int]:
+    """The edge pass's pixels as a ``(list_h, list_w, 2)`` int32 texture of ``(row, col)``, in
+    the order given, padded with ``(−1, −1)``; and its width and height."""
+    n = len(rows)
+    list_w = min(n, LIST_WIDTH)
+    list_h = -(-n // list_w)
+    listed = np.full((list_h * list_w, 2), -1, np.int32)
+    listed[:n, 0] = rows
+    listed[:n, 1] = cols
+    return listed.reshape(list_h, list_w, 2), list_w, list_h
+
+
 class MarcherGL:
     """Draws 2018 clouds of a :class:`LitScene` with the GLSL marcher (a layer drawer, see
     :mod:`cumuli.rendering.kinds`). Several clouds are marched in one pass, front to back by
@@ -272,18 +288,25 @@ class MarcherGL:
             occ_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             occ_tex.use(location=5)
             self._set("u_occupancy", 5)
-            self._set("u_masked", mask is not None)
+            self._set("u_listed", mask is not None)
             # Always on its own unit: samplers of different types may not share one (unit 0
             # holds the lattice), even when the shader does not read this one.
-            self._set("u_pixel_mask", 6)
-            if mask is not None:
-                marched = np.ascontiguousarray(np.asarray(mask) != 0, np.uint8)
-                mask_tex = ctx.texture((width, height), 1, marched.tobytes(), dtype="u1")
-                scratch.append(mask_tex)
-                mask_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
-                mask_tex.use(location=6)
+            self._set("u_pixel_list", 6)
             self._set_uniforms(scene, len(clouds), camera, width, height, with_sky)
-            return self.tiles.draw(self.vao, self._set, width, height)
+            if mask is None:
+                return self.tiles.draw(self.vao, self._set, width, height)
+            rows, cols = np.nonzero(np.asarray(mask))
+            out = np.zeros((height, width, 4), np.float32)
+            if len(rows) == 0:
+                return out
+            listed, list_w, list_h = pixel_list(rows, cols)
+            list_tex = ctx.texture((list_w, list_h), 2, listed.tobytes(), dtype="i4")
+            scratch.append(list_tex)
+            list_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
+            list_tex.use(location=6)
+            values = self.tiles.draw(self.vao, self._set, list_w, list_h)
+            out[rows, cols] = values.reshape(-1, 4)[: len(rows)]
+            return out
         finally:
             for obj in scratch:
                 obj.release()

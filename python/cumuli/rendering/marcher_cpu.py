@@ -181,17 +181,21 @@ def check_stats_scene(scene: Scene, impostors: Any) -> None:
         )
 
 
-def march_with_stats(
-    lit: LitScene, camera: Camera, width: int, height: int, threads: int = 0
-) -> tuple[np.ndarray, MarchStats]:
-    """The CPU marcher's single pass over every cloud of ``lit`` (all 2018 clouds) with its
-    work statistics: the image `render_cpu` gives for such a scene, and a `MarchStats`."""
-    args = render_cpu_args(lit, camera, width, height, threads)
-    image, raw = _core.render_cpu(**args, return_stats=True)
-    stats = MarchStats(
-        int(raw["fbm_evaluations"]), int(raw["steps"]), int(raw["skipped"]), raw["fbm_map"]
+def combined_stats(passes: Sequence[dict[str, Any]], width: int, height: int) -> MarchStats:
+    """One `MarchStats` of an image from its marches' raw statistics (``_core.render_cpu``'s):
+    the image's own and the edge pass's, whose ``fbm_map`` (an image k times the size) adds its
+    k × k sub-pixels' counts to their pixel."""
+    fbm_map = np.zeros((height, width), np.uint32)
+    for raw in passes:
+        m = np.asarray(raw["fbm_map"], np.uint32)
+        k = m.shape[0] // height
+        fbm_map += m.reshape(height, k, width, k).sum(axis=(1, 3), dtype=np.uint32)
+    return MarchStats(
+        sum(int(raw["fbm_evaluations"]) for raw in passes),
+        sum(int(raw["steps"]) for raw in passes),
+        sum(int(raw["skipped"]) for raw in passes),
+        fbm_map,
     )
-    return image, stats
 
 
 def draw_clouds_cpu(
@@ -203,7 +207,9 @@ def draw_clouds_cpu(
     with_sky: bool,
     threads: int = 0,
     mask: np.ndarray | None = None,
-) -> np.ndarray:
-    """The CPU twin of :meth:`cumuli.rendering.marcher.MarcherGL.draw`."""
+    return_stats: bool = False,
+) -> Any:
+    """The CPU twin of :meth:`cumuli.rendering.marcher.MarcherGL.draw`; with ``return_stats``,
+    ``(image, raw)``: ``_core.render_cpu``'s statistics of the march."""
     args = render_cpu_args(lit, camera, width, height, threads, indices, with_sky)
-    return _core.render_cpu(**args, mask=mask)
+    return _core.render_cpu(**args, mask=mask, return_stats=return_stats)

@@ -87,6 +87,40 @@ class CPUPainter:
         """An impostor was dropped (nothing to release on the CPU)."""
 
 
+class CountingCPUPainter(CPUPainter):
+    """A :class:`CPUPainter` that counts the 2018 marcher's work (``render_cpu(return_stats=
+    True)``): ``passes`` receives each march's raw statistics, the image's and the edge pass's
+    (its ``fbm_map`` the size of that march's image)."""
+
+    def __init__(self, threads: int = 0) -> None:
+        super().__init__(threads)
+        self.passes: list[dict[str, Any]] = []
+
+    def layer(
+        self, lit: LitScene, kind: str, indices: Sequence[int], camera: Camera, width: int,
+        height: int, with_sky: bool,
+    ) -> np.ndarray:  # fmt: skip
+        if kind != "cloud":
+            raise ValueError("return_stats=True counts the 2018 marcher's passes only")
+        return self._count(lit, indices, camera, width, height, with_sky, None)
+
+    def marched(
+        self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
+        mask: np.ndarray,
+    ) -> np.ndarray:  # fmt: skip
+        return self._count(lit, indices, camera, width, height, True, mask)
+
+    def _count(
+        self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
+        with_sky: bool, mask: np.ndarray | None,
+    ) -> np.ndarray:  # fmt: skip
+        image, raw = draw_clouds_cpu(
+            lit, indices, camera, width, height, with_sky, self.threads, mask, return_stats=True
+        )
+        self.passes.append(raw)
+        return image
+
+
 class GLPainter:
     """The GL drawers of a :class:`cumuli.Renderer` (and its impostor display)."""
 
