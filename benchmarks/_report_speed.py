@@ -74,6 +74,18 @@ def hd_lines(render_cpu: dict[str, Any]) -> list[str]:
     reached = t.get("reached")
     shown = "n/a" if reached is None else f"{reached:.3f} s ({verdict(t.get('met'))})"
     lines.append(f"Target: ≤ {t['limit']:g} s on {hd['threads']} threads; reached {shown}.")
+    st = hd.get("stages")
+    if st:
+        lines += [
+            "",
+            "What bounds it, each stage timed alone: the march {:.3f} s ({:,} samples, {:.0f} ns "
+            "per sample and thread), the edge pass {:.3f} s ({:,} outline pixels of {:,} "
+            "covered), the finish (air and resolve) {:.3f} s.".format(
+                st["march"]["median"], st["march_samples"], st["march_ns_per_sample_thread"],
+                st["edge_pass"]["median"], st["edge_pixels"], st["covered_pixels"],
+                st["finish"]["median"],
+            ),
+        ]  # fmt: skip
     return lines + [""]
 
 

@@ -114,12 +114,13 @@ def hd_frame(quick: bool, repeats: int) -> dict[str, Any]:
 def hd_stages(lit: Any, camera: Any, width: int, height: int, repeats: int) -> dict[str, Any]:
     """What bounds the 1080p frame: the compositor's single pass split into its stages, each
     timed alone on `HD_THREADS` threads (median of ``repeats``) — the march of every pixel, the
-    edge pass (the outline found, its two rays per pixel marched, their means), the finish (resolve and
-    air) — with the march's samples and its wall time per sample and thread."""
+    edge pass (the outline found, its two rays per pixel marched, their means), the finish
+    (resolve and air) — with the march's samples and its wall time per sample and thread."""
     import numpy as np
 
     from cumuli.rendering.compositor import finish, seen_from
     from cumuli.rendering.edges import SUB, edge_mask, supersample_edges
+    from cumuli.rendering.marcher_cpu import draw_clouds_cpu
     from cumuli.rendering.painters import CPUPainter
 
     seen = seen_from(lit, camera)
@@ -141,11 +142,13 @@ def hd_stages(lit: Any, camera: Any, width: int, height: int, repeats: int) -> d
         "finish": lambda: finish(edged, scene, camera, seen.shadow, HD_THREADS, edges),
     }
     timed = common.interleaved_repeats(stages, repeats, settle=0)
-    _, stats = cu.render_cpu(lit, camera, width, height, HD_THREADS, return_stats=True)
+    # The first march's own samples (render_cpu's statistics add the edge pass's).
+    _, raw = draw_clouds_cpu(seen, indices, camera, width, height, True, HD_THREADS,
+                             return_stats=True)  # fmt: skip
+    samples = int(raw["steps"])
     out: dict[str, Any] = {name: common.spread(wall) for name, (wall, _) in timed.items()}
-    march_s = out["march"]["median"]
-    out["march_samples"] = int(stats.steps)
-    out["march_ns_per_sample_thread"] = march_s * HD_THREADS / max(int(stats.steps), 1) * 1e9
+    out["march_samples"] = samples
+    out["march_ns_per_sample_thread"] = out["march"]["median"] * HD_THREADS / max(samples, 1) * 1e9
     out["edge_pixels"] = int(edge_mask(image[..., 3]).sum())
     out["covered_pixels"] = int((image[..., 3] > 1e-3).sum())
     out["note"] = (
