@@ -62,8 +62,8 @@ def supersample_edges(
     image: np.ndarray, march: Callable[[np.ndarray], np.ndarray]
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """``image`` (``(H, W, 4)``) with its edge pixels replaced by the mean of their rays
-    (:data:`RAYS`), and
-    the mask of those pixels (None when there are none, or the image is too large).
+    (:data:`RAYS`), and the mask of those pixels (None when there are none, or the image is too
+    large).
 
     ``march(mask)`` draws the same scene at ``(SUB·H, SUB·W)`` marching only the pixels where
     ``mask`` (that size) is true, the others 0."""
