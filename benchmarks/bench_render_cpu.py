@@ -131,8 +131,8 @@ def hd_stages(lit: Any, camera: Any, width: int, height: int, repeats: int) -> d
     def march() -> np.ndarray:
         return painter.layer(seen, "cloud", indices, camera, width, height, True)
 
-    def sub(mask: np.ndarray) -> np.ndarray:
-        return painter.marched(seen, indices, camera, SUB * width, SUB * height, mask)
+    def sub(pixels: np.ndarray) -> np.ndarray:
+        return painter.marched(seen, indices, camera, SUB * width, SUB * height, pixels)
 
     image = march()
     edged, edges = supersample_edges(image, sub)

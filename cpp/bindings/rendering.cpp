@@ -17,6 +17,7 @@
 #include "cumuli/rendering/air.hpp"
 #include "cumuli/rendering/billboards.hpp"
 #include "cumuli/rendering/compositor.hpp"
+#include "cumuli/rendering/edges.hpp"
 #include "cumuli/rendering/impostors.hpp"
 #include "cumuli/rendering/solids.hpp"
 #include "cumuli/rendering/sprites.hpp"
@@ -146,6 +147,26 @@ py::array_t<std::uint8_t, py::array::c_style> pixel_mask(const py::object& given
     throw py::type_error(std::string(name) + " must be a boolean or integer array");
   return py::array_t<std::uint8_t, py::array::c_style>(
       py::module_::import("numpy").attr("not_equal")(given, 0));
+}
+
+// An optional (N, 2) integer array `given` of (row, column) pixels as int32 pairs; empty when
+// `given` is None. The range is checked where the image's size is known (render_pixels).
+py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> pixel_pairs(
+    const py::object& given_obj) {
+  if (given_obj.is_none()) return {};
+  const py::array given = py::array::ensure(given_obj);
+  if (!given || given.ndim() != 2 || given.shape(1) != 2)
+    throw py::value_error("pixels must be an (N, 2) array of (row, column)");
+  const char kind = given.dtype().kind();
+  if (kind != 'u' && kind != 'i') throw py::type_error("pixels must be an integer array");
+  const py::object numpy = py::module_::import("numpy");
+  const py::array wide = numpy.attr("asarray")(given, "int64");
+  const auto view = wide.unchecked<std::int64_t, 2>();
+  for (py::ssize_t k = 0; k < view.shape(0); ++k)
+    for (int j = 0; j < 2; ++j)
+      if (view(k, j) < 0 || view(k, j) > INT32_MAX)
+        throw py::value_error("pixels must lie in the image: (row, column) in [0, H) x [0, W)");
+  return py::array_t<std::int32_t, py::array::c_style | py::array::forcecast>(wide);
 }
 
 }  // namespace
@@ -325,7 +346,7 @@ void bind_march(py::module_& m) {
       [](const Viewport& view, const py::list& clouds, const SunParams& sun, const SkyParams& sky,
          const MarchSettings& settings, const Noise* noise, int threads, bool with_sky,
          const py::object& solids, const py::object& ground, bool return_stats,
-         const py::object& mask) -> py::object {
+         const py::object& pixels) -> py::object {
         try {
           view.validate();
         } catch (const std::invalid_argument& e) {
@@ -356,26 +377,36 @@ void bind_march(py::module_& m) {
           throw py::value_error(e.what());
         }
 
-        // The pixels to march (nonzero where marched), or all of them.
-        const auto pixels = pixel_mask(mask, height, width, "mask");
-        const std::uint8_t* marched = mask.is_none() ? nullptr : pixels.data();
-        auto out = new_array({height, width, 4});
+        // The pixels to march, or all of them.
+        const auto listed = pixel_pairs(pixels);
+        const bool whole = pixels.is_none();
+        const std::size_t count =
+            whole ? static_cast<std::size_t>(width) * static_cast<std::size_t>(height)
+                  : static_cast<std::size_t>(listed.shape(0));
+        auto out =
+            whole ? new_array({height, width, 4}) : new_array({static_cast<py::ssize_t>(count), 4});
         float* dst = out.mutable_data();
-        if (!return_stats) {
-          py::gil_scoped_release release;
-          render_image(scene, s, view.camera, width, height, dst, threads, nullptr, nullptr,
-                       marched);
-          return std::move(out);
-        }
-        py::array_t<std::uint32_t> map(
-            {static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width)});
-        std::uint32_t* map_dst = map.mutable_data();
+        py::array_t<std::uint32_t> map;
         MarchStats stats;
-        {
-          py::gil_scoped_release release;
-          render_image(scene, s, view.camera, width, height, dst, threads, &stats, map_dst,
-                       marched);
+        if (return_stats) {
+          map = whole ? py::array_t<std::uint32_t>(
+                            {static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width)})
+                      : py::array_t<std::uint32_t>(static_cast<py::ssize_t>(count));
         }
+        std::uint32_t* map_dst = return_stats ? map.mutable_data() : nullptr;
+        MarchStats* stats_dst = return_stats ? &stats : nullptr;
+        try {
+          py::gil_scoped_release release;
+          if (whole) {
+            render_image(scene, s, view.camera, width, height, dst, threads, stats_dst, map_dst);
+          } else {
+            render_pixels(scene, s, view.camera, width, height, listed.data(), count, dst, threads,
+                          stats_dst, map_dst);
+          }
+        } catch (const std::invalid_argument& e) {
+          throw py::value_error(e.what());
+        }
+        if (!return_stats) return std::move(out);
         py::dict d;
         d["fbm_evaluations"] = stats.fbm_evaluations;
         d["steps"] = stats.steps;
@@ -386,15 +417,16 @@ void bind_march(py::module_& m) {
       py::arg("view"), py::arg("clouds"), py::arg("sun"), py::arg("sky"), py::arg("settings"),
       py::arg("noise").none(true), py::arg("threads") = 0, py::arg("with_sky") = true,
       py::arg("solids") = py::none(), py::arg("ground") = py::none(),
-      py::arg("return_stats") = false, py::arg("mask") = py::none(),
+      py::arg("return_stats") = false, py::arg("pixels") = py::none(),
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image of the "
       "Viewport, row 0 at the top. Each cloud is a dict with centres, radii, rotations, model, "
       "kappa, phi, light ([z, y, x]) and light_lo / light_hi (or physical). settings: a "
       "MarchSettings (density_constant >= 0 replaces fBm, for tests; physical selects the "
       "physical mode with its PhysicalParams). with_sky=False gives the premultiplied layer "
       "(colour, 1 − T); solids (n, 4) (centre, radius) stop every ray at the nearest solid; "
-      "return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}); mask (H, W) "
-      "marches only the pixels where it is nonzero (the others are 0).");
+      "return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}); pixels, an "
+      "(N, 2) integer array of (row, column), marches only those pixels of the image and returns "
+      "their (N, 4) values in that order (fbm_map then (N,)).");
 
   m.def(
       "occupancy_grid",
@@ -583,6 +615,28 @@ void bind_composite(py::module_& m) {
       "through (1 − A_k)^v_k of it (the physical mode's δ-M view of a medium; None: all 1).");
 
   m.def(
+      "coverage_edges",
+      [](const FloatArray& alpha, float range, int threads) {
+        if (alpha.ndim() != 2 || alpha.shape(0) < 1 || alpha.shape(1) < 1)
+          throw py::value_error("alpha must be a non-empty (H, W) array");
+        if (alpha.shape(0) > kMaxEdge || alpha.shape(1) > kMaxEdge)
+          throw py::value_error("alpha's edges must be at most " + std::to_string(kMaxEdge));
+        if (!std::isfinite(range)) throw py::value_error("range must be finite");
+        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
+        const py::ssize_t height = alpha.shape(0), width = alpha.shape(1);
+        py::array_t<bool> out({height, width});
+        {
+          py::gil_scoped_release release;
+          coverage_edges(alpha.data(), static_cast<int>(width), static_cast<int>(height), range,
+                         reinterpret_cast<std::uint8_t*>(out.mutable_data()), threads);
+        }
+        return out;
+      },
+      py::arg("alpha"), py::arg("range"), py::arg("threads") = 0,
+      "The (H, W) bool mask of the pixels whose 3x3 neighbourhood (edges clamped) of the (H, W) "
+      "coverage alpha spans more than range: the physical mode's outline (the edge pass).");
+
+  m.def(
       "finish_physical",
       [](const FloatArray& image, const CameraParams& camera, const SkyParams& sky,
          const SunParams& sun_params, const py::object& ground, const FloatArray& boxes,
@@ -618,11 +672,10 @@ void bind_composite(py::module_& m) {
         const std::uint8_t* keep = unfiltered.is_none() ? nullptr : skipped.data();
         auto out = new_array({height, width, 4});
         float* dst = out.mutable_data();
-        std::copy(image.data(), image.data() + image.size(), dst);
         {
           py::gil_scoped_release release;
-          finish_physical(dst, static_cast<int>(width), static_cast<int>(height), camera, sky, sun,
-                          gp, list, air, threads, keep);
+          finish_physical(image.data(), dst, static_cast<int>(width), static_cast<int>(height),
+                          camera, sky, sun, gp, list, air, threads, keep);
         }
         return out;
       },

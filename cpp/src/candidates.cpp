@@ -119,8 +119,10 @@ CandidateFan::CandidateFan(const CloudShape& cloud, glm::vec3 origin) {
         axis = glm::vec3(v / len);
       }
     }
-    terms_.push_back(
-        Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, e.unrotated(), axis, cos_cull});
+    const float own_max = std::max(own.x, std::max(own.y, own.z));
+    const float floor_scale = 0.999f / (own_max * own_max);
+    terms_.push_back(Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, floor_scale,
+                          e.unrotated(), axis, cos_cull});
   }
 }
 

@@ -41,42 +41,93 @@ def test_the_edge_mask_marks_the_pixels_beside_a_step_in_coverage() -> None:
     assert edge_mask(np.where(alpha > 0, EDGE_RANGE + 1e-3, 0.0)).any()
 
 
-def test_the_cpu_marcher_marches_only_the_masked_pixels() -> None:
+def reference_edges(alpha: np.ndarray) -> np.ndarray:
+    """edge_mask by its definition: max − min over the nine shifted windows of the padded image."""
+    p = np.pad(alpha, 1, mode="edge")
+    h, w = alpha.shape
+    windows = [p[dy : dy + h, dx : dx + w] for dy in range(3) for dx in range(3)]
+    return (np.max(windows, axis=0) - np.min(windows, axis=0)) > EDGE_RANGE
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 6), (6, 1), (2, 2), (37, 53)])
+def test_the_edge_mask_is_the_neighbourhoods_span(shape: tuple[int, int]) -> None:
+    rng = np.random.default_rng(sum(shape))
+    alpha = np.where(rng.random(shape) < 0.5, rng.random(shape), 0.0).astype(np.float32)
+    np.testing.assert_array_equal(edge_mask(alpha), reference_edges(alpha))
+    # Any thread count gives the same mask; a strided view is read as its values.
+    np.testing.assert_array_equal(_core.coverage_edges(alpha, EDGE_RANGE, 1), edge_mask(alpha))
+    rgba = np.repeat(alpha[..., None], 4, axis=2)
+    np.testing.assert_array_equal(edge_mask(rgba[..., 3]), edge_mask(alpha))
+
+
+def test_the_edge_mask_rejects_bad_input() -> None:
+    with pytest.raises(ValueError, match="alpha must be an"):
+        edge_mask(np.zeros((3, 3, 1), np.float32))
+    with pytest.raises(ValueError, match="non-empty"):
+        edge_mask(np.zeros((0, 3), np.float32))
+    with pytest.raises(ValueError, match="range must be finite"):
+        _core.coverage_edges(np.zeros((2, 2), np.float32), np.nan)
+
+
+def listed_pixels() -> np.ndarray:
+    """Some pixels of the small image, out of order and one twice."""
+    rows, cols = np.mgrid[10:20, 5:40:3]
+    pixels = np.stack([rows.ravel(), cols.ravel()], axis=1)[::-1]
+    return np.concatenate([pixels, pixels[:1]]).astype(np.int32)
+
+
+def test_the_cpu_marcher_marches_a_list_of_pixels() -> None:
     scene, cam = small_scene(resolve=False)
     args = render_cpu_args(scene, cam, W, H)
-    full = _core.render_cpu(**args)
-    mask = np.zeros((H, W), bool)
-    mask[10:20, 5:40:3] = True
-    part = _core.render_cpu(**args, mask=mask)
-    np.testing.assert_array_equal(part[mask], full[mask])
-    assert not part[~mask].any()
-    with pytest.raises(ValueError, match="mask must be an"):
-        _core.render_cpu(**args, mask=np.ones((H, W + 1), bool))
-    with pytest.raises(TypeError, match="mask must be a boolean"):
-        _core.render_cpu(**args, mask=np.ones((H, W), np.float32))
+    full, stats = _core.render_cpu(**args, return_stats=True)
+    pixels = listed_pixels()
+    part, part_stats = _core.render_cpu(**args, pixels=pixels, return_stats=True)
+    assert part.shape == (len(pixels), 4)
+    # The same rays as in the whole image, bit for bit, and their work counted per pixel.
+    np.testing.assert_array_equal(part, full[pixels[:, 0], pixels[:, 1]])
+    np.testing.assert_array_equal(
+        part_stats["fbm_map"], stats["fbm_map"][pixels[:, 0], pixels[:, 1]]
+    )
+    assert part_stats["fbm_evaluations"] == int(part_stats["fbm_map"].sum())
+    # Any thread count gives the same values and totals.
+    one = _core.render_cpu(**{**args, "threads": 1}, pixels=pixels, return_stats=True)
+    np.testing.assert_array_equal(one[0], part)
+    assert one[1]["steps"] == part_stats["steps"]
+    assert _core.render_cpu(**args, pixels=np.zeros((0, 2), np.int64)).shape == (0, 4)
+    with pytest.raises(ValueError, match="pixels must be an"):
+        _core.render_cpu(**args, pixels=np.zeros((3, 3), np.int32))
+    with pytest.raises(TypeError, match="pixels must be an integer"):
+        _core.render_cpu(**args, pixels=np.zeros((3, 2), np.float32))
+    for bad in ([H, 0], [0, W], [-1, 0], [0, 2**40]):
+        with pytest.raises(ValueError, match="pixels must lie in the image"):
+            _core.render_cpu(**args, pixels=np.array([bad], np.int64))
 
 
 @pytest.mark.gl
 @pytest.mark.parametrize("list_width", [1024, 7])
-def test_the_gl_marcher_marches_only_the_masked_pixels(
+def test_the_gl_marcher_marches_a_list_of_pixels(
     list_width: int, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     from cumuli.light.prepare import prepare_light
     from cumuli.rendering import marcher
     from cumuli.rendering.compositor import shared_renderer
 
-    # The masked pixels are drawn as a list; 7 wide, it wraps over rows and ends in padding.
+    # The pixels are drawn as a list; 7 wide, it wraps over rows and ends in padding.
     monkeypatch.setattr(marcher, "LIST_WIDTH", list_width)
 
     scene, cam = small_scene(resolve=False)
     lit = prepare_light(scene)
     drawer = shared_renderer().drawer("cloud")
     full = drawer.draw(lit, [0], cam, W, H, True)
-    mask = np.zeros((H, W), bool)
-    mask[10:20, 5:40:3] = True
-    part = drawer.draw(lit, [0], cam, W, H, True, mask=mask)
-    np.testing.assert_allclose(part[mask], full[mask], atol=1e-5)
-    assert not part[~mask].any()
+    pixels = listed_pixels()
+    part = drawer.draw(lit, [0], cam, W, H, True, pixels=pixels)
+    assert part.shape == (len(pixels), 4)
+    np.testing.assert_allclose(part, full[pixels[:, 0], pixels[:, 1]], atol=1e-5)
+    assert drawer.draw(lit, [0], cam, W, H, True, pixels=np.zeros((0, 2), int)).shape == (0, 4)
+    with pytest.raises(ValueError, match="pixels must lie in the image"):
+        drawer.draw(lit, [0], cam, W, H, True, pixels=np.array([[H, 0]]))
+    with pytest.raises(TypeError, match="pixels must be an integer"):
+        drawer.draw(lit, [0], cam, W, H, True, pixels=np.zeros((1, 2)))
 
 
 def test_finish_keeps_the_unfiltered_pixels_out_of_the_tent() -> None:
@@ -115,7 +166,7 @@ def test_a_physical_render_supersamples_its_outline(backend: str) -> None:
 def test_supersample_edges_leaves_an_image_without_edges_alone() -> None:
     flat = np.full((6, 5, 4), 0.5, np.float32)
 
-    def march(mask: np.ndarray) -> np.ndarray:
+    def march(pixels: np.ndarray) -> np.ndarray:
         raise AssertionError("nothing to march")
 
     out, edges = supersample_edges(flat, march)

@@ -4,7 +4,10 @@
 // order as the GLSL marcher. The caller owns the buffer: no allocation per ray.
 #pragma once
 
+#include <cmath>
 #include <vector>
+
+#include <glm/geometric.hpp>
 
 #include "cumuli/model/cloud.hpp"
 
@@ -62,10 +65,20 @@ class CandidateFan {
   // Primitive j's normalised distance |q| at p: Ellipsoid::normalised_distance, the rotation
   // skipped when it is the identity (it then changes at most the sign of a zero, which the
   // squares take off: the same |q| bit for bit).
-  float q(int j, glm::vec3 p) const {
+  float q(int j, glm::vec3 p) const { return std::sqrt(q2(j, p)); }
+  // |q|², whose square root is q(j, p) bit for bit (glm::length is sqrt(dot(v, v))).
+  float q2(int j, glm::vec3 p) const {
     const Term& e = terms_[static_cast<std::size_t>(j)];
     const glm::vec3 v = p - e.centre;
-    return glm::length((e.identity ? v : e.rt * v) / e.unscaled);
+    const glm::vec3 w = (e.identity ? v : e.rt * v) / e.unscaled;
+    return glm::dot(w, w);
+  }
+  // A bound below q2(j, p) with room for its rounding: |p − centre|²/r_max², shrunk by 10⁻³
+  // (a rotation keeps lengths, and no radius exceeds r_max). One multiply for three divisions.
+  float q2_floor(int j, glm::vec3 p) const {
+    const Term& e = terms_[static_cast<std::size_t>(j)];
+    const glm::vec3 v = p - e.centre;
+    return glm::dot(v, v) * e.floor_scale;
   }
 
  private:
@@ -76,6 +89,7 @@ class CandidateFan {
     float c;          // |o|² − 1
     glm::vec3 centre;
     glm::vec3 unscaled;  // the primitive's own radii (|q| is the primitive's, not the grown one's)
+    float floor_scale;   // (1 − 10⁻³)/r_max² of the own radii (q2_floor)
     bool identity;       // the rotation is exactly the identity
     // The cone from the origin around the grown primitive's bounding sphere, widened well beyond
     // the exact test's rounding: a direction d with d·axis < cos_cull·|d| surely misses.

@@ -119,7 +119,8 @@ struct AirPass {
     const float alpha = std::clamp(px[3], 0.0f, 1.0f);
     // The background's share of the pixel: (1 − α)^{view_scale}, the δ-M view's transmittance
     // (the clouds' forward peak carries what lies behind on), and the clouds' the rest.
-    const float clear = std::pow(1.0f - alpha, air.phase.view_scale);
+    // pow(1, v) is 1: the sky's pixels (most of a frame) skip the call.
+    const float clear = alpha == 0.0f ? 1.0f : std::pow(1.0f - alpha, air.phase.view_scale);
     const float cover = 1.0f - clear;
     float front = 0.0f;
     if (fading) {
@@ -168,39 +169,59 @@ void tent_row(const float* src, float* dst, int width) {
 
 }  // namespace
 
-void finish_physical(float* rgba, int width, int height, const CameraParams& camera,
-                     const SkyParams& sky, const SunParams& sun, const GroundParams& ground,
-                     const std::vector<Box>& boxes, const AirParams& air, int threads,
-                     const std::uint8_t* unfiltered) {
+void finish_physical(const float* rgba, float* out, int width, int height,
+                     const CameraParams& camera, const SkyParams& sky, const SunParams& sun,
+                     const GroundParams& ground, const std::vector<Box>& boxes,
+                     const AirParams& air, int threads, const std::uint8_t* unfiltered) {
   if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
   camera.validate();
   air.validate();
   const AirPass pass(camera, width, height, sky, sun, ground, boxes, air);
   const std::size_t row_floats = static_cast<std::size_t>(width) * 4;
-  std::vector<float> rows(air.resolve ? row_floats * static_cast<std::size_t>(height) : 0);
-  // The air, then each row's tent along x into `rows` (a row needs only its own pixels).
-  parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
-    for (std::size_t r = r0; r < r1; ++r) {
-      float* row = rgba + r * row_floats;
-      if (pass.fading || pass.glowing)
-        for (int c = 0; c < width; ++c) pass.pixel(static_cast<int>(r), c, row + 4 * c);
-      if (air.resolve) tent_row(row, rows.data() + r * row_floats, width);
-    }
-  });
-  if (!air.resolve) return;
-  // The tent along y, from the x-filtered rows back into the image.
-  parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
-    for (std::size_t r = r0; r < r1; ++r) {
-      const float* up = rows.data() + (r > 0 ? r - 1 : r) * row_floats;
-      const float* mid = rows.data() + r * row_floats;
-      const float* down =
-          rows.data() + (r + 1 < static_cast<std::size_t>(height) ? r + 1 : r) * row_floats;
-      float* dst = rgba + r * row_floats;
-      const std::uint8_t* keep =
-          unfiltered != nullptr ? unfiltered + r * static_cast<std::size_t>(width) : nullptr;
-      for (std::size_t i = 0; i < row_floats; ++i)
-        if (keep == nullptr || keep[i / 4] == 0)
-          dst[i] = 0.25f * up[i] + 0.5f * mid[i] + 0.25f * down[i];
+  // Row r seen through the air, into `dst`.
+  auto air_row = [&](int r, float* dst) {
+    std::copy(rgba + r * row_floats, rgba + (r + 1) * row_floats, dst);
+    if (pass.fading || pass.glowing)
+      for (int c = 0; c < width; ++c) pass.pixel(r, c, dst + 4 * c);
+  };
+  if (!air.resolve) {
+    parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
+      for (std::size_t r = r0; r < r1; ++r) air_row(static_cast<int>(r), out + r * row_floats);
+    });
+    return;
+  }
+  // The tent needs each row's neighbours through the air and filtered along x: a block of rows
+  // keeps the last three in a ring, and computes the two rows beyond its ends itself (a few
+  // per cent more air) instead of holding a whole second image.
+  constexpr int kBlockRows = 32;
+  const int blocks = (height + kBlockRows - 1) / kBlockRows;
+  parallel_chunks(static_cast<std::size_t>(blocks), threads, [&](std::size_t b0, std::size_t b1) {
+    std::vector<float> aired(3 * row_floats), across(3 * row_floats);
+    auto ring = [&](std::vector<float>& v, int r) { return v.data() + (r % 3) * row_floats; };
+    auto prepare = [&](int r) {  // row r (in the image) through the air and along x
+      air_row(r, ring(aired, r + 1));
+      tent_row(ring(aired, r + 1), ring(across, r + 1), width);
+    };
+    for (std::size_t b = b0; b < b1; ++b) {
+      const int r0 = static_cast<int>(b) * kBlockRows;
+      const int r1 = std::min(height, r0 + kBlockRows);
+      // Ring slot (r + 1) % 3 holds row r; row −1 and row `height` are copies of the edge rows.
+      prepare(r0);
+      if (r0 > 0) prepare(r0 - 1);
+      for (int r = r0; r < r1; ++r) {
+        if (r + 1 < height) prepare(r + 1);
+        const float* up = ring(across, (r > 0 ? r - 1 : r) + 1);
+        const float* mid = ring(across, r + 1);
+        const float* down = ring(across, (r + 1 < height ? r + 1 : r) + 1);
+        const float* own = ring(aired, r + 1);
+        float* dst = out + static_cast<std::size_t>(r) * row_floats;
+        const std::uint8_t* keep =
+            unfiltered != nullptr ? unfiltered + static_cast<std::size_t>(r) * width : nullptr;
+        for (std::size_t i = 0; i < row_floats; ++i)
+          dst[i] = keep != nullptr && keep[i / 4] != 0
+                       ? own[i]
+                       : 0.25f * up[i] + 0.5f * mid[i] + 0.25f * down[i];
+      }
     }
   });
 }

@@ -2,9 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <mutex>
 #include <optional>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <glm/geometric.hpp>
 
@@ -327,12 +330,17 @@ class RayMarcher {
   // before the cell's exit, before t_end and before the solid. Each counts as a step, so the
   // max_steps budget is spent as without skipping. Returns false when the sample must be taken.
   bool skip_empty(const PreparedCloud& pc, float& t, float off, float t_end, glm::vec3 origin,
-                  glm::vec3 dir, Scratch& scratch, State& st) const {
+                  glm::vec3 dir, Scratch& scratch, State& st,
+                  float* occupied_until = nullptr) const {
     const OccupancyGrid* occ = pc.occupancy;
     if (occ == nullptr) return false;
     int ix, iy, iz;
-    if (!occ->cell_of(origin + (t + off) * dir, ix, iy, iz) || occ->occupied(ix, iy, iz))
+    if (!occ->cell_of(origin + (t + off) * dir, ix, iy, iz)) return false;
+    if (occ->occupied(ix, iy, iz)) {
+      if (occupied_until != nullptr)
+        *occupied_until = occ->cell_exit(ix, iy, iz, origin, dir) - pc.margin;
       return false;
+    }
     const float safe = std::min(occ->cell_exit(ix, iy, iz, origin, dir) - pc.margin, st.t_limit);
     const float step = pc.step;
     do {
@@ -394,8 +402,8 @@ class RayMarcher {
   // The |q| of union_owner's owner of the sample at s (world point p), for samples taken in
   // increasing s: the covering candidates are kept in `active` (candidate order) as they enter
   // (t_in ≤ s; `entered` of them so far) and leave (s > t_out) instead of scanning them all;
-  // the owner's |q| is the smallest. Unsorted candidates (candidate_sort "none") take
-  // union_owner itself.
+  // the owner's |q| is the smallest, or any value above 1 when the sample is outside them all.
+  // Unsorted candidates (candidate_sort "none") take union_owner itself.
   float owner_q(const CloudShape& shape, const CandidateFan& fan, const Candidate* cand, int n,
                 float s, glm::vec3 p, int fallback, Active& active, int& entered) const {
     if (!settings_.sort_candidates) return fan.q(union_owner(shape, cand, n, s, p, fallback), p);
@@ -405,12 +413,20 @@ class RayMarcher {
       if (!(s > cand[active.index[i]].t_out)) active.index[kept++] = active.index[i];
     active.size = kept;
     if (kept == 0) return fan.q(fallback, p);
-    float best_q = fan.q(cand[active.index[0]].primitive, p);
-    for (int i = 1; i < kept; ++i) {
-      const float q = fan.q(cand[active.index[i]].primitive, p);
-      if (q < best_q) best_q = q;
+    // The smallest |q|² (sqrt is monotonic: its root is the smallest |q| bit for bit), where
+    // it is at most 1: beyond, the sample is outside (q > 1) whichever candidate owns it. A
+    // candidate whose cheap bound (q2_floor) exceeds the best so far, or that limit, cannot own
+    // a sample inside: its three divisions are skipped. kInside: a few ulps above 1, so that
+    // every |q|² whose root rounds to 1 still counts.
+    constexpr float kInside = 1.0000004f;
+    float best = kInside;
+    for (int i = 0; i < kept; ++i) {
+      const int j = cand[active.index[i]].primitive;
+      if (fan.q2_floor(j, p) > best) continue;
+      const float q2 = fan.q2(j, p);
+      if (q2 < best) best = q2;
     }
-    return best_q;
+    return best < kInside ? std::sqrt(best) : 2.0f;
   }
 
   // The physical mode (RENDER_CONTRACT "Physical lighting"): the union of the candidate
@@ -475,6 +491,7 @@ class RayMarcher {
     Active& active = scratch.active;
     active.size = 0;
     int entered = 0;
+    float occupied_until = -INFINITY;  // skip_empty's: the samples before it lie in occupied cells
     float t = -INFINITY;
     for (int k = 0; k < n; ++k) {
       if (cand[k].t_out <= t) continue;
@@ -486,7 +503,10 @@ class RayMarcher {
         }
         const float s = t + offset;
         if (!(s < st.t_limit)) return flush();  // a solid hides the rest of the ray
-        if (skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st)) continue;
+        // The rest of an occupied cell (up to its exit, less the margin) needs no new look.
+        if (!(s < occupied_until) &&
+            skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st, &occupied_until))
+          continue;
         ++st.steps;
         const glm::vec3 p = origin + s * dir;
         t += step;
@@ -517,86 +537,121 @@ class RayMarcher {
 
 }  // namespace
 
-void render_image(const MarchScene& scene, const MarchSettings& settings,
-                  const CameraParams& camera, int width, int height, float* out, int threads,
-                  MarchStats* stats, std::uint32_t* fbm_map, const std::uint8_t* mask) {
-  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
-  settings.validate();
-  camera.validate();
-  scene.validate(settings);
+namespace {
 
-  std::vector<OccupancyGrid> grids;
-  if (settings.skip_empty) {
-    grids.reserve(scene.clouds.size());
-    for (const auto& c : scene.clouds) grids.push_back(build_occupancy(c.shape));
-  }
-  // Every ray starts at the camera: each cloud's candidate terms of that origin, once.
-  std::vector<CandidateFan> fans;
-  fans.reserve(scene.clouds.size());
-  for (const auto& c : scene.clouds) fans.emplace_back(c.shape, camera.position);
-  std::vector<PreparedCloud> prepared;
-  prepared.reserve(scene.clouds.size());
-  for (std::size_t k = 0; k < scene.clouds.size(); ++k) {
-    const RenderCloud& c = scene.clouds[k];
-    PreparedCloud pc{&c,
-                     candidate_bounds(c.shape),
-                     settings.step_for(camera.position, c.shape.centre()),
-                     nullptr,
-                     0.0f,
-                     &fans[k]};
+// What every ray of one render shares: each cloud's occupancy grid, candidate fan (every ray
+// starts at the camera) and march constants. Built once per render, then read by all threads.
+class PreparedScene {
+ public:
+  PreparedScene(const MarchScene& scene, const MarchSettings& settings,
+                const CameraParams& camera) {
+    settings.validate();
+    camera.validate();
+    scene.validate(settings);
     if (settings.skip_empty) {
-      const OccupancyGrid& g = grids[k];
-      const glm::vec3 cell = (g.box.hi - g.box.lo) / static_cast<float>(g.res);
-      pc.occupancy = &g;
-      pc.margin = 1e-3f * std::min(cell.x, std::min(cell.y, cell.z));
+      grids_.reserve(scene.clouds.size());
+      for (const auto& c : scene.clouds) grids_.push_back(build_occupancy(c.shape));
     }
-    prepared.push_back(pc);
+    fans_.reserve(scene.clouds.size());
+    for (const auto& c : scene.clouds) fans_.emplace_back(c.shape, camera.position);
+    clouds_.reserve(scene.clouds.size());
+    for (std::size_t k = 0; k < scene.clouds.size(); ++k) {
+      const RenderCloud& c = scene.clouds[k];
+      PreparedCloud pc{&c,
+                       candidate_bounds(c.shape),
+                       settings.step_for(camera.position, c.shape.centre()),
+                       nullptr,
+                       0.0f,
+                       &fans_[k]};
+      if (settings.skip_empty) {
+        const OccupancyGrid& g = grids_[k];
+        const glm::vec3 cell = (g.box.hi - g.box.lo) / static_cast<float>(g.res);
+        pc.occupancy = &g;
+        pc.margin = 1e-3f * std::min(cell.x, std::min(cell.y, cell.z));
+      }
+      clouds_.push_back(pc);
+    }
   }
+  const std::vector<PreparedCloud>& clouds() const { return clouds_; }
 
+ private:
+  std::vector<OccupancyGrid> grids_;
+  std::vector<CandidateFan> fans_;
+  std::vector<PreparedCloud> clouds_;
+};
+
+// Marches `count` pixels on `threads` threads: pixel k is (row_of(k), col_of(k)) of the
+// (height, width) image and writes out[4k..4k+3] (and fbm_map[k]). Work is counted per pixel
+// and the totals are integer sums: the same whatever the thread count.
+template <class PixelOf>
+void march_pixels(const MarchScene& scene, const MarchSettings& settings,
+                  const CameraParams& camera, int width, int height, std::size_t count,
+                  PixelOf pixel_of, float* out, int threads, MarchStats* stats,
+                  std::uint32_t* fbm_map) {
+  const PreparedScene prepared(scene, settings, camera);
   const CameraRays rays(camera, width, height);
-  const RayMarcher marcher(scene, settings, prepared);
-  // Per-row totals, summed in row order afterwards: the same whatever the thread count.
-  std::vector<MarchStats> rows(stats != nullptr ? static_cast<std::size_t>(height) : 0);
-  // Rows are independent: each pixel is written by exactly one thread.
-  parallel_chunks(static_cast<std::size_t>(height), threads, [&](std::size_t r0, std::size_t r1) {
+  const RayMarcher marcher(scene, settings, prepared.clouds());
+  std::mutex lock;
+  MarchStats total;
+  parallel_chunks(count, threads, [&](std::size_t k0, std::size_t k1) {
     Scratch scratch;
     marcher.init(scratch);
-    for (std::size_t r = r0; r < r1; ++r) {
-      std::uint64_t row_steps = 0;
-      const std::uint64_t fbm0 = scratch.fbm, skipped0 = scratch.skipped;
-      for (int c = 0; c < width; ++c) {
-        const std::size_t i = r * static_cast<std::size_t>(width) + static_cast<std::size_t>(c);
-        if (mask != nullptr && mask[i] == 0) {
-          std::fill(out + i * 4, out + i * 4 + 4, 0.0f);
-          if (fbm_map != nullptr) fbm_map[i] = 0;
-          continue;
-        }
-        const glm::vec3 dir = rays.direction(static_cast<int>(r), c);
-        const float xi = settings.physical || settings.jitter
-                             ? jitter(static_cast<int>(r), c, settings.phys.jitter_seed)
-                             : 0.5f;
-        const std::uint64_t before = scratch.fbm;
-        int steps = 0;
-        const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi, steps);
-        row_steps += static_cast<std::uint64_t>(steps);
-        if (fbm_map != nullptr) fbm_map[i] = static_cast<std::uint32_t>(scratch.fbm - before);
-        float* o = out + i * 4;
-        o[0] = px.x;
-        o[1] = px.y;
-        o[2] = px.z;
-        o[3] = px.w;
-      }
-      if (stats != nullptr) rows[r] = {scratch.fbm - fbm0, row_steps, scratch.skipped - skipped0};
+    std::uint64_t steps_sum = 0;
+    for (std::size_t k = k0; k < k1; ++k) {
+      const auto [r, c] = pixel_of(k);
+      const glm::vec3 dir = rays.direction(r, c);
+      const float xi =
+          settings.physical || settings.jitter ? jitter(r, c, settings.phys.jitter_seed) : 0.5f;
+      const std::uint64_t before = scratch.fbm;
+      int steps = 0;
+      const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi, steps);
+      steps_sum += static_cast<std::uint64_t>(steps);
+      if (fbm_map != nullptr) fbm_map[k] = static_cast<std::uint32_t>(scratch.fbm - before);
+      float* o = out + k * 4;
+      o[0] = px.x;
+      o[1] = px.y;
+      o[2] = px.z;
+      o[3] = px.w;
+    }
+    if (stats != nullptr) {
+      const std::lock_guard<std::mutex> guard(lock);
+      total.fbm_evaluations += scratch.fbm;
+      total.steps += steps_sum;
+      total.skipped += scratch.skipped;
     }
   });
-  if (stats != nullptr) {
-    *stats = MarchStats{};
-    for (const MarchStats& m : rows) {
-      stats->fbm_evaluations += m.fbm_evaluations;
-      stats->steps += m.steps;
-      stats->skipped += m.skipped;
-    }
+  if (stats != nullptr) *stats = total;
+}
+
+}  // namespace
+
+void render_image(const MarchScene& scene, const MarchSettings& settings,
+                  const CameraParams& camera, int width, int height, float* out, int threads,
+                  MarchStats* stats, std::uint32_t* fbm_map) {
+  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+  const std::size_t w = static_cast<std::size_t>(width);
+  march_pixels(
+      scene, settings, camera, width, height, w * static_cast<std::size_t>(height),
+      [w](std::size_t k) {
+        return std::pair<int, int>(static_cast<int>(k / w), static_cast<int>(k % w));
+      },
+      out, threads, stats, fbm_map);
+}
+
+void render_pixels(const MarchScene& scene, const MarchSettings& settings,
+                   const CameraParams& camera, int width, int height, const std::int32_t* pixels,
+                   std::size_t count, float* out, int threads, MarchStats* stats,
+                   std::uint32_t* fbm_map) {
+  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+  for (std::size_t k = 0; k < count; ++k) {
+    const std::int32_t r = pixels[2 * k], c = pixels[2 * k + 1];
+    if (r < 0 || r >= height || c < 0 || c >= width)
+      throw std::invalid_argument("pixels must lie in the image: (row, column) in [0, H) x [0, W)");
   }
+  march_pixels(
+      scene, settings, camera, width, height, count,
+      [pixels](std::size_t k) { return std::pair<int, int>(pixels[2 * k], pixels[2 * k + 1]); },
+      out, threads, stats, fbm_map);
 }
 
 }  // namespace cumuli

@@ -135,6 +135,20 @@ def pixel_list(rows: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, int, int
     return listed.reshape(list_h, list_w, 2), list_w, list_h
 
 
+def checked_pixels(pixels: Any, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+    """The rows and columns of an ``(N, 2)`` integer array of pixels inside a ``(height,
+    width)`` image (the CPU marcher's checks: ValueError, TypeError)."""
+    p = np.asarray(pixels)
+    if p.ndim != 2 or p.shape[1] != 2:
+        raise ValueError("pixels must be an (N, 2) array of (row, column)")
+    if p.dtype.kind not in "iu":
+        raise TypeError("pixels must be an integer array")
+    rows, cols = p[:, 0].astype(np.int64), p[:, 1].astype(np.int64)
+    if len(p) and (rows.min() < 0 or rows.max() >= height or cols.min() < 0 or cols.max() >= width):
+        raise ValueError("pixels must lie in the image: (row, column) in [0, H) x [0, W)")
+    return rows, cols
+
+
 class MarcherGL:
     """Draws 2018 clouds of a :class:`LitScene` with the GLSL marcher (a layer drawer, see
     :mod:`cumuli.rendering.kinds`). Several clouds are marched in one pass, front to back by
@@ -226,11 +240,12 @@ class MarcherGL:
         width: int,
         height: int,
         with_sky: bool,
-        mask: np.ndarray | None = None,
+        pixels: np.ndarray | None = None,
     ) -> np.ndarray:
         """The clouds ``indices`` of ``lit`` over the sky (``with_sky``) or as a premultiplied
-        layer ``(colour, 1 − T)``: ``(height, width, 4)`` float32, row 0 on top. With ``mask``
-        (``(height, width)``, nonzero where marched) the other pixels are 0."""
+        layer ``(colour, 1 − T)``: ``(height, width, 4)`` float32, row 0 on top. With
+        ``pixels`` (an ``(N, 2)`` integer array of rows and columns) only those pixels, as
+        ``(N, 4)`` values in their order."""
         scene = lit.scene
         physical = scene.settings.physical
         clouds = [scene.clouds[k] for k in indices]
@@ -288,25 +303,23 @@ class MarcherGL:
             occ_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             occ_tex.use(location=5)
             self._set("u_occupancy", 5)
-            self._set("u_listed", mask is not None)
+            self._set("u_listed", pixels is not None)
             # Always on its own unit: samplers of different types may not share one (unit 0
             # holds the lattice), even when the shader does not read this one.
             self._set("u_pixel_list", 6)
             self._set_uniforms(scene, len(clouds), camera, width, height, with_sky)
-            if mask is None:
+            if pixels is None:
                 return self.tiles.draw(self.vao, self._set, width, height)
-            rows, cols = np.nonzero(np.asarray(mask))
-            out = np.zeros((height, width, 4), np.float32)
+            rows, cols = checked_pixels(pixels, width, height)
             if len(rows) == 0:
-                return out
+                return np.zeros((0, 4), np.float32)
             listed, list_w, list_h = pixel_list(rows, cols)
             list_tex = ctx.texture((list_w, list_h), 2, listed.tobytes(), dtype="i4")
             scratch.append(list_tex)
             list_tex.filter = (moderngl.NEAREST, moderngl.NEAREST)
             list_tex.use(location=6)
             values = self.tiles.draw(self.vao, self._set, list_w, list_h)
-            out[rows, cols] = values.reshape(-1, 4)[: len(rows)]
-            return out
+            return np.ascontiguousarray(values.reshape(-1, 4)[: len(rows)])
         finally:
             for obj in scratch:
                 obj.release()

@@ -183,13 +183,18 @@ def check_stats_scene(scene: Scene, impostors: Any) -> None:
 
 def combined_stats(passes: Sequence[dict[str, Any]], width: int, height: int) -> MarchStats:
     """One `MarchStats` of an image from its marches' raw statistics (``_core.render_cpu``'s):
-    the image's own and the edge pass's, whose ``fbm_map`` (an image k times the size) adds its
-    k × k sub-pixels' counts to their pixel."""
+    the image's own, whose ``fbm_map`` is the image's, and the edge pass's, a list of sub-pixels
+    (``raw["pixels"]``, ``(N, 2)`` rows and columns of an image ``raw["size"]`` = k times the
+    image's height) whose counts add to the pixel each lies in."""
     fbm_map = np.zeros((height, width), np.uint32)
     for raw in passes:
         m = np.asarray(raw["fbm_map"], np.uint32)
-        k = m.shape[0] // height
-        fbm_map += m.reshape(height, k, width, k).sum(axis=(1, 3), dtype=np.uint32)
+        if "pixels" not in raw:
+            fbm_map += m
+            continue
+        k = int(raw["size"][0]) // height
+        pixels = np.asarray(raw["pixels"])
+        np.add.at(fbm_map, (pixels[:, 0] // k, pixels[:, 1] // k), m)
     return MarchStats(
         sum(int(raw["fbm_evaluations"]) for raw in passes),
         sum(int(raw["steps"]) for raw in passes),
@@ -206,10 +211,11 @@ def draw_clouds_cpu(
     height: int,
     with_sky: bool,
     threads: int = 0,
-    mask: np.ndarray | None = None,
+    pixels: np.ndarray | None = None,
     return_stats: bool = False,
 ) -> Any:
-    """The CPU twin of :meth:`cumuli.rendering.marcher.MarcherGL.draw`; with ``return_stats``,
-    ``(image, raw)``: ``_core.render_cpu``'s statistics of the march."""
+    """The CPU twin of :meth:`cumuli.rendering.marcher.MarcherGL.draw`; with ``pixels`` (an
+    ``(N, 2)`` integer array of rows and columns) only those pixels, as ``(N, 4)`` values; with
+    ``return_stats``, ``(image, raw)``: ``_core.render_cpu``'s statistics of the march."""
     args = render_cpu_args(lit, camera, width, height, threads, indices, with_sky)
-    return _core.render_cpu(**args, mask=mask, return_stats=return_stats)
+    return _core.render_cpu(**args, pixels=pixels, return_stats=return_stats)

@@ -47,11 +47,12 @@ class CPUPainter:
 
     def marched(
         self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
-        mask: np.ndarray,
+        pixels: np.ndarray,
     ) -> np.ndarray:  # fmt: skip
-        """The 2018 clouds ``indices`` over the sky, marching only the pixels of ``mask`` (the
-        edge pass, :mod:`cumuli.rendering.edges`)."""
-        return draw_clouds_cpu(lit, indices, camera, width, height, True, self.threads, mask)
+        """The 2018 clouds ``indices`` over the sky at the ``(N, 2)`` pixels (rows, columns) of
+        a ``(height, width)`` image, as ``(N, 4)`` values in their order (the edge pass,
+        :mod:`cumuli.rendering.edges`)."""
+        return draw_clouds_cpu(lit, indices, camera, width, height, True, self.threads, pixels)
 
     def solids(self, lit: LitScene, camera: Camera, width: int, height: int) -> np.ndarray:
         scene = lit.scene
@@ -90,7 +91,7 @@ class CPUPainter:
 class CountingCPUPainter(CPUPainter):
     """A :class:`CPUPainter` that counts the 2018 marcher's work (``render_cpu(return_stats=
     True)``): ``passes`` receives each march's raw statistics, the image's and the edge pass's
-    (its ``fbm_map`` the size of that march's image)."""
+    (its ``fbm_map`` one count per listed pixel, with ``pixels`` and the image's ``size``)."""
 
     def __init__(self, threads: int = 0) -> None:
         super().__init__(threads)
@@ -106,17 +107,19 @@ class CountingCPUPainter(CPUPainter):
 
     def marched(
         self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
-        mask: np.ndarray,
+        pixels: np.ndarray,
     ) -> np.ndarray:  # fmt: skip
-        return self._count(lit, indices, camera, width, height, True, mask)
+        return self._count(lit, indices, camera, width, height, True, pixels)
 
     def _count(
         self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
-        with_sky: bool, mask: np.ndarray | None,
+        with_sky: bool, pixels: np.ndarray | None,
     ) -> np.ndarray:  # fmt: skip
         image, raw = draw_clouds_cpu(
-            lit, indices, camera, width, height, with_sky, self.threads, mask, return_stats=True
+            lit, indices, camera, width, height, with_sky, self.threads, pixels, return_stats=True
         )
+        if pixels is not None:
+            raw.update(pixels=pixels, size=(height, width))
         self.passes.append(raw)
         return image
 
@@ -137,13 +140,13 @@ class GLPainter:
 
     def marched(
         self, lit: LitScene, indices: Sequence[int], camera: Camera, width: int, height: int,
-        mask: np.ndarray,
+        pixels: np.ndarray,
     ) -> np.ndarray:  # fmt: skip
         """As :meth:`CPUPainter.marched`, on the GL marcher."""
         drawer = self.renderer.drawer("cloud")
         tiles = self.renderer.tiles
         first = tiles.last_gpu_ns  # the main pass's time: the render's is both passes'
-        image = drawer.draw(lit, indices, camera, width, height, True, mask=mask)
+        image = drawer.draw(lit, indices, camera, width, height, True, pixels=pixels)
         if first is None or tiles.last_gpu_ns is None:
             tiles.last_gpu_ns = None
         else:

@@ -36,14 +36,14 @@ struct AirParams {
   void validate() const;  // throws std::invalid_argument
 };
 
-// Finishes the (height, width, 4) linear RGBA image `rgba` (row 0 on top) in place: the air,
-// then the resolve. `boxes`: the drawables' layer boxes (for the clouds' depth). The result
-// does not depend on the thread count.
+// Finishes the (height, width, 4) linear RGBA image `rgba` (row 0 on top) into `out` (the same
+// size; not `rgba` itself): the air, then the resolve. `boxes`: the drawables' layer boxes (for
+// the clouds' depth). The result does not depend on the thread count.
 // `unfiltered` (height·width bytes, optional): pixels whose byte is nonzero skip the resolve's
 // tent (the edge pass's supersampled pixels, already antialiased) but still see the air.
-void finish_physical(float* rgba, int width, int height, const CameraParams& camera,
-                     const SkyParams& sky, const SunParams& sun, const GroundParams& ground,
-                     const std::vector<Box>& boxes, const AirParams& air, int threads,
-                     const std::uint8_t* unfiltered = nullptr);
+void finish_physical(const float* rgba, float* out, int width, int height,
+                     const CameraParams& camera, const SkyParams& sky, const SunParams& sun,
+                     const GroundParams& ground, const std::vector<Box>& boxes,
+                     const AirParams& air, int threads, const std::uint8_t* unfiltered = nullptr);
 
 }  // namespace cumuli

@@ -8,6 +8,7 @@
 // the sky shows through what is left of T. Everything is float32, like the shader.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -152,12 +153,18 @@ struct MarchStats {
 // The (height, width, 4) float32 RGBA image, row 0 at the top, on `threads` threads (0 = all).
 // The result does not depend on the thread count. `out` holds height·width·4 floats. When
 // `stats` is given it receives the totals, and `fbm_map` (height·width counts, if given) the
-// fBm evaluations of each pixel. With `mask` (height·width bytes) only the pixels whose byte is
-// nonzero are marched; the others are written 0 (the edge pass of the physical mode marches
-// only its outline pixels' sub-pixels).
+// fBm evaluations of each pixel.
 void render_image(const MarchScene& scene, const MarchSettings& settings,
                   const CameraParams& camera, int width, int height, float* out, int threads,
-                  MarchStats* stats = nullptr, std::uint32_t* fbm_map = nullptr,
-                  const std::uint8_t* mask = nullptr);
+                  MarchStats* stats = nullptr, std::uint32_t* fbm_map = nullptr);
+
+// As render_image, for a list of `count` pixels of the (height, width) image: `pixels` holds
+// (row, column) pairs, `out` receives count·4 floats (pixel k's RGBA at 4k) and `fbm_map`
+// count values. The physical mode's edge pass marches its outline's sub-pixels so, without an
+// image twice the size that is mostly zeros. Throws std::invalid_argument for a pixel outside.
+void render_pixels(const MarchScene& scene, const MarchSettings& settings,
+                   const CameraParams& camera, int width, int height, const std::int32_t* pixels,
+                   std::size_t count, float* out, int threads, MarchStats* stats = nullptr,
+                   std::uint32_t* fbm_map = nullptr);
 
 }  // namespace cumuli
