@@ -173,6 +173,21 @@ def test_supersample_edges_leaves_an_image_without_edges_alone() -> None:
     assert out is flat and edges is None
 
 
+def test_supersample_edges_spends_a_writable_image_only_when_told() -> None:
+    image = np.zeros((6, 8, 4), np.float32)
+    image[:, 4:] = 1.0
+
+    def march(pixels: np.ndarray) -> np.ndarray:
+        return np.full((len(pixels), 4), 0.5, np.float32)
+
+    kept = image.copy()
+    out, edges = supersample_edges(image, march)
+    assert out is not image and np.array_equal(image, kept)
+    assert edges is not None and (out[edges] == 0.5).all()
+    spent, _ = supersample_edges(image, march, writable=True)
+    assert spent is image and np.array_equal(spent, out)
+
+
 def test_the_paper_mode_has_no_edge_pass() -> None:
     scene, cam = small_scene(lighting="paper")
     calls: list[int] = []

@@ -207,6 +207,7 @@ struct Batch {
 struct Active {
   std::vector<int> index;
   int size = 0;
+  float leave = INFINITY;  // the smallest t_out among them: none leaves before it
 };
 
 struct Scratch {
@@ -407,11 +408,23 @@ class RayMarcher {
   float owner_q(const CloudShape& shape, const CandidateFan& fan, const Candidate* cand, int n,
                 float s, glm::vec3 p, int fallback, Active& active, int& entered) const {
     if (!settings_.sort_candidates) return fan.q(union_owner(shape, cand, n, s, p, fallback), p);
-    while (entered < n && cand[entered].t_in <= s) active.index[active.size++] = entered++;
-    int kept = 0;
-    for (int i = 0; i < active.size; ++i)
-      if (!(s > cand[active.index[i]].t_out)) active.index[kept++] = active.index[i];
-    active.size = kept;
+    while (entered < n && cand[entered].t_in <= s) {
+      active.leave = std::min(active.leave, cand[entered].t_out);
+      active.index[active.size++] = entered++;
+    }
+    if (s > active.leave) {  // some candidate has left: drop those, and find the next to leave
+      int kept = 0;
+      active.leave = INFINITY;
+      for (int i = 0; i < active.size; ++i) {
+        const float out = cand[active.index[i]].t_out;
+        if (!(s > out)) {
+          active.index[kept++] = active.index[i];
+          active.leave = std::min(active.leave, out);
+        }
+      }
+      active.size = kept;
+    }
+    const int kept = active.size;
     if (kept == 0) return fan.q(fallback, p);
     // The smallest |q|² (sqrt is monotonic: its root is the smallest |q| bit for bit), where
     // it is at most 1: beyond, the sample is outside (q > 1) whichever candidate owns it. A
@@ -490,6 +503,7 @@ class RayMarcher {
     // The candidates covering the sample (union_owner's), kept as s grows.
     Active& active = scratch.active;
     active.size = 0;
+    active.leave = INFINITY;
     int entered = 0;
     float occupied_until = -INFINITY;  // skip_empty's: the samples before it lie in occupied cells
     float t = -INFINITY;

@@ -121,7 +121,9 @@ def compose(
         edges = None
         if _edge_pass(scene, kind, indices):
             image, edges = supersample_edges(
-                image, lambda m: painter.marched(lit, indices, camera, SUB * width, SUB * height, m)
+                image,
+                lambda m: painter.marched(lit, indices, camera, SUB * width, SUB * height, m),
+                writable=image.dtype == np.float32 and image.flags.writeable,
             )
         return finish(image, scene, camera, lit.shadow, threads, edges)
     if impostors is not None:

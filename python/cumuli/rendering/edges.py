@@ -54,11 +54,12 @@ def edge_mask(alpha: np.ndarray) -> np.ndarray:
 
 
 def supersample_edges(
-    image: np.ndarray, march: Callable[[np.ndarray], np.ndarray]
+    image: np.ndarray, march: Callable[[np.ndarray], np.ndarray], writable: bool = False
 ) -> tuple[np.ndarray, np.ndarray | None]:
     """``image`` (``(H, W, 4)``) with its edge pixels replaced by the mean of their rays
     (:data:`RAYS`), and the mask of those pixels (None when there are none, or too many:
-    :data:`MAX_RAYS`).
+    :data:`MAX_RAYS`). ``writable``: ``image`` (float32) is the caller's to spend and is
+    changed in place, sparing a copy of the frame; otherwise it is left as it is.
 
     ``march(pixels)`` draws the same scene at ``(SUB·H, SUB·W)`` at the ``(N, 2)`` int32 pixels
     (rows, columns) of that image only, returning their ``(N, 4)`` values in that order."""
@@ -75,6 +76,6 @@ def supersample_edges(
     pixels = SUB * np.stack([ys, xs], axis=1).astype(np.int32)[:, None, :] + offsets[None]
     values = np.asarray(march(pixels.reshape(-1, 2)), np.float32)
     mean = values.reshape(len(ys), len(RAYS), 4).astype(np.float64).mean(axis=1)
-    out = np.array(image, np.float32, copy=True)
+    out = image if writable else np.array(image, np.float32, copy=True)
     out[ys, xs] = mean.astype(np.float32)
     return out, edges
