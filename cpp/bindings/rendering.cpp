@@ -218,6 +218,7 @@ void bind_render_params(py::module_& m) {
       .def_readwrite("height", &Viewport::height)
       .def("validate", &Viewport::validate);
 
+  m.attr("ORDER_PHASE_SIZE") = kOrderPhaseSize;
   py::class_<PhysicalParams>(m, "PhysicalParams",
                              "The physical lighting mode's shading (RENDER_CONTRACT "
                              "\"Physical lighting\").")
@@ -246,6 +247,19 @@ void bind_render_params(py::module_& m) {
       .def_readwrite("oct_b", &PhysicalParams::oct_b)
       .def_readwrite("oct_c", &PhysicalParams::oct_c)
       .def_readwrite("oct_poisson", &PhysicalParams::oct_poisson)
+      .def_property(
+          "order_phase",
+          [](const PhysicalParams& p) {
+            FloatArray out(static_cast<py::ssize_t>(p.order_phase.size()));
+            std::copy(p.order_phase.begin(), p.order_phase.end(), out.mutable_data());
+            return out;
+          },
+          [](PhysicalParams& p, const FloatArray& values) {
+            if (values.ndim() != 1) throw py::value_error("order_phase must be one-dimensional");
+            p.order_phase.assign(values.data(), values.data() + values.size());
+          },
+          "Orders 1… of the drawn octaves' phase, (octaves - 1) rows of ORDER_PHASE_SIZE "
+          "values at sin(θ/2) = k/(ORDER_PHASE_SIZE - 1), flattened; empty: phase(bⁱ·g).")
       .def_readwrite("oct_first", &PhysicalParams::oct_first)
       .def_readwrite("view_scale", &PhysicalParams::view_scale)
       .def_readwrite("view_diffuse", &PhysicalParams::view_diffuse)

@@ -7,6 +7,7 @@
 #include "common/trilinear.glsl"
 
 #define MAX_OCTAVES 8
+#define ORDER_PHASE_SIZE 64  // entries per order of u_phys_order_phase (kOrderPhaseSize)
 
 uniform float u_phys_extinction;  // σt = u_phys_extinction · ρ
 uniform float u_phys_albedo;      // ϖ
@@ -17,6 +18,10 @@ uniform vec4 u_phys_mie_p;        // its g_HG, g_D, α, w_D
 uniform int u_phys_octaves;       // scattering orders drawn
 uniform vec3 u_phys_abc;          // octave constants a, b, c
 uniform float u_phys_poisson;     // β of the Poisson weights (0: plain octaves)
+uniform bool u_phys_order_table;  // orders ≥ 1 turn by the tabulated phase, not phase(bⁱ·g)
+// Order i's phase (i ≥ 1) at sin(θ/2) = k/(ORDER_PHASE_SIZE − 1): entry (i − 1)·SIZE + k, 4 a
+// vec4.
+uniform vec4 u_phys_order_phase[(MAX_OCTAVES - 1) * ORDER_PHASE_SIZE / 4];
 uniform float u_phys_first;       // order 0's depth scale, 1 − f·ϖ (the δ-M sun)
 uniform float u_phys_view;        // the radiance's depth scale along the view, 1 − f·ϖ (δ-M view)
 uniform float u_phys_diffuse;     // the diffuse light's share of the view's emission, 1 − f
@@ -30,7 +35,25 @@ float phys_phase(float c, float scale) {
     return (1.0 - u_phys_g.z) * p1 + u_phys_g.z * hg_phase(u_phys_g.y * scale, c);
 }
 
-// Weights aⁱ·phase(bⁱ·g, c) and depth scales cⁱ of the drawn orders (order 0's the δ-M
+float order_phase_entry(int i) {
+    return u_phys_order_phase[i >> 2][i & 3];
+}
+
+// Order i's phase at cos θ = c: the phase itself for order 0; else the table's row, linear in
+// sin(θ/2) = √((1 − c)/2) between its entries (PhysicalParams::order_phase_at; no acos, whose
+// accuracy varies between drivers), or phase(bⁱ·g) without one.
+float order_phase_at(int order, float c, float b) {
+    if (order == 0 || !u_phys_order_table) return phys_phase(c, b);
+    float u = sqrt(max(0.5 - 0.5 * c, 0.0));
+    float x = min(u, 1.0) * float(ORDER_PHASE_SIZE - 1);
+    int k = min(int(x), ORDER_PHASE_SIZE - 2);
+    float w = x - float(k);
+    int base = (order - 1) * ORDER_PHASE_SIZE + k;
+    float v0 = order_phase_entry(base);
+    return v0 + w * (order_phase_entry(base + 1) - v0);
+}
+
+// Weights aⁱ·pᵢ(c) (order_phase_at) and depth scales cⁱ of the drawn orders (order 0's the δ-M
 // sun's, u_phys_first); returns their count.
 int octave_terms(float c, out float w[MAX_OCTAVES], out float k[MAX_OCTAVES]) {
     int n = clamp(u_phys_octaves, 1, MAX_OCTAVES);
@@ -39,7 +62,7 @@ int octave_terms(float c, out float w[MAX_OCTAVES], out float k[MAX_OCTAVES]) {
         w[i] = 0.0;
         k[i] = 0.0;
         if (i >= n) continue;
-        w[i] = a * phys_phase(c, b);
+        w[i] = a * order_phase_at(i, c, b);
         k[i] = i == 0 ? u_phys_first : s;
         a *= u_phys_abc.x;
         b *= u_phys_abc.y;

@@ -57,6 +57,16 @@ RANGES = {
     "FLUX_LIMIT": (0.0, 1.5),
     "OCTAVE_A": (0.0, 1.0),
 }
+
+
+def fitted() -> tuple[str, ...]:
+    """:data:`FITTED` less ``OCTAVE_B`` where the orders' phase is the convolved one
+    (``OCTAVE_PHASE``), which does not read it."""
+    if phys.OCTAVE_PHASE == "convolved":
+        return tuple(n for n in FITTED if n != "OCTAVE_B")
+    return FITTED
+
+
 GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25}
 
 
@@ -96,7 +106,7 @@ def loss(errs: dict[str, dict[str, float]]) -> float:
 
 
 def apply(x: Sequence[float]) -> None:
-    for name, value in zip(FITTED, x, strict=True):
+    for name, value in zip(fitted(), x, strict=True):
         lo, hi = RANGES[name]
         setattr(phys, name, float(min(max(value, lo), hi)))
 
@@ -146,18 +156,18 @@ def main(argv: Sequence[str] | None = None) -> int:
     for item in filter(None, args.start.split(",")):
         key, value = item.split("=")
         setattr(phys, key, float(value))
-    x0 = np.array([getattr(phys, n) for n in FITTED], np.float64)
+    x0 = np.array([getattr(phys, n) for n in fitted()], np.float64)
 
     def f(x: np.ndarray) -> float:
         apply(x)
         return loss(errors(phys.FIT_VIEWS))
 
-    print("today's constants:", dict(zip(FITTED, x0.tolist(), strict=True)), flush=True)
+    print("today's constants:", dict(zip(fitted(), x0.tolist(), strict=True)), flush=True)
     report(errors([*phys.FIT_VIEWS, *phys.HELD_OUT_VIEWS]))
     best = nelder_mead(f, x0, args.iterations)
     apply(best)
-    fitted = {n: round(getattr(phys, n), 3) for n in FITTED}
-    print("fitted:", fitted, f"loss {f(best):.3f} (today {f(x0):.3f})", flush=True)
+    values = {n: round(getattr(phys, n), 3) for n in fitted()}
+    print("fitted:", values, f"loss {f(best):.3f} (today {f(x0):.3f})", flush=True)
     apply(best)
     report(errors([*phys.FIT_VIEWS, *phys.HELD_OUT_VIEWS]))
     return 0

@@ -37,7 +37,7 @@ def test_poisson_octaves_are_their_formula(poisson: float) -> None:
         got = octave_sum(s, tau, c, 3)
         want = np.zeros(len(TAU))
         for n in range(3):
-            p = phase_values(s, np.array([c]), phys.OCTAVE_B**n)[0]
+            p = phys.order_phase(s, np.array([c]), n, 3)[0]  # the phase itself for n = 0
             weight = (poisson * tau) ** n / math.factorial(n) if poisson else 1.0
             k = phys.first_order_depth_scale(s) if n == 0 else phys.OCTAVE_C**n  # δ-M order 0
             want += phys.OCTAVE_A**n * p * weight * np.exp(-k * tau)

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <stdexcept>
+#include <string>
 
 #include "cumuli/phase.hpp"
 
@@ -33,6 +34,16 @@ void PhysicalParams::validate() const {
     throw std::invalid_argument("jitter_seed must be in [0, 1023]");
   if (!(min_transmittance >= 0.0f && min_transmittance < 1.0f))
     throw std::invalid_argument("min_transmittance must be in [0, 1)");
+  if (!order_phase.empty()) {
+    const std::size_t want = static_cast<std::size_t>(octaves - 1) * kOrderPhaseSize;
+    if (order_phase.size() != want)
+      throw std::invalid_argument("order_phase must hold (octaves - 1) x " +
+                                  std::to_string(kOrderPhaseSize) + " values, got " +
+                                  std::to_string(order_phase.size()));
+    for (float v : order_phase)
+      if (!(v >= 0.0f) || !std::isfinite(v))
+        throw std::invalid_argument("order_phase values must be finite and >= 0");
+  }
 }
 
 float PhysicalParams::phase(float cos_theta, float scale) const {
@@ -42,11 +53,23 @@ float PhysicalParams::phase(float cos_theta, float scale) const {
   return (1.0f - blend) * p1 + blend * henyey_greenstein(g2 * scale, cos_theta);
 }
 
+float PhysicalParams::order_phase_at(int order, float cos_theta, float b_power) const {
+  if (order == 0 || order_phase.empty()) return phase(cos_theta, b_power);
+  // sin(θ/2) = √((1 − cos θ)/2): no inverse trigonometry (whose GLSL accuracy varies), and
+  // entries closest together where the phase is steepest, near the forward direction.
+  const float u = std::sqrt(std::max(0.5f - 0.5f * cos_theta, 0.0f));
+  const float x = std::min(u, 1.0f) * static_cast<float>(kOrderPhaseSize - 1);
+  const int k = std::min(static_cast<int>(x), kOrderPhaseSize - 2);
+  const float w = x - static_cast<float>(k);
+  const float* row = order_phase.data() + static_cast<std::size_t>(order - 1) * kOrderPhaseSize;
+  return row[k] + w * (row[k + 1] - row[k]);
+}
+
 OctaveTerms::OctaveTerms(const PhysicalParams& p, float cos_theta)
     : n(p.octaves), poisson(p.oct_poisson) {
   float a = 1.0f, b = 1.0f, c = 1.0f;
   for (int i = 0; i < n; ++i) {
-    weight[i] = a * p.phase(cos_theta, b);
+    weight[i] = a * p.order_phase_at(i, cos_theta, b);
     scale[i] = i == 0 ? p.oct_first : c;
     a *= p.oct_a;
     b *= p.oct_b;

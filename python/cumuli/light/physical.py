@@ -81,7 +81,11 @@ from cumuli.light.memo import remember
 from cumuli.light.moved import moved, moved_box, moved_frame, moved_light
 from cumuli.light.phase import (  # noqa: F401 (public)
     PEAK_COS,
+    first_order_depth_scale,
     forward_peak_share,
+    order_phase_at,
+    order_phase_table,
+    order_phase_values,
     phase,
     phase_values,
     view_depth_scale,
@@ -94,6 +98,11 @@ from cumuli.sky import sky_args
 #: order ``n`` scatters ``aⁿ`` of the light with the phase's g scaled by ``bⁿ``, weighted by
 #: ``(β·τ)ⁿ/n!·e^{−cⁿ·τ}`` (``β`` = :data:`OCTAVE_POISSON`; 0 gives the plain ``e^{−cⁿ·τ}``).
 OCTAVES = 2
+#: How order ``n ≥ 1`` turns the light: ``"scaled"``, the phase with its g's scaled by ``bⁿ``
+#: (:data:`OCTAVE_B`; Wrenninge et al.'s octaves; the constants below are fitted for it), or
+#: ``"convolved"``, the δ-M phase convolved with itself ``n`` times (:func:`order_phase_table`;
+#: refitted it does no better on the held-out views, docs/fidelity.md).
+OCTAVE_PHASE = "scaled"
 OCTAVE_A = 0.983
 OCTAVE_B = 1.0
 OCTAVE_C = 0.546
@@ -516,7 +525,7 @@ def octave_sum(settings: Any, tau: Any, cos_theta: Any, octaves: int) -> np.ndar
     out = np.zeros(np.broadcast_shapes(t.shape, c.shape))
     weight = np.ones_like(t)
     for n in range(octaves):
-        p = phase_values(settings, c, OCTAVE_B**n)
+        p = order_phase(settings, c, n, octaves)
         scale = first_order_depth_scale(settings) if n == 0 else OCTAVE_C**n
         out += OCTAVE_A**n * p * weight * np.exp(-scale * t)
         if OCTAVE_POISSON > 0.0:
@@ -524,20 +533,11 @@ def octave_sum(settings: Any, tau: Any, cos_theta: Any, octaves: int) -> np.ndar
     return out
 
 
-#: Whether order 0 (single scattering) reaches a point with the δ-M sun, ``e^{−(1 − f·ϖ)τ}``.
-FIRST_ORDER_DELTA_M = True
-
-
-def first_order_depth_scale(settings: Any) -> float:
-    """Order 0's optical-depth scale: ``1 − f·ϖ`` (:func:`forward_peak_share`), the δ-M sun.
-
-    The phase's forward peak scatters light on along the sun's ray: the sun light that has
-    only been forward-peak scattered still reaches the point, so single scattering out of the
-    peak sees ``e^{−(1 − f·ϖ)τ}``, not ``e^{−τ}`` (the δ-M similarity relation, as the
-    diffusion's source)."""
-    if not FIRST_ORDER_DELTA_M:
-        return 1.0
-    return float(1.0 - forward_peak_share(settings) * float(settings.albedo))
+def order_phase(settings: Any, cos_theta: Any, order: int, octaves: int) -> np.ndarray:
+    """Order ``order``'s phase at ``cos_theta`` as the drawers read it (:data:`OCTAVE_PHASE`;
+    :func:`cumuli.light.phase.order_phase_at`)."""
+    convolved = OCTAVE_PHASE == "convolved"
+    return order_phase_at(settings, cos_theta, order, octaves, OCTAVE_B**order, convolved)
 
 
 def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[float, float]]:
@@ -546,7 +546,7 @@ def octave_terms(settings: Any, cos_theta: float, octaves: int) -> list[tuple[fl
     drawers; the Poisson weights, which depend on ``τ``, are :func:`octave_sum`'s)."""
     out = []
     for i in range(octaves):
-        p = phase(settings, cos_theta, OCTAVE_B**i)
+        p = float(order_phase(settings, np.array([cos_theta]), i, octaves)[0])
         out.append((OCTAVE_A**i * p, first_order_depth_scale(settings) if i == 0 else OCTAVE_C**i))
     return out
 

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 from typing import Any
 
+import numpy as np
+
 from cumuli import _core
 from cumuli.camera import Camera
 from cumuli.light import physical as _physical
@@ -77,6 +79,8 @@ def physical_params(settings: RenderSettings, octaves: int) -> _core.PhysicalPar
     # read at call time: the fitting script (benchmarks/fit_physical.py) varies them
     p.oct_a, p.oct_b, p.oct_c = _physical.OCTAVE_A, _physical.OCTAVE_B, _physical.OCTAVE_C
     p.oct_poisson = _physical.OCTAVE_POISSON
+    if _physical.OCTAVE_PHASE == "convolved":  # else the marchers compute phase(bⁿ·g)
+        p.order_phase = _physical.order_phase_table(settings, int(octaves)).ravel()
     p.oct_first = _physical.first_order_depth_scale(settings)
     p.view_scale = _physical.view_depth_scale(settings)
     p.view_diffuse = _physical.view_diffuse_share(settings)
@@ -146,6 +150,19 @@ def march_uniforms(params: _core.MarchSettings, exact_noise: bool = False) -> di
     }
 
 
+#: vec4 entries of ``u_phys_order_phase`` (shaders/common/physical.glsl): every order past the
+#: first of at most ``MAX_OCTAVES`` (8), ``ORDER_PHASE_SIZE`` values each.
+ORDER_PHASE_VEC4S = 7 * _core.ORDER_PHASE_SIZE // 4
+
+
+def order_phase_vec4s(table: Any) -> list[tuple[float, ...]]:
+    """``PhysicalParams.order_phase`` as the shaders' ``u_phys_order_phase`` (zeros past it)."""
+    flat = np.zeros(4 * ORDER_PHASE_VEC4S, np.float32)
+    values = np.asarray(table, np.float32).ravel()
+    flat[: values.size] = values
+    return [tuple(float(v) for v in row) for row in flat.reshape(-1, 4)]
+
+
 def physical_uniforms(params: _core.PhysicalParams) -> dict[str, Any]:
     """The physical shading uniforms (shaders/common/physical.glsl) of a ``_core.PhysicalParams``
     (:func:`physical_params`): the same values the CPU twin takes."""
@@ -160,6 +177,8 @@ def physical_uniforms(params: _core.PhysicalParams) -> dict[str, Any]:
         "u_phys_octaves": p.octaves,
         "u_phys_abc": (p.oct_a, p.oct_b, p.oct_c),
         "u_phys_poisson": p.oct_poisson,
+        "u_phys_order_table": len(p.order_phase) > 0,
+        "u_phys_order_phase": order_phase_vec4s(p.order_phase),
         "u_phys_first": p.oct_first,
         "u_phys_view": p.view_scale,
         "u_phys_diffuse": p.view_diffuse,

@@ -29,6 +29,9 @@
 namespace cumuli {
 
 constexpr int kMaxOctaves = 8;
+// Entries per order of PhysicalParams::order_phase, at sin(θ/2) = k/(K − 1), θ the scattering
+// angle.
+constexpr int kOrderPhaseSize = 64;
 
 struct PhysicalParams {
   float extinction_scale = 12.0f;
@@ -40,6 +43,11 @@ struct PhysicalParams {
   ApproxMie mie_params = approx_mie_params(20.0f);
   int octaves = 4;  // scattering orders drawn (1: single scattering)
   float oct_a = 0.5f, oct_b = 0.5f, oct_c = 0.5f;
+  // The angular distribution of orders i ≥ 1, tabulated: row i − 1 holds order i's phase at
+  // sin(θ/2) = k/(kOrderPhaseSize − 1), read with linear interpolation in sin(θ/2) (the table:
+  // cumuli.light.phase.order_phase_table, the phase convolved with itself i times). Empty:
+  // phase(bⁱ·g) (Wrenninge et al. 2013's octaves). Order 0 is always the phase itself.
+  std::vector<float> order_phase;
   float oct_poisson = 0.0f;  // β of the Poisson weights, in [0, 16] (0: plain octaves)
   // Order 0's depth scale: 1 − f·ϖ with f the phase's forward-peak share (the δ-M sun), 1: e^{−τ}.
   float oct_first = 1.0f;
@@ -55,9 +63,11 @@ struct PhysicalParams {
   void validate() const;  // throws std::invalid_argument
   // The phase function with its g's scaled by `scale`.
   float phase(float cos_theta, float scale) const;
+  // Order i's phase (i ≥ 1) at cos θ: order_phase's row i − 1, or phase(bⁱ·g) without a table.
+  float order_phase_at(int order, float cos_theta, float b_power) const;
 };
 
-// The per-ray constants: weight aⁱ·phase(bⁱg, cosθ) and depth scale cⁱ of every order.
+// The per-ray constants: weight aⁱ·pᵢ(cosθ) (order_phase_at) and depth scale cⁱ of every order.
 struct OctaveTerms {
   int n = 1;
   float weight[kMaxOctaves] = {};
