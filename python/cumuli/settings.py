@@ -137,7 +137,9 @@ class RenderSettings:
         ``False`` gives the raw jittered image. The paper mode has none.
     physical_resolution:
         Longest edge of the physical mode's light grids (optical depth towards the sun, sky
-        visibility, multiple scattering); the other edges follow the cloud's box.
+        visibility, multiple scattering); the other edges follow the cloud's box. The gains
+        fitted at the default (``cumuli.light.gains``) keep their cell at any value: a finer
+        light sharpens the light's detail, it does not change the picture's exposure.
     multiple_scattering, sky_light:
         Switch the multiple-scattering approximation and the sky light off (to study each
         approximation alone).

@@ -30,7 +30,8 @@ maths):
   sees the first mean free path of a cell that spans several, where the diffuse light is larger
   than the cell's mean, and the whole of a cell thinner than one: the fluence is read with a
   gain that rises with the cell's optical thickness ``τc`` from 1 to :data:`SUN_GAIN`,
-  ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`),
+  ``1 + (G − 1)(1 − e^{−τc/τg})`` with ``τg`` = :data:`GAIN_DEPTH` (:func:`lattice_gains`;
+  ``τc`` on the cell of the default resolution's lattice, :mod:`cumuli.light.gains`),
   and through its flux: ``anisotropy`` ``r = 3E/φ``, ``E = −D∇φ + SUN_FORWARD·3D·Q1`` (the P1
   flux with the source's first moment: the forward-scattered light streams on along the sun's
   way), applied per frame for the camera (:mod:`cumuli.light.view`, :data:`FLUX_LIMIT`).
@@ -69,6 +70,7 @@ from cumuli import _core, registry
 from cumuli.ground import ground_radiance_unshadowed
 from cumuli.light.digests import drawable_digest
 from cumuli.light.footprint import box_corners
+from cumuli.light.gains import gain_cell, lattice_gains  # noqa: F401 (public)
 from cumuli.light.medium import (  # noqa: F401 (public)
     cloud_extinction_scale,
     extinction_grid,
@@ -232,37 +234,6 @@ def _stage(timings: dict[str, float] | None, name: str) -> Iterator[None]:
             timings[name] = timings.get(name, 0.0) + time.perf_counter() - t0
 
 
-def lattice_gains(
-    extinction: Any, lo: Any, hi: Any, gain: float, depth: float = GAIN_DEPTH
-) -> np.ndarray:
-    """The gain ``G(τc) = 1 + (G∞ − 1)(1 − e^{−τc/τg})`` of every cell of an extinction lattice
-    ``(D, H, W)`` over the box ``lo``–``hi``: ``τc = σt·h`` the cell's optical thickness (``h``
-    the geometric mean of its edges), ``G∞ = gain``, ``τg = depth`` (0: ``gain`` everywhere).
-
-    The camera sees the first mean free path of a thick cell, where the diffuse light is larger
-    than the cell's mean fluence that the diffusion solves for; it sees the whole of a thin cell
-    (a fringe, a strand), whose mean is what it sees: no gain there. The light step takes these
-    gains in ``_core.physical_grid``; this is their numpy reference (the same values)."""
-    ext = np.asarray(extinction, np.float64)
-    if ext.ndim != 3:
-        raise ValueError(f"extinction must be a (D, H, W) lattice, got shape {ext.shape}")
-    if not (math.isfinite(gain) and gain > 0.0):
-        raise ValueError(f"gain must be finite and > 0, got {gain}")
-    if not (math.isfinite(depth) and depth >= 0.0):
-        raise ValueError(f"gain_depth must be finite and >= 0, got {depth}")
-    if depth == 0.0:
-        return np.full(ext.shape, gain, np.float32)
-    rise = -np.expm1(-np.maximum(ext, 0.0) * _cell_size(lo, hi, ext.shape) / depth)
-    return (1.0 + (gain - 1.0) * rise).astype(np.float32)
-
-
-def _cell_size(lo: Any, hi: Any, shape: tuple[int, ...]) -> float:
-    """The geometric mean of the edges of a ``(D, H, W)`` lattice's cells over the box."""
-    d, h, w = shape[:3]
-    edges = (np.asarray(hi, np.float64) - np.asarray(lo, np.float64)) / (w, h, d)
-    return float(np.prod(np.abs(edges)) ** (1.0 / 3.0))
-
-
 def physical_light(
     drawable: Any,
     scene: Any,
@@ -375,8 +346,10 @@ def physical_light(
             aniso.setflags(write=False)
     # A: G_sun·φ_sun; RGB: G_sky·(E_sky + φ_sky), the gains of lattice_gains (E_sky alone
     # without multiple scattering).
+    # The gains' cell is the lattice's at the default resolution, whatever this one is
+    # (cumuli.light.gains): a finer light does not lower them.
     grid = _core.physical_grid(
-        ext, phi, sky_e, _cell_size(lo, hi, ext.shape), depth_g, SUN_GAIN, SKY_GAIN, threads
+        ext, phi, sky_e, gain_cell(lo, hi, lattice), depth_g, SUN_GAIN, SKY_GAIN, threads
     )
     grid.setflags(write=False)
     return PhysicalLight(
