@@ -76,7 +76,7 @@ def physical_params(settings: RenderSettings, octaves: int) -> _core.PhysicalPar
     p.mie = settings.phase == "mie"
     p.droplet_diameter = float(settings.droplet_diameter)
     p.octaves = int(octaves)
-    # read at call time: the fitting script (benchmarks/fit_physical.py) varies them
+    # read at call time: the fitting script (tests/references/fit_physical.py) varies them
     p.oct_a, p.oct_b, p.oct_c = _physical.OCTAVE_A, _physical.OCTAVE_B, _physical.OCTAVE_C
     p.oct_poisson = _physical.OCTAVE_POISSON
     if _physical.OCTAVE_PHASE == "convolved":  # else the marchers compute phase(bⁿ·g)
