@@ -1084,11 +1084,15 @@ void bind_physical_light(py::module_& m) {
   m.def(
       "lattice_transmittance",
       [](const FloatArray& depth, const py::tuple& frame, V3 lo, V3 cell,
-         const std::array<int, 3>& dims, int threads, const py::object& upstream,
-         float depth_scale) {
+         const std::array<int, 3>& dims, int threads, const py::object& upstream, float depth_scale,
+         float carried, float carried_rate) {
         const SunFrame f = frame_of(frame);
         if (!(depth_scale >= 0.0f) || !std::isfinite(depth_scale))
           throw py::value_error("depth_scale must be finite and >= 0");
+        if (!(carried >= 0.0f && carried <= 1.0f))
+          throw py::value_error("carried must be in [0, 1]");
+        if (!(carried_rate > 0.0f) || !std::isfinite(carried_rate))
+          throw py::value_error("carried_rate must be finite and > 0");
         if (depth.ndim() != 3 || depth.shape(0) != f.res[2] || depth.shape(1) != f.res[1] ||
             depth.shape(2) != f.res[0])
           throw py::value_error("depth must have the frame's shape (nw, nv, nu)");
@@ -1105,16 +1109,20 @@ void bind_physical_light(py::module_& m) {
         {
           py::gil_scoped_release release;
           out = lattice_transmittance(v, f, v3(lo), v3(cell), dims.data(), threads, columns,
-                                      depth_scale);
+                                      depth_scale, CarriedSource{carried, carried_rate});
         }
         return adopt_array(std::move(out), {dims[2], dims[1], dims[0]});
       },
       py::arg("depth"), py::arg("frame"), py::arg("lo"), py::arg("cell"), py::arg("dims"),
       py::arg("threads") = 0, py::arg("upstream") = py::none(), py::arg("depth_scale") = 1.0f,
+      py::arg("carried") = 0.0f, py::arg("carried_rate") = 1.0f,
       "e^-(depth_scale*tau) of a light-frame lattice of optical depths tau (plus `upstream`, a "
       "(nv, nu) map of one depth per column, where given) at the centres of a (W, H, D) lattice "
       "(lo + (index + 1/2)*cell per axis, float32), shape (D, H, W): the sun's transmittance "
-      "on a drawable's world lattice.");
+      "on a drawable's world lattice. `carried` m > 0: the diffusion's sun source with a share m "
+      "of the collided light carried on along the light, turning diffuse at the rate "
+      "`carried_rate` a: (1 - m)*e^(-k*tau) + m*a/(a - k)*(e^(-k*tau) - e^(-a*tau)), "
+      "k = depth_scale.");
 
   m.def(
       "sky_irradiance",

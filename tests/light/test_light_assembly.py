@@ -184,8 +184,58 @@ def test_forward_peak_share_integrates_the_phase_over_the_cone() -> None:
     assert forward_peak_share(replace(mie, droplet_diameter=5.0)) < forward_peak_share(mie)
 
 
+def _carried_by_march(tau: np.ndarray, k: float, a: float, m: float, h: float = 1e-4) -> np.ndarray:
+    """The carried source marched step by step along τ: the carried light C gains the collided
+    ``e^{−kτ}`` and loses ``a·C`` to the diffusion (midpoint steps of ``h`` in τ)."""
+
+    def step(c: float, t: float, h: float) -> float:
+        mid = c + 0.5 * h * (np.exp(-k * t) - a * c)
+        return c + h * (np.exp(-k * (t + 0.5 * h)) - a * mid)
+
+    out = np.empty_like(tau)
+    c, t = 0.0, 0.0
+    for i in np.argsort(tau):
+        while t + h <= tau[i]:
+            c, t = step(c, t, h), t + h
+        end = step(c, t, tau[i] - t)  # the last part step, to τ exactly
+        out[i] = (1 - m) * np.exp(-k * tau[i]) + m * a * end
+    return out
+
+
+def test_the_carried_source_is_the_carried_light_turning_diffuse() -> None:
+    """``carried`` m: the source is ``(1 − m)e^{−kτ} + m·a·C(τ)``, C the collided light carried on
+    along the light (dC/dτ = e^{−kτ} − a·C), whose closed form holds for a above, below and at
+    k; all of what collides diffuses in the end (∫ a·C dτ = ∫ e^{−kτ} dτ)."""
+    dims = (9, 8, 7)
+    frame, depth, lo32, cell = _cloud_lattices(dims)
+    flat = _core.sample_frame(depth, frame, _centres(lo32, cell, dims), 1).astype(np.float64)
+    tau = flat.reshape(dims[::-1])
+    assert tau.max() > 2.0
+    for k, a, m in ((0.55, 0.2, 0.3), (0.55, 1.7, 1.0), (0.55, 0.55, 0.5), (1.0, 0.1, 1.0)):
+        got = _core.lattice_transmittance(
+            depth, frame, lo32, cell, dims, 2, depth_scale=k, carried=m, carried_rate=a
+        )
+        want = _carried_by_march(flat, k, a, m).reshape(tau.shape)
+        np.testing.assert_allclose(got, want, rtol=2e-4, atol=1e-7)
+    # Along a long column the diffused total equals the collided total, 1/k.
+    column = np.linspace(0.0, 80.0, 801)
+    for a in (0.2, 0.55, 3.0):
+        source = _carried_by_march(column, 0.55, a, 1.0, h=2e-3)
+        total = np.sum(0.5 * (source[1:] + source[:-1]) * np.diff(column))
+        assert total == pytest.approx(1 / 0.55, rel=2e-3)
+    for bad in (-0.1, 1.5, float("nan")):
+        with pytest.raises(ValueError, match="carried"):
+            _core.lattice_transmittance(depth, frame, lo32, cell, dims, carried=bad)
+    for bad in (0.0, -1.0, float("inf")):
+        with pytest.raises(ValueError, match="carried_rate"):
+            _core.lattice_transmittance(depth, frame, lo32, cell, dims, carried=0.5,
+                                        carried_rate=bad)  # fmt: skip
+
+
 def test_the_diffusion_takes_the_sun_with_its_forward_peak_unscattered(monkeypatch) -> None:
-    """The diffusion's sun source is fed ``(1 − f)·e^{−(1 − f·ϖ)τ}`` at the lattice's centres."""
+    """The diffusion's sun source is fed ``(1 − f)`` of the collided light at the lattice's
+    centres: ``e^{−kτ}`` (k = 1 − f·ϖ) where it collides, a share :data:`SUN_CARRIED` of it
+    carried on along the light (``a/(a − k)·(e^{−kτ} − e^{−aτ})``, a = :func:`carried_rate`)."""
     from cumuli.light import physical as phys
 
     scene = cumulus_scene(settings=cu.RenderSettings(physical_resolution=12))
@@ -207,6 +257,9 @@ def test_the_diffusion_takes_the_sun_with_its_forward_peak_unscattered(monkeypat
     lo32 = tuple(float(F32(lo[a])) for a in range(3))
     cell = tuple(float(F32((hi[a] - lo[a]) / (wd, h, d)[a])) for a in range(3))
     tau = _core.sample_frame(light.sun_depth, light.frame, _centres(lo32, cell, (wd, h, d)), 1)
-    want = (1 - f) * np.exp(-(1 - f * w) * tau.astype(np.float64)).reshape(d, h, wd)
-    assert f > 0.4 and tau.max() > 5.0
+    k, a, m = 1 - f * w, phys.carried_rate(scene.settings), phys.SUN_CARRIED
+    tau = tau.astype(np.float64)
+    carried = a / (a - k) * (np.exp(-k * tau) - np.exp(-a * tau))
+    want = (1 - f) * ((1 - m) * np.exp(-k * tau) + m * carried).reshape(d, h, wd)
+    assert f > 0.4 and tau.max() > 5.0 and 0 < m < 1 and abs(a - k) > 0.05
     np.testing.assert_allclose(seen["sun_t"], want, rtol=1e-4, atol=1e-12)

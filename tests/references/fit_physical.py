@@ -2,9 +2,9 @@
 
 The constants of ``cumuli.light.physical`` (the Poisson-weighted octaves ``OCTAVE_B``,
 ``OCTAVE_C``, ``OCTAVE_POISSON``, ``OCTAVE_A`` and the lattice gains ``SUN_GAIN``, ``SKY_GAIN``,
-``GAIN_DEPTH``, the forward-scattered source's ``SUN_FORWARD`` and the view's ``FLUX_LIMIT``;
-``OCTAVES`` held) are fitted on the views of
-``cumuli.light.physical.FIT_VIEWS`` alone, by a Nelder–Mead search from today's values, on the
+``GAIN_DEPTH``, the forward-scattered source's ``SUN_FORWARD``, the carried source's
+``SUN_CARRIED`` and ``CARRIED_RATE`` and the view's ``FLUX_LIMIT``; ``OCTAVES`` held) are fitted
+on the views of ``cumuli.light.physical.FIT_VIEWS`` alone, by a Nelder–Mead search from today's values, on the
 CPU twin; the loss is the sum over those views of each error over its goal, squared (cloud mean
 5 %, block median 10 %, p90 25 %). The other views (``HELD_OUT_VIEWS``) are only reported: they
 test the fit. Run::
@@ -44,6 +44,8 @@ FITTED = (
     "SUN_FORWARD",
     "FLUX_LIMIT",
     "OCTAVE_A",
+    "SUN_CARRIED",
+    "CARRIED_RATE",
 )
 #: Each constant's range (the search is clamped to it).
 RANGES = {
@@ -56,6 +58,8 @@ RANGES = {
     "SUN_FORWARD": (0.0, 1.5),
     "FLUX_LIMIT": (0.0, 1.5),
     "OCTAVE_A": (0.0, 1.0),
+    "SUN_CARRIED": (0.0, 1.0),
+    "CARRIED_RATE": (0.05, 8.0),
 }
 
 

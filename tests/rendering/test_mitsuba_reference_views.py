@@ -37,9 +37,9 @@ GOAL = {"mean_ratio": 0.05, "block_median": 0.10, "block_p90": 0.25, "transmitta
 
 #: Looser bounds where a view misses the goal: the worst of GL and CPU as measured plus a margin
 #: of about one point (0.003 for ΔT), keyed by (view, metric); every other pair is held to GOAL.
-#: None today: with the constants fitted on the side-lit, back-lit, metaball and top-lit views
-#: (``cumuli.light.physical.FIT_VIEWS``) every view meets the goal on GL (llvmpipe, LLVM 15.0.6)
-#: and the CPU twin alike — the held-out sunset and L-system views as well (docs/fidelity.md).
+#: None today: with the constants fitted on the side-lit, back-lit, metaball, top-lit and L-system
+#: views (``cumuli.light.physical.FIT_VIEWS``) every view meets the goal on GL (llvmpipe, LLVM
+#: 15.0.6) and the CPU twin alike — the held-out sunset view as well (docs/fidelity.md).
 GUARDS: dict[tuple[str, str], float] = {}
 
 

@@ -334,9 +334,20 @@ float sample_frame(const float* values, const SunFrame& f, glm::vec3 p, const fl
   return value + (b0 + fy * (b1 - b0));
 }
 
+double carried_factor(double tau, double k, const CarriedSource& carried) {
+  const double direct = std::exp(-k * tau);
+  const double m = carried.share, a = carried.rate;
+  if (m <= 0.0) return direct;
+  // a/(a − k)·(e^{−kτ} − e^{−aτ}) = a·e^{−kτ}·(1 − e^{−(a−k)τ})/(a − k), → a·τ·e^{−kτ} as a → k.
+  const double x = (a - k) * tau;
+  const double spread = std::abs(x) < 1e-8 ? tau : -std::expm1(-x) / (a - k);
+  return (1.0 - m) * direct + m * a * direct * spread;
+}
+
 std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
                                          glm::vec3 cell, const int dims[3], int threads,
-                                         const float* columns, float depth_scale) {
+                                         const float* columns, float depth_scale,
+                                         const CarriedSource& carried) {
   f.validate();
   const std::size_t w = static_cast<std::size_t>(dims[0]), h = static_cast<std::size_t>(dims[1]),
                     d = static_cast<std::size_t>(dims[2]);
@@ -347,7 +358,9 @@ std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, 
     for (std::size_t i = 0; i < w; ++i) {
       const float x = lo.x + (static_cast<float>(i) + 0.5f) * cell.x;
       const float tau = sample_frame(depth, f, glm::vec3(x, y, z), columns);
-      out[row * w + i] = std::exp(-(depth_scale * tau));  // 1·τ is τ exactly
+      out[row * w + i] = carried.share > 0.0f
+                             ? static_cast<float>(carried_factor(tau, depth_scale, carried))
+                             : std::exp(-(depth_scale * tau));  // 1·τ is τ exactly
     }
   });
   return out;

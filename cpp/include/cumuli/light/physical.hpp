@@ -60,14 +60,30 @@ SunFrame make_sun_frame(const Box& world_box, glm::vec3 to_sun, const int res[3]
 float sample_frame(const float* values, const SunFrame& f, glm::vec3 p,
                    const float* columns = nullptr);
 
+// The collided sun light carried on along the light before it diffuses: a share `share` of
+// what collides travels on along the sun's way and turns diffuse at the rate `rate`·σ (in
+// optical depth). The diffusion's sun source then follows, per unit of the collided light,
+// (1 − share)·e^{−kτ} + share·a/(a − k)·(e^{−kτ} − e^{−aτ}) (a = rate, k the depth scale):
+// the solution of dC/dτ = e^{−kτ} − a·C, read as a·C. share 0: the light diffuses where it
+// collides.
+struct CarriedSource {
+  float share = 0.0f;
+  float rate = 1.0f;
+};
+
+// The carried source's factor at optical depth τ with depth scale k (see CarriedSource).
+double carried_factor(double tau, double k, const CarriedSource& carried);
+
 // e^{−τ} of a frame's optical depths `depth` at the centres of a dims[0] × dims[1] × dims[2]
 // (x, y, z) lattice, [z][y][x]: centre (i, j, k) at lo + (index + ½)·cell per axis, in float32
 // as written (the sun's transmittance on a drawable's world lattice); `columns`, when given, the
 // per-column depths sample_frame adds; `depth_scale` k: e^{−k·τ} (the δ-M similarity relation's
-// transmittance, with the phase's forward peak taken as unscattered).
+// transmittance, with the phase's forward peak taken as unscattered); `carried`, when its share
+// is > 0: carried_factor instead of e^{−kτ} (the diffusion's sun source).
 std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
                                          glm::vec3 cell, const int dims[3], int threads,
-                                         const float* columns = nullptr, float depth_scale = 1.0f);
+                                         const float* columns = nullptr, float depth_scale = 1.0f,
+                                         const CarriedSource& carried = {});
 
 // What extinction a ray meets.
 struct CloudMedium {
