@@ -5,9 +5,9 @@ The constants of ``cumuli.light.physical`` (the Poisson-weighted octaves ``OCTAV
 ``GAIN_DEPTH``, the forward-scattered source's ``SUN_FORWARD``, the carried source's
 ``SUN_CARRIED`` and ``CARRIED_RATE`` and the view's ``FLUX_LIMIT``; ``OCTAVES`` held) are fitted
 on the views of ``cumuli.light.physical.FIT_VIEWS`` alone, by a Nelder–Mead search from today's
-values, on the CPU twin; the loss is the sum over those views of each error over its goal, squared (cloud mean
-5 %, block median 10 %, p90 25 %). The other views (``HELD_OUT_VIEWS``) are only reported: they
-test the fit. Run::
+values, on the CPU twin; the loss is the sum over those views of each error over its goal,
+squared (cloud mean 5 %, block median 10 %, p90 25 %). The other views (``HELD_OUT_VIEWS``) are
+only reported: they test the fit. Run::
 
     python tests/references/fit_physical.py [--iterations 120]
 
