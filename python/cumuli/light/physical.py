@@ -373,7 +373,8 @@ def physical_light(
 
 def carried_rate(settings: Any) -> float:
     """``a``: the rate, per unit of optical depth, at which the carried collided sun light turns
-    diffuse, :data:`CARRIED_RATE` times the reduced extinction's share ``1 − ϖḡ``."""
+    diffuse, :data:`CARRIED_RATE` times the reduced extinction's share ``1 − ϖḡ`` (kept above 0:
+    at ``ϖ = ḡ = 1`` nothing would ever diffuse, and the core takes only a positive rate)."""
     return max(CARRIED_RATE * (1.0 - settings.albedo * settings.mean_cosine), 1e-6)
 
 
