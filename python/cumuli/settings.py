@@ -175,7 +175,7 @@ class RenderSettings:
         (``0.2``: ÷ 2 fBm evaluations at a mean |Δ| ≤ 1.3e-3 on the benchmark scenes) trade a
         bounded error (at most ``min_transmittance`` times the radiance behind) for fewer fBm
         evaluations (``benchmarks/bench_render_cpu.py`` measures both). The physical mode keeps
-        its own exit (``T < 1e-4``).
+        its own exit (``T < 1e-3``, opaque beyond).
     """
 
     kappa: float | None = None

@@ -302,7 +302,9 @@ void main() {
                     colour += T_view * ((1.0 - av) / u_phys_view) * S;
                     T *= at;
                     T_view *= av;
-                    if (T_view < u_phys_min_t) { done = true; break; }
+                    // Stopped: opaque (no light from behind leaks through the rest: a sun
+                    // disc or its aureole behind the cloud is brighter than the cloud itself).
+                    if (T_view < u_phys_min_t) { T = 0.0; T_view = 0.0; done = true; break; }
                 }
                 t += step;
             }

@@ -155,6 +155,8 @@ void main() {
       T *= dtau;
       T_view *= dview;
     }
+    // Stopped: opaque, as the 2018 marcher's (no light from behind leaks through the rest).
+    if (T_view < u_phys_min_t) { T = 0.0; T_view = 0.0; }
 #else
     float phase = hg_phase(u_g, dot(d, u_sun_dir));
     for (int k = 0; k < n && T >= MIN_TRANSMITTANCE; ++k) {

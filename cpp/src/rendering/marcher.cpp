@@ -337,6 +337,9 @@ class RayMarcher {
         st.T *= a;
         st.T_view *= a_view;
         if (st.T_view < ph.min_transmittance) {
+          // Stopped: opaque. What lies behind would add at most T_view of its radiance, but a
+          // sun disc or its aureole behind the cloud is far brighter than the cloud itself.
+          st.T = st.T_view = 0.0f;
           st.steps = b.steps[i];
           scratch.skipped = b.skipped[i];
           b.size = 0;

@@ -126,6 +126,8 @@ std::vector<float> render_volume_cpu(const float* density, const float* light, c
           T *= dtau;
           T_view *= dview;
         }
+        // Stopped: opaque, as the 2018 marcher's (no light from behind leaks through the rest).
+        if (T_view < p.phys.min_transmittance) T = T_view = 0.0f;
       }
       const float phase = henyey_greenstein(p.g, glm::dot(d, p.sun.direction));
       for (int k = 0; k < n && T >= kVolumeMinTransmittance && !p.physical; ++k) {

@@ -58,7 +58,7 @@ struct PhysicalParams {
   // scatters the diffuse light on along the ray, not towards the camera anew), 1: all of it.
   float view_diffuse = 1.0f;
   int jitter_seed = 0;
-  float min_transmittance = 1e-4f;  // the ray stops below it
+  float min_transmittance = 1e-3f;  // the ray stops below it
 
   void validate() const;  // throws std::invalid_argument
   // The phase function with its g's scaled by `scale`.
