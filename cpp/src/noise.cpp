@@ -238,7 +238,6 @@ struct Lattice {
   int p;               // size + 1
   int mask;            // size − 1 (power-of-two sizes only reach the kernels)
   std::uint32_t key;   // Noise::key() (the hash kernels)
-  int shift;           // log2(size): texel index (z·size + y)·size + x = z << 2·shift | ...
   float bias;          // Noise::bias_, taken off each blend
 };
 
@@ -521,12 +520,22 @@ struct HashAvx2 {
 };
 
 // One octave of 8 points whose cell corners are hashed, not read: kernel_scalar's arithmetic on
-// the same biased corner values (texel (x, y, z) is index z << 2s | y << s | x, s = log2 size).
+// the same biased corner values (texel (x, y, z) is index (z·size + y)·size + x). Its product
+// (i + key)·m1 is z·(size²·m1) + y·(size·m1) + x·m1 + key·m1 (mod 2³²): one product per axis, the
+// upper neighbour's the lower one's plus the axis constant, or 0 where size − 1 wraps to 0.
 struct HashOctaveAvx2 {
   __m256 half;
-  __m256i mask, one_i, key;
-  __m128i shift, shift2;
+  __m256i mask, key_m1;
+  __m256i y_m1, z_m1;  // size·m1, size²·m1 (mod 2³²)
   HashAvx2 hash;
+  // The upper neighbour's share from the lower one's (`lower` of texel j, `wrapped` its value
+  // where j = size − 1).
+  __attribute__((target("avx2"), always_inline)) __m256i upper(__m256i j, __m256i lower,
+                                                               __m256i step,
+                                                               __m256i wrapped) const {
+    const __m256i last = _mm256_cmpeq_epi32(j, mask);
+    return _mm256_blendv_epi8(_mm256_add_epi32(lower, step), wrapped, last);
+  }
   __attribute__((target("avx2"), always_inline)) __m256 operator()(__m256 px, __m256 py, __m256 pz,
                                                                    __m256 sc) const {
     const __m256 x = _mm256_sub_ps(_mm256_mul_ps(px, sc), half);
@@ -534,26 +543,23 @@ struct HashOctaveAvx2 {
     const __m256 z = _mm256_sub_ps(_mm256_mul_ps(pz, sc), half);
     const __m256 fx = _mm256_floor_ps(x), fy = _mm256_floor_ps(y), fz = _mm256_floor_ps(z);
     const __m256 wx = _mm256_sub_ps(x, fx), wy = _mm256_sub_ps(y, fy), wz = _mm256_sub_ps(z, fz);
-    const __m256i jx = _mm256_cvttps_epi32(fx), jy = _mm256_cvttps_epi32(fy);
-    const __m256i jz = _mm256_cvttps_epi32(fz);
-    const __m256i x0 = _mm256_and_si256(jx, mask);
-    const __m256i x1 = _mm256_and_si256(_mm256_add_epi32(jx, one_i), mask);
-    const __m256i y0 = _mm256_sll_epi32(_mm256_and_si256(jy, mask), shift);
-    const __m256i y1 = _mm256_sll_epi32(_mm256_and_si256(_mm256_add_epi32(jy, one_i), mask), shift);
-    const __m256i z0 = _mm256_add_epi32(_mm256_sll_epi32(_mm256_and_si256(jz, mask), shift2), key);
-    const __m256i z1 = _mm256_add_epi32(
-        _mm256_sll_epi32(_mm256_and_si256(_mm256_add_epi32(jz, one_i), mask), shift2), key);
-    // Row index + key (the bit fields of z, y and x do not overlap: | is +).
-    const __m256i row[4] = {_mm256_add_epi32(z0, y0), _mm256_add_epi32(z0, y1),
-                            _mm256_add_epi32(z1, y0), _mm256_add_epi32(z1, y1)};
-    // (i + key)·m1 = (row + key)·m1 + x·m1 (mod 2³²): four row products and two x products, not
-    // eight.
-    const __m256i xm0 = _mm256_mullo_epi32(x0, hash.m1), xm1 = _mm256_mullo_epi32(x1, hash.m1);
+    const __m256i x0 = _mm256_and_si256(_mm256_cvttps_epi32(fx), mask);
+    const __m256i y0 = _mm256_and_si256(_mm256_cvttps_epi32(fy), mask);
+    const __m256i z0 = _mm256_and_si256(_mm256_cvttps_epi32(fz), mask);
+    const __m256i zero = _mm256_setzero_si256();
+    // Each axis's share of (i + key)·m1, lower and upper neighbour; the key rides on x's.
+    const __m256i xm0 = _mm256_add_epi32(_mm256_mullo_epi32(x0, hash.m1), key_m1);
+    const __m256i xm1 = upper(x0, xm0, hash.m1, key_m1);
+    const __m256i ym0 = _mm256_mullo_epi32(y0, y_m1);
+    const __m256i ym1 = upper(y0, ym0, y_m1, zero);
+    const __m256i zm0 = _mm256_mullo_epi32(z0, z_m1);
+    const __m256i zm1 = upper(z0, zm0, z_m1, zero);
+    const __m256i rm[4] = {_mm256_add_epi32(zm0, ym0), _mm256_add_epi32(zm0, ym1),
+                           _mm256_add_epi32(zm1, ym0), _mm256_add_epi32(zm1, ym1)};
     __m256 c[4];
     for (int r = 0; r < 4; ++r) {
-      const __m256i rm = _mm256_mullo_epi32(row[r], hash.m1);
-      const __m256 k0 = hash(_mm256_add_epi32(rm, xm0));
-      const __m256 k1 = hash(_mm256_add_epi32(rm, xm1));
+      const __m256 k0 = hash(_mm256_add_epi32(rm[r], xm0));
+      const __m256 k1 = hash(_mm256_add_epi32(rm[r], xm1));
       c[r] = _mm256_add_ps(k0, _mm256_mul_ps(wx, _mm256_sub_ps(k1, k0)));
     }
     const __m256 c0 = _mm256_add_ps(c[0], _mm256_mul_ps(wy, _mm256_sub_ps(c[1], c[0])));
@@ -565,13 +571,14 @@ struct HashOctaveAvx2 {
 __attribute__((target("avx2"))) void kernel_hash_avx2(const Lattice& lat, const FbmTables& t,
                                                       const float* points, std::size_t count,
                                                       float* out) {
+  const std::uint32_t size = static_cast<std::uint32_t>(lat.mask) + 1u;
   const HashOctaveAvx2 octave{_mm256_set1_ps(0.5f),
                               _mm256_set1_epi32(lat.mask),
-                              _mm256_set1_epi32(1),
-                              _mm256_set1_epi32(static_cast<int>(lat.key)),
-                              _mm_cvtsi32_si128(lat.shift),
-                              _mm_cvtsi32_si128(2 * lat.shift),
-                              {_mm256_set1_epi32(0x21f0aaad), _mm256_set1_epi32(0x735a2d97),
+                              _mm256_set1_epi32(static_cast<int>(lat.key * Noise::kHashM1)),
+                              _mm256_set1_epi32(static_cast<int>(size * Noise::kHashM1)),
+                              _mm256_set1_epi32(static_cast<int>(size * size * Noise::kHashM1)),
+                              {_mm256_set1_epi32(static_cast<int>(Noise::kHashM1)),
+                               _mm256_set1_epi32(static_cast<int>(Noise::kHashM2)),
                                _mm256_set1_epi32(0x3f800000), _mm256_set1_ps(1.0f)}};
   blocks_avx2(octave, t, points, count, out);
 }
@@ -819,13 +826,14 @@ struct HashAvx512 {
   }
 };
 
-// HashOctaveAvx2 for 16 points, with octave_avx512's round-down conversion for the floor.
+// HashOctaveAvx2 for 16 points (the same product per axis), with octave_avx512's round-down
+// conversion for the floor. VREDUCEPS, one instruction for x − floor(x), is no substitute: where
+// that difference is not exact (small negative x) it rounds otherwise than the scalar path.
 template <bool Shrd>
 struct HashOctaveAvx512 {
   __m512 half;
-  __m512i mask, key;
-  __m512i y_step, y_mask, z_step, z_mask;  // 1 << s, mask << s; 1 << 2s, mask << 2s
-  __m128i shift, shift2;
+  __m512i mask, key_m1;
+  __m512i y_m1, z_m1;  // size·m1, size²·m1 (mod 2³²)
   HashAvx512<Shrd> hash;
   __attribute__((target("avx512f,avx512bw"), always_inline)) __m512 operator()(__m512 px, __m512 py,
                                                                                __m512 pz,
@@ -840,25 +848,23 @@ struct HashOctaveAvx512 {
     const __m512 wx = _mm512_sub_ps(x, _mm512_cvtepi32_ps(jx));
     const __m512 wy = _mm512_sub_ps(y, _mm512_cvtepi32_ps(jy));
     const __m512 wz = _mm512_sub_ps(z, _mm512_cvtepi32_ps(jz));
-    // The upper neighbours wrap within their bit fields: y1 = (y0 + 1) mod size, shifted, etc.
     const __m512i x0 = _mm512_and_si512(jx, mask);
-    const __m512i y0 = _mm512_sll_epi32(_mm512_and_si512(jy, mask), shift);
-    const __m512i y1 = _mm512_and_si512(_mm512_add_epi32(y0, y_step), y_mask);
-    const __m512i z0s = _mm512_sll_epi32(_mm512_and_si512(jz, mask), shift2);
-    const __m512i z1s = _mm512_and_si512(_mm512_add_epi32(z0s, z_step), z_mask);
-    const __m512i z0 = _mm512_add_epi32(z0s, key), z1 = _mm512_add_epi32(z1s, key);
-    // Row index + key (the bit fields of z, y and x do not overlap: | is +).
-    const __m512i row[4] = {_mm512_add_epi32(z0, y0), _mm512_add_epi32(z0, y1),
-                            _mm512_add_epi32(z1, y0), _mm512_add_epi32(z1, y1)};
-    // (i + key)·m1 = (row + key)·m1 + x·m1 (mod 2³²): four row products and one x product, not
-    // eight; x1·m1 = x0·m1 + m1, or 0 where x0 = size − 1 wraps to x1 = 0.
-    const __m512i xm0 = _mm512_mullo_epi32(x0, hash.m1);
-    const __m512i xm1 = _mm512_maskz_add_epi32(_mm512_cmpneq_epi32_mask(x0, mask), xm0, hash.m1);
+    const __m512i y0 = _mm512_and_si512(jy, mask);
+    const __m512i z0 = _mm512_and_si512(jz, mask);
+    // Each axis's share of (i + key)·m1, lower and upper neighbour; the key rides on x's.
+    const __m512i xm0 = _mm512_add_epi32(_mm512_mullo_epi32(x0, hash.m1), key_m1);
+    const __m512i xm1 =
+        _mm512_mask_add_epi32(key_m1, _mm512_cmpneq_epi32_mask(x0, mask), xm0, hash.m1);
+    const __m512i ym0 = _mm512_mullo_epi32(y0, y_m1);
+    const __m512i ym1 = _mm512_maskz_add_epi32(_mm512_cmpneq_epi32_mask(y0, mask), ym0, y_m1);
+    const __m512i zm0 = _mm512_mullo_epi32(z0, z_m1);
+    const __m512i zm1 = _mm512_maskz_add_epi32(_mm512_cmpneq_epi32_mask(z0, mask), zm0, z_m1);
+    const __m512i rm[4] = {_mm512_add_epi32(zm0, ym0), _mm512_add_epi32(zm0, ym1),
+                           _mm512_add_epi32(zm1, ym0), _mm512_add_epi32(zm1, ym1)};
     __m512 c[4];
     for (int r = 0; r < 4; ++r) {
-      const __m512i rm = _mm512_mullo_epi32(row[r], hash.m1);
-      const __m512 k0 = hash(_mm512_add_epi32(rm, xm0));
-      const __m512 k1 = hash(_mm512_add_epi32(rm, xm1));
+      const __m512 k0 = hash(_mm512_add_epi32(rm[r], xm0));
+      const __m512 k1 = hash(_mm512_add_epi32(rm[r], xm1));
       c[r] = _mm512_add_ps(k0, _mm512_mul_ps(wx, _mm512_sub_ps(k1, k0)));
     }
     const __m512 c0 = _mm512_add_ps(c[0], _mm512_mul_ps(wy, _mm512_sub_ps(c[1], c[0])));
@@ -872,17 +878,16 @@ __attribute__((target("avx512f,avx512bw"))) void kernel_hash_avx512(const Lattic
                                                                     const FbmTables& t,
                                                                     const float* points,
                                                                     std::size_t count, float* out) {
+  constexpr std::uint32_t kM1 = Noise::kHashM1;
+  const std::uint32_t size = static_cast<std::uint32_t>(lat.mask) + 1u;
   const HashOctaveAvx512<Shrd> octave{
       _mm512_set1_ps(0.5f),
       _mm512_set1_epi32(lat.mask),
-      _mm512_set1_epi32(static_cast<int>(lat.key)),
-      _mm512_set1_epi32(1 << lat.shift),
-      _mm512_set1_epi32(lat.mask << lat.shift),
-      _mm512_set1_epi32(1 << (2 * lat.shift)),
-      _mm512_set1_epi32(lat.mask << (2 * lat.shift)),
-      _mm_cvtsi32_si128(lat.shift),
-      _mm_cvtsi32_si128(2 * lat.shift),
-      {_mm512_set1_epi32(0x21f0aaad), _mm512_set1_epi32(0x735a2d97), _mm512_set1_epi32(0x3f800000),
+      _mm512_set1_epi32(static_cast<int>(lat.key * kM1)),
+      _mm512_set1_epi32(static_cast<int>(size * kM1)),
+      _mm512_set1_epi32(static_cast<int>(size * size * kM1)),
+      {_mm512_set1_epi32(static_cast<int>(kM1)),
+       _mm512_set1_epi32(static_cast<int>(Noise::kHashM2)), _mm512_set1_epi32(0x3f800000),
        _mm512_set1_ps(1.0f), _mm512_set1_epi32(0x7f)}};
   blocks_avx512(octave, t, points, count, out);
 }
@@ -964,9 +969,7 @@ void Noise::fbm_many(const float* points, std::size_t count, float* out, const F
   const FbmTables tables = make_tables(params);
   const Kernel kernel =
       kernel_for(simd_level(), simd_fetch(), size_, !cells_.empty(), version_ == kVersionHash);
-  int shift = 0;
-  while ((1 << shift) < size_) ++shift;
-  const Lattice lat{padded_.data(), cells_.data(), size_ + 1, mask_, key_, shift, bias_};
+  const Lattice lat{padded_.data(), cells_.data(), size_ + 1, mask_, key_, bias_};
   const MaxAbsBits scan_block = max_abs_bits_for(simd_level());
   // Threads take whole blocks: the loop hands out up to 32 chunks per thread, which on a short
   // call (a light ray's 64 queued samples) would otherwise be a kernel call per two points.

@@ -45,12 +45,13 @@ class Noise {
   // [1, 2) (the lattice value is that minus 1). Version 2 blends these biased values and takes
   // the 1 off the blend, one subtraction per lookup instead of eight.
   static std::uint32_t hash_key(std::uint64_t seed);
+  static constexpr std::uint32_t kHashM1 = 0x21f0aaadu, kHashM2 = 0x735a2d97u;
   static float hash_biased(std::uint32_t key, std::uint32_t index) {
     // (index + key)·m1, the high half folded down, times m2: the top bits depend on every input
     // bit. Written as (index·m1 + key·m1) the first product splits into a part per axis.
-    std::uint32_t h = (index + key) * 0x21f0aaadu;
+    std::uint32_t h = (index + key) * kHashM1;
     h ^= h >> 16;
-    h *= 0x735a2d97u;
+    h *= kHashM2;
     // The top 23 bits as the mantissa of a float in [1, 2).
     const std::uint32_t bits = (h >> 9) | 0x3f800000u;
     float v;
