@@ -278,7 +278,10 @@ void bind_render_params(py::module_& m) {
           "(the marchers' per-sample octave term).")
       .def_readwrite("jitter_seed", &PhysicalParams::jitter_seed)
       .def_readwrite("min_transmittance", &PhysicalParams::min_transmittance)
+      .def_readwrite("coarsen_below", &PhysicalParams::coarsen_below)
       .def("validate", &PhysicalParams::validate);
+  m.attr("COARSEN_EVERY") = kCoarsenEvery;
+  m.attr("MAX_COARSEN") = kMaxCoarsen;
 
   py::class_<MarchSettings> ms(m, "MarchSettings",
                                "The 2018 marcher's settings (RENDER_CONTRACT), filled from "

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ATLAS_MAX_SIZE', 'ATLAS_MAX_SPRITES', 'ATLAS_MIN_SIZE', 'CameraParams', 'CloudShape', 'DECK_DETAIL_CONTRAST', 'DECK_MAX_LATTICE_EDGE', 'DECK_MAX_MAP_EDGE', 'DECK_MAX_VOXELS', 'DeckShape', 'EndlessWalk', 'EvolutionParams', 'FbmParams', 'GaussianCumulusParams', 'LIGHT_MAX_RESOLUTION', 'LIGHT_MAX_STEPS_PER_RAY', 'LSYSTEM_MAX_LENGTH', 'MarchSettings', 'Noise', 'ORDER_PHASE_SIZE', 'PARTICLES_MAX', 'ParticleSpriteSettings', 'PhysicalParams', 'SEEDBOX_MAX_BILLBOARDS', 'SEEDBOX_MAX_BOXES', 'SEEDBOX_MAX_SEEDS', 'ShadeParams', 'SkyParams', 'SpriteRasterSettings', 'SunParams', 'TurtleParams', 'Viewport', 'VolumeCamera', 'VolumeRenderParams', 'WEATHER_MAX_INSTANCES', 'WeatherSim', 'add_multiple_scattering', 'approx_mie_mean_cosine', 'approx_mie_params', 'approx_mie_phase', 'atlas_grid', 'billboard_corners', 'billboard_shade', 'billboard_sprites', 'billboard_vertex_colours', 'blend_volumes', 'caf_path_lengths', 'caf_values', 'camera_candidates', 'cloud_density', 'composite_layers', 'composite_split', 'coverage_edges', 'crossfade_weight', 'deck_density', 'deck_lattice', 'density_grid', 'diffusion_anisotropy', 'diffusion_light', 'display_impostors', 'draw_solids', 'ellipsoids_from_mesh', 'evolving_cloud_box', 'evolving_cloud_volumes', 'field_path_lengths', 'finish_physical', 'fit_shexp', 'gaussian_cumulus', 'impostor_backwards', 'impostor_focal_length_px', 'impostor_half_diagonal_fov', 'impostor_near_corner_radius', 'impostor_rects', 'impostor_required_resolution', 'impostor_resolution', 'impostor_resolution_skyworks', 'impostor_translation_error', 'lattice_transmittance', 'light_frame', 'light_grid', 'light_space_depth', 'light_volume', 'lsystem_expand', 'lsystem_interpret', 'lsystem_length', 'medium_optical_depth', 'needs_screen_impostor', 'occupancy_grid', 'particle_fill', 'particle_light', 'particle_light_splats', 'particle_shadow', 'particle_sphere', 'particle_sprites', 'particles_from_volume', 'particles_to_volume', 'phase_4pi', 'physical_grid', 'point_optical_depth', 'project_sprites', 'rasterise_sprites', 'remove_contained_spheres', 'render_cpu', 'render_volume_cpu', 'sample_frame', 'sample_volume', 'screen_impostor_size', 'seed_box_cloud', 'seed_box_worst_case', 'set_progress', 'set_simd_fetch', 'set_simd_level', 'sh_eval', 'sh_optical_depth', 'shexp_apply', 'simd_fetch', 'simd_fetch_preferred', 'simd_level', 'simd_levels', 'similarity_matrix', 'sky_irradiance', 'sky_irradiance_from', 'sky_sh', 'sky_visibility', 'sphere_outside_frustum', 'sphere_quadrature', 'splat_kernel', 'sprite_atlas', 'sun_optical_depth', 'tight_impostor_view', 'transition_matrix', 'variant_seed', 'volume_sample_points', 'yaw_cos_sin']
+__all__: list[str] = ['ATLAS_MAX_SIZE', 'ATLAS_MAX_SPRITES', 'ATLAS_MIN_SIZE', 'COARSEN_EVERY', 'CameraParams', 'CloudShape', 'DECK_DETAIL_CONTRAST', 'DECK_MAX_LATTICE_EDGE', 'DECK_MAX_MAP_EDGE', 'DECK_MAX_VOXELS', 'DeckShape', 'EndlessWalk', 'EvolutionParams', 'FbmParams', 'GaussianCumulusParams', 'LIGHT_MAX_RESOLUTION', 'LIGHT_MAX_STEPS_PER_RAY', 'LSYSTEM_MAX_LENGTH', 'MAX_COARSEN', 'MarchSettings', 'Noise', 'ORDER_PHASE_SIZE', 'PARTICLES_MAX', 'ParticleSpriteSettings', 'PhysicalParams', 'SEEDBOX_MAX_BILLBOARDS', 'SEEDBOX_MAX_BOXES', 'SEEDBOX_MAX_SEEDS', 'ShadeParams', 'SkyParams', 'SpriteRasterSettings', 'SunParams', 'TurtleParams', 'Viewport', 'VolumeCamera', 'VolumeRenderParams', 'WEATHER_MAX_INSTANCES', 'WeatherSim', 'add_multiple_scattering', 'approx_mie_mean_cosine', 'approx_mie_params', 'approx_mie_phase', 'atlas_grid', 'billboard_corners', 'billboard_shade', 'billboard_sprites', 'billboard_vertex_colours', 'blend_volumes', 'caf_path_lengths', 'caf_values', 'camera_candidates', 'cloud_density', 'composite_layers', 'composite_split', 'coverage_edges', 'crossfade_weight', 'deck_density', 'deck_lattice', 'density_grid', 'diffusion_anisotropy', 'diffusion_light', 'display_impostors', 'draw_solids', 'ellipsoids_from_mesh', 'evolving_cloud_box', 'evolving_cloud_volumes', 'field_path_lengths', 'finish_physical', 'fit_shexp', 'gaussian_cumulus', 'impostor_backwards', 'impostor_focal_length_px', 'impostor_half_diagonal_fov', 'impostor_near_corner_radius', 'impostor_rects', 'impostor_required_resolution', 'impostor_resolution', 'impostor_resolution_skyworks', 'impostor_translation_error', 'lattice_transmittance', 'light_frame', 'light_grid', 'light_space_depth', 'light_volume', 'lsystem_expand', 'lsystem_interpret', 'lsystem_length', 'medium_optical_depth', 'needs_screen_impostor', 'occupancy_grid', 'particle_fill', 'particle_light', 'particle_light_splats', 'particle_shadow', 'particle_sphere', 'particle_sprites', 'particles_from_volume', 'particles_to_volume', 'phase_4pi', 'physical_grid', 'point_optical_depth', 'project_sprites', 'rasterise_sprites', 'remove_contained_spheres', 'render_cpu', 'render_volume_cpu', 'sample_frame', 'sample_volume', 'screen_impostor_size', 'seed_box_cloud', 'seed_box_worst_case', 'set_progress', 'set_simd_fetch', 'set_simd_level', 'sh_eval', 'sh_optical_depth', 'shexp_apply', 'simd_fetch', 'simd_fetch_preferred', 'simd_level', 'simd_levels', 'similarity_matrix', 'sky_irradiance', 'sky_irradiance_from', 'sky_sh', 'sky_visibility', 'sphere_outside_frustum', 'sphere_quadrature', 'splat_kernel', 'sprite_atlas', 'sun_optical_depth', 'tight_impostor_view', 'transition_matrix', 'variant_seed', 'volume_sample_points', 'yaw_cos_sin']
 class FbmParams:
     """
     fBm of eq. (1): octaves n, gain w, lacunarity s, frequency f (lattice texels per world unit).
@@ -463,6 +463,12 @@ class PhysicalParams:
         ...
     @blend.setter
     def blend(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
+        ...
+    @property
+    def coarsen_below(self) -> float:
+        ...
+    @coarsen_below.setter
+    def coarsen_below(self, arg0: typing.SupportsFloat | typing.SupportsIndex) -> None:
         ...
     @property
     def droplet_diameter(self) -> float:
@@ -1297,6 +1303,7 @@ def yaw_cos_sin(degrees: typing.SupportsFloat | typing.SupportsIndex) -> tuple[f
 ATLAS_MAX_SIZE: int = 512
 ATLAS_MAX_SPRITES: int = 256
 ATLAS_MIN_SIZE: int = 8
+COARSEN_EVERY: int = 16
 DECK_DETAIL_CONTRAST: float = 3.0
 DECK_MAX_LATTICE_EDGE: int = 1024
 DECK_MAX_MAP_EDGE: int = 4096
@@ -1304,6 +1311,7 @@ DECK_MAX_VOXELS: int = 134217728
 LIGHT_MAX_RESOLUTION: int = 256
 LIGHT_MAX_STEPS_PER_RAY: float = 1048576.0
 LSYSTEM_MAX_LENGTH: int = 1073741824
+MAX_COARSEN: float = 8.0
 ORDER_PHASE_SIZE: int = 64
 PARTICLES_MAX: int = 4194304
 SEEDBOX_MAX_BILLBOARDS: int = 1048576

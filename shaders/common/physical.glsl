@@ -27,6 +27,19 @@ uniform float u_phys_view;        // the radiance's depth scale along the view, 
 uniform float u_phys_diffuse;     // the diffuse light's share of the view's emission, 1 − f
 uniform int u_phys_seed;          // jitter seed
 uniform float u_phys_min_t;       // the ray stops below this transmittance
+// The camera ray's step doubles for each decade its view transmittance falls below this
+// (PhysicalParams::coarsen_below; 0: never), looked at after every COARSEN_EVERY samples inside
+// the cloud, at most MAX_COARSEN times the step: the C++ marcher's batches, so both take the same
+// steps.
+uniform float u_phys_coarsen;
+#define COARSEN_EVERY 16
+#define MAX_COARSEN 8.0
+
+float phys_coarsening(float T_view) {
+    float m = 1.0;
+    for (float limit = u_phys_coarsen; m < MAX_COARSEN && T_view < limit; limit *= 0.1) m *= 2.0;
+    return m;
+}
 
 float phys_phase(float c, float scale) {
     if (u_phys_mie) return approx_mie_phase(u_phys_mie_p, c, scale);

@@ -274,6 +274,8 @@ void main() {
 #ifdef PHYSICAL
         PhysicalCloud pc = phys[order[h]];
         float offset = xi * step;
+        float dt = step;  // the step now: coarser as the ray grows opaque
+        int inside = 0;   // samples inside the cloud so far (the C++ marcher's queue)
         for (int k = 0; k < n && !done; ++k) {
             if (cand_out[k] <= t_union) continue;
             float t = max(t_union, cand_in[k]);
@@ -286,18 +288,19 @@ void main() {
                 if (u_skip_empty && empty_cell(c, p, o, dir, t_safe)) {
                     // Pass over the lattice's samples in the empty cell (each one a step).
                     t_safe = min(t_safe, t_solid);
-                    do { ++samples; t += step; }
+                    do { ++samples; t += dt; }
                     while (samples < max_steps && t < cand_out[k] && t + offset < t_safe);
                     continue;
                 }
                 ++samples;
                 int a = c.info.z == 0 ? attribute_sample(n, s, p, k) : k;
-                float rho = cloud_density(c, cand_prim[a], p).x;
+                vec2 d = cloud_density(c, cand_prim[a], p);
+                float rho = d.x;
                 if (rho > 0.0) {
                     float sigma = u_phys_extinction * rho;
-                    float at = exp(-sigma * step);
+                    float at = exp(-sigma * dt);
                     // The radiance sees σ·u_phys_view (the δ-M view); each unit of σ emits S.
-                    float av = exp(-sigma * u_phys_view * step);
+                    float av = exp(-sigma * u_phys_view * dt);
                     vec3 S = phys_source(pc, p, ow, ok, no, u_sun_radiance, u_exact);
                     colour += T_view * ((1.0 - av) / u_phys_view) * S;
                     T *= at;
@@ -306,7 +309,9 @@ void main() {
                     // disc or its aureole behind the cloud is brighter than the cloud itself).
                     if (T_view < u_phys_min_t) { T = 0.0; T_view = 0.0; done = true; break; }
                 }
-                t += step;
+                t += dt;
+                // γ > 0: inside the cloud (a sample the C++ marcher queues).
+                if (d.y > 0.0 && ++inside % COARSEN_EVERY == 0) dt = step * phys_coarsening(T_view);
             }
             t_union = t;
         }

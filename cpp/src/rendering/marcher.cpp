@@ -30,6 +30,14 @@ struct PreparedCloud {
   const CandidateFan* fan;         // the candidates of the camera's rays
 };
 
+// The physical camera ray's step multiple at view transmittance T_view: twice for each decade
+// below `below` (PhysicalParams::coarsen_below), at most kMaxCoarsen; 1 when `below` is 0.
+inline float coarsening(float below, float T_view) {
+  float m = 1.0f;
+  for (float limit = below; m < kMaxCoarsen && T_view < limit; limit *= 0.1f) m *= 2.0f;
+  return m;
+}
+
 struct BoxHit {
   float t_in, t_out;
   int cloud;
@@ -40,9 +48,10 @@ struct BoxHit {
 // The physical march's queued samples (march_physical): position, normalised distance to the
 // owning primitive, the step and skip counts after each, and their fBm.
 struct Batch {
-  static constexpr int kSize = 16;
+  static constexpr int kSize = kCoarsenEvery;
   float pts[3 * kSize];
   float q[kSize];
+  float dt[kSize];  // the step each sample stands for
   float rho[kSize];
   int steps[kSize];
   std::uint64_t skipped[kSize];
@@ -177,8 +186,8 @@ class RayMarcher {
   // before the cell's exit, before t_end and before the solid. Each counts as a step, so the
   // max_steps budget is spent as without skipping. Returns false when the sample must be taken.
   bool skip_empty(const PreparedCloud& pc, float& t, float off, float t_end, glm::vec3 origin,
-                  glm::vec3 dir, Scratch& scratch, State& st,
-                  float* occupied_until = nullptr) const {
+                  glm::vec3 dir, Scratch& scratch, State& st, float* occupied_until = nullptr,
+                  float step = 0.0f) const {
     const OccupancyGrid* occ = pc.occupancy;
     if (occ == nullptr) return false;
     int ix, iy, iz;
@@ -189,7 +198,7 @@ class RayMarcher {
       return false;
     }
     const float safe = std::min(occ->cell_exit(ix, iy, iz, origin, dir) - pc.margin, st.t_limit);
-    const float step = pc.step;
+    if (step == 0.0f) step = pc.step;
     do {
       ++st.steps;
       ++scratch.skipped;
@@ -326,10 +335,10 @@ class RayMarcher {
         if (!(d.rho > 0.0f)) continue;
         const glm::vec3 p(b.pts[3 * i], b.pts[3 * i + 1], b.pts[3 * i + 2]);
         const float sigma = ph.extinction_scale * d.rho;
-        const float a = std::exp(-sigma * step);
+        const float a = std::exp(-sigma * b.dt[i]);
         // The radiance sees σ·view_scale (the δ-M view); each unit of σ still emits S:
         // ∫₀^Δ e^{−σ'x}·σ·S dx = (1 − e^{−σ'Δ})·S/view_scale.
-        const float a_view = std::exp(-sigma * ph.view_scale * step);
+        const float a_view = std::exp(-sigma * ph.view_scale * b.dt[i]);
         if (!terms) terms.emplace(ph, st.cos_theta);
         const glm::vec3 S =
             rc.physical.source(p, *terms, scene_.sun.radiance, ph.albedo, ph.view_diffuse);
@@ -355,6 +364,7 @@ class RayMarcher {
     active.leave = INFINITY;
     int entered = 0;
     float occupied_until = -INFINITY;  // skip_empty's: the samples before it lie in occupied cells
+    float dt = step;                   // the step now: coarser as the ray grows opaque
     float t = -INFINITY;
     for (int k = 0; k < n; ++k) {
       if (cand[k].t_out <= t) continue;
@@ -368,11 +378,11 @@ class RayMarcher {
         if (!(s < st.t_limit)) return flush();  // a solid hides the rest of the ray
         // The rest of an occupied cell (up to its exit, less the margin) needs no new look.
         if (!(s < occupied_until) &&
-            skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st, &occupied_until))
+            skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st, &occupied_until, dt))
           continue;
         ++st.steps;
         const glm::vec3 p = origin + s * dir;
-        t += step;
+        t += dt;
         float q = 0.0f;
         if (spheroid) {
           q = owner_q(shape, *pc.fan, cand, n, s, p, cand[k].primitive, active, entered);
@@ -384,9 +394,13 @@ class RayMarcher {
         b.pts[3 * b.size + 1] = p.y;
         b.pts[3 * b.size + 2] = p.z;
         b.q[b.size] = q;
+        b.dt[b.size] = dt;
         b.steps[b.size] = st.steps;
         b.skipped[b.size] = scratch.skipped;
-        if (++b.size == Batch::kSize && !flush()) return false;
+        if (++b.size == Batch::kSize) {
+          if (!flush()) return false;
+          dt = step * coarsening(ph.coarsen_below, st.T_view);
+        }
       }
     }
     return flush();

@@ -34,6 +34,8 @@ void PhysicalParams::validate() const {
     throw std::invalid_argument("jitter_seed must be in [0, 1023]");
   if (!(min_transmittance >= 0.0f && min_transmittance < 1.0f))
     throw std::invalid_argument("min_transmittance must be in [0, 1)");
+  if (!(coarsen_below >= 0.0f && coarsen_below <= 1.0f))
+    throw std::invalid_argument("coarsen_below must be in [0, 1]");
   if (!order_phase.empty()) {
     const std::size_t want = static_cast<std::size_t>(octaves - 1) * kOrderPhaseSize;
     if (order_phase.size() != want)

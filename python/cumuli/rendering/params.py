@@ -26,6 +26,15 @@ from cumuli.sky import Sky, Sun, sky_args, sun_disc_edges
 #: samples on the Mitsuba reference views (the cumulus 6.7 %) and changes no 4×4 block of them
 #: by more than 0.25 % (no pixel by more than 0.004).
 MIN_TRANSMITTANCE = 1e-3
+#: The physical camera ray's step doubles for each decade its view transmittance falls below this,
+#: looked at after every ``COARSEN_EVERY`` samples inside a cloud (the C++ marcher's batch), up to
+#: ``MAX_COARSEN`` times the LOD step; 0 keeps the step. What lies beyond a view transmittance of
+#: ½ adds at most half the pixel's light, and coarser samples there move it little: on the
+#: Mitsuba reference views it marches 12 % fewer samples on the cumulus (15 % at 1080p) and moves
+#: no view's block median by more than 0.1 point (RENDER_CONTRACT "Physical lighting").
+COARSEN_BELOW = 0.5
+COARSEN_EVERY: int = _core.COARSEN_EVERY
+MAX_COARSEN: float = _core.MAX_COARSEN
 
 
 def fbm_params(settings: RenderSettings) -> _core.FbmParams:
@@ -89,6 +98,7 @@ def physical_params(settings: RenderSettings, octaves: int) -> _core.PhysicalPar
     p.view_diffuse = _physical.view_diffuse_share(settings)
     p.jitter_seed = int(settings.jitter_seed)
     p.min_transmittance = MIN_TRANSMITTANCE
+    p.coarsen_below = COARSEN_BELOW
     return p
 
 
@@ -187,6 +197,7 @@ def physical_uniforms(params: _core.PhysicalParams) -> dict[str, Any]:
         "u_phys_diffuse": p.view_diffuse,
         "u_phys_seed": p.jitter_seed,
         "u_phys_min_t": p.min_transmittance,
+        "u_phys_coarsen": p.coarsen_below,
     }
 
 

@@ -29,6 +29,10 @@
 namespace cumuli {
 
 constexpr int kMaxOctaves = 8;
+// The camera ray's step grows (PhysicalParams::coarsen_below) only between blocks of this many
+// queued samples (the C++ marcher's batch), so that the GLSL twin takes the same steps.
+constexpr int kCoarsenEvery = 16;
+constexpr float kMaxCoarsen = 8.0f;
 // Entries per order of PhysicalParams::order_phase, at sin(θ/2) = k/(K − 1), θ the scattering
 // angle.
 constexpr int kOrderPhaseSize = 64;
@@ -59,6 +63,9 @@ struct PhysicalParams {
   float view_diffuse = 1.0f;
   int jitter_seed = 0;
   float min_transmittance = 1e-3f;  // the ray stops below it
+  // The camera ray's step doubles each time its view transmittance falls a decade below this
+  // (checked every kCoarsenEvery queued samples), up to kMaxCoarsen times the step; 0: never.
+  float coarsen_below = 0.0f;
 
   void validate() const;  // throws std::invalid_argument
   // The phase function with its g's scaled by `scale`.
