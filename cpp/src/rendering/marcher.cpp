@@ -46,7 +46,7 @@ struct BoxHit {
 // Per-thread scratch: candidates of one cloud, the clouds a ray hits, the density source with
 // this thread's fBm counter, and the thread's work counters.
 // The physical march's queued samples (march_physical): position, normalised distance to the
-// owning primitive, the step and skip counts after each, and their fBm.
+// owning primitive, the step it stands for, the step and skip counts after each, and their fBm.
 struct Batch {
   static constexpr int kSize = kCoarsenEvery;
   float pts[3 * kSize];
@@ -185,9 +185,9 @@ class RayMarcher {
   // following sample of the lattice (t += step, as the plain march adds) whose s stays a margin
   // before the cell's exit, before t_end and before the solid. Each counts as a step, so the
   // max_steps budget is spent as without skipping. Returns false when the sample must be taken.
-  bool skip_empty(const PreparedCloud& pc, float& t, float off, float t_end, glm::vec3 origin,
-                  glm::vec3 dir, Scratch& scratch, State& st, float* occupied_until = nullptr,
-                  float step = 0.0f) const {
+  bool skip_empty(const PreparedCloud& pc, float& t, float step, float off, float t_end,
+                  glm::vec3 origin, glm::vec3 dir, Scratch& scratch, State& st,
+                  float* occupied_until = nullptr) const {
     const OccupancyGrid* occ = pc.occupancy;
     if (occ == nullptr) return false;
     int ix, iy, iz;
@@ -198,7 +198,6 @@ class RayMarcher {
       return false;
     }
     const float safe = std::min(occ->cell_exit(ix, iy, iz, origin, dir) - pc.margin, st.t_limit);
-    if (step == 0.0f) step = pc.step;
     do {
       ++st.steps;
       ++scratch.skipped;
@@ -222,7 +221,7 @@ class RayMarcher {
       for (int k = 0; k < n; ++k) {
         for (float t = cand[k].t_in; t < cand[k].t_out;) {
           if (!(t + offset < st.t_limit)) break;
-          if (skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st)) {
+          if (skip_empty(pc, t, step, offset, cand[k].t_out, origin, dir, scratch, st)) {
             if (st.steps >= settings_.max_steps) return false;
             continue;
           }
@@ -241,7 +240,7 @@ class RayMarcher {
       while (t < cand[k].t_out) {
         const float s = t + offset;
         if (!(s < st.t_limit)) break;
-        if (skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st)) {
+        if (skip_empty(pc, t, step, offset, cand[k].t_out, origin, dir, scratch, st)) {
           if (st.steps >= settings_.max_steps) return false;
           continue;
         }
@@ -378,7 +377,7 @@ class RayMarcher {
         if (!(s < st.t_limit)) return flush();  // a solid hides the rest of the ray
         // The rest of an occupied cell (up to its exit, less the margin) needs no new look.
         if (!(s < occupied_until) &&
-            skip_empty(pc, t, offset, cand[k].t_out, origin, dir, scratch, st, &occupied_until, dt))
+            skip_empty(pc, t, dt, offset, cand[k].t_out, origin, dir, scratch, st, &occupied_until))
           continue;
         ++st.steps;
         const glm::vec3 p = origin + s * dir;
