@@ -32,8 +32,8 @@ uniform float u_phys_min_t;       // the ray stops below this transmittance
 // the cloud, at most MAX_COARSEN times the step: the C++ marcher's batches, so both take the same
 // steps.
 uniform float u_phys_coarsen;
-#define COARSEN_EVERY 16
-#define MAX_COARSEN 8.0
+#define COARSEN_EVERY 16  // kCoarsenEvery
+#define MAX_COARSEN 8.0   // kMaxCoarsen
 
 float phys_coarsening(float T_view) {
     float m = 1.0;

@@ -5,12 +5,14 @@ the volume renderer against the marcher, and bad input."""
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
 
 import cumuli as cu
 from cumuli import _core
+from cumuli.gl.context import shader_dir
 from cumuli.light import physical
 from cumuli.light.onto_media import frame_nodes
 from cumuli.light.physical import (
@@ -498,6 +500,14 @@ def test_rays_growing_opaque_take_coarser_steps(
     # The GL marcher changes as the C++ marcher does.
     cpu_change = cpu[default] - cpu[0.0]
     assert np.abs(change - cpu_change).max() < 0.25 * np.abs(cpu_change).max()
+
+
+def test_the_shader_coarsens_by_the_core_constants() -> None:
+    """The GLSL marcher's copies of ``kCoarsenEvery`` and ``kMaxCoarsen`` are the core's."""
+    text = (shader_dir() / "common" / "physical.glsl").read_text()
+    defines = dict(re.findall(r"^#define (COARSEN_EVERY|MAX_COARSEN) (\S+)", text, re.M))
+    assert int(defines["COARSEN_EVERY"]) == COARSEN_EVERY
+    assert float(defines["MAX_COARSEN"]) == MAX_COARSEN
 
 
 def test_coarsen_below_is_checked() -> None:
