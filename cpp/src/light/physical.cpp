@@ -38,6 +38,7 @@ struct MarchSamples {
   std::vector<int> marched;
   std::vector<int> dense;  // index of the sample's point in pts / q / fbm, or −1 (no density)
   std::vector<float> pts, q, fbm;
+  std::vector<Candidate> candidates = std::vector<Candidate>(kMaxCandidates);
   std::size_t count = 0, dense_count = 0;
   void reserve(std::size_t n) {
     if (s.size() >= n) return;
@@ -49,10 +50,27 @@ struct MarchSamples {
 };
 
 // The calling thread's buffer (taken once per march: each access to a thread_local in a shared
-// library can cost a call).
-MarchSamples& march_samples() {
+// library can cost a call). Not inlined: inlined, the compiler may take the address again (that
+// call) wherever it runs out of registers to keep it in.
+#if defined(__GNUC__)
+#define CUMULI_OPAQUE __attribute__((noinline))
+#else
+#define CUMULI_OPAQUE
+#endif
+CUMULI_OPAQUE MarchSamples& march_samples() {
   thread_local MarchSamples m;
   return m;
+}
+
+// light_space_depth's per-column buffers: the segments of a column and the primitives it meets.
+struct ColumnBuffers {
+  std::vector<std::array<float, 3>> segs;
+  std::vector<int> subset;
+};
+
+CUMULI_OPAQUE ColumnBuffers& column_buffers() {
+  thread_local ColumnBuffers b;
+  return b;
 }
 
 // Calls visit(s, σt, ℓ) for the segments of o + t·d, t in [t0, t1], inside the union of the
@@ -68,7 +86,10 @@ template <class Visit>
 void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float t1, float step,
                  Visit&& visit, const std::vector<int>* subset = nullptr,
                  double stop_depth = INFINITY) {
-  Candidate cand[kMaxCandidates];
+  MarchSamples& m = march_samples();
+  // The thread's buffer, not a local array: that would be initialised on every call (its
+  // Candidates have default values), a cost as large as a short column's march.
+  Candidate* cand = m.candidates.data();
   const CloudShape& shape = *c.shape;
   const int n = subset == nullptr
                     ? collect_candidates(shape, o, d, t0, t1, cand, kMaxCandidates, true)
@@ -81,7 +102,6 @@ void march_cloud(const CloudMedium& c, glm::vec3 o, glm::vec3 d, float t0, float
     unrotated[j] = shape.primitives[static_cast<std::size_t>(cand[j].primitive)].unrotated();
   const bool stops = std::isfinite(stop_depth);
   constexpr std::size_t kStopChunk = 64;  // samples laid out between checks of the depth
-  MarchSamples& m = march_samples();
   m.reserve(kStopChunk);
   // Where the layout stands: candidate k, ray parameter t, and whether t lies in k's interval.
   int k = 0;
@@ -418,10 +438,12 @@ LargeVector<float> light_space_depth(const Medium& medium, const SunFrame& f, fl
     const int i = static_cast<int>(col % nu), j = static_cast<int>(col / nu);
     const glm::vec3 n0 = f.node(i, j, 0);
     const glm::vec3 origin = n0 - (0.5f * dw) * f.w;  // on the sun-side face
-    // Segments of every drawable, merged in order of t (drawables may overlap); the buffer is
-    // the thread's, reused from column to column.
-    thread_local std::vector<std::array<float, 3>> segs;
-    thread_local std::vector<int> subset;
+    // Segments of every drawable, merged in order of t (drawables may overlap); the buffers are
+    // the thread's, reused from column to column, and taken once per column (each access to a
+    // thread_local in a shared library can cost a call, and `keep` runs once per segment).
+    ColumnBuffers& buffers = column_buffers();
+    std::vector<std::array<float, 3>>& segs = buffers.segs;
+    std::vector<int>& subset = buffers.subset;
     segs.clear();
     auto keep = [&](float s, float sigma, float len) {
       if (sigma > 0.0f) segs.push_back({s - 0.5f * len, s + 0.5f * len, sigma});
