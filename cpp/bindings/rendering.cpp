@@ -219,6 +219,7 @@ void bind_render_params(py::module_& m) {
       .def("validate", &Viewport::validate);
 
   m.attr("ORDER_PHASE_SIZE") = kOrderPhaseSize;
+  m.attr("MAX_OCTAVES") = kMaxOctaves;
   py::class_<PhysicalParams>(m, "PhysicalParams",
                              "The physical lighting mode's shading (RENDER_CONTRACT "
                              "\"Physical lighting\").")

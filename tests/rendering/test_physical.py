@@ -502,12 +502,29 @@ def test_rays_growing_opaque_take_coarser_steps(
     assert np.abs(change - cpu_change).max() < 0.25 * np.abs(cpu_change).max()
 
 
-def test_the_shader_coarsens_by_the_core_constants() -> None:
-    """The GLSL marcher's copies of ``kCoarsenEvery`` and ``kMaxCoarsen`` are the core's."""
+def test_the_shader_keeps_the_core_constants() -> None:
+    """The GLSL marcher's copies of the core's constants are the core's: ``kCoarsenEvery`` and
+    ``kMaxCoarsen`` (the coarser steps), ``kMaxOctaves`` and ``kOrderPhaseSize`` (the octaves'
+    arrays and the phase table's layout)."""
     text = (shader_dir() / "common" / "physical.glsl").read_text()
-    defines = dict(re.findall(r"^#define (COARSEN_EVERY|MAX_COARSEN) (\S+)", text, re.M))
+    names = "COARSEN_EVERY|MAX_COARSEN|MAX_OCTAVES|ORDER_PHASE_SIZE"
+    defines = dict(re.findall(rf"^#define ({names}) (\S+)", text, re.M))
     assert int(defines["COARSEN_EVERY"]) == COARSEN_EVERY
     assert float(defines["MAX_COARSEN"]) == MAX_COARSEN
+    assert int(defines["MAX_OCTAVES"]) == _core.MAX_OCTAVES
+    assert int(defines["ORDER_PHASE_SIZE"]) == _core.ORDER_PHASE_SIZE
+    # The uniform array the octaves' phases are uploaded into is as long as the table.
+    assert params.ORDER_PHASE_VEC4S == (_core.MAX_OCTAVES - 1) * _core.ORDER_PHASE_SIZE // 4
+
+
+def test_octaves_beyond_the_shader_arrays_are_refused() -> None:
+    """``kMaxOctaves`` bounds the octaves: one more is refused, before any shader sees it."""
+    p = _core.PhysicalParams()
+    p.octaves = _core.MAX_OCTAVES
+    p.validate()
+    p.octaves = _core.MAX_OCTAVES + 1
+    with pytest.raises(ValueError, match="octaves"):
+        p.validate()
 
 
 def test_coarsen_below_is_checked() -> None:

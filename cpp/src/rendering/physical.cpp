@@ -20,7 +20,7 @@ void PhysicalParams::validate() const {
     throw std::invalid_argument("Mie parameters out of range");
   if (!(blend >= 0.0f && blend <= 1.0f)) throw std::invalid_argument("hg_blend must be in [0, 1]");
   if (octaves < 1 || octaves > kMaxOctaves)
-    throw std::invalid_argument("octaves must be in [1, 8]");
+    throw std::invalid_argument("octaves must be in [1, " + std::to_string(kMaxOctaves) + "]");
   for (float c : {oct_a, oct_b, oct_c})
     if (!(c >= 0.0f && c <= 1.0f))
       throw std::invalid_argument("octave constants must be in [0, 1]");

@@ -164,8 +164,8 @@ def march_uniforms(params: _core.MarchSettings, exact_noise: bool = False) -> di
 
 
 #: vec4 entries of ``u_phys_order_phase`` (shaders/common/physical.glsl): every order past the
-#: first of at most ``MAX_OCTAVES`` (8), ``ORDER_PHASE_SIZE`` values each.
-ORDER_PHASE_VEC4S = 7 * _core.ORDER_PHASE_SIZE // 4
+#: first of at most ``MAX_OCTAVES``, ``ORDER_PHASE_SIZE`` values each.
+ORDER_PHASE_VEC4S = (_core.MAX_OCTAVES - 1) * _core.ORDER_PHASE_SIZE // 4
 
 
 def order_phase_vec4s(table: Any) -> list[tuple[float, ...]]:
