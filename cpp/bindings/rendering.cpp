@@ -149,6 +149,25 @@ py::array_t<std::uint8_t, py::array::c_style> pixel_mask(const py::object& given
       py::module_::import("numpy").attr("not_equal")(given, 0));
 }
 
+// The `out` array of finish_physical: a writable C-contiguous float32 (height, width, 4) array,
+// `image` itself or memory apart from it (a partial overlap would read rows already written).
+py::array finish_target(const py::object& given, const FloatArray& image, py::ssize_t height,
+                        py::ssize_t width) {
+  if (!py::isinstance<py::array>(given)) throw py::type_error("out must be a numpy array or None");
+  const auto out = py::reinterpret_borrow<py::array>(given);
+  if (!out.dtype().is(py::dtype::of<float>())) throw py::type_error("out must be float32");
+  if (out.ndim() != 3 || out.shape(0) != height || out.shape(1) != width || out.shape(2) != 4)
+    throw py::value_error("out must have the image's shape (H, W, 4)");
+  if (!(out.flags() & py::array::c_style)) throw py::value_error("out must be C-contiguous");
+  if (!out.writeable()) throw py::value_error("out must be writable");
+  const auto* o = static_cast<const char*>(out.data());
+  const auto* i = reinterpret_cast<const char*>(image.data());
+  const auto bytes = static_cast<std::size_t>(out.nbytes());
+  if (o != i && o < i + bytes && i < o + bytes)
+    throw py::value_error("out must be the image itself or not overlap it");
+  return out;
+}
+
 // An optional (N, 2) integer array `given` of (row, column) pixels as int32 pairs; empty when
 // `given` is None. The range is checked where the image's size is known (render_pixels).
 py::array_t<std::int32_t, py::array::c_style | py::array::forcecast> pixel_pairs(
@@ -659,7 +678,7 @@ void bind_composite(py::module_& m) {
       [](const FloatArray& image, const CameraParams& camera, const SkyParams& sky,
          const SunParams& sun_params, const py::object& ground, const FloatArray& boxes,
          const std::tuple<float, float, float>& air_terms, const PhysicalParams& phase,
-         bool resolve, int threads, const py::object& unfiltered) {
+         bool resolve, int threads, const py::object& unfiltered, const py::object& out_arg) {
         if (image.ndim() != 3 || image.shape(2) != 4)
           throw py::value_error("image must have shape (H, W, 4)");
         const py::ssize_t height = image.shape(0), width = image.shape(1);
@@ -688,8 +707,9 @@ void bind_composite(py::module_& m) {
         // Pixels the tent skips (nonzero where skipped), or none.
         const auto skipped = pixel_mask(unfiltered, height, width, "unfiltered");
         const std::uint8_t* keep = unfiltered.is_none() ? nullptr : skipped.data();
-        auto out = new_array({height, width, 4});
-        float* dst = out.mutable_data();
+        py::array out = out_arg.is_none() ? py::array(new_array({height, width, 4}))
+                                          : finish_target(out_arg, image, height, width);
+        float* dst = static_cast<float*>(out.mutable_data());
         {
           py::gil_scoped_release release;
           finish_physical(image.data(), dst, static_cast<int>(width), static_cast<int>(height),
@@ -699,12 +719,14 @@ void bind_composite(py::module_& m) {
       },
       py::arg("image"), py::arg("camera"), py::arg("sky"), py::arg("sun"), py::arg("ground"),
       py::arg("boxes"), py::arg("air"), py::arg("phase"), py::arg("resolve"),
-      py::arg("threads") = 0, py::arg("unfiltered") = py::none(),
+      py::arg("threads") = 0, py::arg("unfiltered") = py::none(), py::arg("out") = py::none(),
       "The physical mode's finishing passes on a finished (H, W, 4) image (a new array): the air "
       "(air = (air_extinction, air_height, haze): aerial perspective, and the aureole with "
       "phase's phase function; boxes (n, 2, 3): the drawables' layer boxes for the clouds' "
       "depth), then the 3x3 tent resolve when resolve is true, except at the pixels where "
-      "unfiltered (H, W) is nonzero (the edge pass's supersampled pixels).");
+      "unfiltered (H, W) is nonzero (the edge pass's supersampled pixels). out: a writable "
+      "C-contiguous float32 (H, W, 4) array to write into and return instead of a new one; it may "
+      "be image itself (finished in place), but must not overlap it otherwise.");
 
   m.def(
       "draw_solids",

@@ -167,6 +167,106 @@ def test_the_core_pass_is_the_numpy_reference(phase: str, ground: bool) -> None:
     assert finish(img, paper, cam, shadow) is img
 
 
+@pytest.mark.parametrize("rows", [1, 33, 64, 70])
+@pytest.mark.parametrize("resolve", [True, False])
+def test_the_core_pass_in_place_is_the_pass_into_a_new_image(rows: int, resolve: bool) -> None:
+    """Finished where it lies, an image reads the same bits as finished into a new one: the
+    resolve's blocks of 32 rows read their neighbours' edge rows before those are written over
+    (one row; a last block of one row; whole blocks; a partial last block), whatever the
+    threads, the edge pass's unfiltered pixels included."""
+    from cumuli import _core
+    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
+
+    scene = cloud_scene()
+    rng = np.random.default_rng(rows)
+    img = rng.uniform(0.0, 2.0, (rows, 9, 4)).astype(np.float32)
+    img[..., 3] = rng.choice([0.0, 0.4, 1.0], (rows, 9))
+    unfiltered = rng.random((rows, 9)) < 0.2
+    args = dict(
+        camera=camera_params(camera_at(40.0)), sky=sky_params(scene.sky),
+        sun=sun_params(scene.sun), ground=None, boxes=np.zeros((0, 2, 3), np.float32),
+        air=(0.01, 10.0, 0.05), phase=physical_params(scene.settings, 1), resolve=resolve,
+        unfiltered=unfiltered,
+    )  # fmt: skip
+    new = _core.finish_physical(img, threads=1, **args)
+    assert np.abs(new - img).max() > 0.01
+    for threads in (1, 2, 3):
+        spent = img.copy()
+        out = _core.finish_physical(spent, threads=threads, out=spent, **args)
+        assert out is spent
+        np.testing.assert_array_equal(spent, new)
+    # Into another array: the same too, and the image is left as it was.
+    kept = img.copy()
+    target = np.empty_like(img)
+    assert _core.finish_physical(kept, threads=2, out=target, **args) is target
+    np.testing.assert_array_equal(target, new)
+    np.testing.assert_array_equal(kept, img)
+
+
+def test_the_core_pass_refuses_a_bad_target() -> None:
+    from cumuli import _core
+    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
+
+    scene = cloud_scene()
+    args = dict(
+        camera=camera_params(camera_at(40.0)), sky=sky_params(scene.sky),
+        sun=sun_params(scene.sun), ground=None, boxes=np.zeros((0, 2, 3), np.float32),
+        air=(0.01, 10.0, 0.05), phase=physical_params(scene.settings, 1), resolve=True,
+    )  # fmt: skip
+    img = np.zeros((6, 5, 4), np.float32)
+    with pytest.raises(TypeError, match="float32"):
+        _core.finish_physical(img, out=np.zeros((6, 5, 4)), **args)
+    with pytest.raises(TypeError, match="numpy array"):
+        _core.finish_physical(img, out=[0.0], **args)
+    with pytest.raises(ValueError, match="shape"):
+        _core.finish_physical(img, out=np.zeros((6, 5, 3), np.float32), **args)
+    with pytest.raises(ValueError, match="C-contiguous"):
+        _core.finish_physical(img, out=np.zeros((5, 6, 4), np.float32).transpose(1, 0, 2), **args)
+    frozen = np.zeros((6, 5, 4), np.float32)
+    frozen.setflags(write=False)
+    with pytest.raises(ValueError, match="writable"):
+        _core.finish_physical(img, out=frozen, **args)
+    # A target overlapping the image but not the image itself would read rows it has written.
+    big = np.zeros((7, 5, 4), np.float32)
+    with pytest.raises(ValueError, match="overlap"):
+        _core.finish_physical(big[:6], out=big[1:], **args)
+
+
+def test_the_render_finishes_its_own_image_in_place(monkeypatch) -> None:
+    """The renderer's image is finished where the march left it, to the same values as a copy
+    finished into a new image; a read-only image is never written."""
+    from cumuli import _core
+    from cumuli.rendering.air import finish
+
+    scene = cloud_scene(air_extinction=0.01)
+    scene = scene.replace(settings=scene.settings.replace(haze=0.05, resolve=True))
+    lit = cu.prepare_light(scene)
+    cam = camera_at(40.0)
+    before = cu.render_cpu(lit, cam, 40, 36)
+    core_pass, seen = _core.finish_physical, []
+
+    def spying(image, *args, **kw):
+        out = core_pass(image, *args, **kw)
+        seen.append(out is image)
+        return out
+
+    monkeypatch.setattr(_core, "finish_physical", spying)
+    np.testing.assert_array_equal(cu.render_cpu(lit, cam, 40, 36), before)
+    assert seen == [True]
+    raw = np.random.default_rng(5).uniform(0.0, 1.0, (36, 40, 4)).astype(np.float32)
+    copy = finish(raw, scene, cam, lit.shadow)
+    assert copy is not raw
+    spent = raw.copy()
+    assert finish(spent, scene, cam, lit.shadow, in_place=True) is spent
+    np.testing.assert_array_equal(spent, copy)
+    frozen = raw.copy()
+    frozen.setflags(write=False)
+    out = finish(frozen, scene, cam, lit.shadow, in_place=True)
+    assert out is not frozen
+    np.testing.assert_array_equal(frozen, raw)
+    np.testing.assert_array_equal(out, copy)
+
+
 def test_the_core_pass_checks_its_arguments() -> None:
     from cumuli import _core
     from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params

@@ -183,9 +183,35 @@ void finish_physical(const float* rgba, float* out, int width, int height,
   air.validate();
   const AirPass pass(camera, width, height, sky, sun, ground, boxes, air);
   const std::size_t row_floats = static_cast<std::size_t>(width) * 4;
-  // Row r seen through the air, into `dst`.
+  constexpr int kBlockRows = 32;  // the resolve's rows per block (below)
+  const int blocks = (height + kBlockRows - 1) / kBlockRows;
+  // In place, a block of the resolve reads the edge rows of its neighbours, which they may have
+  // written already: those rows (each block's first and last) are read from copies made first.
+  const bool in_place = rgba == out;
+  std::vector<float> edge_rows;
+  if (in_place && air.resolve) {
+    edge_rows.resize(static_cast<std::size_t>(blocks) * 2 * row_floats);
+    for (int b = 0; b < blocks; ++b) {
+      const int first = b * kBlockRows, last = std::min(height, first + kBlockRows) - 1;
+      std::copy_n(rgba + first * row_floats, row_floats, edge_rows.data() + 2 * b * row_floats);
+      std::copy_n(rgba + last * row_floats, row_floats,
+                  edge_rows.data() + (2 * b + 1) * row_floats);
+    }
+  }
+  // Row r of the image as it came in.
+  auto source_row = [&](int r) -> const float* {
+    if (!edge_rows.empty()) {
+      const int b = r / kBlockRows, first = b * kBlockRows;
+      if (r == first) return edge_rows.data() + 2 * b * row_floats;
+      if (r == std::min(height, first + kBlockRows) - 1)
+        return edge_rows.data() + (2 * b + 1) * row_floats;
+    }
+    return rgba + r * row_floats;
+  };
+  // Row r seen through the air, into `dst` (which may be the row itself).
   auto air_row = [&](int r, float* dst) {
-    std::copy(rgba + r * row_floats, rgba + (r + 1) * row_floats, dst);
+    const float* src = source_row(r);
+    if (src != dst) std::copy_n(src, row_floats, dst);
     if (pass.fading || pass.glowing)
       for (int c = 0; c < width; ++c) pass.pixel(r, c, dst + 4 * c);
   };
@@ -197,9 +223,8 @@ void finish_physical(const float* rgba, float* out, int width, int height,
   }
   // The tent needs each row's neighbours through the air and filtered along x: a block of rows
   // keeps the last three in a ring, and computes the two rows beyond its ends itself (a few
-  // per cent more air) instead of holding a whole second image.
-  constexpr int kBlockRows = 32;
-  const int blocks = (height + kBlockRows - 1) / kBlockRows;
+  // per cent more air) instead of holding a whole second image. Within a block, row r is read
+  // (into the ring) before it is written, so the block may write over its own input.
   parallel_chunks(static_cast<std::size_t>(blocks), threads, [&](std::size_t b0, std::size_t b1) {
     std::vector<float> aired(3 * row_floats), across(3 * row_floats);
     auto ring = [&](std::vector<float>& v, int r) { return v.data() + (r % 3) * row_floats; };

@@ -248,14 +248,16 @@ def add_air(image: np.ndarray, scene: Any, camera: Any, shadow: Any = None) -> n
 
 def finish(
     image: np.ndarray, scene: Any, camera: Any, shadow: Any = None, threads: int = 0,
-    unfiltered: np.ndarray | None = None,
+    unfiltered: np.ndarray | None = None, in_place: bool = False,
 ) -> Any:  # fmt: skip
     """``image`` seen through the air, then resolved (``resolve(add_air(image, …), scene)``) in
     one threaded pass of the core (``_core.finish_physical``): the same formulas per pixel as
     :func:`add_air` and :func:`cumuli.rendering.resolve.tent_filter`, which stay their numpy
     reference (the tent is bit for bit the same; the air agrees to float rounding). ``image``
     itself when neither applies (the paper mode). The pixels of ``unfiltered`` (``(H, W)``
-    bool, the edge pass's supersampled pixels) see the air but not the tent."""
+    bool, the edge pass's supersampled pixels) see the air but not the tent. ``in_place``:
+    ``image`` is the caller's to spend, and a writable float32 one is finished where it lies
+    (the same values, without a second image's memory)."""
     from cumuli import _core
     from cumuli.ground import ground_args
     from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
@@ -272,8 +274,10 @@ def finish(
         float(s.air_height),
         float(s.haze) if glowing else 0.0,
     )
+    source = np.ascontiguousarray(image, np.float32)
+    out = source if in_place and source.flags.writeable else None
     return _core.finish_physical(
-        np.ascontiguousarray(image, np.float32), camera_params(camera), sky_params(scene.sky),
-        sun_params(scene.sun), ground_args(scene.ground, scene.sky, shadow), boxes, air,
-        physical_params(s, 1), bool(resolving), int(threads), unfiltered,
+        source, camera_params(camera), sky_params(scene.sky), sun_params(scene.sun),
+        ground_args(scene.ground, scene.sky, shadow), boxes, air, physical_params(s, 1),
+        bool(resolving), int(threads), unfiltered, out,
     )  # fmt: skip

@@ -125,7 +125,7 @@ def compose(
                 lambda m: painter.marched(lit, indices, camera, SUB * width, SUB * height, m),
                 writable=image.dtype == np.float32 and image.flags.writeable,
             )
-        return finish(image, scene, camera, lit.shadow, threads, edges)
+        return finish(image, scene, camera, lit.shadow, threads, edges, in_place=True)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)
         kinds = []  # impostors are images: their layers composite by their coverage
@@ -146,7 +146,7 @@ def compose(
         ground_args(scene.ground, scene.sky, lit.shadow),
         view_scales(scene, kinds) if kinds else None,
     )  # fmt: skip
-    return finish(image, scene, camera, lit.shadow, threads)
+    return finish(image, scene, camera, lit.shadow, threads, in_place=True)
 
 
 def view_scales(scene: Scene, kinds: Sequence[str]) -> np.ndarray:

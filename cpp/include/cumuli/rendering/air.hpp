@@ -37,8 +37,9 @@ struct AirParams {
 };
 
 // Finishes the (height, width, 4) linear RGBA image `rgba` (row 0 on top) into `out` (the same
-// size; not `rgba` itself): the air, then the resolve. `boxes`: the drawables' layer boxes (for
-// the clouds' depth). The result does not depend on the thread count.
+// size): the air, then the resolve. `out` may be `rgba` itself (in place, the same result: a
+// 1080p frame then needs no second 33 MB image), but must not overlap it otherwise. `boxes`: the
+// drawables' layer boxes (for the clouds' depth). The result does not depend on the thread count.
 // `unfiltered` (height·width bytes, optional): pixels whose byte is nonzero skip the resolve's
 // tent (the edge pass's supersampled pixels, already antialiased) but still see the air.
 void finish_physical(const float* rgba, float* out, int width, int height,
