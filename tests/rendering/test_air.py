@@ -167,6 +167,20 @@ def test_the_core_pass_is_the_numpy_reference(phase: str, ground: bool) -> None:
     assert finish(img, paper, cam, shadow) is img
 
 
+def core_pass_args(**overrides) -> dict:
+    """Keyword arguments of ``_core.finish_physical`` but the image: :func:`cloud_scene`'s sun
+    and sky seen from 40 units, with air, an aureole and the resolve."""
+    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
+
+    scene = cloud_scene()
+    args = dict(
+        camera=camera_params(camera_at(40.0)), sky=sky_params(scene.sky),
+        sun=sun_params(scene.sun), ground=None, boxes=np.zeros((0, 2, 3), np.float32),
+        air=(0.01, 10.0, 0.05), phase=physical_params(scene.settings, 1), resolve=True,
+    )  # fmt: skip
+    return {**args, **overrides}
+
+
 @pytest.mark.parametrize("rows", [1, 33, 64, 70])
 @pytest.mark.parametrize("resolve", [True, False])
 def test_the_core_pass_in_place_is_the_pass_into_a_new_image(rows: int, resolve: bool) -> None:
@@ -175,19 +189,12 @@ def test_the_core_pass_in_place_is_the_pass_into_a_new_image(rows: int, resolve:
     (one row; a last block of one row; whole blocks; a partial last block), whatever the
     threads, the edge pass's unfiltered pixels included."""
     from cumuli import _core
-    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
 
-    scene = cloud_scene()
     rng = np.random.default_rng(rows)
     img = rng.uniform(0.0, 2.0, (rows, 9, 4)).astype(np.float32)
     img[..., 3] = rng.choice([0.0, 0.4, 1.0], (rows, 9))
     unfiltered = rng.random((rows, 9)) < 0.2
-    args = dict(
-        camera=camera_params(camera_at(40.0)), sky=sky_params(scene.sky),
-        sun=sun_params(scene.sun), ground=None, boxes=np.zeros((0, 2, 3), np.float32),
-        air=(0.01, 10.0, 0.05), phase=physical_params(scene.settings, 1), resolve=resolve,
-        unfiltered=unfiltered,
-    )  # fmt: skip
+    args = core_pass_args(resolve=resolve, unfiltered=unfiltered)
     new = _core.finish_physical(img, threads=1, **args)
     assert np.abs(new - img).max() > 0.01
     for threads in (1, 2, 3):
@@ -205,14 +212,8 @@ def test_the_core_pass_in_place_is_the_pass_into_a_new_image(rows: int, resolve:
 
 def test_the_core_pass_refuses_a_bad_target() -> None:
     from cumuli import _core
-    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
 
-    scene = cloud_scene()
-    args = dict(
-        camera=camera_params(camera_at(40.0)), sky=sky_params(scene.sky),
-        sun=sun_params(scene.sun), ground=None, boxes=np.zeros((0, 2, 3), np.float32),
-        air=(0.01, 10.0, 0.05), phase=physical_params(scene.settings, 1), resolve=True,
-    )  # fmt: skip
+    args = core_pass_args()
     img = np.zeros((6, 5, 4), np.float32)
     with pytest.raises(TypeError, match="float32"):
         _core.finish_physical(img, out=np.zeros((6, 5, 4)), **args)
@@ -269,14 +270,8 @@ def test_the_render_finishes_its_own_image_in_place(monkeypatch) -> None:
 
 def test_the_core_pass_checks_its_arguments() -> None:
     from cumuli import _core
-    from cumuli.rendering.params import camera_params, physical_params, sky_params, sun_params
 
-    scene = cloud_scene()
-    args = dict(
-        camera=camera_params(camera_at(40.0)), sky=sky_params(scene.sky),
-        sun=sun_params(scene.sun), ground=None, boxes=np.zeros((0, 2, 3), np.float32),
-        air=(0.01, 10.0, 0.05), phase=physical_params(scene.settings, 1), resolve=True,
-    )  # fmt: skip
+    args = core_pass_args()
     img = np.zeros((4, 5, 4), np.float32)
     assert _core.finish_physical(img, **args).shape == (4, 5, 4)
     with pytest.raises(ValueError, match="image"):
