@@ -187,26 +187,22 @@ void finish_physical(const float* rgba, float* out, int width, int height,
   const int blocks = (height + kBlockRows - 1) / kBlockRows;
   // In place, a block of the resolve reads the edge rows of its neighbours, which they may have
   // written already: those rows (each block's first and last) are read from copies made first.
-  const bool in_place = rgba == out;
-  std::vector<float> edge_rows;
-  if (in_place && air.resolve) {
+  auto is_edge = [&](int r) {
+    return r % kBlockRows == 0 || r == std::min(height, (r / kBlockRows + 1) * kBlockRows) - 1;
+  };
+  std::vector<float> edge_rows;  // block b's first row at slot 2b, its last at 2b + 1
+  auto edge_copy = [&](int r) {
+    const int slot = 2 * (r / kBlockRows) + (r % kBlockRows == 0 ? 0 : 1);
+    return edge_rows.data() + static_cast<std::size_t>(slot) * row_floats;
+  };
+  if (rgba == out && air.resolve) {
     edge_rows.resize(static_cast<std::size_t>(blocks) * 2 * row_floats);
-    for (int b = 0; b < blocks; ++b) {
-      const int first = b * kBlockRows, last = std::min(height, first + kBlockRows) - 1;
-      std::copy_n(rgba + first * row_floats, row_floats, edge_rows.data() + 2 * b * row_floats);
-      std::copy_n(rgba + last * row_floats, row_floats,
-                  edge_rows.data() + (2 * b + 1) * row_floats);
-    }
+    for (int r = 0; r < height; ++r)
+      if (is_edge(r)) std::copy_n(rgba + r * row_floats, row_floats, edge_copy(r));
   }
   // Row r of the image as it came in.
   auto source_row = [&](int r) -> const float* {
-    if (!edge_rows.empty()) {
-      const int b = r / kBlockRows, first = b * kBlockRows;
-      if (r == first) return edge_rows.data() + 2 * b * row_floats;
-      if (r == std::min(height, first + kBlockRows) - 1)
-        return edge_rows.data() + (2 * b + 1) * row_floats;
-    }
-    return rgba + r * row_floats;
+    return !edge_rows.empty() && is_edge(r) ? edge_copy(r) : rgba + r * row_floats;
   };
   // Row r seen through the air, into `dst` (which may be the row itself).
   auto air_row = [&](int r, float* dst) {
