@@ -1105,7 +1105,7 @@ void bind_physical_light(py::module_& m) {
         FloatArray held;
         const float* columns = frame_columns(upstream, f, held);
         const float* v = depth.data();
-        std::vector<float> out;
+        LargeVector<float> out;
         {
           py::gil_scoped_release release;
           out = lattice_transmittance(v, f, v3(lo), v3(cell), dims.data(), threads, columns,
@@ -1136,12 +1136,12 @@ void bind_physical_light(py::module_& m) {
           throw py::value_error("sky_coeffs must hold 3·order² values");
         if (!(step > 0.0f) || !std::isfinite(step)) throw py::value_error("step must be > 0");
         const float *e = ext.data(), *s = sky_coeffs.data();
-        std::vector<float> out;
+        LargeVector<float> out;
         {
           py::gil_scoped_release release;
           out = sky_irradiance(e, g, s, order, n_theta, step, threads, how);
         }
-        return to_array(out, {g.d, g.h, g.w, 3});
+        return adopt_array(std::move(out), {g.d, g.h, g.w, 3});
       },
       py::arg("extinction"), py::arg("lo"), py::arg("hi"), py::arg("sky_coeffs"), py::arg("order"),
       py::arg("n_theta"), py::arg("step"), py::arg("threads") = 0, py::arg("method") = "march",
@@ -1209,7 +1209,7 @@ void bind_physical_light(py::module_& m) {
         if (!(cell > 0.0) || !std::isfinite(cell))
           throw py::value_error("cell must be finite and > 0");
         const float* e = ext.data();
-        std::vector<float> out;
+        LargeVector<float> out;
         {
           py::gil_scoped_release release;
           out = physical_grid(e, voxels, f, channels, s, cell, gain_depth, sun_gain, sky_gain,
@@ -1239,7 +1239,7 @@ void bind_physical_light(py::module_& m) {
         const std::size_t voxels = static_cast<std::size_t>(visibility.size() / nc);
         const float* v = visibility.data();
         const float* s = sky_coeffs.data();
-        std::vector<float> out;
+        LargeVector<float> out;
         {
           py::gil_scoped_release release;
           out = sky_irradiance_from(v, voxels, s, order, threads);
@@ -1284,10 +1284,10 @@ void bind_physical_light(py::module_& m) {
         p.solver = kind;
         const int channels = has_sky ? 4 : 1;
         const float *e = ext.data(), *st = sun_t.data(), *se = has_sky ? sky.data() : nullptr;
-        std::vector<float> out;
+        LargeVector<float> out;
         {
           py::gil_scoped_release release;
-          std::vector<float> q = diffusion_sources(e, g, st, v3(to_sun), se, albedo, threads);
+          LargeVector<float> q = diffusion_sources(e, g, st, v3(to_sun), se, albedo, threads);
           add_sun_flux_source(q, channels, e, g, st, v3(to_sun), albedo, mean_cosine, forward);
           out = diffusion_fluence(e, g, q.data(), channels, p, threads);
         }
@@ -1331,7 +1331,7 @@ void bind_physical_light(py::module_& m) {
             !(glm::length(sd) > 0.0f && std::isfinite(sd.x) && std::isfinite(sd.y) &&
               std::isfinite(sd.z)))
           throw py::value_error("to_sun must be a finite, non-zero vector");
-        std::vector<float> out;
+        LargeVector<float> out;
         {
           py::gil_scoped_release release;
           out = diffusion_anisotropy(ext.data(), g, phi.data(), channels, p, threads,

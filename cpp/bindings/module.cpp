@@ -2,6 +2,7 @@
 // (noise, model, light, render, anim; see ARCHITECTURE.md).
 #include <pybind11/pybind11.h>
 
+#include "cumuli/large_buffer.hpp"
 #include "cumuli/parallel.hpp"
 
 namespace py = pybind11;
@@ -94,6 +95,31 @@ PYBIND11_MODULE(_core, m) {
       }
     }
   });
+  m.def(
+      "buffer_cache_stats",
+      [] {
+        const cumuli::BufferCacheStats s = cumuli::buffer_cache_stats();
+        py::dict d;
+        d["idle_blocks"] = s.idle_blocks;
+        d["idle_bytes"] = s.idle_bytes;
+        d["limit_bytes"] = s.limit_bytes;
+        d["hits"] = s.hits;
+        d["misses"] = s.misses;
+        return d;
+      },
+      "The light step's idle-block cache: idle_blocks and idle_bytes it holds, its limit_bytes, "
+      "and the hits (blocks reused) and misses (blocks made afresh) since the process started.");
+  m.def(
+      "set_buffer_cache_limit",
+      [](long long bytes) {
+        if (bytes < 0) throw py::value_error("the buffer cache limit must be >= 0 bytes");
+        return cumuli::set_buffer_cache_limit(static_cast<std::size_t>(bytes));
+      },
+      py::arg("bytes"),
+      "Set the most bytes the idle-block cache keeps (0: none), giving back what is over it; "
+      "returns the previous limit.");
+  m.def("release_buffer_cache", &cumuli::release_buffer_cache,
+        "Give every idle block of the cache back to the system; returns the bytes given back.");
   // The parameter structs first: the functions' signatures name these classes.
   cumuli::bind::bind_noise_params(m);
   cumuli::bind::bind_model_params(m);

@@ -12,6 +12,11 @@ from typing import TYPE_CHECKING
 
 from cumuli import registry
 from cumuli._util.budget import BudgetError, Limits, get_limits, limits, set_limits
+from cumuli._util.buffer_cache import (
+    buffer_cache_stats,
+    release_buffer_cache,
+    set_buffer_cache_limit,
+)
 from cumuli._version import __version__
 from cumuli.anim import frames, weather_presets
 from cumuli.anim.cluster import sweep
@@ -107,6 +112,9 @@ __all__ = [
     "get_limits",
     "limits",
     "set_limits",
+    "buffer_cache_stats",
+    "release_buffer_cache",
+    "set_buffer_cache_limit",
     "BasisModel",
     "BillboardCloud",
     "BillboardField",

@@ -6,7 +6,7 @@ import collections.abc
 import numpy
 import numpy.typing
 import typing
-__all__: list[str] = ['ATLAS_MAX_SIZE', 'ATLAS_MAX_SPRITES', 'ATLAS_MIN_SIZE', 'COARSEN_EVERY', 'CameraParams', 'CloudShape', 'DECK_DETAIL_CONTRAST', 'DECK_MAX_LATTICE_EDGE', 'DECK_MAX_MAP_EDGE', 'DECK_MAX_VOXELS', 'DeckShape', 'EndlessWalk', 'EvolutionParams', 'FbmParams', 'GaussianCumulusParams', 'LIGHT_MAX_RESOLUTION', 'LIGHT_MAX_STEPS_PER_RAY', 'LSYSTEM_MAX_LENGTH', 'MAX_COARSEN', 'MAX_OCTAVES', 'MarchSettings', 'Noise', 'ORDER_PHASE_SIZE', 'PARTICLES_MAX', 'ParticleSpriteSettings', 'PhysicalParams', 'SEEDBOX_MAX_BILLBOARDS', 'SEEDBOX_MAX_BOXES', 'SEEDBOX_MAX_SEEDS', 'ShadeParams', 'SkyParams', 'SpriteRasterSettings', 'SunParams', 'TurtleParams', 'Viewport', 'VolumeCamera', 'VolumeRenderParams', 'WEATHER_MAX_INSTANCES', 'WeatherSim', 'add_multiple_scattering', 'approx_mie_mean_cosine', 'approx_mie_params', 'approx_mie_phase', 'atlas_grid', 'billboard_corners', 'billboard_shade', 'billboard_sprites', 'billboard_vertex_colours', 'blend_volumes', 'caf_path_lengths', 'caf_values', 'camera_candidates', 'cloud_density', 'composite_layers', 'composite_split', 'coverage_edges', 'crossfade_weight', 'deck_density', 'deck_lattice', 'density_grid', 'diffusion_anisotropy', 'diffusion_light', 'display_impostors', 'draw_solids', 'ellipsoids_from_mesh', 'evolving_cloud_box', 'evolving_cloud_volumes', 'field_path_lengths', 'finish_physical', 'fit_shexp', 'gaussian_cumulus', 'impostor_backwards', 'impostor_focal_length_px', 'impostor_half_diagonal_fov', 'impostor_near_corner_radius', 'impostor_rects', 'impostor_required_resolution', 'impostor_resolution', 'impostor_resolution_skyworks', 'impostor_translation_error', 'lattice_transmittance', 'light_frame', 'light_grid', 'light_space_depth', 'light_volume', 'lsystem_expand', 'lsystem_interpret', 'lsystem_length', 'medium_optical_depth', 'needs_screen_impostor', 'occupancy_grid', 'particle_fill', 'particle_light', 'particle_light_splats', 'particle_shadow', 'particle_sphere', 'particle_sprites', 'particles_from_volume', 'particles_to_volume', 'phase_4pi', 'physical_grid', 'point_optical_depth', 'project_sprites', 'rasterise_sprites', 'remove_contained_spheres', 'render_cpu', 'render_volume_cpu', 'sample_frame', 'sample_volume', 'screen_impostor_size', 'seed_box_cloud', 'seed_box_worst_case', 'set_progress', 'set_simd_fetch', 'set_simd_level', 'sh_eval', 'sh_optical_depth', 'shexp_apply', 'simd_fetch', 'simd_fetch_preferred', 'simd_level', 'simd_levels', 'similarity_matrix', 'sky_irradiance', 'sky_irradiance_from', 'sky_sh', 'sky_visibility', 'sphere_outside_frustum', 'sphere_quadrature', 'splat_kernel', 'sprite_atlas', 'sun_optical_depth', 'tight_impostor_view', 'transition_matrix', 'variant_seed', 'volume_sample_points', 'yaw_cos_sin']
+__all__: list[str] = ['ATLAS_MAX_SIZE', 'ATLAS_MAX_SPRITES', 'ATLAS_MIN_SIZE', 'COARSEN_EVERY', 'CameraParams', 'CloudShape', 'DECK_DETAIL_CONTRAST', 'DECK_MAX_LATTICE_EDGE', 'DECK_MAX_MAP_EDGE', 'DECK_MAX_VOXELS', 'DeckShape', 'EndlessWalk', 'EvolutionParams', 'FbmParams', 'GaussianCumulusParams', 'LIGHT_MAX_RESOLUTION', 'LIGHT_MAX_STEPS_PER_RAY', 'LSYSTEM_MAX_LENGTH', 'MAX_COARSEN', 'MAX_OCTAVES', 'MarchSettings', 'Noise', 'ORDER_PHASE_SIZE', 'PARTICLES_MAX', 'ParticleSpriteSettings', 'PhysicalParams', 'SEEDBOX_MAX_BILLBOARDS', 'SEEDBOX_MAX_BOXES', 'SEEDBOX_MAX_SEEDS', 'ShadeParams', 'SkyParams', 'SpriteRasterSettings', 'SunParams', 'TurtleParams', 'Viewport', 'VolumeCamera', 'VolumeRenderParams', 'WEATHER_MAX_INSTANCES', 'WeatherSim', 'add_multiple_scattering', 'approx_mie_mean_cosine', 'approx_mie_params', 'approx_mie_phase', 'atlas_grid', 'billboard_corners', 'billboard_shade', 'billboard_sprites', 'billboard_vertex_colours', 'blend_volumes', 'buffer_cache_stats', 'caf_path_lengths', 'caf_values', 'camera_candidates', 'cloud_density', 'composite_layers', 'composite_split', 'coverage_edges', 'crossfade_weight', 'deck_density', 'deck_lattice', 'density_grid', 'diffusion_anisotropy', 'diffusion_light', 'display_impostors', 'draw_solids', 'ellipsoids_from_mesh', 'evolving_cloud_box', 'evolving_cloud_volumes', 'field_path_lengths', 'finish_physical', 'fit_shexp', 'gaussian_cumulus', 'impostor_backwards', 'impostor_focal_length_px', 'impostor_half_diagonal_fov', 'impostor_near_corner_radius', 'impostor_rects', 'impostor_required_resolution', 'impostor_resolution', 'impostor_resolution_skyworks', 'impostor_translation_error', 'lattice_transmittance', 'light_frame', 'light_grid', 'light_space_depth', 'light_volume', 'lsystem_expand', 'lsystem_interpret', 'lsystem_length', 'medium_optical_depth', 'needs_screen_impostor', 'occupancy_grid', 'particle_fill', 'particle_light', 'particle_light_splats', 'particle_shadow', 'particle_sphere', 'particle_sprites', 'particles_from_volume', 'particles_to_volume', 'phase_4pi', 'physical_grid', 'point_optical_depth', 'project_sprites', 'rasterise_sprites', 'release_buffer_cache', 'remove_contained_spheres', 'render_cpu', 'render_volume_cpu', 'sample_frame', 'sample_volume', 'screen_impostor_size', 'seed_box_cloud', 'seed_box_worst_case', 'set_buffer_cache_limit', 'set_progress', 'set_simd_fetch', 'set_simd_level', 'sh_eval', 'sh_optical_depth', 'shexp_apply', 'simd_fetch', 'simd_fetch_preferred', 'simd_level', 'simd_levels', 'similarity_matrix', 'sky_irradiance', 'sky_irradiance_from', 'sky_sh', 'sky_visibility', 'sphere_outside_frustum', 'sphere_quadrature', 'splat_kernel', 'sprite_atlas', 'sun_optical_depth', 'tight_impostor_view', 'transition_matrix', 'variant_seed', 'volume_sample_points', 'yaw_cos_sin']
 class FbmParams:
     """
     fBm of eq. (1): octaves n, gain w, lacunarity s, frequency f (lattice texels per world unit).
@@ -960,6 +960,10 @@ def blend_volumes(a: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], b:
     """
     w·a + (1 − w)·b.
     """
+def buffer_cache_stats() -> dict:
+    """
+    The light step's idle-block cache: idle_blocks and idle_bytes it holds, its limit_bytes, and the hits (blocks reused) and misses (blocks made afresh) since the process started.
+    """
 def caf_path_lengths(boxes: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], points: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], owner: typing.Annotated[numpy.typing.ArrayLike, numpy.int32], sun: typing.Annotated[collections.abc.Sequence[typing.SupportsFloat | typing.SupportsIndex], "FixedSize(3)"], overlap: str, include_self: bool, threads: typing.SupportsInt | typing.SupportsIndex = 0) -> numpy.typing.NDArray[numpy.float64]:
     """
     Light path length L through the boxes from each point towards the sun: (N,) float64.
@@ -1178,6 +1182,10 @@ def rasterise_sprites(centres: typing.Annotated[numpy.typing.ArrayLike, numpy.fl
     """
     Rasterise view-plane-parallel sprites back to front into a premultiplied (H, W, 4) layer; settings: a SpriteRasterSettings (kernel, peak); atlas: None or (rgba (H, W, 4), (nx, ny)); shading: per-pixel billboard shading; depth (H, W): a sprite covers only pixels where its view depth is smaller.
     """
+def release_buffer_cache() -> int:
+    """
+    Give every idle block of the cache back to the system; returns the bytes given back.
+    """
 def remove_contained_spheres(centres: typing.Annotated[numpy.typing.ArrayLike, numpy.float32], radii: typing.Annotated[numpy.typing.ArrayLike, numpy.float32]) -> numpy.typing.NDArray[numpy.int64]:
     """
     Eq. (17): indices of the spheres kept so that none lies inside another.
@@ -1209,6 +1217,10 @@ def seed_box_cloud(seeds: list, billboard_size: typing.Annotated[collections.abc
 def seed_box_worst_case(seeds: list) -> tuple[int, int]:
     """
     (boxes, billboards) in the worst case of a seed-box parameter set.
+    """
+def set_buffer_cache_limit(bytes: typing.SupportsInt | typing.SupportsIndex) -> int:
+    """
+    Set the most bytes the idle-block cache keeps (0: none), giving back what is over it; returns the previous limit.
     """
 def set_progress(callback: typing.Any) -> typing.Any:
     """

@@ -44,7 +44,7 @@ namespace {
 // previous cell: its value comes in a register (`prev`, with a coefficient of 0 where there is
 // none), added last, so that the chain from cell to cell is one multiply and one add.
 inline double forward_at(const CellSystem& s, const MicFactor& f, double r,
-                         const std::vector<double>& z, std::size_t k, double prev) {
+                         const LargeVector<double>& z, std::size_t k, double prev) {
   const auto& nb = s.rows[k].nb;
   const auto& l = f.lower[k];
   return (f.inv_sqrt[k] * r + l[1] * z[nb[1]] + l[2] * z[nb[2]]) + l[0] * prev;
@@ -52,8 +52,8 @@ inline double forward_at(const CellSystem& s, const MicFactor& f, double r,
 
 // The backward sweep of z = M⁻¹·r over the forward sweep's values (in z), with Σ r·z; the +x
 // neighbour is the next cell (as above).
-double backward(const CellSystem& s, const MicFactor& f, const std::vector<double>& r,
-                std::vector<double>& z) {
+double backward(const CellSystem& s, const MicFactor& f, const LargeVector<double>& r,
+                LargeVector<double>& z) {
   double rz = 0.0, next = 0.0;
   for (std::size_t k = s.size(); k-- > 0;) {
     const auto& nb = s.rows[k].nb;
@@ -65,7 +65,7 @@ double backward(const CellSystem& s, const MicFactor& f, const std::vector<doubl
   return rz;
 }
 
-double apply_row(const CellSystem::Row& row, const std::vector<double>& x, std::size_t k) {
+double apply_row(const CellSystem::Row& row, const LargeVector<double>& x, std::size_t k) {
   const auto& nb = row.nb;
   const auto& c = row.cond;
   return row.diag * x[k] - (c[0] * x[nb[0]] + c[1] * x[nb[1]] + c[2] * x[nb[2]] + c[3] * x[nb[3]] +
@@ -74,12 +74,12 @@ double apply_row(const CellSystem::Row& row, const std::vector<double>& x, std::
 
 }  // namespace
 
-int solve_mic(const CellSystem& s, const MicFactor& f, const std::vector<double>& b,
-              std::vector<double>& x, double tolerance, int max_iterations) {
+int solve_mic(const CellSystem& s, const MicFactor& f, const LargeVector<double>& b,
+              LargeVector<double>& x, double tolerance, int max_iterations) {
   const std::size_t m = s.size();
   x.resize(m + 1);
   x[m] = 0.0;
-  std::vector<double> r(m + 1, 0.0), z(m + 1, 0.0), p(m + 1, 0.0), Ap(m, 0.0);
+  LargeVector<double> r(m + 1, 0.0), z(m + 1, 0.0), p(m + 1, 0.0), Ap(m, 0.0);
   double bb = 0.0;
   for (std::size_t k = 0; k < m; ++k) {
     r[k] = b[k] - apply_row(s.rows[k], x, k);

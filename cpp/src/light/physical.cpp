@@ -364,14 +364,14 @@ double carried_factor(double tau, double k, const CarriedSource& carried) {
   return (1.0 - m) * direct + m * a * direct * spread;
 }
 
-std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
+LargeVector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
                                          glm::vec3 cell, const int dims[3], int threads,
                                          const float* columns, float depth_scale,
                                          const CarriedSource& carried) {
   f.validate();
   const std::size_t w = static_cast<std::size_t>(dims[0]), h = static_cast<std::size_t>(dims[1]),
                     d = static_cast<std::size_t>(dims[2]);
-  std::vector<float> out(w * h * d);
+  LargeVector<float> out(w * h * d);
   parallel_for(d * h, threads, [&](std::size_t row) {
     const float y = lo.y + (static_cast<float>(row % h) + 0.5f) * cell.y;
     const float z = lo.z + (static_cast<float>(row / h) + 0.5f) * cell.z;
@@ -638,7 +638,7 @@ constexpr int kSkyLanes = 16;
 // lattice's end read there (their samples are never counted).
 struct PaddedLattice {
   static constexpr std::size_t kSlack = 2 * kSkyLanes;
-  std::vector<float> v;
+  LargeVector<float> v;
   int pad, w, h, d;  // border and padded dimensions
   PaddedLattice(const float* ext, const VolumeGrid& g, int border)
       : pad(border), w(g.w + 2 * border), h(g.h + 2 * border), d(g.d + 2 * border) {
@@ -905,7 +905,7 @@ LargeVector<float> sky_visibility(const float* ext, const VolumeGrid& g, int ord
   const SphereQuadrature quad(n_theta);
   const int nc = order * order;
   const std::size_t ndir = quad.dirs.size();
-  std::vector<float> basis(ndir * nc);
+  LargeVector<float> basis(ndir * nc);
   for (std::size_t k = 0; k < ndir; ++k) sh_eval(order, quad.dirs[k], &basis[k * nc]);
   const glm::vec3 vs = g.voxel_size();
   const float dt = step_voxels * std::min(vs.x, std::min(vs.y, vs.z));
@@ -916,7 +916,7 @@ LargeVector<float> sky_visibility(const float* ext, const VolumeGrid& g, int ord
   // unoccluded sky (V = 1: V_0 = √4π, the other coefficients 0).
   const float open = 3.5449077018110318f;  // √(4π)
   // The 3×3×3 neighbourhood's "any medium", as three one-axis dilations.
-  std::vector<unsigned char> near(nv), pass(nv);
+  LargeVector<unsigned char> near(nv), pass(nv);
   for (std::size_t v = 0; v < nv; ++v) near[v] = ext[v] > 0.0f;
   const std::size_t strides[3] = {1, static_cast<std::size_t>(g.w),
                                   static_cast<std::size_t>(g.w) * static_cast<std::size_t>(g.h)};
@@ -947,16 +947,16 @@ LargeVector<float> sky_visibility(const float* ext, const VolumeGrid& g, int ord
     // not depend on the thread count.
     const std::vector<LatticeDirection> dirs = lattice_directions();
     const std::size_t nd = dirs.size();
-    std::vector<float> lbasis(nd * nc);
+    LargeVector<float> lbasis(nd * nc);
     for (std::size_t k = 0; k < nd; ++k)
       sh_eval(order, glm::normalize(glm::vec3(dirs[k].step) * vs), &lbasis[k * nc]);
     const std::size_t batch =
         std::min<std::size_t>(nd, std::max<std::size_t>(resolve_threads(threads, nd), 1));
-    std::vector<float> depth(batch * nv);
-    std::vector<float> wy(nd * nc);  // weight × basis, per direction
+    LargeVector<float> depth(batch * nv);
+    LargeVector<float> wy(nd * nc);  // weight × basis, per direction
     for (std::size_t k = 0; k < nd; ++k)
       for (int c = 0; c < nc; ++c) wy[k * nc + c] = dirs[k].weight * lbasis[k * nc + c];
-    std::vector<float> moments(static_cast<std::size_t>(nc) * nv, 0.0f);  // [c][v]
+    LargeVector<float> moments(static_cast<std::size_t>(nc) * nv, 0.0f);  // [c][v]
     constexpr std::size_t kChunk = 4096;
     const std::size_t chunks = (nv + kChunk - 1) / kChunk;
     for (std::size_t k0 = 0; k0 < nd; k0 += batch) {
@@ -1058,14 +1058,14 @@ LargeVector<float> sky_visibility(const float* ext, const VolumeGrid& g, int ord
   return out;
 }
 
-std::vector<float> physical_grid(const float* ext, std::size_t voxels, const float* phi,
+LargeVector<float> physical_grid(const float* ext, std::size_t voxels, const float* phi,
                                  int phi_channels, const float* sky_e, double cell,
                                  double gain_depth, double sun_gain, double sky_gain, int threads) {
   if (phi != nullptr && phi_channels != 1 && phi_channels != 4)
     throw std::invalid_argument("phi must have 1 or 4 channels");
   if (phi != nullptr && phi_channels == 1 && sky_e != nullptr)
     throw std::invalid_argument("a sky's light needs the fluence's sky channels");
-  std::vector<float> out(voxels * 4, 0.0f);
+  LargeVector<float> out(voxels * 4, 0.0f);
   parallel_chunks(voxels, threads, [&](std::size_t vb, std::size_t ve) {
     for (std::size_t v = vb; v < ve; ++v) {
       float* o = &out[v * 4];
@@ -1094,11 +1094,11 @@ std::vector<float> physical_grid(const float* ext, std::size_t voxels, const flo
   return out;
 }
 
-std::vector<float> sky_irradiance_from(const float* visibility, std::size_t voxels,
+LargeVector<float> sky_irradiance_from(const float* visibility, std::size_t voxels,
                                        const float* sky_coeffs, int order, int threads) {
   if (order < 1 || order > kMaxShOrder) throw std::invalid_argument("sh_order must be in [1, 4]");
   const int nc = order * order;
-  std::vector<float> out(voxels * 3);
+  LargeVector<float> out(voxels * 3);
   parallel_for(voxels, threads, [&](std::size_t v) {
     const float* vis = visibility + v * nc;
     for (int ch = 0; ch < 3; ++ch) {
@@ -1111,7 +1111,7 @@ std::vector<float> sky_irradiance_from(const float* visibility, std::size_t voxe
   return out;
 }
 
-std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
+LargeVector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
                                   int order, int n_theta, float step_voxels, int threads,
                                   SkyRays rays) {
   const LargeVector<float> vis = sky_visibility(ext, g, order, n_theta, step_voxels, threads, rays);
@@ -1131,12 +1131,12 @@ float boost(float x) {  // 2 sinh(x/2)/x, the thick-cell source factor (→ 1 fo
 }
 }  // namespace
 
-std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
+LargeVector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
                                      glm::vec3 to_sun, const float* sky_e, float albedo,
                                      int threads) {
   const std::size_t slice = static_cast<std::size_t>(g.w) * g.h;
   const int ch = sky_e != nullptr ? 4 : 1;
-  std::vector<float> q(g.voxels() * ch, 0.0f);
+  LargeVector<float> q(g.voxels() * ch, 0.0f);
   const glm::vec3 h = g.voxel_size();
   const glm::vec3 s = glm::normalize(to_sun);
   const float ell_sun =
@@ -1162,10 +1162,10 @@ namespace {
 // weight·3D·|Q1| per cell (0 outside the medium): Q1 = ϖσ·T·ḡ the first moment of the collided
 // sun light per unit irradiance, D = 1/(3σt') — the forward-scattered flux the diffusion's
 // source −∇·(3D·Q1) carries, and a part of the diffuse flux E = −D∇φ + 3D·Q1.
-std::vector<float> sun_flux_strength(const float* ext, std::size_t n, const unsigned char* medium,
+LargeVector<float> sun_flux_strength(const float* ext, std::size_t n, const unsigned char* medium,
                                      const float* sun_t, float albedo, float mean_cosine,
                                      float weight) {
-  std::vector<float> f(n, 0.0f);
+  LargeVector<float> f(n, 0.0f);
   for (std::size_t i = 0; i < n; ++i) {
     if (!medium[i]) continue;
     const float st = ext[i];
@@ -1177,7 +1177,7 @@ std::vector<float> sun_flux_strength(const float* ext, std::size_t n, const unsi
 
 }  // namespace
 
-void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, const VolumeGrid& g,
+void add_sun_flux_source(LargeVector<float>& q, int channels, const float* ext, const VolumeGrid& g,
                          const float* sun_t, glm::vec3 to_sun, float albedo, float mean_cosine,
                          float weight) {
   if (weight == 0.0f) return;
@@ -1190,9 +1190,9 @@ void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, 
   const float hmin = std::min(h[0], std::min(h[1], h[2]));
   const glm::vec3 dir = -glm::normalize(to_sun);  // the way the light travels
   const float s[3] = {dir.x, dir.y, dir.z};
-  std::vector<unsigned char> medium(n);
+  LargeVector<unsigned char> medium(n);
   for (std::size_t i = 0; i < n; ++i) medium[i] = ext[i] * hmin > kMediumThickness;
-  const std::vector<float> f =
+  const LargeVector<float> f =
       sun_flux_strength(ext, n, medium.data(), sun_t, albedo, mean_cosine, weight);
   const std::size_t stride[3] = {1, static_cast<std::size_t>(W), static_cast<std::size_t>(W) * H};
   const int dims[3] = {W, H, Dd};
@@ -1222,8 +1222,8 @@ struct DiffusionLattice {
   float h[3];
   std::size_t stride[3];
   int dims[3];
-  std::vector<unsigned char> medium;
-  std::vector<float> D;
+  LargeVector<unsigned char> medium;
+  LargeVector<float> D;
 
   DiffusionLattice(const float* ext, const VolumeGrid& g, const DiffusionParams& p)
       : W(g.w), H(g.h), Dd(g.d), n(g.voxels()), medium(g.voxels()), D(g.voxels(), 0.0f) {
@@ -1257,7 +1257,7 @@ struct DiffusionLattice {
 // The old solve (solver jacobi): conjugate gradients preconditioned by the diagonal over the
 // whole lattice, into out (`channels` per voxel; the medium cells' values).
 void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* source, int channels,
-                    const DiffusionParams& p, int threads, std::vector<float>& out) {
+                    const DiffusionParams& p, int threads, LargeVector<float>& out) {
   const std::size_t n = L.n;
   const int W = L.W, H = L.H;
   const auto& stride = L.stride;
@@ -1265,11 +1265,11 @@ void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* so
   const auto& h = L.h;
   const auto& medium = L.medium;
   const auto& D = L.D;
-  std::vector<float> diag(n, 1.0f);
+  LargeVector<float> diag(n, 1.0f);
   for (std::size_t i = 0; i < n; ++i)
     if (medium[i]) diag[i] = (1.0f - p.albedo) * ext[i];
   // Face conductances (to the + neighbour along each axis) and the diagonal.
-  std::vector<float> cond(3 * n, 0.0f);
+  LargeVector<float> cond(3 * n, 0.0f);
   auto coord = [&](std::size_t i, int a) {
     return a == 0   ? static_cast<int>(i % W)
            : a == 1 ? static_cast<int>((i / W) % H)
@@ -1296,7 +1296,7 @@ void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* so
     }
   }
   // y = A·x at cell i (0 outside the medium).
-  auto apply_at = [&](const std::vector<double>& x, std::size_t i) {
+  auto apply_at = [&](const LargeVector<double>& x, std::size_t i) {
     if (!medium[i]) return 0.0;
     double s = static_cast<double>(diag[i]) * x[i];
     for (int a = 0; a < 3; ++a) {
@@ -1315,7 +1315,7 @@ void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* so
   auto b_of = [&](std::size_t i, int c) {
     return medium[i] ? static_cast<double>(source[i * channels + c]) : 0.0;
   };
-  auto solve = [&](int c, const std::vector<double>* from, int from_c, std::vector<double>& x,
+  auto solve = [&](int c, const LargeVector<double>* from, int from_c, LargeVector<double>& x,
                    int inner) {
     std::vector<std::array<double, 2>> part(blocks);
     auto sums = [&](auto&& body) {  // body(begin, end) → {Σ, Σ} over its block
@@ -1329,7 +1329,7 @@ void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* so
       }
       return total;
     };
-    std::vector<double> r(n), z(n), q(n), Ap(n);
+    LargeVector<double> r(n), z(n), q(n), Ap(n);
     x.assign(n, 0.0);
     double scale = 0.0;
     if (from != nullptr) {
@@ -1393,8 +1393,8 @@ void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* so
   // differ mostly by a factor: the conjugate gradients then only correct the difference). A
   // solve on one thread saves each iteration's hand-offs between threads on a lattice this
   // small; the results are the same on any number of threads.
-  std::vector<std::vector<double>> xs(static_cast<std::size_t>(channels));
-  auto round = [&](const std::vector<int>& cs, const std::vector<double>* from, int from_c) {
+  std::vector<LargeVector<double>> xs(static_cast<std::size_t>(channels));
+  auto round = [&](const std::vector<int>& cs, const LargeVector<double>* from, int from_c) {
     const bool apart = cs.size() > 1 && resolve_threads(threads, cs.size()) > 1;
     if (apart) {
       parallel_for(cs.size(), threads,
@@ -1420,10 +1420,10 @@ void fluence_jacobi(const DiffusionLattice& L, const float* ext, const float* so
 // are built over z-slices in parallel (each slice's rows start at the count of medium cells
 // before it: the same system whatever the thread count).
 CellSystem medium_system(const DiffusionLattice& L, const float* ext, const DiffusionParams& p,
-                         int threads, std::vector<std::size_t>& cells) {
+                         int threads, LargeVector<std::size_t>& cells) {
   const std::size_t n = L.n;
   const std::size_t slice = static_cast<std::size_t>(L.W) * L.H;
-  std::vector<std::int32_t> at(n, -1);
+  LargeVector<std::int32_t> at(n, -1);
   std::vector<std::size_t> first(static_cast<std::size_t>(L.Dd) + 1, 0);  // per slice
   cells.clear();
   for (std::size_t i = 0; i < n; ++i) {
@@ -1468,18 +1468,18 @@ CellSystem medium_system(const DiffusionLattice& L, const float* ext, const Diff
 // The new solve (solver mic): conjugate gradients preconditioned by MIC(0), over the medium cells
 // only, each channel on one thread, into out (`channels` per voxel; the medium cells' values).
 void fluence_mic(const DiffusionLattice& L, const float* ext, const float* source, int channels,
-                 const DiffusionParams& p, int threads, std::vector<float>& out) {
-  std::vector<std::size_t> cells;
+                 const DiffusionParams& p, int threads, LargeVector<float>& out) {
+  LargeVector<std::size_t> cells;
   const CellSystem sys = medium_system(L, ext, p, threads, cells);
   const MicFactor factor = mic_factor(sys);
   const std::size_t m = cells.size();
   // One channel's solve into xs[c] (m + 1 values); `from` (< 0: none) the channel whose solution
   // it starts from, scaled by the least-squares ratio of the two channels' sources.
-  std::vector<std::vector<double>> xs(static_cast<std::size_t>(channels));
+  std::vector<LargeVector<double>> xs(static_cast<std::size_t>(channels));
   auto solve = [&](int c, int from) {
-    std::vector<double> b(m);
+    LargeVector<double> b(m);
     for (std::size_t k = 0; k < m; ++k) b[k] = source[cells[k] * channels + c];
-    std::vector<double>& x = xs[c];
+    LargeVector<double>& x = xs[c];
     x.assign(m + 1, 0.0);
     if (from >= 0) {
       double num = 0.0, den = 0.0;
@@ -1505,7 +1505,7 @@ void fluence_mic(const DiffusionLattice& L, const float* ext, const float* sourc
 
 }  // namespace
 
-std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
+LargeVector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
                                      int channels, const DiffusionParams& p, int threads) {
   g.validate();
   if (channels < 1 || channels > 8) throw std::invalid_argument("channels must be in [1, 8]");
@@ -1513,7 +1513,7 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
     throw std::invalid_argument("albedo must be in [0, 1]");
   const DiffusionLattice L(ext, g, p);
   const std::size_t n = L.n;
-  std::vector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
+  LargeVector<float> out(n * static_cast<std::size_t>(channels), 0.0f);
   if (p.solver == DiffusionSolver::mic)
     fluence_mic(L, ext, source, channels, p, threads, out);
   else
@@ -1550,20 +1550,20 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
   return out;
 }
 
-std::vector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, const float* phi,
+LargeVector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, const float* phi,
                                         int channels, const DiffusionParams& p, int threads,
                                         const float* sun_t, glm::vec3 to_sun, float forward) {
   g.validate();
   if (channels < 1 || channels > 8) throw std::invalid_argument("channels must be in [1, 8]");
   const DiffusionLattice L(ext, g, p);
   const std::size_t n = L.n;
-  std::vector<float> out(n * 3, 0.0f);
+  LargeVector<float> out(n * 3, 0.0f);
   auto at = [&](std::size_t i) { return static_cast<double>(phi[i * channels]); };
   // The forward-scattered flux's strength per cell and the way the light travels (none: 0).
   const bool streams = sun_t != nullptr && forward != 0.0f;
-  const std::vector<float> fwd =
+  const LargeVector<float> fwd =
       streams ? sun_flux_strength(ext, n, L.medium.data(), sun_t, p.albedo, p.mean_cosine, forward)
-              : std::vector<float>();
+              : LargeVector<float>();
   const glm::vec3 dir = streams ? -glm::normalize(to_sun) : glm::vec3(0.0f);
   // The flux through the face of medium cell i on side ±1 of axis a, along +a.
   auto face = [&](std::size_t i, const int c[3], int a, int side) {

@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "cumuli/large_buffer.hpp"
+
 namespace cumuli {
 
 // A symmetric positive definite 7-point system over a compact list of cells (the medium cells
@@ -18,7 +20,7 @@ struct CellSystem {
     std::array<float, 6> cond{};
     float diag = 1.0f;
   };
-  std::vector<Row> rows;
+  LargeVector<Row> rows;
   std::size_t size() const { return rows.size(); }
 };
 
@@ -27,9 +29,9 @@ struct CellSystem {
 // p_k = 1/√e_k (e_k the pivot), forward y_k = p_k·r_k + Σ_lower lower[k][a]·y_j and backward
 // z_k = p_k·y_k + Σ_upper upper[k][a]·z_j, lower[k][a] = c_kj·p_j·p_k, upper[k][a] = c_kj·p_k².
 struct MicFactor {
-  std::vector<float> inv_sqrt;              // p_k
-  std::vector<std::array<float, 3>> lower;  // a = −x, −y, −z
-  std::vector<std::array<float, 3>> upper;  // a = +x, +y, +z
+  LargeVector<float> inv_sqrt;              // p_k
+  LargeVector<std::array<float, 3>> lower;  // a = −x, −y, −z
+  LargeVector<std::array<float, 3>> upper;  // a = +x, +y, +z
 };
 
 // MIC(0) of `s`: the dropped fill-in moved to the diagonal with weight `tau` (row sums kept at
@@ -39,7 +41,7 @@ MicFactor mic_factor(const CellSystem& s, float tau = 0.97f, float safety = 0.25
 // Solves s·x = b by conjugate gradients preconditioned with `f`, on one thread (each step in
 // the cells' order: the result does not depend on anything else), from x's values (size()+1
 // entries, the last 0) until |r| ≤ tolerance·|b| or max_iterations. Returns the iterations.
-int solve_mic(const CellSystem& s, const MicFactor& f, const std::vector<double>& b,
-              std::vector<double>& x, double tolerance, int max_iterations);
+int solve_mic(const CellSystem& s, const MicFactor& f, const LargeVector<double>& b,
+              LargeVector<double>& x, double tolerance, int max_iterations);
 
 }  // namespace cumuli

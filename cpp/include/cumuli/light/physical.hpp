@@ -80,7 +80,7 @@ double carried_factor(double tau, double k, const CarriedSource& carried);
 // per-column depths sample_frame adds; `depth_scale` k: e^{−k·τ} (the δ-M similarity relation's
 // transmittance, with the phase's forward peak taken as unscattered); `carried`, when its share
 // is > 0: carried_factor instead of e^{−kτ} (the diffusion's sun source).
-std::vector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
+LargeVector<float> lattice_transmittance(const float* depth, const SunFrame& f, glm::vec3 lo,
                                          glm::vec3 cell, const int dims[3], int threads,
                                          const float* columns = nullptr, float depth_scale = 1.0f,
                                          const CarriedSource& carried = {});
@@ -137,15 +137,15 @@ LargeVector<float> sky_visibility(const float* ext, const VolumeGrid& g, int ord
 //   A = G_sun·φ_sun, RGB = G_sky·(E_sky + φ_sky)   (E_sky alone without φ; 0 without either),
 // G = 1 + (G∞ − 1)(1 − e^{−τc/τg}) per cell, τc = max(σt, 0)·cell, in double rounded to float
 // (G∞ everywhere when τg = 0); the products in float.
-std::vector<float> physical_grid(const float* ext, std::size_t voxels, const float* phi,
+LargeVector<float> physical_grid(const float* ext, std::size_t voxels, const float* phi,
                                  int phi_channels, const float* sky_e, double cell,
                                  double gain_depth, double sun_gain, double sky_gain, int threads);
 
 // E_sky = max(0, Σ_m L_m V_m) per voxel (RGB interleaved) from sky_visibility's moments (each
 // voxel's sum on one thread: the same on any thread count).
-std::vector<float> sky_irradiance_from(const float* visibility, std::size_t voxels,
+LargeVector<float> sky_irradiance_from(const float* visibility, std::size_t voxels,
                                        const float* sky_coeffs, int order, int threads = 1);
-std::vector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
+LargeVector<float> sky_irradiance(const float* ext, const VolumeGrid& g, const float* sky_coeffs,
                                   int order, int n_theta, float step_voxels, int threads,
                                   SkyRays rays = SkyRays::March);
 
@@ -169,7 +169,7 @@ struct DiffusionParams {
 // sun, 2h/3 — the mean chord — for the sky), the albedo's share of which scatters:
 // Q = ϖ·T·2 sinh(x/2)/ℓ (→ ϖσT for thin cells), so coarse cells keep the light's energy.
 // Threads over z-slices (the values do not depend on the thread count).
-std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
+LargeVector<float> diffusion_sources(const float* ext, const VolumeGrid& g, const float* sun_t,
                                      glm::vec3 to_sun, const float* sky_e, float albedo,
                                      int threads = 1);
 
@@ -178,12 +178,12 @@ std::vector<float> diffusion_sources(const float* ext, const VolumeGrid& g, cons
 // travels; Ishimaru 1978, §9.2, the diffusion equation with the reduced intensity's flux), times
 // `weight`, on the faces between medium cells only: it moves the source along the light
 // (deeper into the cloud) and leaves its sum unchanged. weight 0: nothing is added.
-void add_sun_flux_source(std::vector<float>& q, int channels, const float* ext, const VolumeGrid& g,
+void add_sun_flux_source(LargeVector<float>& q, int channels, const float* ext, const VolumeGrid& g,
                          const float* sun_t, glm::vec3 to_sun, float albedo, float mean_cosine,
                          float weight);
 
 // φ (the collided fluence, `channels` per voxel) of the diffusion problem above.
-std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
+LargeVector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, const float* source,
                                      int channels, const DiffusionParams& p, int threads);
 
 // The anisotropy r = 3E/φ of channel 0 of a diffusion solution `phi` (`channels` per voxel, as
@@ -198,7 +198,7 @@ std::vector<float> diffusion_fluence(const float* ext, const VolumeGrid& g, cons
 // the faces between medium cells (E = −D∇φ + 3D·Q1, the P1 flux with a first-moment source):
 // where the collided light has not yet diffused — thin strands, the first mean free paths — it
 // streams on along the light.
-std::vector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, const float* phi,
+LargeVector<float> diffusion_anisotropy(const float* ext, const VolumeGrid& g, const float* phi,
                                         int channels, const DiffusionParams& p, int threads,
                                         const float* sun_t = nullptr,
                                         glm::vec3 to_sun = glm::vec3(0.0f, 1.0f, 0.0f),
