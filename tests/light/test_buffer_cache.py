@@ -107,7 +107,9 @@ def test_bad_limits_are_refused(cache_limit: None, limit: object, error: type) -
     assert cu.buffer_cache_stats()["limit_bytes"] == before
 
 
-@pytest.mark.parametrize(("text", "limit"), [("256M", 256 << 20), ("0", 0), ("nonsense", 64 << 20)])
+@pytest.mark.parametrize(
+    ("text", "limit"), [("256M", 256 << 20), ("0", 0), ("nonsense", 256 << 20)]
+)
 def test_the_environment_sets_the_starting_limit(text: str, limit: int) -> None:
     code = "import cumuli; print(cumuli.buffer_cache_stats()['limit_bytes'])"
     env = {**os.environ, "CUMULI_BUFFER_CACHE": text}

@@ -27,7 +27,7 @@ constexpr std::size_t kPooledBytes = std::size_t{64} << 10;
 // Blocks at least this large take the mapped path.
 constexpr std::size_t kLargeBytes = std::size_t{2} << 20;
 // The idle-block cache's default limit, in bytes.
-constexpr std::size_t kDefaultBufferCacheBytes = std::size_t{64} << 20;
+constexpr std::size_t kDefaultBufferCacheBytes = std::size_t{256} << 20;
 
 // What the idle-block cache holds and has done since the process started.
 struct BufferCacheStats {

@@ -5,9 +5,10 @@ results: hundreds of kilobytes to megabytes each) afresh for every cloud and eve
 fresh from the system costs a page fault per 4 KiB page on first touch, a tenth of a default
 cumulus's light step. The core therefore keeps the blocks of 64 KiB or more that it frees (the
 arrays it hands to numpy included, once numpy lets go of them) in one process-wide cache, up to
-a limit (64 MiB unless ``CUMULI_BUFFER_CACHE`` or `set_buffer_cache_limit` says otherwise), and
-reuses a block of the same size before asking the system. The cache changes no result: every
-array the core makes is filled before it is read.
+a limit, and reuses a block of the same size before asking the system. The limit is 256 MiB
+(about what a sixteen-cloud scene's light step frees) unless ``CUMULI_BUFFER_CACHE`` or
+`set_buffer_cache_limit` says otherwise. The cache changes no result: every array the core makes
+is filled before it is read.
 """
 
 from __future__ import annotations
