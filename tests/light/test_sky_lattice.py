@@ -140,17 +140,27 @@ def test_lattice_rays_see_through_a_dense_cube_only_what_is_left() -> None:
         assert centre < corner < sky
 
 
-def test_the_physical_light_marches_the_sky_by_default() -> None:
-    """The march stays the physical default: the lattice's 26 directions are ~7× faster but
-    further from Mitsuba 3 on the held-out views (docs/lighting.md)."""
+def test_the_physical_light_takes_the_sky_along_the_lattice_by_default(monkeypatch) -> None:
+    """The lattice's 26 directions are the physical default (refitted, nearer Mitsuba 3 than
+    the march: docs/lighting.md), and the setting reaches the light step: the march gives
+    another sky light."""
     from cumuli.light import physical
+    from cumuli.light.prepare import clear_memo
 
-    assert physical.SKY_RAYS == "march"
-    rng = np.random.default_rng(2)
-    ext = rng.uniform(0.0, 2.0, (6, 6, 6)).astype(F)
-    default = _core.sky_irradiance(ext, (0, 0, 0), (1, 1, 1), COEFFS, 3, 3, 1.0, 1)
-    march = _core.sky_irradiance(ext, (0, 0, 0), (1, 1, 1), COEFFS, 3, 3, 1.0, 1, method="march")
-    assert np.array_equal(default, march)
+    assert physical.SKY_RAYS == "lattice"
+    scene = cu.Scene(
+        clouds=[cu.gaussian_cumulus(seed=3)], settings=cu.RenderSettings(lighting="physical")
+    )
+    clear_memo()
+    lattice = physical.physical_light(scene.clouds[0], scene, 1).grid
+    monkeypatch.setattr(physical, "SKY_RAYS", "march")
+    clear_memo()
+    march = physical.physical_light(scene.clouds[0], scene, 1).grid
+    clear_memo()
+    assert lattice.shape == march.shape
+    sky = (slice(None),) * 3 + (slice(1, 4),)  # the RGB sky channels
+    assert not np.allclose(lattice[sky], march[sky], rtol=1e-3)
+    assert np.array_equal(lattice[..., 0] > 0, march[..., 0] > 0)
 
 
 def test_unknown_ray_method_is_refused() -> None:

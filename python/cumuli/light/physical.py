@@ -38,11 +38,11 @@ maths):
   and through its flux: ``anisotropy`` ``r = 3E/φ``, ``E = −D∇φ + SUN_FORWARD·3D·Q1`` (the P1
   flux with the source's first moment: the forward-scattered light streams on along the sun's
   way), applied per frame for the camera (:mod:`cumuli.light.view`, :data:`FLUX_LIMIT`).
-- **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`, the endless animation's
-  quadrature with 2·:data:`SKY_SAMPLES`² directions; :data:`SKY_RAYS`) times the sky's SH
-  projection gives the sky irradiance reaching each voxel unscattered; with multiple
-  scattering on, it and its diffusion are read with the gain of the same form up to
-  :data:`SKY_GAIN`.
+- **Sky**: the SH projection of the visibility (order :data:`SKY_ORDER`; its rays the lattice's
+  26 directions or the endless animation's quadrature with 2·:data:`SKY_SAMPLES`² of them:
+  :data:`SKY_RAYS`) times the sky's SH projection gives the sky irradiance reaching each
+  voxel unscattered; with multiple scattering on, it and its diffusion are read with the gain
+  of the same form up to :data:`SKY_GAIN`.
 
 The drawers see all of it through the **δ-M view**: the camera's rays take the same forward
 peak as unscattered, so what lies behind a stretch of cloud reaches the camera with
@@ -108,29 +108,29 @@ OCTAVES = 2
 #: ``"convolved"``, the δ-M phase convolved with itself ``n`` times (:func:`order_phase_table`;
 #: refitted it does no better on the held-out views, docs/fidelity.md).
 OCTAVE_PHASE = "scaled"
-OCTAVE_A = 0.773
+OCTAVE_A = 0.776
 OCTAVE_B = 1.0
-OCTAVE_C = 0.528
-OCTAVE_POISSON = 0.918
+OCTAVE_C = 0.53
+OCTAVE_POISSON = 0.884
 #: Gains on the lattice's diffuse light, reached in optically thick cells: the sun's multiple
 #: scattering, and the sky's light (:func:`lattice_gains`).
-SUN_GAIN = 1.674
-SKY_GAIN = 3.658
+SUN_GAIN = 1.636
+SKY_GAIN = 4.092
 #: Optical thickness ``τg`` of a lattice cell over which the gains rise from 1 to their value.
-GAIN_DEPTH = 1.958
+GAIN_DEPTH = 2.108
 #: Weight of the forward-scattered sun's flux source in the diffusion (``−∇·(3D·Q1)``, the first
 #: moment of the collided sun light; 0: an isotropic source, 1: the whole of it).
-SUN_FORWARD = 0.18
+SUN_FORWARD = 0.181
 #: Share ``m`` of the collided sun light carried on along the sun's way before it diffuses, and
 #: the rate at which it turns diffuse, ``a·σ`` with ``a = CARRIED_RATE·(1 − ϖḡ)`` (the reduced
 #: extinction's share): the diffusion's sun source per unit of collided light is
 #: ``(1 − m)·e^{−kτ} + m·a/(a − k)·(e^{−kτ} − e^{−aτ})`` (``k = 1 − f·ϖ``;
 #: ``_core.lattice_transmittance``). 0: all of it diffuses where it collides.
-SUN_CARRIED = 0.308
-CARRIED_RATE = 1.124
+SUN_CARRIED = 0.363
+CARRIED_RATE = 1.049
 #: How far the camera's view of the diffuse sun light may lean on its flux: the drawers read
 #: ``φ·(1 + ḡ·clamp(r·d, ±FLUX_LIMIT))``, ``r = 3E/φ`` (:mod:`cumuli.light.view`).
-FLUX_LIMIT = 0.888
+FLUX_LIMIT = 0.946
 #: The views the constants above were fitted on (``tests/references/fit_physical.py``); the other
 #: reference views (``tests/references``) are held out to test them.
 FIT_VIEWS = ("sidelit", "backlit", "metaball", "toplit", "lsystem")
@@ -142,11 +142,12 @@ DIFFUSION_SOLVER = "mic"
 DIFFUSION_TOLERANCE = 1e-3
 #: SH order of the sky visibility, its rays (``"march"``: a ray marched per voxel and direction
 #: of a product quadrature; ``"lattice"``: the 26 directions to a voxel's neighbours, Lebedev's
-#: 26-point rule, τ exact by one pass over the lattice per direction, ~7× faster but 1.5–2
-#: points further from Mitsuba 3 on the held-out views: docs/lighting.md) and the quadrature's
-#: polar nodes (``n_theta``; it also projects the sky's radiance).
+#: 26-point rule, τ exact by one pass over the lattice per direction: ~5× faster than the
+#: march and, with the constants above fitted for it, nearer Mitsuba 3 on every view but the
+#: L-system's, the held-out one included: docs/lighting.md) and the quadrature's polar nodes
+#: (``n_theta``: the march's, and the sky radiance's projection).
 SKY_ORDER = 3
-SKY_RAYS = "march"
+SKY_RAYS = "lattice"
 SKY_SAMPLES = 3
 #: The sun's march along a column of its lattice ends once the optical depth passes this: the
 #: sun light left is ``e^{−30}``, and the octaves' slowest term, ``β·τ·e^{−c·τ}``, ~2e-5 (the
