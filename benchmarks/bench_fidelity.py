@@ -160,7 +160,7 @@ def main(argv: list[str] | None = None) -> int:
     names = [n for n in mv.VIEWS if n in record and mv.view_file(n).exists()]
     if args.quick:
         names = names[-1:]
-    repeats = 1 if args.quick else 5
+    repeats = 1 if args.quick else 9
     views = {}
     for name in names:
         common.log(f"view {name} ...")

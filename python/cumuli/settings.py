@@ -32,7 +32,7 @@ DROPLET_DIAMETER_RANGE = (5.0, 50.0)
 #: The physical mode's sun lattice: ACROSS × physical_resolution nodes across the light, ALONG ×
 #: as many along.
 ACROSS = 2
-ALONG = 2
+ALONG = 1
 #: Cell-averaging of the world lattice's extinction (supersample³ points per voxel).
 SUPERSAMPLE = 2
 #: Bytes per physical_resolution³ node while one drawable's light is made: the sun lattice's

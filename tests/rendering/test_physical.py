@@ -187,8 +187,9 @@ def test_sun_depth_matches_a_brute_force_march() -> None:
     shallow, deep = want < 0.8 * cut, want > 1.2 * cut
     assert shallow.sum() >= 15, want
     # (A deep point between the last node before the cut and the first after it reads a blend
-    # of the two: within a few percent under the cut, its light e^−τ nil all the same.)
-    assert np.all(got[deep] > 0.95 * cut) and np.all(got[deep] <= 1.05 * want[deep])
+    # of the two: up to ~10 % under the cut with one node per cell along the light, its light
+    # e^−τ nil all the same.)
+    assert np.all(got[deep] > 0.9 * cut) and np.all(got[deep] <= 1.05 * want[deep])
     assert np.median(got[deep]) > cut
     # Trilinear between lattice nodes: close where the depth varies smoothly (the shallow points
     # include the cloud's fringe, where a node's depth differs most from a point's).
