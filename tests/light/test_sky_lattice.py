@@ -163,6 +163,19 @@ def test_the_physical_light_takes_the_sky_along_the_lattice_by_default(monkeypat
     assert np.array_equal(lattice[..., 0] > 0, march[..., 0] > 0)
 
 
+def test_the_core_keeps_the_march_as_its_own_default() -> None:
+    """``_core.sky_irradiance`` without ``method`` marches (the physical step names its rays)."""
+    rng = np.random.default_rng(2)
+    ext = rng.uniform(0.0, 2.0, (6, 6, 6)).astype(F)
+    default = _core.sky_irradiance(ext, (0, 0, 0), (1, 1, 1), COEFFS, 3, 3, 1.0, 1)
+    march = _core.sky_irradiance(ext, (0, 0, 0), (1, 1, 1), COEFFS, 3, 3, 1.0, 1, method="march")
+    lattice = _core.sky_irradiance(
+        ext, (0, 0, 0), (1, 1, 1), COEFFS, 3, 3, 1.0, 1, method="lattice"
+    )
+    assert np.array_equal(default, march)
+    assert not np.array_equal(default, lattice)
+
+
 def test_unknown_ray_method_is_refused() -> None:
     ext = np.ones((4, 4, 4), F)
     with pytest.raises(ValueError, match="'lattice' or 'march'"):
