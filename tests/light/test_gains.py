@@ -1,6 +1,7 @@
-"""The gains on the physical light's diffuse light take the cell of the default resolution's
-lattice (``cumuli.light.gains``): the same drawable gets the same gains, and nearly the same
-picture, at any ``physical_resolution``."""
+"""The gains on the physical light's diffuse light take the cell of the lattice at
+``GAIN_RESOLUTION`` 48 (``cumuli.light.gains``), the resolution they were first fitted at: the
+same drawable gets the same gains, and nearly the same picture, at any ``physical_resolution``
+(the default, 40, included)."""
 
 from __future__ import annotations
 
@@ -22,8 +23,16 @@ def _volume(edge: int) -> cu.VolumeCloud:
     return cu.VolumeCloud(density=density, box=((0, 0, 0), (4.0, 3.0, 5.0)), sigma_t=2.0)
 
 
-def test_gain_resolution_is_the_default() -> None:
-    assert GAIN_RESOLUTION == cu.RenderSettings().physical_resolution == 48
+def test_the_gains_keep_the_48_lattice_cell_at_the_default_resolution() -> None:
+    """The default light lattice (40) is coarser than the gains' (48): they do not follow it."""
+    assert GAIN_RESOLUTION == 48
+    assert cu.RenderSettings().physical_resolution == 40
+    cloud = cu.gaussian_cumulus(seed=1)
+    s = cu.RenderSettings()
+    field = extinction_grid(cloud, NOISE, s, s.physical_resolution, 1, 1)
+    lo, hi = field.box
+    own = cell_size(lo, hi, field.values.shape)
+    assert gain_cell(lo, hi) == pytest.approx(own * 40 / 48, rel=0.03)
 
 
 @pytest.mark.parametrize(
@@ -37,10 +46,10 @@ def test_gain_resolution_is_the_default() -> None:
     ],  # fmt: skip
     ids=["cumulus", "metaball", "lsystem", "volume 32", "volume 64"],
 )
-def test_the_gain_cell_is_the_default_lattice_cell(drawable) -> None:
-    """At the default resolution the gains' cell is the light lattice's own cell (the renders
-    are the ones the constants were fitted on); at any other, it stays that one."""
-    s = cu.RenderSettings()
+def test_the_gain_cell_is_the_gain_resolution_lattice_cell(drawable) -> None:
+    """At ``GAIN_RESOLUTION`` the gains' cell is the light lattice's own cell; at any other
+    resolution, it stays that one."""
+    s = cu.RenderSettings(physical_resolution=GAIN_RESOLUTION)
     own = cu.registry.of(drawable).medium.own_lattice(drawable)
     n = s.physical_resolution
     resolution = None if own is not None and max(own) <= n else n
@@ -53,7 +62,7 @@ def test_the_gain_cell_is_the_default_lattice_cell(drawable) -> None:
 
 
 def test_the_light_grid_takes_the_default_cell_at_a_finer_resolution(monkeypatch) -> None:
-    """The light lattice's gains at resolution 64 are those of the 48-cell lattice's cell, not
+    """The light lattice's gains at resolution 64 are those of the 48-lattice's cell, not
     of its own finer cell: the grid's sun channel with a gain of 2 over the same with no gain
     (``SUN_GAIN`` 1: the fluence itself) is ``lattice_gains`` on :func:`gain_cell`."""
     settings = cu.RenderSettings(physical_resolution=64)
@@ -93,10 +102,11 @@ def _top_lit_mean(resolution: int) -> float:
 
 
 def test_a_finer_light_does_not_darken_the_cloud() -> None:
-    """A top-lit cumulus's radiance at resolution 64 and 96 stays within 6 % of 48's (with the
-    gains on their own cell it fell 6 % at 64 and 15 % at 96; with them +2 % and +4 %)."""
+    """A top-lit cumulus's radiance at resolution 40 (the default), 64 and 96 stays within 6 % of
+    48's (with the gains on their own cell it fell 6 % at 64 and 15 % at 96; with them +2 % and
+    +4 %)."""
     base = _top_lit_mean(48)
-    for n in (64, 96):
+    for n in (40, 64, 96):
         assert abs(_top_lit_mean(n) / base - 1.0) < 0.06, n
 
 

@@ -208,12 +208,13 @@ def test_the_view_is_the_light_step_seen_from_the_camera(counted) -> None:
 
 @pytest.mark.parametrize("backend", ["cpu", "gl"])
 def test_the_flux_term_reaches_the_image(monkeypatch, backend: str) -> None:
-    """The diffuse light leaves a cloud through every surface, and its forward-scattered part
-    streams on along the light: seen from downstream (the sun behind the cloud, side +1) the
-    cloud is brighter with the flux term than with the isotropic fluence (FLUX_LIMIT 0, the view
-    pass a no-op), and brightened more than seen from the sun's side (by 2.1 % against 2.0 %
-    since most of the forward-scattered light is carried in the source, ``SUN_CARRIED``, rather
-    than streamed in the flux); GL draws what the CPU twin draws."""
+    """The diffuse light leaves a cloud through every surface: seen from downstream (the sun
+    behind the cloud, side +1) and from the sun's side alike the cloud is brighter with the flux
+    term than with the isotropic fluence (FLUX_LIMIT 0, the view pass a no-op): by 2.0 % and
+    2.4 % at the default resolution 40. Most of the forward-scattered light is carried in the
+    source (``SUN_CARRIED``) rather than streamed in the flux, so which side gains more is the
+    lattice's detail (at resolution 48 it was 2.1 % against 2.0 %). GL draws what the CPU twin
+    draws."""
     scene = _scene()
     out = {}
     for limit in (0.0, phys.FLUX_LIMIT):
@@ -226,8 +227,8 @@ def test_the_flux_term_reaches_the_image(monkeypatch, backend: str) -> None:
                 cpu = cu.render(scene, _camera(scene, side), 48, 36, backend="cpu")
                 np.testing.assert_allclose(img, cpu, atol=2e-3)
     gain = {side: out[phys.FLUX_LIMIT, side] / out[0.0, side] for side in (1.0, -1.0)}
-    assert gain[1.0] > 1.003, out
-    assert gain[1.0] > gain[-1.0] + 0.0008, out
+    assert gain[1.0] > 1.01, out
+    assert gain[-1.0] > 1.01, out
 
 
 def test_without_multiple_scattering_there_is_no_view() -> None:

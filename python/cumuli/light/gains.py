@@ -22,11 +22,11 @@ from typing import Any
 import numpy as np
 
 from cumuli.light.medium import lattice_shape
-from cumuli.settings import RenderSettings
 
-#: The ``physical_resolution`` whose lattice sets the gains' cell (:func:`gain_cell`): the
-#: default one, at which the gains' constants are fitted.
-GAIN_RESOLUTION = RenderSettings().physical_resolution
+#: The ``physical_resolution`` whose lattice sets the gains' cell (:func:`gain_cell`): 48, the
+#: default at which the gains were first fitted. It is kept when the default resolution moves
+#: (40 since then), so that a gain is a property of the medium's cell, not of the light's grid.
+GAIN_RESOLUTION = 48
 
 
 def cell_size(lo: Any, hi: Any, shape: tuple[int, ...]) -> float:
