@@ -1,7 +1,7 @@
 """The physical mode's light step (the default lighting): where its time goes, per cloud count.
 
 Scenes: the demo's cumulus scene (`cumuli.demo.cumulus_scene`: `gaussian_cumulus(seed=1)`, sun
-(0.45, 0.75, 0.5), noise seed 7, default settings: ``physical_resolution`` 48, Mie phase, sky
+(0.45, 0.75, 0.5), noise seed 7, default settings: ``physical_resolution`` 40, Mie phase, sky
 light and multiple scattering on) with 1, 2, 4, 8 and 16 clouds (--quick: 1, 2, 4 at
 ``physical_resolution`` 16) in two series, on a square grid 32 units apart in the horizontal
 plane: *copies* (the cumulus translated) and *seeds* (``gaussian_cumulus(seed=1..n)``), 2 threads.
@@ -16,6 +16,9 @@ optical depth of the other clouds upstream of it, the sun's transmittance on the
 the SH sky visibility, the diffusion solve), summed over the clouds, the median of as many
 more passes as repeats (``stages_s``, and ``stages_share`` of their sum). The growth exponent is
 the least-squares slope of log(time) over log(clouds).
+
+``previous_default``: the one-cloud light step at the default resolution and at 48, the default
+before (interleaved), and their ratio.
 
 ``noise_versions``: the one-cloud scene with noise version 1 (the table) and 2 (the hash, whose
 wide fBm kernels compute the lattice in registers), timed alike (interleaved), each with its
@@ -157,6 +160,26 @@ def profile(per_stage: dict[str, float]) -> dict[str, Any]:
         "stages_share": {k: v / total for k, v in per_stage.items()},
         "slowest_stage": max(per_stage, key=lambda k: per_stage[k]),
     }
+
+
+def previous_default(repeats: int) -> dict[str, Any]:
+    """The one-cloud light step at the default ``physical_resolution`` (40) and at 48, the
+    default before it (the gains' cell, ``GAIN_RESOLUTION``), interleaved: what the lower
+    default saves (its picture is as close to Mitsuba, ``docs/fidelity.md``)."""
+    sc = scene("copies", 1, None)
+    old = sc.replace(settings=sc.settings.replace(physical_resolution=48))
+    timed = common.interleaved_repeats(
+        {"default": lambda: light_step(sc), "48": lambda: light_step(old)}, repeats
+    )
+    out = {name: common.spread(wall) for name, (wall, _cpu) in timed.items()}
+    out["default_resolution"] = sc.settings.physical_resolution
+    out["default_over_48"] = out["default"]["median"] / out["48"]["median"]
+    common.log(
+        f"light step at resolution {sc.settings.physical_resolution}: "
+        f"{1e3 * out['default']['median']:.1f} ms, at 48: {1e3 * out['48']['median']:.1f} ms "
+        f"({out['default_over_48']:.2f}x)"
+    )
+    return out
 
 
 def noise_versions(resolution: int | None, repeats: int) -> dict[str, Any]:
@@ -433,6 +456,7 @@ def main(argv: list[str] | None = None) -> int:
         targets[f"sixteen_over_one_{s}"] = common.target(
             TARGET_GROWTH, growth[s]["last_over_one"] if full else None, "<="
         )
+    before = previous_default(repeats) if full else None
     versions = noise_versions(resolution, repeats)
     rays = sky_rays(resolution, repeats)
     sun_moves = moving_sun(resolution, repeats)
@@ -457,6 +481,7 @@ def main(argv: list[str] | None = None) -> int:
         "series": results,
         "growth": growth,
         "seeds_alone_s": alone,
+        "previous_default": before,
         "noise_versions": versions,
         "sky_rays": rays,
         "moving_sun": sun_moves,
