@@ -5,9 +5,9 @@ diffuse light is larger than the cell's mean fluence that the diffusion solves f
 whole of a cell thinner than one: the fluence is read with a gain that rises with the cell's
 optical thickness ``τc = σt·h`` from 1 to ``G∞``, ``G(τc) = 1 + (G∞ − 1)(1 − e^{−τc/τg})``.
 
-The cell edge ``h`` is the one the drawable's lattice has at the **default**
-``physical_resolution`` (:data:`GAIN_RESOLUTION`), whatever resolution the scene asks for
-(:func:`gain_cell`): the gains are fitted at that resolution against Mitsuba 3, and with the
+The cell edge ``h`` is the one the drawable's lattice has at ``physical_resolution`` 48
+(:data:`GAIN_RESOLUTION`, the default when the gains were first fitted against Mitsuba 3),
+whatever resolution the scene asks for, today's default 40 included (:func:`gain_cell`): with the
 actual cell they fell as the lattice was refined (``τc`` halves with the cell), so that a finer
 light darkened the picture — the top-lit reference view's cloud mean went from −8 % at 48 to
 −15 % at 64 and −25 % at 96. With the gains' cell held, one extinction gets one gain at any
