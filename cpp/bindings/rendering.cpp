@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -533,6 +534,55 @@ void bind_camera_candidates(py::module_& m) {
       "The candidates (primitive, t_in, t_out; −1 past the last) of rays from one origin, by "
       "the camera's fan (culled by cones, the marchers' path) and by testing every primitive: "
       "(fan, each), each (n, capacity, 3) float32. For tests: the two must agree bit for bit.");
+  m.def(
+      "screen_candidates",
+      [](const FloatArray& centres, const FloatArray& radii, const FloatArray& rotations,
+         const std::string& model, const Viewport& view, int capacity) {
+        view.validate();
+        if (capacity < 1 || capacity > 4096)
+          throw py::value_error("capacity must be in [1, 4096], got " + std::to_string(capacity));
+        if (static_cast<long long>(view.width) * view.height * capacity > (1LL << 26))
+          throw py::value_error("width x height x capacity must be at most 2^26");
+        const CloudShape cloud = cloud_from_arrays(centres, radii, rotations, model, 0.5f, 1.0f);
+        const py::ssize_t h = view.height, w = view.width, c = capacity;
+        py::array_t<float> binned({h, w, c, py::ssize_t{3}});
+        py::array_t<float> each({h, w, c, py::ssize_t{3}});
+        py::array_t<std::int32_t> tested({h, w});
+        std::fill_n(binned.mutable_data(), binned.size(), -1.0f);
+        std::fill_n(each.mutable_data(), each.size(), -1.0f);
+        {
+          py::gil_scoped_release release;
+          const CameraRays rays(view.camera, view.width, view.height);
+          const ScreenTiles tiles(rays);
+          CandidateFan fan(cloud, rays.origin);
+          fan.bin(tiles.cones());
+          std::vector<Candidate> a(static_cast<std::size_t>(capacity)), b(a.size());
+          auto put = [](float* dst, const std::vector<Candidate>& src, int n) {
+            for (int k = 0; k < n; ++k)
+              std::tie(dst[3 * k], dst[3 * k + 1], dst[3 * k + 2]) =
+                  std::make_tuple(static_cast<float>(src[k].primitive), src[k].t_in, src[k].t_out);
+          };
+          for (int r = 0; r < view.height; ++r) {
+            for (int col = 0; col < view.width; ++col) {
+              const glm::vec3 dir = rays.direction(r, col);
+              const int tile = tiles.tile_of(r, col);
+              put(binned.mutable_data(r, col), a,
+                  fan.collect(dir, tile, 0.0f, INFINITY, a.data(), capacity));
+              put(each.mutable_data(r, col), b,
+                  collect_candidates(cloud, rays.origin, dir, 0.0f, INFINITY, b.data(), capacity));
+              tested.mutable_at(r, col) = fan.bin_size(tile);
+            }
+          }
+        }
+        return py::make_tuple(binned, each, tested);
+      },
+      py::arg("centres"), py::arg("radii"), py::arg("rotations"), py::arg("model"),
+      py::arg("viewport"), py::arg("capacity") = 64,
+      "The candidates (primitive, t_in, t_out; −1 past the last) of every pixel's camera ray, by "
+      "the marchers' fan binned by screen tile and by testing every primitive, and the number of "
+      "primitives each pixel's bin holds: (binned, each, tested), binned and each (H, W, "
+      "capacity, 3) float32, tested (H, W) int32. For tests: binned and each must agree bit for "
+      "bit.");
 }
 
 void bind_volume_march(py::module_& m) {

@@ -111,23 +111,66 @@ CandidateFan::CandidateFan(const CloudShape& cloud, glm::vec3 origin) {
     const double len = glm::length(v);
     const double slack = 2e-3 * r_max / std::max(r_min, 1e-30);
     float cos_cull = -2.0f;  // never culled
+    double cull_angle = 4.0;
     glm::vec3 axis(0.0f);
     if (std::isfinite(slack) && len > r_max * (1.0 + 1e-2) && std::isfinite(len)) {
       const double angle = std::asin(r_max / len) + slack;
       if (angle < 3.0) {
         cos_cull = static_cast<float>(std::cos(angle) - 1e-6);
+        cull_angle = angle;
         axis = glm::vec3(v / len);
       }
     }
-    const float own_max = std::max(own.x, std::max(own.y, own.z));
-    const float floor_scale = 0.999f / (own_max * own_max);
-    terms_.push_back(Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, floor_scale,
-                          e.unrotated(), axis, cos_cull});
+    const glm::vec3 o_own = (rt * (origin - e.centre)) / own;
+    terms_.push_back(Term{rt, e.radii, o, glm::dot(o, o) - 1.0f, e.centre, own, o_own,
+                          e.unrotated(), axis, cos_cull, cull_angle});
   }
+}
+
+void CandidateFan::bin(const std::vector<DirectionCone>& bins) {
+  // Primitive j's cull cone (axis a, half-angle α) meets cone b (axis c, half-angle β) when
+  // ∠(a, c) ≤ α + β, i.e. a·c ≥ cos(α + β) = cos α·cos β − sin α·sin β for α + β < π. A pad of
+  // 10⁻⁵ rad on β covers the rounding of the float axes and ray directions (≲ 10⁻⁶ rad).
+  constexpr double kPad = 1e-5;
+  const std::size_t n = terms_.size();
+  std::vector<double> cos_a(n), sin_a(n);
+  for (std::size_t j = 0; j < n; ++j) {
+    cos_a[j] = std::cos(terms_[j].cull_angle);
+    sin_a[j] = std::sin(terms_[j].cull_angle);
+  }
+  bin_start_.assign(1, 0);
+  bin_members_.clear();
+  for (const DirectionCone& cone : bins) {
+    const double beta = cone.half_angle + kPad;
+    const double cos_b = std::cos(beta), sin_b = std::sin(beta);
+    for (std::size_t j = 0; j < n; ++j) {
+      const Term& e = terms_[j];
+      const bool meets = e.cull_angle + beta >= 3.0 || glm::dot(glm::dvec3(e.axis), cone.axis) >=
+                                                           cos_a[j] * cos_b - sin_a[j] * sin_b;
+      if (meets) bin_members_.push_back(static_cast<int>(j));
+    }
+    bin_start_.push_back(static_cast<int>(bin_members_.size()));
+  }
+}
+
+int CandidateFan::collect(glm::vec3 dir, int b, float t_min, float t_max, Candidate* out,
+                          int capacity, bool sorted) const {
+  if (b < 0 || static_cast<std::size_t>(b) + 1 >= bin_start_.size())
+    return collect(dir, t_min, t_max, out, capacity, sorted);
+  const int* members = bin_members_.data() + bin_start_[static_cast<std::size_t>(b)];
+  const int count =
+      bin_start_[static_cast<std::size_t>(b) + 1] - bin_start_[static_cast<std::size_t>(b)];
+  return collect_in(dir, members, count, t_min, t_max, out, capacity, sorted);
 }
 
 int CandidateFan::collect(glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
                           bool sorted) const {
+  return collect_in(dir, nullptr, static_cast<int>(terms_.size()), t_min, t_max, out, capacity,
+                    sorted);
+}
+
+int CandidateFan::collect_in(glm::vec3 dir, const int* members, int count, float t_min, float t_max,
+                             Candidate* out, int capacity, bool sorted) const {
   const float dir_len = glm::length(dir);
   auto hit = [&](std::size_t j, Interval& iv) {
     const Term& e = terms_[j];
@@ -144,8 +187,11 @@ int CandidateFan::collect(glm::vec3 dir, float t_min, float t_max, Candidate* ou
     iv.t_out = (-b + sq) / a;
     return true;
   };
-  return cumuli::collect([](int i) { return i; }, static_cast<int>(terms_.size()), hit, t_min,
-                         t_max, out, capacity, sorted);
+  if (members == nullptr)
+    return cumuli::collect([](int i) { return i; }, count, hit, t_min, t_max, out, capacity,
+                           sorted);
+  return cumuli::collect([members](int i) { return members[i]; }, count, hit, t_min, t_max, out,
+                         capacity, sorted);
 }
 
 int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,

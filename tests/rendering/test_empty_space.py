@@ -282,6 +282,41 @@ def test_camera_fan_culls_no_candidate(model, distance):
         assert (hits < cloud.n).all() and (hits == 0).sum() > 1000  # ... and far ones were culled
 
 
+@pytest.mark.parametrize("model", ["spheroid", "metaball"])
+@pytest.mark.parametrize(
+    "where, size, fov",
+    [("far", (160, 120), 38.0), ("near", (97, 61), 70.0), ("inside", (64, 48), 90.0),
+     ("wide", (800, 48), 12.0)],
+)  # fmt: skip
+def test_screen_tile_bins_lose_no_candidate(model, where, size, fov):
+    """The marchers' fans sort the primitives into one bin per screen tile; every pixel's ray
+    gets the candidates of testing every primitive, bit for bit: cameras far, near, inside the
+    cloud, a wide strip (16-pixel tiles), elongated primitives. Far away, the bins hold a fraction
+    of the primitives (the point of them)."""
+    rng = np.random.default_rng(len(where) + 11)
+    cloud = _random_cloud(model, 9, n=60)
+    radii = cloud.radii * np.array([4.0, 1.0, 0.3], np.float32)
+    cloud = cu.Cloud(cloud.centres, radii, cloud.rotations, model=model)
+    lo, hi = (np.asarray(b, np.float64) for b in cloud.bounds())
+    centre, extent = (lo + hi) / 2, float(np.linalg.norm(hi - lo))
+    away = {"far": 2.0 * extent, "near": 0.6 * extent, "inside": 0.0, "wide": 1.2 * extent}[where]
+    offset = rng.normal(size=3)
+    position = centre + away * offset / np.linalg.norm(offset)
+    target = centre if away > 0 else centre + offset
+    camera = _core.CameraParams()
+    camera.position, camera.target, camera.fov = tuple(position), tuple(target), fov
+    centres, radii, rotations, model_name = cloud.core_args()[:4]
+    binned, each, tested = _core.screen_candidates(
+        centres, radii, rotations, model_name, _core.Viewport(camera, *size), 64
+    )
+    np.testing.assert_array_equal(binned, each)
+    hits = (each[..., 0] >= 0).sum(axis=-1)
+    assert (hits > 0).mean() > 0.02  # the rays met primitives
+    assert (tested >= hits).all()
+    if where == "far" and model == "spheroid":  # metaballs' candidates are grown by √n
+        assert tested.mean() < 0.5 * cloud.n
+
+
 def test_camera_candidates_bad_input():
     cloud = _random_cloud("spheroid", 1)
     centres, radii, rotations, model_name = cloud.core_args()[:4]

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <glm/geometric.hpp>
+#include <glm/vec3.hpp>
 
 #include "cumuli/model/cloud.hpp"
 
@@ -54,13 +55,33 @@ int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, 
 int union_owner(const CloudShape& cloud, const Candidate* cand, int n, float s, glm::vec3 p,
                 int fallback, float& q_owner);
 
+// A cone of directions: those within `half_angle` radians of the unit `axis`.
+struct DirectionCone {
+  glm::dvec3 axis{0.0, 0.0, 1.0};
+  double half_angle = 0.0;
+};
+
 // collect_candidates for the rays of one origin (a camera's): the terms of each primitive's
 // intersection that depend only on the origin are computed once, and every direction gets the
 // same intervals, bit for bit, as collect_candidates(cloud, origin, dir, ...).
 class CandidateFan {
  public:
   CandidateFan(const CloudShape& cloud, glm::vec3 origin);
+  // Sorts the primitives into bins, one per cone of `bins` (a screen tile's rays): bin b lists,
+  // in increasing order, every primitive whose cull cone meets cone b. collect(dir, b, ...) for
+  // a direction inside cone b then tests only those; the others' cones lie wholly outside it,
+  // so the cull test would have dropped them anyway, and the intervals stay the same bit for bit.
+  void bin(const std::vector<DirectionCone>& bins);
   int collect(glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
+              bool sorted = true) const;
+  // The primitives bin b holds (every primitive when there are no bins or b < 0).
+  int bin_size(int b) const {
+    if (b < 0 || static_cast<std::size_t>(b) + 1 >= bin_start_.size())
+      return static_cast<int>(terms_.size());
+    return bin_start_[static_cast<std::size_t>(b) + 1] - bin_start_[static_cast<std::size_t>(b)];
+  }
+  // The same for a direction inside the cone of bin `b` (bin()); b < 0: every primitive.
+  int collect(glm::vec3 dir, int b, float t_min, float t_max, Candidate* out, int capacity,
               bool sorted = true) const;
   // Primitive j's normalised distance |q| at p: Ellipsoid::normalised_distance, the rotation
   // skipped when it is the identity (it then changes at most the sign of a zero, which the
@@ -73,15 +94,20 @@ class CandidateFan {
     const glm::vec3 w = (e.identity ? v : e.rt * v) / e.unscaled;
     return glm::dot(w, w);
   }
-  // A bound below q2(j, p) with room for its rounding: |p − centre|²/r_max², shrunk by 10⁻³
-  // (a rotation keeps lengths, and no radius exceeds r_max). One multiply for three divisions.
-  float q2_floor(int j, glm::vec3 p) const {
+  // The ray origin + s·dir in primitive j's unit frame (own radii): its |q|² at s is
+  // |from + s·along|², q2(j, origin + s·dir) up to rounding.
+  void ray_frame(int j, glm::vec3 dir, glm::vec3& from, glm::vec3& along) const {
     const Term& e = terms_[static_cast<std::size_t>(j)];
-    const glm::vec3 v = p - e.centre;
-    return glm::dot(v, v) * e.floor_scale;
+    from = e.o_own;
+    along = (e.identity ? dir : e.rt * dir) / e.unscaled;
   }
 
  private:
+  // collect() over the primitives members[0 .. count) (increasing), or the first `count` when
+  // members is null.
+  int collect_in(glm::vec3 dir, const int* members, int count, float t_min, float t_max,
+                 Candidate* out, int capacity, bool sorted) const;
+
   struct Term {
     glm::mat3 rt;     // the rotation's transpose
     glm::vec3 radii;  // grown by candidate_scale
@@ -89,14 +115,17 @@ class CandidateFan {
     float c;          // |o|² − 1
     glm::vec3 centre;
     glm::vec3 unscaled;  // the primitive's own radii (|q| is the primitive's, not the grown one's)
-    float floor_scale;   // (1 − 10⁻³)/r_max² of the own radii (q2_floor)
+    glm::vec3 o_own;     // the origin in the own radii's unit frame
     bool identity;       // the rotation is exactly the identity
     // The cone from the origin around the grown primitive's bounding sphere, widened well beyond
     // the exact test's rounding: a direction d with d·axis < cos_cull·|d| surely misses.
     glm::vec3 axis;
     float cos_cull;
+    double cull_angle;  // the cone's half-angle (cos_cull's, before the float rounding); > π: none
   };
   std::vector<Term> terms_;
+  std::vector<int> bin_start_;  // bin b holds bin_members_[bin_start_[b] .. bin_start_[b + 1])
+  std::vector<int> bin_members_;
 };
 
 }  // namespace cumuli

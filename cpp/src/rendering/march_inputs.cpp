@@ -99,6 +99,32 @@ glm::vec3 CameraRays::direction(int row, int col) const {
   return glm::normalize(forward + x * right + y * up);
 }
 
+ScreenTiles::ScreenTiles(const CameraRays& rays) {
+  while (static_cast<long>(count(rays.width)) * count(rays.height) > kMaxTiles) size_ *= 2;
+  cols_ = count(rays.width);
+  const int rows = count(rays.height);
+  // A direction through a tile is forward + x·right + y·up normalised, (x, y) in the rectangle
+  // of its corner pixels' centres: every such direction lies within the largest angle from the
+  // corners' mean direction to a corner (the directions within an angle < 90° of an axis meet
+  // the image plane in a convex ellipse). The float rounding of the directions is ~10⁻⁷ rad,
+  // well inside the bins' pad.
+  auto corner = [&](int row, int col) { return glm::dvec3(rays.direction(row, col)); };
+  cones_.reserve(static_cast<std::size_t>(cols_) * static_cast<std::size_t>(rows));
+  for (int tr = 0; tr < rows; ++tr) {
+    const int r0 = tr * size_, r1 = std::min(r0 + size_, rays.height) - 1;
+    for (int tc = 0; tc < cols_; ++tc) {
+      const int c0 = tc * size_, c1 = std::min(c0 + size_, rays.width) - 1;
+      const glm::dvec3 k[4] = {corner(r0, c0), corner(r0, c1), corner(r1, c0), corner(r1, c1)};
+      DirectionCone cone;
+      cone.axis = glm::normalize(k[0] + k[1] + k[2] + k[3]);
+      for (const glm::dvec3& d : k)
+        cone.half_angle =
+            std::max(cone.half_angle, std::acos(std::min(glm::dot(cone.axis, d), 1.0)));
+      cones_.push_back(cone);
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 // Settings
 

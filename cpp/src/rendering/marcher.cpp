@@ -58,9 +58,11 @@ struct Batch {
   int size = 0;
 };
 
-// The candidates covering the physical march's current sample (RayMarcher::owner_q).
+// The candidates covering the physical march's current sample (RayMarcher::owner_q): each one's
+// t_out, and its primitive's |q|² along the ray as |from + s·along|² (CandidateFan::ray_frame).
 struct Active {
-  std::vector<int> index;
+  std::vector<float> out;
+  std::vector<glm::vec3> from, along;
   int size = 0;
   float leave = INFINITY;  // the smallest t_out among them: none leaves before it
 };
@@ -88,14 +90,19 @@ class RayMarcher {
   // A thread's scratch, its density source counting into it.
   void init(Scratch& scratch) const {
     scratch.candidates.resize(static_cast<std::size_t>(settings_.max_candidates));
-    scratch.active.index.resize(static_cast<std::size_t>(settings_.max_candidates));
+    const std::size_t capacity = static_cast<std::size_t>(settings_.max_candidates);
+    scratch.active.out.resize(capacity);
+    scratch.active.from.resize(capacity);
+    scratch.active.along.resize(capacity);
     scratch.hits.reserve(prepared_.size());
     scratch.src = src_;
     scratch.src.evaluations = &scratch.fbm;
   }
 
-  // The pixel's colour; `steps` receives the samples marched.
-  glm::vec4 march(glm::vec3 origin, glm::vec3 dir, Scratch& scratch, float xi, int& steps) const {
+  // The pixel's colour; `steps` receives the samples marched. `tile`: the screen tile of the
+  // pixel (ScreenTiles), whose bins the candidate fans hold.
+  glm::vec4 march(glm::vec3 origin, glm::vec3 dir, int tile, Scratch& scratch, float xi,
+                  int& steps) const {
     const glm::vec3 inv_dir = 1.0f / dir;
     // Clouds whose box the ray meets in front of the camera, sorted by entry (t ≥ 0) with a
     // stable insertion sort so that ties keep the scene order.
@@ -123,15 +130,15 @@ class RayMarcher {
       // density: most rays of a frame never meet one.
       std::optional<OctaveTerms> terms;
       for (const BoxHit& h : hits) {
-        if (!march_physical(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch,
-                            st, terms, xi))
+        if (!march_physical(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, tile,
+                            scratch, st, terms, xi))
           break;
       }
     } else {
       st.phase = henyey_greenstein(settings_.hg_g, st.cos_theta);
       for (const BoxHit& h : hits) {
-        if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, scratch, st,
-                         xi))
+        if (!march_cloud(prepared_[static_cast<std::size_t>(h.cloud)], h, origin, dir, tile,
+                         scratch, st, xi))
           break;
       }
     }
@@ -209,10 +216,10 @@ class RayMarcher {
   // Marches one cloud, each sample at ξ·Δ into its step (ξ = ½ unless jittered); false when the
   // whole ray is done.
   bool march_cloud(const PreparedCloud& pc, const BoxHit& h, glm::vec3 origin, glm::vec3 dir,
-                   Scratch& scratch, State& st, float xi) const {
+                   int tile, Scratch& scratch, State& st, float xi) const {
     const CloudShape& shape = pc.cloud->shape;
     Candidate* cand = scratch.candidates.data();
-    const int n = pc.fan->collect(dir, h.t_in, h.t_out, cand, settings_.max_candidates,
+    const int n = pc.fan->collect(dir, tile, h.t_in, h.t_out, cand, settings_.max_candidates,
                                   settings_.sort_candidates);
     const float step = pc.step;
     const float offset = xi * step;  // Δ/2 exactly when not jittered (the paper)
@@ -254,44 +261,51 @@ class RayMarcher {
     return true;
   }
 
-  // The |q| of union_owner's owner of the sample at s (world point p), for samples taken in
-  // increasing s: the covering candidates are kept in `active` (candidate order) as they enter
+  // The |q| of union_owner's owner of the sample at s (world point p = origin + s·dir), for
+  // samples taken in increasing s: the covering candidates are kept in `active` as they enter
   // (t_in ≤ s; `entered` of them so far) and leave (s > t_out) instead of scanning them all;
   // the owner's |q| is the smallest, or any value above 1 when the sample is outside them all.
-  // Unsorted candidates (candidate_sort "none") take union_owner itself.
+  // Each candidate's |q|² is the ray's quadratic in s in its primitive's frame, |from + s·along|²
+  // (set up once as it enters): three multiply-adds and a dot product per sample, where the
+  // world point's frame change took a rotation and three divisions. It equals that |q|² up to
+  // rounding (a few ulps), as the light pass's attribution does. Unsorted candidates
+  // (candidate_sort "none") take union_owner itself.
   float owner_q(const CloudShape& shape, const CandidateFan& fan, const Candidate* cand, int n,
-                float s, glm::vec3 p, int fallback, Active& active, int& entered) const {
+                float s, glm::vec3 p, glm::vec3 dir, int fallback, Active& active,
+                int& entered) const {
     if (!settings_.sort_candidates) return fan.q(union_owner(shape, cand, n, s, p, fallback), p);
     while (entered < n && cand[entered].t_in <= s) {
-      active.leave = std::min(active.leave, cand[entered].t_out);
-      active.index[active.size++] = entered++;
+      const Candidate& c = cand[entered++];
+      const std::size_t k = static_cast<std::size_t>(active.size++);
+      active.out[k] = c.t_out;
+      active.leave = std::min(active.leave, c.t_out);
+      fan.ray_frame(c.primitive, dir, active.from[k], active.along[k]);
     }
     if (s > active.leave) {  // some candidate has left: drop those, and find the next to leave
-      int kept = 0;
+      std::size_t kept = 0;
       active.leave = INFINITY;
-      for (int i = 0; i < active.size; ++i) {
-        const float out = cand[active.index[i]].t_out;
+      for (std::size_t i = 0; i < static_cast<std::size_t>(active.size); ++i) {
+        const float out = active.out[i];
         if (!(s > out)) {
-          active.index[kept++] = active.index[i];
+          active.out[kept] = out;
+          active.from[kept] = active.from[i];
+          active.along[kept] = active.along[i];
+          ++kept;
           active.leave = std::min(active.leave, out);
         }
       }
-      active.size = kept;
+      active.size = static_cast<int>(kept);
     }
-    const int kept = active.size;
+    const std::size_t kept = static_cast<std::size_t>(active.size);
     if (kept == 0) return fan.q(fallback, p);
-    // The smallest |q|² (sqrt is monotonic: its root is the smallest |q| bit for bit), where
-    // it is at most 1: beyond, the sample is outside (q > 1) whichever candidate owns it. A
-    // candidate whose cheap bound (q2_floor) exceeds the best so far, or that limit, cannot own
-    // a sample inside: its three divisions are skipped. kInside: a few ulps above 1, so that
-    // every |q|² whose root rounds to 1 still counts.
+    // The smallest |q|², where it is at most 1: beyond, the sample is outside (q > 1) whichever
+    // candidate owns it. kInside: a few ulps above 1, so that every |q|² whose root rounds to 1
+    // still counts.
     constexpr float kInside = 1.0000004f;
     float best = kInside;
-    for (int i = 0; i < kept; ++i) {
-      const int j = cand[active.index[i]].primitive;
-      if (fan.q2_floor(j, p) > best) continue;
-      const float q2 = fan.q2(j, p);
-      if (q2 < best) best = q2;
+    for (std::size_t i = 0; i < kept; ++i) {
+      const glm::vec3 v = active.from[i] + s * active.along[i];
+      best = std::min(best, glm::dot(v, v));
     }
     return best < kInside ? std::sqrt(best) : 2.0f;
   }
@@ -304,13 +318,13 @@ class RayMarcher {
   // queued past that sample, so the image and the work counted are those of the one-by-one march
   // (the evaluations past it, at most kBatch − 1 per ray, are done but not counted).
   bool march_physical(const PreparedCloud& pc, const BoxHit& h, glm::vec3 origin, glm::vec3 dir,
-                      Scratch& scratch, State& st, std::optional<OctaveTerms>& terms,
+                      int tile, Scratch& scratch, State& st, std::optional<OctaveTerms>& terms,
                       float xi) const {
     const RenderCloud& rc = *pc.cloud;
     const CloudShape& shape = rc.shape;
     const PhysicalParams& ph = settings_.phys;
     Candidate* cand = scratch.candidates.data();
-    const int n = pc.fan->collect(dir, h.t_in, h.t_out, cand, settings_.max_candidates,
+    const int n = pc.fan->collect(dir, tile, h.t_in, h.t_out, cand, settings_.max_candidates,
                                   settings_.sort_candidates);
     const float step = pc.step;
     const float offset = xi * step;
@@ -384,7 +398,7 @@ class RayMarcher {
         t += dt;
         float q = 0.0f;
         if (spheroid) {
-          q = owner_q(shape, *pc.fan, cand, n, s, p, cand[k].primitive, active, entered);
+          q = owner_q(shape, *pc.fan, cand, n, s, p, dir, cand[k].primitive, active, entered);
           if (q > 1.0f) continue;  // outside the cloud: no density (spheroid_density)
         } else if (!metaball_inside(shape, p)) {
           continue;
@@ -412,11 +426,12 @@ class RayMarcher {
 };
 
 // What every ray of one render shares: each cloud's occupancy grid, candidate fan (every ray
-// starts at the camera) and march constants. Built once per render, then read by all threads.
+// starts at the camera, binned by screen tile) and march constants. Built once per render, then
+// read by all threads.
 class PreparedScene {
  public:
-  PreparedScene(const MarchScene& scene, const MarchSettings& settings,
-                const CameraParams& camera) {
+  PreparedScene(const MarchScene& scene, const MarchSettings& settings, const CameraParams& camera,
+                const ScreenTiles& tiles) {
     settings.validate();
     camera.validate();
     scene.validate(settings);
@@ -425,7 +440,11 @@ class PreparedScene {
       for (const auto& c : scene.clouds) grids_.push_back(build_occupancy(c.shape));
     }
     fans_.reserve(scene.clouds.size());
-    for (const auto& c : scene.clouds) fans_.emplace_back(c.shape, camera.position);
+    for (const auto& c : scene.clouds) {
+      fans_.emplace_back(c.shape, camera.position);
+      // A few primitives cost less to test than to bin.
+      if (c.shape.primitives.size() > kBinFrom) fans_.back().bin(tiles.cones());
+    }
     clouds_.reserve(scene.clouds.size());
     for (std::size_t k = 0; k < scene.clouds.size(); ++k) {
       const RenderCloud& c = scene.clouds[k];
@@ -447,6 +466,7 @@ class PreparedScene {
   const std::vector<PreparedCloud>& clouds() const { return clouds_; }
 
  private:
+  static constexpr std::size_t kBinFrom = 8;
   std::vector<OccupancyGrid> grids_;
   std::vector<CandidateFan> fans_;
   std::vector<PreparedCloud> clouds_;
@@ -460,8 +480,9 @@ void march_pixels(const MarchScene& scene, const MarchSettings& settings,
                   const CameraParams& camera, int width, int height, std::size_t count,
                   PixelOf pixel_of, float* out, int threads, MarchStats* stats,
                   std::uint32_t* fbm_map) {
-  const PreparedScene prepared(scene, settings, camera);
   const CameraRays rays(camera, width, height);
+  const ScreenTiles tiles(rays);
+  const PreparedScene prepared(scene, settings, camera, tiles);
   const RayMarcher marcher(scene, settings, prepared.clouds());
   std::mutex lock;
   MarchStats total;
@@ -476,7 +497,7 @@ void march_pixels(const MarchScene& scene, const MarchSettings& settings,
           settings.physical || settings.jitter ? jitter(r, c, settings.phys.jitter_seed) : 0.5f;
       const std::uint64_t before = scratch.fbm;
       int steps = 0;
-      const glm::vec4 px = marcher.march(rays.origin, dir, scratch, xi, steps);
+      const glm::vec4 px = marcher.march(rays.origin, dir, tiles.tile_of(r, c), scratch, xi, steps);
       steps_sum += static_cast<std::uint64_t>(steps);
       if (fbm_map != nullptr) fbm_map[k] = static_cast<std::uint32_t>(scratch.fbm - before);
       float* o = out + k * 4;

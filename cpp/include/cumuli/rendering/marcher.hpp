@@ -81,6 +81,26 @@ struct CameraRays {
   glm::vec3 direction(int row, int col) const;
 };
 
+// The image cut into square tiles of pixels, and the cone of each tile's camera rays: the
+// marcher's candidate fans sort their primitives into one bin per tile (CandidateFan::bin), so
+// that a ray tests only the primitives whose cull cone meets its tile's (on a 128-primitive
+// L-system cloud framed by the camera, every ray tested all 128 and kept a few). Tiles are 8
+// pixels square, larger until there are at most kMaxTiles (binning costs tiles × primitives).
+class ScreenTiles {
+ public:
+  static constexpr long kMaxTiles = 512;
+  explicit ScreenTiles(const CameraRays& rays);
+  const std::vector<DirectionCone>& cones() const { return cones_; }
+  int tile_of(int row, int col) const { return (row / size_) * cols_ + col / size_; }
+  int size() const { return size_; }
+
+ private:
+  int count(int pixels) const { return (pixels + size_ - 1) / size_; }
+  int size_ = 8;
+  int cols_ = 1;
+  std::vector<DirectionCone> cones_;
+};
+
 struct MarchSettings {
   float absorption = 1.0f;  // φ_s of Δτ = exp(−φ_s·ρ·Δ/Δ_ref)
   float lod_a = 0.1f;       // A of the LOD step
