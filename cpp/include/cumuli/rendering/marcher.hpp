@@ -92,7 +92,6 @@ class ScreenTiles {
   explicit ScreenTiles(const CameraRays& rays);
   const std::vector<DirectionCone>& cones() const { return cones_; }
   int tile_of(int row, int col) const { return (row / size_) * cols_ + col / size_; }
-  int size() const { return size_; }
 
  private:
   int count(int pixels) const { return (pixels + size_ - 1) / size_; }
