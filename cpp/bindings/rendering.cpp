@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -378,13 +379,44 @@ void bind_sprite_params(py::module_& m) {
   enum_property(rs, "kernel", &SpriteRasterSettings::kernel, kKernels);
 }
 
+namespace {
+
+// The edge pass's (range, sub, rays, max_rays, max_sub_edge), or none for None.
+std::optional<EdgePass> edge_pass_of(const py::object& edges) {
+  if (edges.is_none()) return std::nullopt;
+  using Spec = std::tuple<float, int, std::vector<std::pair<int, int>>, long long, int>;
+  Spec t;
+  try {
+    t = edges.cast<Spec>();
+  } catch (const py::cast_error&) {
+    throw py::type_error(
+        "edges must be a tuple (range, sub, rays, max_rays, max_sub_edge), rays (row, column) "
+        "pairs");
+  }
+  EdgePass pass;
+  pass.range = std::get<0>(t);
+  pass.sub = std::get<1>(t);
+  pass.rays = std::get<2>(t);
+  if (std::get<3>(t) < 0) throw py::value_error("max_rays must be >= 0");
+  pass.max_rays = static_cast<std::size_t>(std::get<3>(t));
+  pass.max_sub_edge = std::get<4>(t);
+  try {
+    pass.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  return pass;
+}
+
+}  // namespace
+
 void bind_march(py::module_& m) {
   m.def(
       "render_cpu",
       [](const Viewport& view, const py::list& clouds, const SunParams& sun, const SkyParams& sky,
          const MarchSettings& settings, const Noise* noise, int threads, bool with_sky,
          const py::object& solids, const py::object& ground, bool return_stats,
-         const py::object& pixels) -> py::object {
+         const py::object& pixels, const py::object& edges) -> py::object {
         try {
           view.validate();
         } catch (const std::invalid_argument& e) {
@@ -418,6 +450,8 @@ void bind_march(py::module_& m) {
         // The pixels to march, or all of them.
         const auto listed = pixel_pairs(pixels);
         const bool whole = pixels.is_none();
+        const std::optional<EdgePass> pass = edge_pass_of(edges);
+        if (pass && !whole) throw py::value_error("edges needs the whole image (pixels=None)");
         const std::size_t count =
             whole ? static_cast<std::size_t>(width) * static_cast<std::size_t>(height)
                   : static_cast<std::size_t>(listed.shape(0));
@@ -433,9 +467,16 @@ void bind_march(py::module_& m) {
         }
         std::uint32_t* map_dst = return_stats ? map.mutable_data() : nullptr;
         MarchStats* stats_dst = return_stats ? &stats : nullptr;
+        py::array_t<bool> mask;
+        bool edged = false;
+        if (pass) mask = py::array_t<bool>({height, width});
         try {
           py::gil_scoped_release release;
-          if (whole) {
+          if (pass) {
+            edged = render_image_with_edges(
+                scene, s, view.camera, width, height, dst, threads, *pass,
+                reinterpret_cast<std::uint8_t*>(mask.mutable_data()), stats_dst, map_dst);
+          } else if (whole) {
             render_image(scene, s, view.camera, width, height, dst, threads, stats_dst, map_dst);
           } else {
             render_pixels(scene, s, view.camera, width, height, listed.data(), count, dst, threads,
@@ -444,18 +485,21 @@ void bind_march(py::module_& m) {
         } catch (const std::invalid_argument& e) {
           throw py::value_error(e.what());
         }
-        if (!return_stats) return std::move(out);
+        py::object outline = edged ? py::object(mask) : py::object(py::none());
+        if (!return_stats) return pass ? py::object(py::make_tuple(out, outline)) : py::object(out);
         py::dict d;
         d["fbm_evaluations"] = stats.fbm_evaluations;
         d["steps"] = stats.steps;
         d["skipped"] = stats.skipped;
         d["fbm_map"] = map;
+        if (pass) return py::make_tuple(out, outline, d);
         return py::make_tuple(out, d);
       },
       py::arg("view"), py::arg("clouds"), py::arg("sun"), py::arg("sky"), py::arg("settings"),
       py::arg("noise").none(true), py::arg("threads") = 0, py::arg("with_sky") = true,
       py::arg("solids") = py::none(), py::arg("ground") = py::none(),
       py::arg("return_stats") = false, py::arg("pixels") = py::none(),
+      py::arg("edges") = py::none(),
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image of the "
       "Viewport, row 0 at the top. Each cloud is a dict with centres, radii, rotations, model, "
       "kappa, phi, light ([z, y, x]) and light_lo / light_hi (or physical). settings: a "
@@ -464,7 +508,9 @@ void bind_march(py::module_& m) {
       "(colour, 1 − T); solids (n, 4) (centre, radius) stop every ray at the nearest solid; "
       "return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}); pixels, an "
       "(N, 2) integer array of (row, column), marches only those pixels of the image and returns "
-      "their (N, 4) values in that order (fbm_map then (N,)).");
+      "their (N, 4) values in that order (fbm_map then (N,)); edges, a tuple (range, sub, rays, "
+      "max_rays, max_sub_edge), adds the physical mode's edge pass to the whole image "
+      "(cumuli.rendering.edges) and returns (image, mask or None[, stats]).");
 
   m.def(
       "occupancy_grid",

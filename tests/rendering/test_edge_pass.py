@@ -10,7 +10,7 @@ import pytest
 import cumuli as cu
 from cumuli import _core
 from cumuli.rendering.edges import EDGE_RANGE, RAYS, SUB, edge_mask, supersample_edges
-from cumuli.rendering.marcher_cpu import render_cpu_args
+from cumuli.rendering.marcher_cpu import combined_stats, render_cpu_args
 from cumuli.rendering.resolve import tent_filter
 
 W, H = 48, 36
@@ -194,20 +194,85 @@ def test_the_paper_mode_has_no_edge_pass() -> None:
 
     import cumuli.rendering.painters as painters
 
-    original = painters.CPUPainter.marched
+    original = painters.CPUPainter.edged
 
     def spy(self, *args, **kwargs):  # noqa: ANN001, ANN002, ANN003, ANN202
         calls.append(1)
         return original(self, *args, **kwargs)
 
-    painters.CPUPainter.marched = spy  # type: ignore[method-assign]
+    painters.CPUPainter.edged = spy  # type: ignore[method-assign]
     try:
         cu.render(scene, cam, W, H, backend="cpu")
         assert not calls
         cu.render(small_scene()[0], cam, W, H, backend="cpu")
         assert calls  # the physical mode's render does call it
     finally:
-        painters.CPUPainter.marched = original  # type: ignore[method-assign]
+        painters.CPUPainter.edged = original  # type: ignore[method-assign]
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+@pytest.mark.parametrize("size", [(W, H), (31, 17)])
+def test_the_one_call_edge_pass_equals_the_two_call_route(
+    threads: int, size: tuple[int, int]
+) -> None:
+    """The CPU twin marches the image and its outline in one core call (grids and fans built
+    once); its image, outline and counted work are those of the march, the mask and the list
+    march taken one after the other (the GL painter's route), bit for bit."""
+    from cumuli.light.prepare import prepare_light
+    from cumuli.light.view import seen_from
+    from cumuli.rendering.edges import core_pass
+    from cumuli.rendering.painters import CountingCPUPainter, CPUPainter
+
+    scene, cam = small_scene()
+    lit = seen_from(prepare_light(scene), cam)
+    w, h = size
+    painter = CPUPainter(threads)
+    layer = painter.layer(lit, "cloud", [0], cam, w, h, True)
+    two, two_edges = supersample_edges(
+        layer, lambda m: painter.marched(lit, [0], cam, SUB * w, SUB * h, m)
+    )
+    one, one_edges = painter.edged(lit, [0], cam, w, h)
+    assert two_edges is not None and one_edges is not None and two_edges.any()
+    np.testing.assert_array_equal(one_edges, two_edges)
+    np.testing.assert_array_equal(one.view(np.uint32), two.view(np.uint32))
+    # The work, counted per pixel.
+    split, whole = CountingCPUPainter(threads), CountingCPUPainter(threads)
+    layer = split.layer(lit, "cloud", [0], cam, w, h, True)
+    supersample_edges(layer, lambda m: split.marched(lit, [0], cam, SUB * w, SUB * h, m))
+    whole.edged(lit, [0], cam, w, h)
+    a, b = combined_stats(split.passes, w, h), combined_stats(whole.passes, w, h)
+    assert (a.fbm_evaluations, a.steps, a.skipped) == (b.fbm_evaluations, b.steps, b.skipped)
+    np.testing.assert_array_equal(a.fbm_map, b.fbm_map)
+    # An image with no outline, or too long an outline, keeps the single march and no mask.
+    args = render_cpu_args(lit, cam, w, h, threads)
+    flat = (1e9, SUB, RAYS, 1 << 24, 1 << 14)
+    image, mask = _core.render_cpu(**args, edges=flat)
+    assert mask is None and np.array_equal(image, _core.render_cpu(**args))
+    image, mask = _core.render_cpu(**args, edges=core_pass()[:3] + (1, 1 << 14))
+    assert mask is None and np.array_equal(image, _core.render_cpu(**args))
+
+
+def test_the_one_call_edge_pass_rejects_bad_input() -> None:
+    from cumuli.light.prepare import prepare_light
+
+    scene, cam = small_scene()
+    args = render_cpu_args(prepare_light(scene), cam, W, H)
+    good = (EDGE_RANGE, SUB, RAYS, 1 << 24, 1 << 14)
+    bad = {
+        "range must be finite": (float("nan"), SUB, RAYS, 1 << 24, 1 << 14),
+        "sub must be in": (EDGE_RANGE, 0, RAYS, 1 << 24, 1 << 14),
+        "at least one ray": (EDGE_RANGE, SUB, (), 1 << 24, 1 << 14),
+        "must be sub-pixels": (EDGE_RANGE, SUB, ((0, 2),), 1 << 24, 1 << 14),
+        "max_rays must be": (EDGE_RANGE, SUB, RAYS, -1, 1 << 14),
+        "max_sub_edge must be": (EDGE_RANGE, SUB, RAYS, 1 << 24, 0),
+    }
+    for message, edges in bad.items():
+        with pytest.raises(ValueError, match=message):
+            _core.render_cpu(**args, edges=edges)
+    with pytest.raises(ValueError, match="whole image"):
+        _core.render_cpu(**args, edges=good, pixels=np.zeros((1, 2), np.int32))
+    with pytest.raises(TypeError, match="edges must be a tuple"):
+        _core.render_cpu(**args, edges=(EDGE_RANGE, SUB))
 
 
 def test_return_stats_counts_the_edge_pass_in_its_pixels() -> None:

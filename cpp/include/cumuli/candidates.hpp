@@ -74,6 +74,8 @@ class CandidateFan {
   void bin(const std::vector<DirectionCone>& bins);
   int collect(glm::vec3 dir, float t_min, float t_max, Candidate* out, int capacity,
               bool sorted = true) const;
+  // The cloud's primitives.
+  std::size_t size() const { return terms_.size(); }
   // The primitives bin b holds (every primitive when there are no bins or b < 0).
   int bin_size(int b) const {
     if (b < 0 || static_cast<std::size_t>(b) + 1 >= bin_start_.size())

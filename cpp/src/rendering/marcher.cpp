@@ -8,10 +8,12 @@
 #include <stdexcept>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <glm/geometric.hpp>
 
 #include "cumuli/parallel.hpp"
+#include "cumuli/rendering/edges.hpp"
 
 namespace cumuli {
 
@@ -440,11 +442,8 @@ class PreparedScene {
       for (const auto& c : scene.clouds) grids_.push_back(build_occupancy(c.shape));
     }
     fans_.reserve(scene.clouds.size());
-    for (const auto& c : scene.clouds) {
-      fans_.emplace_back(c.shape, camera.position);
-      // A few primitives cost less to test than to bin.
-      if (c.shape.primitives.size() > kBinFrom) fans_.back().bin(tiles.cones());
-    }
+    for (const auto& c : scene.clouds) fans_.emplace_back(c.shape, camera.position);
+    bin(tiles);
     clouds_.reserve(scene.clouds.size());
     for (std::size_t k = 0; k < scene.clouds.size(); ++k) {
       const RenderCloud& c = scene.clouds[k];
@@ -464,6 +463,14 @@ class PreparedScene {
     }
   }
   const std::vector<PreparedCloud>& clouds() const { return clouds_; }
+  // Bins the fans for `tiles` (the same camera, another image size: the edge pass's). Not while
+  // a march reads them.
+  void bin(const ScreenTiles& tiles) {
+    for (CandidateFan& fan : fans_) {
+      // A few primitives cost less to test than to bin.
+      if (fan.size() > kBinFrom) fan.bin(tiles.cones());
+    }
+  }
 
  private:
   static constexpr std::size_t kBinFrom = 8;
@@ -475,14 +482,12 @@ class PreparedScene {
 // Marches `count` pixels on `threads` threads: pixel k is (row_of(k), col_of(k)) of the
 // (height, width) image and writes out[4k..4k+3] (and fbm_map[k]). Work is counted per pixel
 // and the totals are integer sums: the same whatever the thread count.
+// `prepared`'s fans binned for `tiles`, which are those of `rays`.
 template <class PixelOf>
 void march_pixels(const MarchScene& scene, const MarchSettings& settings,
-                  const CameraParams& camera, int width, int height, std::size_t count,
-                  PixelOf pixel_of, float* out, int threads, MarchStats* stats,
+                  const PreparedScene& prepared, const CameraRays& rays, const ScreenTiles& tiles,
+                  std::size_t count, PixelOf pixel_of, float* out, int threads, MarchStats* stats,
                   std::uint32_t* fbm_map) {
-  const CameraRays rays(camera, width, height);
-  const ScreenTiles tiles(rays);
-  const PreparedScene prepared(scene, settings, camera, tiles);
   const RayMarcher marcher(scene, settings, prepared.clouds());
   std::mutex lock;
   MarchStats total;
@@ -516,35 +521,132 @@ void march_pixels(const MarchScene& scene, const MarchSettings& settings,
   if (stats != nullptr) *stats = total;
 }
 
+// The (row, column) of pixel k of a whole (·, width) image, row by row.
+struct RowMajor {
+  std::size_t width;
+  std::pair<int, int> operator()(std::size_t k) const {
+    return {static_cast<int>(k / width), static_cast<int>(k % width)};
+  }
+};
+
+// The (row, column) of pixel k of a list of pairs.
+struct Listed {
+  const std::int32_t* pixels;
+  std::pair<int, int> operator()(std::size_t k) const { return {pixels[2 * k], pixels[2 * k + 1]}; }
+};
+
+void check_size(int width, int height) {
+  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+}
+
 }  // namespace
 
 void render_image(const MarchScene& scene, const MarchSettings& settings,
                   const CameraParams& camera, int width, int height, float* out, int threads,
                   MarchStats* stats, std::uint32_t* fbm_map) {
-  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+  check_size(width, height);
+  const CameraRays rays(camera, width, height);
+  const ScreenTiles tiles(rays);
+  const PreparedScene prepared(scene, settings, camera, tiles);
   const std::size_t w = static_cast<std::size_t>(width);
-  march_pixels(
-      scene, settings, camera, width, height, w * static_cast<std::size_t>(height),
-      [w](std::size_t k) {
-        return std::pair<int, int>(static_cast<int>(k / w), static_cast<int>(k % w));
-      },
-      out, threads, stats, fbm_map);
+  march_pixels(scene, settings, prepared, rays, tiles, w * static_cast<std::size_t>(height),
+               RowMajor{w}, out, threads, stats, fbm_map);
 }
 
 void render_pixels(const MarchScene& scene, const MarchSettings& settings,
                    const CameraParams& camera, int width, int height, const std::int32_t* pixels,
                    std::size_t count, float* out, int threads, MarchStats* stats,
                    std::uint32_t* fbm_map) {
-  if (width < 1 || height < 1) throw std::invalid_argument("width and height must be >= 1");
+  check_size(width, height);
   for (std::size_t k = 0; k < count; ++k) {
     const std::int32_t r = pixels[2 * k], c = pixels[2 * k + 1];
     if (r < 0 || r >= height || c < 0 || c >= width)
       throw std::invalid_argument("pixels must lie in the image: (row, column) in [0, H) x [0, W)");
   }
-  march_pixels(
-      scene, settings, camera, width, height, count,
-      [pixels](std::size_t k) { return std::pair<int, int>(pixels[2 * k], pixels[2 * k + 1]); },
-      out, threads, stats, fbm_map);
+  const CameraRays rays(camera, width, height);
+  const ScreenTiles tiles(rays);
+  const PreparedScene prepared(scene, settings, camera, tiles);
+  march_pixels(scene, settings, prepared, rays, tiles, count, Listed{pixels}, out, threads, stats,
+               fbm_map);
+}
+
+void EdgePass::validate() const {
+  if (!std::isfinite(range)) throw std::invalid_argument("edge range must be finite");
+  if (sub < 1 || sub > 16) throw std::invalid_argument("edge sub must be in [1, 16]");
+  if (rays.empty()) throw std::invalid_argument("the edge pass needs at least one ray");
+  for (const auto& [r, c] : rays) {
+    if (r < 0 || r >= sub || c < 0 || c >= sub)
+      throw std::invalid_argument("edge rays must be sub-pixels (row, column) in [0, sub)");
+  }
+  if (max_sub_edge < 1) throw std::invalid_argument("max_sub_edge must be >= 1");
+}
+
+bool render_image_with_edges(const MarchScene& scene, const MarchSettings& settings,
+                             const CameraParams& camera, int width, int height, float* out,
+                             int threads, const EdgePass& pass, std::uint8_t* mask,
+                             MarchStats* stats, std::uint32_t* fbm_map) {
+  check_size(width, height);
+  pass.validate();
+  const std::size_t w = static_cast<std::size_t>(width), h = static_cast<std::size_t>(height);
+  const CameraRays rays(camera, width, height);
+  const ScreenTiles tiles(rays);
+  PreparedScene prepared(scene, settings, camera, tiles);
+  march_pixels(scene, settings, prepared, rays, tiles, w * h, RowMajor{w}, out, threads, stats,
+               fbm_map);
+  std::fill(mask, mask + w * h, std::uint8_t{0});
+  if (static_cast<long long>(pass.sub) * std::max(width, height) > pass.max_sub_edge) return false;
+
+  // The outline, as edges.edge_mask finds it.
+  std::vector<float> alpha(w * h);
+  for (std::size_t k = 0; k < w * h; ++k) alpha[k] = out[4 * k + 3];
+  coverage_edges(alpha.data(), width, height, pass.range, mask, threads);
+  std::vector<std::size_t> outline;  // the edge pixels, row by row
+  for (std::size_t k = 0; k < w * h; ++k)
+    if (mask[k] != 0) outline.push_back(k);
+  const std::size_t n_rays = pass.rays.size();
+  if (outline.empty() || outline.size() * n_rays > pass.max_rays) {
+    std::fill(mask, mask + w * h, std::uint8_t{0});
+    return false;
+  }
+
+  // Each edge pixel's rays side by side: neighbours in the list, in the cache and on a thread.
+  std::vector<std::int32_t> listed(2 * outline.size() * n_rays);
+  for (std::size_t i = 0; i < outline.size(); ++i) {
+    const int r = static_cast<int>(outline[i] / w), c = static_cast<int>(outline[i] % w);
+    for (std::size_t j = 0; j < n_rays; ++j) {
+      listed[2 * (i * n_rays + j)] = pass.sub * r + pass.rays[j].first;
+      listed[2 * (i * n_rays + j) + 1] = pass.sub * c + pass.rays[j].second;
+    }
+  }
+  const CameraRays sub_rays(camera, pass.sub * width, pass.sub * height);
+  const ScreenTiles sub_tiles(sub_rays);
+  prepared.bin(sub_tiles);
+  const std::size_t count = outline.size() * n_rays;
+  std::vector<float> values(4 * count);
+  std::vector<std::uint32_t> sub_map(fbm_map != nullptr ? count : 0);
+  MarchStats sub_stats;
+  march_pixels(scene, settings, prepared, sub_rays, sub_tiles, count, Listed{listed.data()},
+               values.data(), threads, stats != nullptr ? &sub_stats : nullptr,
+               fbm_map != nullptr ? sub_map.data() : nullptr);
+
+  // The mean in double, rounded once (numpy's mean of the float32 values as float64).
+  for (std::size_t i = 0; i < outline.size(); ++i) {
+    double sum[4] = {0.0, 0.0, 0.0, 0.0};
+    for (std::size_t j = 0; j < n_rays; ++j) {
+      const float* v = values.data() + 4 * (i * n_rays + j);
+      for (int ch = 0; ch < 4; ++ch) sum[ch] += static_cast<double>(v[ch]);
+      if (fbm_map != nullptr) fbm_map[outline[i]] += sub_map[i * n_rays + j];
+    }
+    float* o = out + 4 * outline[i];
+    for (int ch = 0; ch < 4; ++ch)
+      o[ch] = static_cast<float>(sum[ch] / static_cast<double>(n_rays));
+  }
+  if (stats != nullptr) {
+    stats->fbm_evaluations += sub_stats.fbm_evaluations;
+    stats->steps += sub_stats.steps;
+    stats->skipped += sub_stats.skipped;
+  }
+  return true;
 }
 
 }  // namespace cumuli

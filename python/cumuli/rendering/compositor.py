@@ -35,7 +35,6 @@ from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.light.view import seen_from
 from cumuli.model.volume import DEFAULT_DETAIL, VolumeCloud
 from cumuli.rendering.air import finish
-from cumuli.rendering.edges import SUB, supersample_edges
 from cumuli.rendering.marcher_cpu import check_stats_scene, combined_stats
 from cumuli.rendering.painters import CountingCPUPainter, CPUPainter, GLPainter
 from cumuli.rendering.params import camera_params
@@ -117,14 +116,10 @@ def compose(
     calls = plan(scene)
     if impostors is None and single_pass(scene):
         kind, indices = calls[0]
-        image = painter.layer(lit, kind, indices, camera, width, height, True)
-        edges = None
         if _edge_pass(scene, kind, indices):
-            image, edges = supersample_edges(
-                image,
-                lambda m: painter.marched(lit, indices, camera, SUB * width, SUB * height, m),
-                writable=image.dtype == np.float32 and image.flags.writeable,
-            )
+            image, edges = painter.edged(lit, indices, camera, width, height)
+        else:
+            image, edges = painter.layer(lit, kind, indices, camera, width, height, True), None
         return finish(image, scene, camera, lit.shadow, threads, edges, in_place=True)
     if impostors is not None:
         layer_list, box_list = impostors.layers(lit, calls, camera, width, height, painter)

@@ -44,6 +44,13 @@ MAX_RAYS = 1 << 24
 MAX_SUB_EDGE = 1 << 14
 
 
+def core_pass() -> tuple[float, int, tuple[tuple[int, int], ...], int, int]:
+    """The pass's constants as ``_core.render_cpu(edges=...)`` takes them: the CPU twin marches
+    the image and its outline in one call (the occupancy grids and candidate fans built once),
+    with the same result as :func:`supersample_edges` over two calls."""
+    return EDGE_RANGE, SUB, RAYS, MAX_RAYS, MAX_SUB_EDGE
+
+
 def edge_mask(alpha: np.ndarray) -> np.ndarray:
     """``(H, W)`` coverage → ``(H, W)`` bool: the pixels whose 3×3 neighbourhood (edges clamped)
     spans more than :data:`EDGE_RANGE`."""

@@ -213,9 +213,17 @@ def draw_clouds_cpu(
     threads: int = 0,
     pixels: np.ndarray | None = None,
     return_stats: bool = False,
+    edges: bool = False,
 ) -> Any:
     """The CPU twin of :meth:`cumuli.rendering.marcher.MarcherGL.draw`; with ``pixels`` (an
     ``(N, 2)`` integer array of rows and columns) only those pixels, as ``(N, 4)`` values; with
-    ``return_stats``, ``(image, raw)``: ``_core.render_cpu``'s statistics of the march."""
+    ``return_stats``, ``(image, raw)``: ``_core.render_cpu``'s statistics of the march. With
+    ``edges`` the whole image gets the physical mode's edge pass in the same call
+    (:func:`cumuli.rendering.edges.core_pass`) and the result is ``(image, mask or None)``
+    (``(image, mask, raw)`` with ``return_stats``, the outline's work counted in its pixels)."""
+    from cumuli.rendering.edges import core_pass
+
     args = render_cpu_args(lit, camera, width, height, threads, indices, with_sky)
-    return _core.render_cpu(**args, pixels=pixels, return_stats=return_stats)
+    return _core.render_cpu(
+        **args, pixels=pixels, return_stats=return_stats, edges=core_pass() if edges else None
+    )

@@ -10,6 +10,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <glm/vec3.hpp>
@@ -185,5 +186,29 @@ void render_pixels(const MarchScene& scene, const MarchSettings& settings,
                    const CameraParams& camera, int width, int height, const std::int32_t* pixels,
                    std::size_t count, float* out, int threads, MarchStats* stats = nullptr,
                    std::uint32_t* fbm_map = nullptr);
+
+// The physical mode's edge pass (cumuli.rendering.edges): the outline's pixels, those whose 3×3
+// neighbourhood's coverage spans more than `range`, marched again at `rays` (row, column
+// offsets) of their sub × sub sub-pixels in the image `sub` times the size, and set to the mean.
+struct EdgePass {
+  float range = 0.1f;
+  int sub = 2;
+  std::vector<std::pair<int, int>> rays;
+  std::size_t max_rays = 0;  // an outline needing more rays keeps the image as it is
+  int max_sub_edge = 0;      // likewise an image whose sub-sampled edge is longer
+
+  void validate() const;  // throws std::invalid_argument
+};
+
+// render_image followed by the edge pass in one call: the occupancy grids and candidate fans
+// are built once for both marches, and the result equals render_image, coverage_edges and
+// render_pixels of the sub-pixels with their mean taken in double (the two-call route of the
+// compositor). Returns whether the pass ran; `mask` (height·width bytes) then holds 1 at the
+// outline's pixels (otherwise it is all 0). Stats and fbm_map include the sub-pixels' work,
+// each added to the pixel it lies in.
+bool render_image_with_edges(const MarchScene& scene, const MarchSettings& settings,
+                             const CameraParams& camera, int width, int height, float* out,
+                             int threads, const EdgePass& pass, std::uint8_t* mask,
+                             MarchStats* stats = nullptr, std::uint32_t* fbm_map = nullptr);
 
 }  // namespace cumuli
