@@ -963,14 +963,64 @@ Kernel kernel_for(SimdLevel level, SimdFetch fetch, int size, bool has_cells, bo
 
 }  // namespace
 
+// What fbm_many and Batch choose once per call or batch.
+struct Noise::Batch::Plan {
+  const Noise* noise;
+  FbmParams params;
+  FbmTables tables;
+  Kernel kernel;
+  Lattice lat;
+  MaxAbsBits scan_block;
+  int mask;
+
+  Plan(const Noise& n, const FbmParams& p)
+      : noise(&n),
+        params(p),
+        tables(make_tables(p)),
+        kernel(kernel_for(simd_level(), simd_fetch(), n.size_, !n.cells_.empty(),
+                          n.version_ == kVersionHash)),
+        lat{n.padded_.data(), n.cells_.data(), n.size_ + 1, n.mask_, n.key_, n.bias_},
+        scan_block(max_abs_bits_for(simd_level())),
+        mask(n.mask_) {}
+
+  // Points [0, n) of one block (n ≤ kBlock) into out; returns their largest |coordinate|'s bits
+  // (max_abs_bits: ≥ 0x7f800000 when one is not finite).
+  std::uint32_t block(const float* pts, std::size_t n, float* out) const {
+    const std::uint32_t top = scan_block(pts, 3 * n);
+    const bool finite = top < 0x7f800000u;
+    float biggest;
+    std::memcpy(&biggest, &top, sizeof biggest);
+    // Rounded multiplication is monotonic, so |p|·max_scale bounds |p|·scale of every octave
+    // and every point. A block with a point beyond the fast path (or not finite, or a lattice
+    // whose size is not a power of two) takes the general per-point path.
+    const bool slow = mask < 0 || !finite || !(biggest * tables.max_scale < kFastLimit);
+    if (slow) {
+      for (std::size_t k = 0; k < n; ++k)
+        out[k] = noise->fbm(glm::vec3(pts[3 * k], pts[3 * k + 1], pts[3 * k + 2]), params);
+    } else {
+      kernel(lat, tables, pts, n, out);
+    }
+    return top;
+  }
+};
+
+Noise::Batch::Batch(const Noise& noise, const FbmParams& params) {
+  params.validate();
+  plan_ = std::make_unique<const Plan>(noise, params);
+}
+Noise::Batch::~Batch() = default;
+Noise::Batch::Batch(Batch&&) noexcept = default;
+Noise::Batch& Noise::Batch::operator=(Batch&&) noexcept = default;
+
+void Noise::Batch::operator()(const float* points, std::size_t count, float* out) const {
+  for (std::size_t i = 0; i < count; i += kBlock)
+    plan_->block(points + 3 * i, std::min(kBlock, count - i), out + i);
+}
+
 void Noise::fbm_many(const float* points, std::size_t count, float* out, const FbmParams& params,
                      int threads, PointScan* scan) const {
   params.validate();
-  const FbmTables tables = make_tables(params);
-  const Kernel kernel =
-      kernel_for(simd_level(), simd_fetch(), size_, !cells_.empty(), version_ == kVersionHash);
-  const Lattice lat{padded_.data(), cells_.data(), size_ + 1, mask_, key_, bias_};
-  const MaxAbsBits scan_block = max_abs_bits_for(simd_level());
+  const Batch::Plan plan(*this, params);
   // Threads take whole blocks: the loop hands out up to 32 chunks per thread, which on a short
   // call (a light ray's 64 queued samples) would otherwise be a kernel call per two points.
   const std::size_t blocks = (count + kBlock - 1) / kBlock;
@@ -981,23 +1031,12 @@ void Noise::fbm_many(const float* points, std::size_t count, float* out, const F
     const std::size_t b = block_begin * kBlock, e = std::min(count, block_end * kBlock);
     for (std::size_t i = b; i < e; i += kBlock) {
       const std::size_t n = std::min(kBlock, e - i);
-      const float* pts = points + 3 * i;
-      // The block's largest |coordinate| (see max_abs_bits).
-      const std::uint32_t top = scan_block(pts, 3 * n);
-      const bool finite = top < 0x7f800000u;
-      float biggest;
-      std::memcpy(&biggest, &top, sizeof biggest);
-      if (scan != nullptr)
-        block_max[i / kBlock] = finite ? biggest : std::numeric_limits<float>::quiet_NaN();
-      // Rounded multiplication is monotonic, so |p|·max_scale bounds |p|·scale of every octave
-      // and every point. A block with a point beyond the fast path (or not finite, or a lattice
-      // whose size is not a power of two) takes the general per-point path.
-      const bool slow = mask_ < 0 || !finite || !(biggest * tables.max_scale < kFastLimit);
-      if (slow) {
-        for (std::size_t k = 0; k < n; ++k)
-          out[i + k] = fbm(glm::vec3(pts[3 * k], pts[3 * k + 1], pts[3 * k + 2]), params);
-      } else {
-        kernel(lat, tables, pts, n, out + i);
+      const std::uint32_t top = plan.block(points + 3 * i, n, out + i);
+      if (scan != nullptr) {
+        float biggest;
+        std::memcpy(&biggest, &top, sizeof biggest);
+        block_max[i / kBlock] =
+            top < 0x7f800000u ? biggest : std::numeric_limits<float>::quiet_NaN();
       }
     }
   });

@@ -87,6 +87,7 @@ class RayMarcher {
     src_.noise = scene.noise;
     src_.fbm = settings.fbm;
     src_.constant = settings.density_constant;
+    if (src_.constant < 0.0f && src_.noise != nullptr) batch_.emplace(*src_.noise, src_.fbm);
   }
 
   // A thread's scratch, its density source counting into it.
@@ -340,7 +341,7 @@ class RayMarcher {
       if (src_.constant >= 0.0f) {
         std::fill(b.rho, b.rho + count, src_.constant);
       } else {
-        src_.noise->fbm_many(noise_points(shape, b.pts, count), count, b.rho, src_.fbm, 1);
+        (*batch_)(noise_points(shape, b.pts, count), count, b.rho);
       }
       for (int i = 0; i < b.size; ++i) {
         if (src_.constant < 0.0f) ++scratch.fbm;
@@ -425,6 +426,7 @@ class RayMarcher {
   const MarchSettings& settings_;
   const std::vector<PreparedCloud>& prepared_;
   DensitySource src_;
+  std::optional<Noise::Batch> batch_;  // src_'s fBm for the physical march's queued samples
 };
 
 // What every ray of one render shares: each cloud's occupancy grid, candidate fan (every ray
