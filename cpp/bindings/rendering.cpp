@@ -408,6 +408,92 @@ std::optional<EdgePass> edge_pass_of(const py::object& edges) {
   return pass;
 }
 
+// _core.render_cpu and render_cpu_edged: the march of a whole image, of a list of pixels, or of
+// a whole image with the physical mode's edge pass (`edges` not None).
+py::object march_call(const Viewport& view, const py::list& clouds, const SunParams& sun,
+                      const SkyParams& sky, const MarchSettings& settings, const Noise* noise,
+                      int threads, bool with_sky, const py::object& solids,
+                      const py::object& ground, bool return_stats, const py::object& pixels,
+                      const py::object& edges) {
+  try {
+    view.validate();
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  const int width = view.width, height = view.height;
+  if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
+  const MarchSettings& s = settings;
+  if (s.phys.jitter_seed < 0 || s.phys.jitter_seed > 1023)
+    throw py::value_error("jitter_seed must be in [0, 1023]");
+
+  MarchScene scene;
+  scene.sun = sun_of(sun);
+  scene.sky = sky;
+  scene.noise = noise;
+  scene.with_sky = with_sky;
+  scene.solids = solid_spheres(solids);
+  scene.ground = ground_of(ground);
+  scene.clouds.reserve(clouds.size());
+  std::vector<py::object> keep;  // the physical lattices the clouds view, held to the end
+  for (std::size_t i = 0; i < clouds.size(); ++i)
+    scene.clouds.push_back(cloud_from_dict(clouds[i], i, keep));
+
+  try {
+    s.validate();
+    scene.validate(s);
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+
+  // The pixels to march, or all of them.
+  const auto listed = pixel_pairs(pixels);
+  const bool whole = pixels.is_none();
+  const std::optional<EdgePass> pass = edge_pass_of(edges);
+  if (pass && !whole) throw py::value_error("edges needs the whole image (pixels=None)");
+  const std::size_t count = whole
+                                ? static_cast<std::size_t>(width) * static_cast<std::size_t>(height)
+                                : static_cast<std::size_t>(listed.shape(0));
+  auto out =
+      whole ? new_array({height, width, 4}) : new_array({static_cast<py::ssize_t>(count), 4});
+  float* dst = out.mutable_data();
+  py::array_t<std::uint32_t> map;
+  MarchStats stats;
+  if (return_stats) {
+    map = whole ? py::array_t<std::uint32_t>(
+                      {static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width)})
+                : py::array_t<std::uint32_t>(static_cast<py::ssize_t>(count));
+  }
+  std::uint32_t* map_dst = return_stats ? map.mutable_data() : nullptr;
+  MarchStats* stats_dst = return_stats ? &stats : nullptr;
+  py::array_t<bool> mask;
+  bool edged = false;
+  if (pass) mask = py::array_t<bool>({height, width});
+  try {
+    py::gil_scoped_release release;
+    if (pass) {
+      edged = render_image_with_edges(scene, s, view.camera, width, height, dst, threads, *pass,
+                                      reinterpret_cast<std::uint8_t*>(mask.mutable_data()),
+                                      stats_dst, map_dst);
+    } else if (whole) {
+      render_image(scene, s, view.camera, width, height, dst, threads, stats_dst, map_dst);
+    } else {
+      render_pixels(scene, s, view.camera, width, height, listed.data(), count, dst, threads,
+                    stats_dst, map_dst);
+    }
+  } catch (const std::invalid_argument& e) {
+    throw py::value_error(e.what());
+  }
+  py::object outline = edged ? py::object(mask) : py::object(py::none());
+  if (!return_stats) return pass ? py::object(py::make_tuple(out, outline)) : py::object(out);
+  py::dict d;
+  d["fbm_evaluations"] = stats.fbm_evaluations;
+  d["steps"] = stats.steps;
+  d["skipped"] = stats.skipped;
+  d["fbm_map"] = map;
+  if (pass) return py::make_tuple(out, outline, d);
+  return py::make_tuple(out, d);
+}
+
 }  // namespace
 
 void bind_march(py::module_& m) {
@@ -416,90 +502,14 @@ void bind_march(py::module_& m) {
       [](const Viewport& view, const py::list& clouds, const SunParams& sun, const SkyParams& sky,
          const MarchSettings& settings, const Noise* noise, int threads, bool with_sky,
          const py::object& solids, const py::object& ground, bool return_stats,
-         const py::object& pixels, const py::object& edges) -> py::object {
-        try {
-          view.validate();
-        } catch (const std::invalid_argument& e) {
-          throw py::value_error(e.what());
-        }
-        const int width = view.width, height = view.height;
-        if (threads < 0 || threads > 1024) throw py::value_error("threads must be in [0, 1024]");
-        const MarchSettings& s = settings;
-        if (s.phys.jitter_seed < 0 || s.phys.jitter_seed > 1023)
-          throw py::value_error("jitter_seed must be in [0, 1023]");
-
-        MarchScene scene;
-        scene.sun = sun_of(sun);
-        scene.sky = sky;
-        scene.noise = noise;
-        scene.with_sky = with_sky;
-        scene.solids = solid_spheres(solids);
-        scene.ground = ground_of(ground);
-        scene.clouds.reserve(clouds.size());
-        std::vector<py::object> keep;  // the physical lattices the clouds view, held to the end
-        for (std::size_t i = 0; i < clouds.size(); ++i)
-          scene.clouds.push_back(cloud_from_dict(clouds[i], i, keep));
-
-        try {
-          s.validate();
-          scene.validate(s);
-        } catch (const std::invalid_argument& e) {
-          throw py::value_error(e.what());
-        }
-
-        // The pixels to march, or all of them.
-        const auto listed = pixel_pairs(pixels);
-        const bool whole = pixels.is_none();
-        const std::optional<EdgePass> pass = edge_pass_of(edges);
-        if (pass && !whole) throw py::value_error("edges needs the whole image (pixels=None)");
-        const std::size_t count =
-            whole ? static_cast<std::size_t>(width) * static_cast<std::size_t>(height)
-                  : static_cast<std::size_t>(listed.shape(0));
-        auto out =
-            whole ? new_array({height, width, 4}) : new_array({static_cast<py::ssize_t>(count), 4});
-        float* dst = out.mutable_data();
-        py::array_t<std::uint32_t> map;
-        MarchStats stats;
-        if (return_stats) {
-          map = whole ? py::array_t<std::uint32_t>(
-                            {static_cast<py::ssize_t>(height), static_cast<py::ssize_t>(width)})
-                      : py::array_t<std::uint32_t>(static_cast<py::ssize_t>(count));
-        }
-        std::uint32_t* map_dst = return_stats ? map.mutable_data() : nullptr;
-        MarchStats* stats_dst = return_stats ? &stats : nullptr;
-        py::array_t<bool> mask;
-        bool edged = false;
-        if (pass) mask = py::array_t<bool>({height, width});
-        try {
-          py::gil_scoped_release release;
-          if (pass) {
-            edged = render_image_with_edges(
-                scene, s, view.camera, width, height, dst, threads, *pass,
-                reinterpret_cast<std::uint8_t*>(mask.mutable_data()), stats_dst, map_dst);
-          } else if (whole) {
-            render_image(scene, s, view.camera, width, height, dst, threads, stats_dst, map_dst);
-          } else {
-            render_pixels(scene, s, view.camera, width, height, listed.data(), count, dst, threads,
-                          stats_dst, map_dst);
-          }
-        } catch (const std::invalid_argument& e) {
-          throw py::value_error(e.what());
-        }
-        py::object outline = edged ? py::object(mask) : py::object(py::none());
-        if (!return_stats) return pass ? py::object(py::make_tuple(out, outline)) : py::object(out);
-        py::dict d;
-        d["fbm_evaluations"] = stats.fbm_evaluations;
-        d["steps"] = stats.steps;
-        d["skipped"] = stats.skipped;
-        d["fbm_map"] = map;
-        if (pass) return py::make_tuple(out, outline, d);
-        return py::make_tuple(out, d);
+         const py::object& pixels) {
+        return march_call(view, clouds, sun, sky, settings, noise, threads, with_sky, solids,
+                          ground, return_stats, pixels, py::none());
       },
       py::arg("view"), py::arg("clouds"), py::arg("sun"), py::arg("sky"), py::arg("settings"),
       py::arg("noise").none(true), py::arg("threads") = 0, py::arg("with_sky") = true,
       py::arg("solids") = py::none(), py::arg("ground") = py::none(),
       py::arg("return_stats") = false, py::arg("pixels") = py::none(),
-      py::arg("edges") = py::none(),
       "CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image of the "
       "Viewport, row 0 at the top. Each cloud is a dict with centres, radii, rotations, model, "
       "kappa, phi, light ([z, y, x]) and light_lo / light_hi (or physical). settings: a "
@@ -508,9 +518,24 @@ void bind_march(py::module_& m) {
       "(colour, 1 − T); solids (n, 4) (centre, radius) stop every ray at the nearest solid; "
       "return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}); pixels, an "
       "(N, 2) integer array of (row, column), marches only those pixels of the image and returns "
-      "their (N, 4) values in that order (fbm_map then (N,)); edges, a tuple (range, sub, rays, "
-      "max_rays, max_sub_edge), adds the physical mode's edge pass to the whole image "
-      "(cumuli.rendering.edges) and returns (image, mask or None[, stats]).");
+      "their (N, 4) values in that order (fbm_map then (N,)).");
+
+  m.def(
+      "render_cpu_edged",
+      [](const Viewport& view, const py::list& clouds, const SunParams& sun, const SkyParams& sky,
+         const MarchSettings& settings, const Noise* noise, int threads, const py::object& ground,
+         bool return_stats, const py::object& edges) {
+        if (edges.is_none()) throw py::type_error("edges must be a tuple, not None");
+        return march_call(view, clouds, sun, sky, settings, noise, threads, true, py::none(),
+                          ground, return_stats, py::none(), edges);
+      },
+      py::arg("view"), py::arg("clouds"), py::arg("sun"), py::arg("sky"), py::arg("settings"),
+      py::arg("noise").none(true), py::arg("threads") = 0, py::arg("ground") = py::none(),
+      py::arg("return_stats") = false, py::arg("edges"),
+      "render_cpu over the sky (no solids) with the physical mode's edge pass in the same call "
+      "(cumuli.rendering.edges): edges, a tuple (range, sub, rays, max_rays, max_sub_edge). "
+      "Returns (image, mask or None) and, with return_stats, (image, mask or None, stats), the "
+      "outline's work counted in its pixels.");
 
   m.def(
       "occupancy_grid",

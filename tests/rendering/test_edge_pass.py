@@ -10,7 +10,7 @@ import pytest
 import cumuli as cu
 from cumuli import _core
 from cumuli.rendering.edges import EDGE_RANGE, RAYS, SUB, edge_mask, supersample_edges
-from cumuli.rendering.marcher_cpu import combined_stats, render_cpu_args
+from cumuli.rendering.marcher_cpu import combined_stats, edged_args, render_cpu_args
 from cumuli.rendering.resolve import tent_filter
 
 W, H = 48, 36
@@ -246,9 +246,9 @@ def test_the_one_call_edge_pass_equals_the_two_call_route(
     # An image with no outline, or too long an outline, keeps the single march and no mask.
     args = render_cpu_args(lit, cam, w, h, threads)
     flat = (1e9, SUB, RAYS, 1 << 24, 1 << 14)
-    image, mask = _core.render_cpu(**args, edges=flat)
+    image, mask = _core.render_cpu_edged(**edged_args(args), edges=flat)
     assert mask is None and np.array_equal(image, _core.render_cpu(**args))
-    image, mask = _core.render_cpu(**args, edges=core_pass()[:3] + (1, 1 << 14))
+    image, mask = _core.render_cpu_edged(**edged_args(args), edges=core_pass()[:3] + (1, 1 << 14))
     assert mask is None and np.array_equal(image, _core.render_cpu(**args))
 
 
@@ -256,8 +256,8 @@ def test_the_one_call_edge_pass_rejects_bad_input() -> None:
     from cumuli.light.prepare import prepare_light
 
     scene, cam = small_scene()
-    args = render_cpu_args(prepare_light(scene), cam, W, H)
-    good = (EDGE_RANGE, SUB, RAYS, 1 << 24, 1 << 14)
+    full = render_cpu_args(prepare_light(scene), cam, W, H)
+    args = edged_args(full)
     bad = {
         "range must be finite": (float("nan"), SUB, RAYS, 1 << 24, 1 << 14),
         "sub must be in": (EDGE_RANGE, 0, RAYS, 1 << 24, 1 << 14),
@@ -268,11 +268,12 @@ def test_the_one_call_edge_pass_rejects_bad_input() -> None:
     }
     for message, edges in bad.items():
         with pytest.raises(ValueError, match=message):
-            _core.render_cpu(**args, edges=edges)
-    with pytest.raises(ValueError, match="whole image"):
-        _core.render_cpu(**args, edges=good, pixels=np.zeros((1, 2), np.int32))
-    with pytest.raises(TypeError, match="edges must be a tuple"):
-        _core.render_cpu(**args, edges=(EDGE_RANGE, SUB))
+            _core.render_cpu_edged(**args, edges=edges)
+    for edges in ((EDGE_RANGE, SUB), None):
+        with pytest.raises(TypeError, match="edges must be a tuple"):
+            _core.render_cpu_edged(**args, edges=edges)
+    with pytest.raises(ValueError, match="without solids"):
+        edged_args(full | {"solids": np.zeros((1, 4), np.float32)})
 
 
 def test_return_stats_counts_the_edge_pass_in_its_pixels() -> None:

@@ -224,6 +224,14 @@ def draw_clouds_cpu(
     from cumuli.rendering.edges import core_pass
 
     args = render_cpu_args(lit, camera, width, height, threads, indices, with_sky)
-    return _core.render_cpu(
-        **args, pixels=pixels, return_stats=return_stats, edges=core_pass() if edges else None
-    )
+    if not edges:
+        return _core.render_cpu(**args, pixels=pixels, return_stats=return_stats)
+    return _core.render_cpu_edged(**edged_args(args), return_stats=return_stats, edges=core_pass())
+
+
+def edged_args(args: dict[str, Any]) -> dict[str, Any]:
+    """:func:`render_cpu_args` as ``_core.render_cpu_edged`` takes them: the edge pass draws the
+    whole image over the sky, with no solids."""
+    if args["solids"] is not None or not args["with_sky"]:
+        raise ValueError("the edge pass draws 2018 clouds over the sky, without solids")
+    return {k: v for k, v in args.items() if k not in ("solids", "with_sky")}
