@@ -531,7 +531,7 @@ void bind_march(py::module_& m) {
       },
       py::arg("view"), py::arg("clouds"), py::arg("sun"), py::arg("sky"), py::arg("settings"),
       py::arg("noise").none(true), py::arg("threads") = 0, py::arg("ground") = py::none(),
-      py::arg("return_stats") = false, py::arg("edges"),
+      py::arg("return_stats") = false, py::arg("edges") = py::none(),
       "render_cpu over the sky (no solids) with the physical mode's edge pass in the same call "
       "(cumuli.rendering.edges): edges, a tuple (range, sub, rays, max_rays, max_sub_edge). "
       "Returns (image, mask or None) and, with return_stats, (image, mask or None, stats), the "

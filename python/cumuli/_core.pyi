@@ -1194,7 +1194,7 @@ def render_cpu(view: Viewport, clouds: list, sun: SunParams, sky: SkyParams, set
     """
     CPU reference ray marcher (RENDER_CONTRACT): an (H, W, 4) float32 RGBA image of the Viewport, row 0 at the top. Each cloud is a dict with centres, radii, rotations, model, kappa, phi, light ([z, y, x]) and light_lo / light_hi (or physical). settings: a MarchSettings (density_constant >= 0 replaces fBm, for tests; physical selects the physical mode with its PhysicalParams). with_sky=False gives the premultiplied layer (colour, 1 − T); solids (n, 4) (centre, radius) stop every ray at the nearest solid; return_stats=True returns (image, {fbm_evaluations, steps, skipped, fbm_map}); pixels, an (N, 2) integer array of (row, column), marches only those pixels of the image and returns their (N, 4) values in that order (fbm_map then (N,)).
     """
-def render_cpu_edged(view: Viewport, clouds: list, sun: SunParams, sky: SkyParams, settings: MarchSettings, noise: Noise, threads: typing.SupportsInt | typing.SupportsIndex = 0, ground: typing.Any = None, return_stats: bool = False, edges: typing.Any) -> typing.Any:
+def render_cpu_edged(view: Viewport, clouds: list, sun: SunParams, sky: SkyParams, settings: MarchSettings, noise: Noise, threads: typing.SupportsInt | typing.SupportsIndex = 0, ground: typing.Any = None, return_stats: bool = False, edges: typing.Any = None) -> typing.Any:
     """
     render_cpu over the sky (no solids) with the physical mode's edge pass in the same call (cumuli.rendering.edges): edges, a tuple (range, sub, rays, max_rays, max_sub_edge). Returns (image, mask or None) and, with return_stats, (image, mask or None, stats), the outline's work counted in its pixels.
     """
