@@ -45,9 +45,9 @@ MAX_SUB_EDGE = 1 << 14
 
 
 def core_pass() -> tuple[float, int, tuple[tuple[int, int], ...], int, int]:
-    """The pass's constants as ``_core.render_cpu_edged(edges=...)`` takes them: the CPU twin marches
-    the image and its outline in one call (the occupancy grids and candidate fans built once),
-    with the same result as :func:`supersample_edges` over two calls."""
+    """The pass's constants as ``_core.render_cpu_edged(edges=...)`` takes them: the CPU twin
+    marches the image and its outline in one call (the occupancy grids and candidate fans built
+    once), with the same result as :func:`supersample_edges` over two calls."""
     return EDGE_RANGE, SUB, RAYS, MAX_RAYS, MAX_SUB_EDGE
 
 
