@@ -449,7 +449,6 @@ py::object march_call(const Viewport& view, const py::list& clouds, const SunPar
   const auto listed = pixel_pairs(pixels);
   const bool whole = pixels.is_none();
   const std::optional<EdgePass> pass = edge_pass_of(edges);
-  if (pass && !whole) throw py::value_error("edges needs the whole image (pixels=None)");
   const std::size_t count = whole
                                 ? static_cast<std::size_t>(width) * static_cast<std::size_t>(height)
                                 : static_cast<std::size_t>(listed.shape(0));

@@ -971,7 +971,6 @@ struct Noise::Batch::Plan {
   Kernel kernel;
   Lattice lat;
   MaxAbsBits scan_block;
-  int mask;
 
   Plan(const Noise& n, const FbmParams& p)
       : noise(&n),
@@ -980,8 +979,7 @@ struct Noise::Batch::Plan {
         kernel(kernel_for(simd_level(), simd_fetch(), n.size_, !n.cells_.empty(),
                           n.version_ == kVersionHash)),
         lat{n.padded_.data(), n.cells_.data(), n.size_ + 1, n.mask_, n.key_, n.bias_},
-        scan_block(max_abs_bits_for(simd_level())),
-        mask(n.mask_) {}
+        scan_block(max_abs_bits_for(simd_level())) {}
 
   // Points [0, n) of one block (n ≤ kBlock) into out; returns their largest |coordinate|'s bits
   // (max_abs_bits: ≥ 0x7f800000 when one is not finite).
@@ -993,7 +991,7 @@ struct Noise::Batch::Plan {
     // Rounded multiplication is monotonic, so |p|·max_scale bounds |p|·scale of every octave
     // and every point. A block with a point beyond the fast path (or not finite, or a lattice
     // whose size is not a power of two) takes the general per-point path.
-    const bool slow = mask < 0 || !finite || !(biggest * tables.max_scale < kFastLimit);
+    const bool slow = lat.mask < 0 || !finite || !(biggest * tables.max_scale < kFastLimit);
     if (slow) {
       for (std::size_t k = 0; k < n; ++k)
         out[k] = noise->fbm(glm::vec3(pts[3 * k], pts[3 * k + 1], pts[3 * k + 2]), params);

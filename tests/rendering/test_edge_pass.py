@@ -272,6 +272,13 @@ def test_the_one_call_edge_pass_rejects_bad_input() -> None:
     for edges in ((EDGE_RANGE, SUB), None):
         with pytest.raises(TypeError, match="edges must be a tuple"):
             _core.render_cpu_edged(**args, edges=edges)
+    from cumuli.rendering.marcher_cpu import draw_clouds_cpu
+
+    with pytest.raises(ValueError, match="pixels or edges, not both"):
+        draw_clouds_cpu(
+            prepare_light(scene), [0], cam, W, H, True, pixels=np.zeros((1, 2), np.int32),
+            edges=True,
+        )  # fmt: skip
     with pytest.raises(ValueError, match="without solids"):
         edged_args(full | {"solids": np.zeros((1, 4), np.float32)})
 

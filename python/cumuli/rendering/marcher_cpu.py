@@ -24,6 +24,7 @@ from cumuli.light.physical import PhysicalLight
 from cumuli.light.prepare import LitScene, prepare_light
 from cumuli.model.cloud import Cloud
 from cumuli.model.solid import solid_arrays
+from cumuli.rendering.edges import core_pass
 from cumuli.rendering.params import (
     MIN_TRANSMITTANCE,  # noqa: F401  (re-exported)
     march_params,
@@ -221,11 +222,11 @@ def draw_clouds_cpu(
     ``edges`` the whole image gets the physical mode's edge pass in the same call
     (:func:`cumuli.rendering.edges.core_pass`) and the result is ``(image, mask or None)``
     (``(image, mask, raw)`` with ``return_stats``, the outline's work counted in its pixels)."""
-    from cumuli.rendering.edges import core_pass
-
     args = render_cpu_args(lit, camera, width, height, threads, indices, with_sky)
     if not edges:
         return _core.render_cpu(**args, pixels=pixels, return_stats=return_stats)
+    if pixels is not None:
+        raise ValueError("the edge pass draws the whole image: pass pixels or edges, not both")
     return _core.render_cpu_edged(**edged_args(args), return_stats=return_stats, edges=core_pass())
 
 
