@@ -50,12 +50,14 @@ and 90th percentile of the per-block relative error, the signed ratio of the mea
 minus 1 and the mean |ΔT| (``tests/rendering/test_mitsuba_reference.py`` holds them to
 15 %, 40 %, ±10 % and 0.01), so that a faster light step shows what it costs in error.
 
-``alone``: each cloud of the largest *seeds* scene lit alone (the same scene with that cloud
-only), the median of the repeats each, interleaved. The seeds differ in size (the light step
-of ``gaussian_cumulus(seed=k)`` alone ranges over ~±15 % around its mean), so for that series
-"one cloud" is their mean alone: n clouds over one is then how the step grows with the number
-of clouds, not how much larger than seed 1 the other seeds happen to be
-(``last_over_first`` keeps the ratio to seed 1 alone beside it).
+``linearity``: the targets' ratios, timed in one interleaved run (round-robin, so that a slow
+drift of a shared machine, which moves the light step by tens of percent over the minutes the
+series take, touches both sides alike): the cumulus alone and its sixteen copies; each cloud of
+the sixteen seeds lit alone (the same scene with that cloud only) and the sixteen together. The
+seeds differ in size (the light step of ``gaussian_cumulus(seed=k)`` alone ranges over ~±15 %
+around its mean), so for that series "one cloud" is their mean alone: n clouds over one is then
+how the step grows with the number of clouds, not how much larger than seed 1 the other seeds
+happen to be (``last_over_first`` keeps the series' ratio to seed 1 alone beside it).
 
 Targets (the light step of the physical default): ≤ 40 ms per default cloud (the one-cloud
 scene), and linear in clouds: 16 clouds ≤ 16× one (each series: the copies over the cumulus
@@ -124,13 +126,30 @@ def scene(series: str, count: int, resolution: int | None) -> cu.Scene:
     return base.replace(clouds=clouds)
 
 
-def each_alone(sc: cu.Scene, repeats: int) -> list[float]:
-    """Seconds of the light step of each cloud of ``sc`` lit alone (median of ``repeats``,
-    the clouds interleaved)."""
-    singles = [sc.replace(clouds=[c]) for c in sc.clouds]
-    fns = {str(k): (lambda one=one: light_step(one)) for k, one in enumerate(singles)}
+def linearity(resolution: int | None, repeats: int, most: int) -> dict[str, Any]:
+    """The targets' ratios (see the docstring): the cumulus alone, its ``most`` copies, each of
+    the ``most`` seeds alone and the seeds together, all timed in one interleaved run (medians
+    of ``repeats``)."""
+    copies, seeds = scene("copies", most, resolution), scene("seeds", most, resolution)
+    scenes = {"cumulus alone": copies.replace(clouds=copies.clouds[:1]), "copies": copies}
+    scenes["seeds"] = seeds
+    for k, cloud in enumerate(seeds.clouds):
+        scenes[f"seed {k + 1} alone"] = seeds.replace(clouds=[cloud])
+    fns = {name: (lambda sc=sc: light_step(sc)) for name, sc in scenes.items()}
     timed = common.interleaved_repeats(fns, repeats)
-    return [common.spread(timed[str(k)][0])["median"] for k in range(len(sc.clouds))]
+    median = {name: common.spread(timed[name][0])["median"] for name in fns}
+    alone = [median[f"seed {k + 1} alone"] for k in range(most)]
+    out = {
+        "copies": {"one_s": median["cumulus alone"], "all_s": median["copies"]},
+        "seeds": {"one_s": float(np.mean(alone)), "all_s": median["seeds"], "alone_s": alone},
+    }
+    for s, row in out.items():
+        row["ratio"] = row["all_s"] / row["one_s"]
+        common.log(
+            f"linearity ({s}, interleaved): {most} clouds {1e3 * row['all_s']:.1f} ms, one "
+            f"{1e3 * row['one_s']:.1f} ms: {row['ratio']:.2f}x"
+        )
+    return out
 
 
 def light_step(sc: cu.Scene) -> None:
@@ -419,16 +438,15 @@ def main(argv: list[str] | None = None) -> int:
                 + ", ".join(f"{k} {1e3 * v:.1f}" for k, v in per_stage.items())
                 + " ms)"
             )
-    # One cloud of each series: the cumulus alone for the copies, the seeds' mean alone.
-    alone = each_alone(scene("seeds", counts[-1], resolution), repeats)
+    # The targets' ratios from one interleaved run: the cumulus alone for the copies, the
+    # seeds' mean alone.
+    linear = linearity(resolution, repeats, counts[-1])
+    alone = linear["seeds"]["alone_s"]
     common.log(
         f"seeds alone: mean {1e3 * np.mean(alone):.1f} ms, seed 1 {1e3 * alone[0]:.1f} ms, "
         f"range {1e3 * min(alone):.1f}-{1e3 * max(alone):.1f} ms"
     )
-    one = {
-        "copies": results["copies"]["1"]["light_step_s"]["median"],
-        "seeds": float(np.mean(alone)),
-    }
+    one = {s: linear[s]["one_s"] for s in SERIES}
     growth: dict[str, Any] = {}
     for s in SERIES:
         rows = [results[s][str(c)] for c in counts]
@@ -440,7 +458,10 @@ def main(argv: list[str] | None = None) -> int:
                 for k in STAGES
             },
             "one_s": one[s],
-            "last_over_one": secs[-1] / one[s],
+            # The target: both sides from linearity's interleaved run.
+            "last_over_one": linear[s]["ratio"],
+            # The series' own last over its first (timed minutes apart) and over one alone.
+            "series_last_over_one": secs[-1] / one[s],
             "last_over_first": secs[-1] / secs[0],
             # The first over the last in process CPU seconds: what other load on a shared
             # machine inflates least (it stretches the short one-cloud step more than the long).
@@ -481,6 +502,7 @@ def main(argv: list[str] | None = None) -> int:
         "series": results,
         "growth": growth,
         "seeds_alone_s": alone,
+        "linearity": linear,
         "previous_default": before,
         "noise_versions": versions,
         "sky_rays": rays,

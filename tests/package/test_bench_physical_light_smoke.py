@@ -43,13 +43,20 @@ def test_bench_physical_light_quick_writes_json_and_plot(
             / rows["1"]["light_step_s"]["median"]
         )
         assert set(growth["stage_exponents"]) == set(STAGES)
-    # "One cloud" of the seeds series is the mean of each seed alone.
+    # "One cloud" of the seeds series is the mean of each seed alone; the targets' ratios come
+    # from one interleaved run of one and all (linearity), not from the series' rows.
     alone = data["seeds_alone_s"]
     assert len(alone) == data["counts"][-1] and min(alone) > 0
     assert data["growth"]["seeds"]["one_s"] == pytest.approx(sum(alone) / len(alone))
-    assert (
-        data["growth"]["copies"]["one_s"] == data["series"]["copies"]["1"]["light_step_s"]["median"]
-    )
+    linear = data["linearity"]
+    assert linear["seeds"]["alone_s"] == alone
+    for series in ("copies", "seeds"):
+        row = linear[series]
+        assert row["one_s"] > 0 and row["all_s"] > row["one_s"]
+        assert row["ratio"] == pytest.approx(row["all_s"] / row["one_s"])
+        assert data["growth"][series]["one_s"] == row["one_s"]
+        assert data["growth"][series]["last_over_one"] == row["ratio"]
+        assert data["growth"][series]["series_last_over_one"] > 0
     for name in ("per_default_cloud_ms", "sixteen_over_one_copies", "sixteen_over_one_seeds"):
         t = data["targets"][name]
         assert t["met"] is None and t["reached"] is None  # --quick measures no target
