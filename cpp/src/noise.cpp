@@ -969,8 +969,14 @@ struct Noise::Batch::Plan {
   FbmParams params;
   FbmTables tables;
   Kernel kernel;
+  // For blocks of at most kNarrow points: AVX2's kernel (8 lanes) where AVX-512's is the one,
+  // which would compute 16 lanes for them (the physical march's short per-ray batches). The
+  // kernels give the same bits (the same operations in the same order, lane by lane).
+  Kernel narrow;
   Lattice lat;
   MaxAbsBits scan_block;
+
+  static constexpr std::size_t kNarrow = 8;
 
   Plan(const Noise& n, const FbmParams& p)
       : noise(&n),
@@ -978,6 +984,10 @@ struct Noise::Batch::Plan {
         tables(make_tables(p)),
         kernel(kernel_for(simd_level(), simd_fetch(), n.size_, !n.cells_.empty(),
                           n.version_ == kVersionHash)),
+        narrow(simd_level() == SimdLevel::Avx512
+                   ? kernel_for(SimdLevel::Avx2, simd_fetch(), n.size_, !n.cells_.empty(),
+                                n.version_ == kVersionHash)
+                   : kernel),
         lat{n.padded_.data(), n.cells_.data(), n.size_ + 1, n.mask_, n.key_, n.bias_},
         scan_block(max_abs_bits_for(simd_level())) {}
 
@@ -996,7 +1006,7 @@ struct Noise::Batch::Plan {
       for (std::size_t k = 0; k < n; ++k)
         out[k] = noise->fbm(glm::vec3(pts[3 * k], pts[3 * k + 1], pts[3 * k + 2]), params);
     } else {
-      kernel(lat, tables, pts, n, out);
+      (n <= kNarrow ? narrow : kernel)(lat, tables, pts, n, out);
     }
     return top;
   }

@@ -116,10 +116,12 @@ def test_wide_paths_equal_the_scalar_path(level: str, size: int) -> None:
         assert np.isfinite(got).all()
 
 
+@pytest.mark.parametrize("version", [1, 2])
 @pytest.mark.parametrize("level", KERNELS)
-def test_every_tail_length_and_thread_count(level: str) -> None:
-    """Counts that leave partial registers (1..40 points) and chunks split across threads."""
-    noise = cu.Noise(seed=5, version=1)
+def test_every_tail_length_and_thread_count(level: str, version: int) -> None:
+    """Counts that leave partial registers (1..40 points: at most 8 take AVX2's kernel where
+    AVX-512's is in use) and chunks split across threads, in both noise versions."""
+    noise = cu.Noise(seed=5, version=version)
     pts = np.random.default_rng(9).uniform(-30, 30, (4099, 3)).astype(F32)
     ref = _at("scalar", lambda: noise.fbm(pts, threads=1))
     _use(level)
