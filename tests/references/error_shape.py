@@ -105,10 +105,7 @@ def same_medium(name: str) -> tuple[cu.Scene, cu.Camera]:
     """View ``name`` with its cloud replaced by the lattice Mitsuba renders: the extinction on
     the view's voxels (``mitsuba_views.export_spec``'s field), drawn trilinear, no detail."""
     scene, camera = mv.VIEWS[name]()
-    cloud = scene.clouds[0]
-    lo, hi = cloud.layer_box()
-    edge = int(math.ceil(float(np.max(np.asarray(hi) - np.asarray(lo))) / mv.voxel(name)))
-    field = cu.density_volume(cloud, scene.noise, scene.settings, edge)
+    field = mv.reference_field(name, scene)
     volume = cu.VolumeCloud(
         density=np.ascontiguousarray(field.values, np.float32),
         box=field.box,

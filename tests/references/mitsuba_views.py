@@ -207,13 +207,19 @@ def phase_table(
     return (whole if keep_peak else out / (1.0 - f)), f
 
 
-def export_spec(name: str, path: Path) -> None:
-    """Write view ``name`` as a Mitsuba-only description (``.npz``) for ``mitsuba_batch.py``."""
-    scene, camera = (VIEWS | EXTRA_VIEWS)[name]()
+def reference_field(name: str, scene: cu.Scene) -> cu.ExtinctionField:
+    """The extinction field view ``name``'s Mitsuba description holds: its cloud voxelised on
+    :func:`voxel` units over the cloud's layer box (the longest edge rounded up)."""
     cloud = scene.clouds[0]
     lo, hi = cloud.layer_box()
     edge = int(math.ceil(float(np.max(np.asarray(hi) - np.asarray(lo))) / voxel(name)))
-    field = cu.density_volume(cloud, scene.noise, scene.settings, edge)
+    return cu.density_volume(cloud, scene.noise, scene.settings, edge)
+
+
+def export_spec(name: str, path: Path) -> None:
+    """Write view ``name`` as a Mitsuba-only description (``.npz``) for ``mitsuba_batch.py``."""
+    scene, camera = (VIEWS | EXTRA_VIEWS)[name]()
+    field = reference_field(name, scene)
     table, f = phase_table(scene)
     values = np.ascontiguousarray(field.values, np.float32)
     # Views of one cloud share its field: stored once, named by its content.
