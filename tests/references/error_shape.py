@@ -103,7 +103,7 @@ def band_normalised_median(ratio: np.ndarray, depth: np.ndarray) -> float:
 
 def same_medium(name: str) -> tuple[cu.Scene, cu.Camera]:
     """View ``name`` with its cloud replaced by the lattice Mitsuba renders: the extinction on
-    the view's voxels (``mitsuba_views.export_spec``'s field), drawn trilinear, no detail."""
+    the view's voxels (``mitsuba_views.reference_field``), drawn trilinear, no detail."""
     scene, camera = mv.VIEWS[name]()
     field = mv.reference_field(name, scene)
     volume = cu.VolumeCloud(
