@@ -160,3 +160,64 @@ def test_a_deck_and_clouds_side_by_side(monkeypatch: pytest.MonkeyPatch) -> None
         np.testing.assert_array_equal(a.grid, b.grid)
         np.testing.assert_array_equal(a.total_depth(), b.total_depth())
     assert together.lights[1].upstream is not None  # the deck shades the cumulus under it
+
+
+def test_the_sun_lattices_go_first_and_are_marched_once(monkeypatch: pytest.MonkeyPatch) -> None:
+    """`prepare_light` marches every medium's own sun lattice before the passes that read them
+    (one march per cloud, none for a light memoised or given), and each lattice once."""
+    scene = _scene(3)
+    kinds = [cu.registry.of(c) for c in scene.clouds]
+    memo.clear()
+    todo = [0, 1, 2]
+    assert [k for k, _ in prep._marches(scene, todo, kinds, [None] * 3)] == todo
+    # A given light needs no lattice of its own.
+    assert [k for k, _ in prep._marches(scene, todo, kinds, [None, object(), None])] == [0, 2]
+    # More media than the memo keeps until their passes read them: each pass marches its own.
+    monkeypatch.setattr(memo, "MEMO_SIZE", 5)
+    assert prep._marches(scene, todo, kinds, [None] * 3) == []
+    monkeypatch.undo()
+    marched = []
+    real = cu._core.light_space_depth
+
+    def counted(*args, **kwargs):
+        marched.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(cu._core, "light_space_depth", counted)
+    lit = prep.prepare_light(scene, threads=2, progress=False)
+    assert len(marched) == 3
+    assert any(light.upstream is not None for light in lit.lights)  # read by those they shade
+    # Lit already: nothing to march again.
+    assert prep._marches(scene, todo, kinds, [None] * 3) == []
+    prep.prepare_light(scene, threads=2, progress=False)
+    assert len(marched) == 3
+    memo.clear()
+
+
+def test_an_error_in_a_sun_lattice_names_its_cloud(monkeypatch: pytest.MonkeyPatch) -> None:
+    scene = _scene(2)
+    real = cu._core.light_space_depth
+    calls = []
+
+    def refuse_second(*args, **kwargs):
+        calls.append(1)
+        if len(calls) == 2:
+            raise ValueError("no lattice")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(cu._core, "light_space_depth", refuse_second)
+    memo.clear()
+    with pytest.raises(ValueError, match=r"scene\.clouds\[\d\]: no lattice"):
+        prep.prepare_light(scene, threads=2, progress=False)
+    assert not memo.pending
+    memo.clear()
+
+
+def test_known_is_what_the_memo_holds() -> None:
+    memo.clear()
+    assert not memo.known(("known test",))
+    memo.remember(("known test",), lambda: 1)
+    assert memo.known(("known test",))
+    assert not memo.known(("known test", "other"))
+    memo.clear()
+    assert not memo.known(("known test",))

@@ -70,6 +70,13 @@ def remember(key: Any, make: Callable[[], Any], media: bool = False, geometry: b
     return value
 
 
+def known(key: Any) -> bool:
+    """Whether :data:`store` holds ``key`` now (made, not being made); it does not count as a
+    use."""
+    with lock:
+        return key in store
+
+
 def clear() -> None:
     """Forget every memoised value."""
     with lock:

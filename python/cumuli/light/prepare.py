@@ -38,12 +38,13 @@ import numpy as np
 from cumuli import registry
 from cumuli._util import progress as _progress
 from cumuli._util import validate as check
+from cumuli.light import memo as _memo
 from cumuli.light.between import onto_media, own_light_of, through_media
 from cumuli.light.digests import shadow_digest as _shadow_digest
 from cumuli.light.memo import clear as _memo_clear
 from cumuli.light.memo import remember as _remember
 from cumuli.light.moved import moved
-from cumuli.light.physical import physical_pass
+from cumuli.light.physical import physical_pass, sun_depth_march
 from cumuli.light.shadow import ShadowMap, compute_shadow, default_extent
 from cumuli.scene import Scene
 
@@ -160,6 +161,20 @@ def _side_by_side(
     return side, [k for k in todo if k not in chosen]
 
 
+def _marches(
+    scene: Scene, todo: list[int], kinds: list[Any], given: list[Any]
+) -> list[tuple[int, Any]]:
+    """``(k, march)``: the own sun lattices (:func:`cumuli.light.physical.sun_depth_march`) of
+    the media of ``todo`` whose physical passes will run, when the memo keeps them all until
+    the passes read them (two entries per cloud: its lattice and its light); else none, and
+    each pass marches the lattices it reads itself."""
+    media = [k for k in todo if given[k] is None and kinds[k].light_pass(True) is physical_pass]
+    if 2 * len(media) > _memo.MEMO_SIZE:
+        return []
+    found = ((k, _light_of(k, lambda: sun_depth_march(scene.clouds[k], scene))) for k in media)  # noqa: B023
+    return [(k, march) for k, march in found if march is not None]
+
+
 def _light_of(k: int, make: Any) -> Any:
     """``make()``, its errors naming cloud ``k``."""
     try:
@@ -237,10 +252,17 @@ def prepare_light(
     with bar as steps:
         if side:
             with ThreadPoolExecutor(max_workers=_cores(threads)) as pool:
+                # Every medium's own sun lattice first, one per core: the passes that read the
+                # lattices of the clouds upstream of them then find them made.
+                marching = [
+                    (k, pool.submit(march)) for k, march in _marches(scene, todo, kinds, given)
+                ]
                 running = [
                     pool.submit(kinds[k].light_pass(physical), scene.clouds[k], scene, given[k], 1)
                     for k in side
                 ]
+                for k, made in marching:
+                    _light_of(k, made.result)
                 for k, made in zip(side, running, strict=True):
                     out[k] = _light_of(k, made.result)
                     steps.update()
