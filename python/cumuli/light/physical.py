@@ -62,7 +62,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass, replace
 from typing import Any
@@ -82,7 +82,6 @@ from cumuli.light.medium import (  # noqa: F401 (public)
     medium_args,
     optical_depth,
 )  # fmt: skip
-from cumuli.light.memo import known as memo_known
 from cumuli.light.memo import remember
 from cumuli.light.moved import moved, moved_box, moved_frame, moved_light
 from cumuli.light.phase import (  # noqa: F401 (public)
@@ -569,16 +568,16 @@ def physical_pass(drawable: Any, scene: Any, given: Any = None, threads: int = 0
         # the drawable's own light underneath; the light step shades it again as the scene is.
         given = given.seen_from or given  # a camera's view: the light it was made from
         return given.shaded_from or given
-    key, lit, upstream, sky, offset = _pass_plan(drawable, scene)
+    key, lit, upstream, sky, offset = pass_plan(drawable, scene)
     light = remember(
         key, lambda: physical_light(lit, replace(scene, sky=sky), threads, upstream=upstream)
     )
     return moved_light(light, offset) if lit is not drawable and offset is not None else light
 
 
-def _pass_plan(drawable: Any, scene: Any) -> tuple[tuple, Any, list[Any], Any, Any]:
+def pass_plan(drawable: Any, scene: Any) -> tuple[tuple, Any, list[Any], Any, Any]:
     """``(key, lit, upstream, sky, offset)`` of :func:`physical_pass`: its memo key, the
-    drawable it lights, the media that shade it, the sky that lights it and the wind's offset."""
+    drawable it lights, the media that shade it, the sky that lights it, the wind's offset."""
     sky = light_sky(scene)
     # Only the media upstream of its sun lattice shade it (the culling of `physical_light`):
     # moving a cloud relights the clouds it shades, not every cloud of the scene.
@@ -592,19 +591,6 @@ def _pass_plan(drawable: Any, scene: Any) -> tuple[tuple, Any, list[Any], Any, A
     key = ("physical", drawable_digest(lit), others, scene.noise.identity,
            scene.settings, scene.sun, sky)  # fmt: skip
     return key, lit, upstream, sky, offset
-
-
-def sun_depth_march(drawable: Any, scene: Any) -> Callable[[], Any] | None:
-    """The march of ``drawable``'s own sun lattice (:func:`own_sun_depth`, on one thread) that
-    its :func:`physical_pass` is about to need, or ``None`` when its light is memoised already.
-
-    ``prepare_light`` runs these first when it lights clouds side by side: a pass that reads the
-    lattice of a cloud upstream of it then finds it made, instead of waiting for the core that is
-    making it (sixteen cumulus copies on two cores: 17–33 ms of waits in a ~250 ms step)."""
-    key, *_ = _pass_plan(drawable, scene)
-    if memo_known(key):
-        return None
-    return lambda: own_sun_depth(drawable, scene, 1)
 
 
 def _sun_frame_of(drawable: Any, scene: Any) -> tuple:
