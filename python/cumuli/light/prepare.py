@@ -31,6 +31,7 @@ import os
 from collections.abc import Mapping, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
+from functools import partial
 from typing import Any
 
 import numpy as np
@@ -177,12 +178,12 @@ def _marches(
     if not media or 2 * len(media) > _memo.MEMO_SIZE:
         return []
     check_budget(scene)  # as the passes would, before any lattice is made
-    out = []
-    for k in media:
-        cloud = scene.clouds[k]
-        if not _memo.known(_light_of(k, lambda: pass_plan(cloud, scene))[0]):  # noqa: B023
-            out.append((k, lambda cloud=cloud: own_sun_depth(cloud, scene, 1)))
-    return out
+    unlit = [
+        k
+        for k in media
+        if not _memo.known(_light_of(k, partial(pass_plan, scene.clouds[k], scene))[0])
+    ]
+    return [(k, partial(own_sun_depth, scene.clouds[k], scene, 1)) for k in unlit]
 
 
 def _light_of(k: int, make: Any) -> Any:
